@@ -1,0 +1,254 @@
+"""Machine definitions: MJCF file + parameters by the source's symbols + reference model.
+
+A :class:`Machine` loads its MJCF with :class:`mujoco.MjSpec`, applies parameter values
+(nominal or overridden by the source's symbols) with spec edits, compiles it, and derives
+its reference transfer-function model from the same parameter values.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import control
+import mujoco
+import numpy as np
+
+from twin.errors import TwinInputError
+
+
+def mjcf_dir() -> Path:
+    """Folder holding the machine MJCF folders (inside the wheel, or the repo's ``mjcf/``)."""
+    here = Path(__file__).resolve().parent.parent
+    for candidate in (here / "mjcf", here.parent / "mjcf"):
+        if candidate.is_dir():
+            return candidate
+    raise FileNotFoundError("mjcf/ folder not found next to the twin package")
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One model parameter, named by the source's symbol.
+
+    Attributes
+    ----------
+    value : float
+        Nominal value in ``unit``.
+    unit : str
+        SI unit (or as stated).
+    description : str
+        What it is and where it comes from (seed file, table or equation).
+    box : tuple of float or None
+        (lower, upper) uncertainty box from the source, if it gives one.
+    positive : bool
+        Whether the value must be strictly positive.
+    """
+
+    value: float
+    unit: str
+    description: str
+    box: tuple[float, float] | None = None
+    positive: bool = True
+
+
+@dataclass(frozen=True)
+class Axis:
+    """One feed axis of a machine and the MJCF names that make it.
+
+    Attributes
+    ----------
+    name : str
+        ``"x"`` or ``"y"``.
+    actuator : str
+        Actuator driven by the axis's control input (V).
+    table_joint : str
+        Slide joint whose position (m) is the axis output.
+    motor_joint, screw_joint : str or None
+        Hinge joints of the motor rotor and lead screw (ball/lead-screw axes only).
+    """
+
+    name: str
+    actuator: str
+    table_joint: str
+    motor_joint: str | None = None
+    screw_joint: str | None = None
+
+    @property
+    def joints(self) -> tuple[str, ...]:
+        """Every joint of the axis, motor first."""
+        return tuple(j for j in (self.motor_joint, self.screw_joint, self.table_joint) if j)
+
+
+@dataclass
+class BuiltMachine:
+    """A compiled machine: MuJoCo model plus its reference model.
+
+    Attributes
+    ----------
+    name : str
+    model : mujoco.MjModel
+    params : dict of str to float
+        Parameter values in effect (nominal merged with overrides).
+    axes : tuple of Axis
+    plant : control.TransferFunction
+        Input (V) to table position (m) model, ``len(axes)`` inputs and outputs, delay excluded.
+    delay_s : float
+        Transport delay (s) of the drive, applied by the runner's drive model.
+    couplings : list of (str, str, float)
+        Gear couplings ``(joint_a, joint_b, ratio)`` meaning ``q_a = ratio * q_b``; used to measure
+        slip. Ratios of nut couplings are in rad/m.
+    table_per_screw_m_per_rad : dict of str to float
+        Lead p (m/rad) per axis, to express screw-side slip as table travel.
+    sensor_gains : tuple of float
+        Encoder gain per axis (measured position = gain * table position).
+    """
+
+    name: str
+    model: mujoco.MjModel
+    params: dict[str, float]
+    axes: tuple[Axis, ...]
+    plant: control.TransferFunction
+    delay_s: float
+    couplings: list[tuple[str, str, float]] = field(default_factory=list)
+    table_per_screw_m_per_rad: dict[str, float] = field(default_factory=dict)
+    sensor_gains: tuple[float, ...] = ()
+
+    def joint_qpos_index(self, joint: str) -> int:
+        """Index of a joint's position in ``MjData.qpos``."""
+        return int(self.model.jnt_qposadr[self.model.joint(joint).id])
+
+    def joint_dof_index(self, joint: str) -> int:
+        """Index of a joint's velocity in ``MjData.qvel``."""
+        return int(self.model.jnt_dofadr[self.model.joint(joint).id])
+
+    @property
+    def workpiece_body_id(self) -> int:
+        """Body id of the workpiece, where cutting forces go (``xfrc_applied``)."""
+        return int(self.model.body("workpiece").id)
+
+    def slip_m(self, qpos: np.ndarray) -> np.ndarray:
+        """Kinematic mismatch (m of table travel) of each gear coupling.
+
+        Parameters
+        ----------
+        qpos : ndarray, shape (n_samples, nq)
+            Joint positions over time.
+
+        Returns
+        -------
+        ndarray, shape (n_samples, n_couplings)
+            ``|q_a - ratio q_b|`` converted to table travel with the axis lead.
+        """
+        cols = []
+        for a, b, ratio in self.couplings:
+            axis = a[0]
+            lead = self.table_per_screw_m_per_rad[axis]
+            qa = qpos[:, self.joint_qpos_index(a)]
+            qb = qpos[:, self.joint_qpos_index(b)]
+            # motor-screw residual is in motor rad: table travel = residual * lead / n
+            scale = lead / ratio if self.model.joint(b).type == mujoco.mjtJoint.mjJNT_HINGE else lead
+            cols.append(np.abs(qa - ratio * qb) * scale)
+        return np.stack(cols, axis=1) if cols else np.zeros((len(qpos), 0))
+
+
+class Machine:
+    """Base class: subclasses set the class attributes and implement the two hooks."""
+
+    name: str = ""
+    xml: str = ""
+    summary: str = ""
+    parameters: dict[str, Parameter] = {}
+    axes: tuple[Axis, ...] = ()
+
+    def resolve(self, overrides: dict[str, float] | None = None) -> dict[str, float]:
+        """Merge overrides into the nominal values, validating names and values.
+
+        Raises
+        ------
+        TwinInputError
+            Unknown symbol, non-finite value, or a non-positive value for a positive parameter.
+        """
+        params = {k: p.value for k, p in self.parameters.items()}
+        for key, value in (overrides or {}).items():
+            if key not in self.parameters:
+                known = ", ".join(self.parameters)
+                raise TwinInputError(f"overrides.{key}", value, f"unknown parameter of machine "
+                                     f"'{self.name}' (known: {known})")
+            try:
+                value = float(value)
+            except (TypeError, ValueError):
+                raise TwinInputError(f"overrides.{key}", value, "must be a number") from None
+            if not math.isfinite(value):
+                raise TwinInputError(f"overrides.{key}", value, "must be finite")
+            if self.parameters[key].positive and value <= 0:
+                raise TwinInputError(f"overrides.{key}", value,
+                                     f"must be > 0 ({self.parameters[key].description})")
+            params[key] = value
+        self.check(params)
+        return params
+
+    def check(self, params: dict[str, float]) -> None:
+        """Cross-parameter checks (override in subclasses)."""
+
+    def configure(self, spec: mujoco.MjSpec, params: dict[str, float]) -> None:
+        """Write parameter values into the spec (MjSpec edits)."""
+        raise NotImplementedError
+
+    def plant(self, params: dict[str, float], model: mujoco.MjModel) -> control.TransferFunction:
+        """Reference transfer-function model, input (V) to table position (m)."""
+        raise NotImplementedError
+
+    def delay(self, params: dict[str, float]) -> float:
+        """Drive transport delay (s)."""
+        return 0.0
+
+    def couplings(self, params: dict[str, float]) -> tuple[list, dict]:
+        """Gear couplings and leads (see :class:`BuiltMachine`)."""
+        return [], {}
+
+    def sensor_gains(self, params: dict[str, float]) -> tuple[float, ...]:
+        """Encoder gain per axis."""
+        return (1.0,) * len(self.axes)
+
+    def build(self, overrides: dict[str, float] | None = None,
+              timestep_s: float | None = None) -> BuiltMachine:
+        """Apply parameters with MjSpec, compile, and derive the reference model."""
+        params = self.resolve(overrides)
+        spec = mujoco.MjSpec.from_file(str(mjcf_dir() / self.xml))
+        if timestep_s is not None:
+            spec.option.timestep = timestep_s
+        self.configure(spec, params)
+        model = spec.compile()
+        couplings, leads = self.couplings(params)
+        return BuiltMachine(self.name, model, params, self.axes, self.plant(params, model),
+                            self.delay(params), couplings, leads, self.sensor_gains(params))
+
+
+def set_gear(spec: mujoco.MjSpec, equality: str, ratio: float) -> None:
+    """Set a joint-equality gear: ``q1 = ratio * q2``."""
+    eq = spec.equality(equality)
+    data = np.array(eq.data)
+    data[:5] = [0.0, ratio, 0.0, 0.0, 0.0]
+    eq.data = data
+
+
+def set_mass(spec: mujoco.MjSpec, body: str, mass_kg: float) -> None:
+    """Set a body's mass (kg), keeping its inertia tensor."""
+    spec.body(body).mass = mass_kg
+
+
+def set_axial_inertia(spec: mujoco.MjSpec, body: str, axis: int, inertia_kg_m2: float) -> None:
+    """Set a body's principal inertia (kg m^2) about one of its axes (0 = x, 1 = y)."""
+    b = spec.body(body)
+    inertia = np.array(b.inertia)
+    inertia[axis] = inertia_kg_m2
+    b.inertia = inertia
+
+
+def diagonal_plant(channels: list[control.TransferFunction]) -> control.TransferFunction:
+    """Diagonal MIMO transfer function from SISO channels."""
+    n = len(channels)
+    num = [[channels[i].num[0][0] if i == j else [0.0] for j in range(n)] for i in range(n)]
+    den = [[channels[i].den[0][0] if i == j else [1.0] for j in range(n)] for i in range(n)]
+    return control.tf(num, den)

@@ -1,0 +1,65 @@
+"""Linear-motor XY table (``linear_motor_xy``), seed 004.
+
+Source: Choi, Hong, Kim, Kim (1999), ``004_752a35899bbc3ab8.txt``: eq. (1)
+m_i v_i' + b_i v_i + F_coul,i sign(v_i) = k_i u_i, Table 1 (m_x 52.3 kg, m_y 17 kg,
+b_x 193.5, b_y 36 N s/m with their uncertainty).  The Y carriage rides on the X carriage, so
+m_x is the whole mass moved by X.  Input gains k_i are not in the paper: 98.2 N/V is the
+Anorad LEB-S-8 peak force (982 N) at a +-10 V command (assumption).  Coulomb friction is not
+quantified in the paper: 0 N by default, set per scenario.
+"""
+
+from __future__ import annotations
+
+import control
+
+from twin.errors import TwinInputError
+from twin.machines.base import Axis, Machine, Parameter, diagonal_plant, set_mass
+
+SEED = "seed 004 (Choi et al. 1999)"
+
+
+class LinearMotorXY(Machine):
+    name = "linear_motor_xy"
+    xml = "linear_motor_xy/linear_motor_xy.xml"
+    summary = "seed 004 linear-motor XY table, m_x 52.3 kg, m_y 17 kg (Y on X), 1/2 um encoders"
+    parameters = {
+        "m_x": Parameter(52.3, "kg", f"mass moved by X (X + Y carriages + workpiece), {SEED} Table 1",
+                         (52.3 * 0.7, 52.3 * 1.3)),
+        "m_y": Parameter(17.0, "kg", f"mass moved by Y (Y carriage + workpiece), {SEED} Table 1",
+                         (17.0 * 0.6, 17.0 * 1.4)),
+        "b_x": Parameter(193.5, "N s/m", f"viscous damping X, {SEED} Table 1", (154.8, 232.2)),
+        "b_y": Parameter(36.0, "N s/m", f"viscous damping Y, {SEED} Table 1", (28.8, 43.2)),
+        "k_x": Parameter(98.2, "N/V", "input gain X: 982 N peak force at 10 V (assumed)"),
+        "k_y": Parameter(98.2, "N/V", "input gain Y: 982 N peak force at 10 V (assumed)"),
+        "F_coul_x": Parameter(0.0, "N", f"Coulomb friction X (eq. 1; no value in {SEED})",
+                              positive=False),
+        "F_coul_y": Parameter(0.0, "N", f"Coulomb friction Y (eq. 1; no value in {SEED})",
+                              positive=False),
+        "m_workpiece": Parameter(2.0, "kg", "workpiece mass, part of m_y (assumed)"),
+    }
+    axes = (Axis("x", "x_drive", "x_table"), Axis("y", "y_drive", "y_table"))
+
+    def check(self, params):
+        for a in ("x", "y"):
+            if params[f"F_coul_{a}"] < 0:
+                raise TwinInputError(f"overrides.F_coul_{a}", params[f"F_coul_{a}"], "must be >= 0")
+        if params["m_y"] <= params["m_workpiece"]:
+            raise TwinInputError("overrides.m_y", params["m_y"],
+                                 f"must exceed m_workpiece = {params['m_workpiece']:g} kg")
+        if params["m_x"] <= params["m_y"]:
+            raise TwinInputError("overrides.m_x", params["m_x"],
+                                 f"must exceed m_y = {params['m_y']:g} kg (Y rides on X)")
+
+    def configure(self, spec, params):
+        set_mass(spec, "x_carriage", params["m_x"] - params["m_y"])
+        set_mass(spec, "y_carriage", params["m_y"] - params["m_workpiece"])
+        set_mass(spec, "workpiece", params["m_workpiece"])
+        for a in ("x", "y"):
+            joint = spec.joint(f"{a}_table")
+            joint.damping = [params[f"b_{a}"], 0.0, 0.0]
+            joint.frictionloss = params[f"F_coul_{a}"]
+            spec.actuator(f"{a}_drive").gainprm[0] = params[f"k_{a}"]
+
+    def plant(self, params, model):
+        return diagonal_plant([control.tf([params[f"k_{a}"]], [params[f"m_{a}"], params[f"b_{a}"], 0.0])
+                               for a in ("x", "y")])

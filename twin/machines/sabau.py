@@ -1,0 +1,69 @@
+"""Identified X/Y servo axes with cross-coupling (``sabau_xy``), seed 001.
+
+Source: Sabau (Morar) (2022), ``001_91435e23e494fefb.txt``: eqs. (1)-(5) omega_x/u_x =
+1054/(s + 40.85), omega_y/u_y = 2188/(s + 87.81), position the integral of velocity; eq. (6)
+adds H_wx_uy = 15 (u_y accelerates X) and H_wy_ux = 24.5 (u_x accelerates Y), entering the
+velocity derivatives directly.  Units are not stated: u in V and positions in mm are assumed,
+so the SI gains are 1.054 and 2.188 m/(V s^2).
+
+Realization: each carriage has a (assumed) mass M_i; joint damping a_i M_i; the drive of axis
+i acts on a fixed tendon over both slides with gain K_i M_i and a coefficient on the other
+slide sized so that it gets the eq. (6) cross-acceleration.
+"""
+
+from __future__ import annotations
+
+import control
+
+from twin.errors import TwinInputError
+from twin.machines.base import Axis, Machine, Parameter, set_mass
+
+SEED = "seed 001 (Sabau 2022)"
+
+
+class SabauXY(Machine):
+    name = "sabau_xy"
+    xml = "sabau_xy/sabau_xy.xml"
+    summary = "seed 001 identified X/Y axes 1054/(s+40.85), 2188/(s+87.81) with eq. (6) coupling"
+    parameters = {
+        "K_x": Parameter(1054.0, "mm/(V s^2)", f"K_Mx/T_Mx, eq. (1), {SEED}"),
+        "a_x": Parameter(40.85, "1/s", f"1/T_Mx, eq. (1), {SEED}"),
+        "K_y": Parameter(2188.0, "mm/(V s^2)", f"K_My/T_My, eq. (3), {SEED}"),
+        "a_y": Parameter(87.81, "1/s", f"1/T_My, eq. (3), {SEED}"),
+        "H_wx_uy": Parameter(15.0, "mm/(V s^2)", f"u_y to X acceleration, eq. (6), {SEED}",
+                             positive=False),
+        "H_wy_ux": Parameter(24.5, "mm/(V s^2)", f"u_x to Y acceleration, eq. (6), {SEED}",
+                             positive=False),
+        "m_x": Parameter(25.0, "kg", "mass moved by X, Y carriage included (assumed)"),
+        "m_y": Parameter(10.0, "kg", "mass moved by Y, workpiece included (assumed)"),
+        "m_workpiece": Parameter(2.0, "kg", "workpiece mass (assumed)"),
+    }
+    axes = (Axis("x", "x_drive", "x_table"), Axis("y", "y_drive", "y_table"))
+
+    def check(self, params):
+        if params["m_y"] <= params["m_workpiece"]:
+            raise TwinInputError("overrides.m_y", params["m_y"],
+                                 f"must exceed m_workpiece = {params['m_workpiece']:g} kg")
+        if params["m_x"] <= params["m_y"]:
+            raise TwinInputError("overrides.m_x", params["m_x"],
+                                 f"must exceed m_y = {params['m_y']:g} kg (Y rides on X)")
+
+    def configure(self, spec, params):
+        mx, my = params["m_x"], params["m_y"]
+        set_mass(spec, "x_carriage", mx - my)
+        set_mass(spec, "y_carriage", my - params["m_workpiece"])
+        set_mass(spec, "workpiece", params["m_workpiece"])
+        kx, ky = params["K_x"] * 1e-3, params["K_y"] * 1e-3
+        spec.joint("x_table").damping = [params["a_x"] * mx, 0.0, 0.0]
+        spec.joint("y_table").damping = [params["a_y"] * my, 0.0, 0.0]
+        spec.actuator("x_drive").gainprm[0] = kx * mx
+        spec.actuator("y_drive").gainprm[0] = ky * my
+        spec.tendon("x_input").wrap_joint("y_table", params["H_wy_ux"] * 1e-3 * my / (kx * mx))
+        spec.tendon("y_input").wrap_joint("x_table", params["H_wx_uy"] * 1e-3 * mx / (ky * my))
+
+    def plant(self, params, model):
+        dx = [1.0, params["a_x"], 0.0]
+        dy = [1.0, params["a_y"], 0.0]
+        num = [[[params["K_x"] * 1e-3], [params["H_wx_uy"] * 1e-3]],
+               [[params["H_wy_ux"] * 1e-3], [params["K_y"] * 1e-3]]]
+        return control.tf(num, [[dx, dx], [dy, dy]])
