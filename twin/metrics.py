@@ -1,0 +1,144 @@
+"""Performance metrics of responses and tracking runs.
+
+Step metrics follow the usual definitions, stated per function: overshoot relative to the
+final value, 2 % settling time, 10-90 % rise time and the 0-100 % rise time (first time the
+response reaches its final value), which some papers call rise time.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def step_metrics(t_s: np.ndarray, y: np.ndarray, final: float | None = None,
+                 settling_band: float = 0.02) -> dict[str, float]:
+    """Overshoot, settling and rise times of a step response.
+
+    Parameters
+    ----------
+    t_s : ndarray, shape (n,)
+        Time (s), step applied at ``t_s[0]``.
+    y : ndarray, shape (n,)
+        Response, starting from 0.
+    final : float, optional
+        Final value; default the last sample.
+    settling_band : float
+        Settling band as a fraction of ``final`` (0.02 for 2 %).
+
+    Returns
+    -------
+    dict
+        ``overshoot_pct`` (%, 0 if none), ``settling_time_s`` (last exit from the band),
+        ``rise_time_10_90_s``, ``rise_time_0_100_s`` (nan if never reached), ``peak``,
+        ``final``.
+    """
+    t = np.asarray(t_s, float) - t_s[0]
+    y = np.asarray(y, float)
+    yf = float(y[-1] if final is None else final)
+    peak = float(y.max() if yf >= 0 else y.min())
+    overshoot = max(0.0, (peak - yf) / abs(yf) * 100.0) if yf else float("nan")
+    outside = np.flatnonzero(np.abs(y - yf) > settling_band * abs(yf))
+    if outside.size == 0:
+        settling = 0.0
+    elif outside[-1] + 1 < len(t):
+        settling = float(t[outside[-1] + 1])
+    else:
+        settling = float("nan")
+
+    def first_cross(level):
+        idx = np.flatnonzero(y >= level) if yf >= 0 else np.flatnonzero(y <= level)
+        if idx.size == 0:
+            return float("nan")
+        i = idx[0]
+        if i == 0:
+            return float(t[0])
+        # linear interpolation between samples
+        return float(t[i - 1] + (level - y[i - 1]) / (y[i] - y[i - 1]) * (t[i] - t[i - 1]))
+
+    return {
+        "overshoot_pct": overshoot,
+        "settling_time_s": settling,
+        "rise_time_10_90_s": first_cross(0.9 * yf) - first_cross(0.1 * yf),
+        "rise_time_0_100_s": first_cross(yf),
+        "peak": peak,
+        "final": yf,
+    }
+
+
+def max_abs(e: np.ndarray) -> np.ndarray:
+    """Maximum absolute error per column (same unit as ``e``)."""
+    return np.abs(np.asarray(e)).max(axis=0)
+
+
+def rmse(e: np.ndarray) -> np.ndarray:
+    """Root-mean-square error per column (same unit as ``e``)."""
+    return np.sqrt(np.mean(np.square(np.asarray(e)), axis=0))
+
+
+def fft_peaks(e: np.ndarray, dt_s: float, frequencies_hz) -> np.ndarray:
+    """Single-sided amplitude spectrum of ``e`` at the bins nearest ``frequencies_hz``.
+
+    Parameters
+    ----------
+    e : ndarray, shape (n,)
+    dt_s : float
+        Sample period (s).
+    frequencies_hz : sequence of float
+
+    Returns
+    -------
+    ndarray
+        Amplitude (unit of ``e``): a sine of amplitude A on a bin reads A.
+    """
+    e = np.asarray(e, float)
+    n = e.size
+    spec = np.abs(np.fft.rfft(e)) * 2.0 / n
+    f = np.fft.rfftfreq(n, dt_s)
+    return np.array([spec[np.argmin(np.abs(f - fq))] for fq in frequencies_hz])
+
+
+def contour_error(actual_xy: np.ndarray, path_xy: np.ndarray) -> np.ndarray:
+    """Distance (same unit) from each actual point to the reference path.
+
+    Parameters
+    ----------
+    actual_xy : ndarray, shape (n, 2)
+    path_xy : ndarray, shape (m, 2)
+        Densely sampled reference path, treated as a polyline.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Shortest distance from every actual point to the polyline's segments.
+    """
+    p = np.asarray(actual_xy, float)
+    a = np.asarray(path_xy, float)[:-1]
+    b = np.asarray(path_xy, float)[1:]
+    ab = b - a
+    len2 = np.maximum((ab**2).sum(1), 1e-300)
+    out = np.empty(len(p))
+    for start in range(0, len(p), 512):  # bounded memory: 512 x segments at a time
+        q = p[start:start + 512, None, :]
+        s = np.clip(((q - a) * ab).sum(-1) / len2, 0.0, 1.0)
+        d = np.linalg.norm(q - (a + s[..., None] * ab), axis=-1)
+        out[start:start + 512] = d.min(axis=1)
+    return out
+
+
+def percent_reduction(before: float, after: float) -> float:
+    """100 (before - after) / before, in %."""
+    return 100.0 * (before - after) / before
+
+
+def tracking_summary(result) -> dict:
+    """Max and RMS tracking error per axis (um) and, for two-axis runs, max contour error (um)."""
+    e = result.error_m()
+    out = {
+        "max_tracking_error_um": dict(zip(result.axis_names, (max_abs(e) * 1e6).round(3).tolist())),
+        "rmse_um": dict(zip(result.axis_names, (rmse(e) * 1e6).round(3).tolist())),
+    }
+    if e.shape[1] == 2:
+        ce = contour_error(result.table_position_m(), result.ref[:, :, 0])
+        out["max_contour_error_um"] = round(float(ce.max() * 1e6), 3)
+        out["rms_contour_error_um"] = round(float(np.sqrt(np.mean(ce**2)) * 1e6), 3)
+    return out

@@ -1,0 +1,226 @@
+"""Closed-loop runner: controller blocks + drive + MuJoCo machine + encoders, at a fixed rate.
+
+One control tick (period ``control_period_s``, a whole multiple of the physics timestep):
+
+    measure table positions (encoder) -> each block's step(ref, meas) -> u (V)
+    -> drive (input disturbance, saturation, transport delay) -> MjData.ctrl
+    -> physics steps (``mj_step``; per-step hooks write cutting forces into xfrc_applied)
+
+The state is recorded at the start of every tick, so ``u[k]`` is the input held over
+``[t[k], t[k+1])`` (zero-order hold).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Protocol, Sequence
+
+import mujoco
+import numpy as np
+from tqdm import tqdm
+
+from controllers.base import ControlBlock
+from twin.drive import Drive, Encoder, substeps_per_tick
+from twin.errors import SimulationDiverged, TwinInputError
+from twin.machines import BuiltMachine
+
+#: Table travel (m) beyond which a run counts as runaway.
+RUNAWAY_M = 10.0
+#: Simulated physics steps above which a progress bar is shown (about 5 s of wall time).
+PROGRESS_STEPS = 1_000_000
+
+
+class Disturbance(Protocol):
+    """A disturbance may add to the drive input and/or act before every physics step.
+
+    ``input_V(t)`` returns ndarray (len(t), n_axes) added to the control input (V);
+    ``before_step(model, data)`` writes forces (e.g. ``data.xfrc_applied``) before each
+    ``mj_step``.  Either may be absent.
+    """
+
+
+@dataclass
+class RunResult:
+    """Time series of one closed-loop run, sampled at the start of every control tick.
+
+    Attributes
+    ----------
+    machine : BuiltMachine
+    t_s : ndarray, shape (n,)
+    ref : ndarray, shape (n, n_axes, 3)
+        Reference position (m), velocity (m/s), acceleration (m/s^2).
+    meas_m : ndarray, shape (n, n_axes)
+        Encoder readings (m).
+    u_V : ndarray, shape (n, n_axes)
+        Controller outputs (V), before the drive.
+    u_applied_V : ndarray, shape (n, n_axes)
+        Drive input after disturbance and saturation (V), before the delay.
+    qpos, qvel : ndarray, shape (n, nq), (n, nv)
+        Every joint's position (m or rad) and velocity (m/s or rad/s).
+    actuator_force : ndarray, shape (n, nu)
+        Actuator force/torque (N or N m) at the last physics step before each tick.
+    workpiece_force_N : ndarray, shape (n, 3)
+        External force on the workpiece (world frame, N) at the last physics step.
+    control_period_s : float
+    """
+
+    machine: BuiltMachine
+    t_s: np.ndarray
+    ref: np.ndarray
+    meas_m: np.ndarray
+    u_V: np.ndarray
+    u_applied_V: np.ndarray
+    qpos: np.ndarray
+    qvel: np.ndarray
+    actuator_force: np.ndarray
+    workpiece_force_N: np.ndarray
+    control_period_s: float
+    info: dict = field(default_factory=dict)
+
+    @property
+    def axis_names(self) -> list[str]:
+        return [a.name for a in self.machine.axes]
+
+    def table_position_m(self) -> np.ndarray:
+        """Table positions (m), shape (n, n_axes)."""
+        idx = [self.machine.joint_qpos_index(a.table_joint) for a in self.machine.axes]
+        return self.qpos[:, idx]
+
+    def error_m(self) -> np.ndarray:
+        """Tracking error reference - table position (m), shape (n, n_axes)."""
+        return self.ref[:, :, 0] - self.table_position_m()
+
+
+def assign_controllers(blocks: Sequence[ControlBlock], n_axes: int) -> list[tuple[ControlBlock, np.ndarray]]:
+    """Map blocks to axes in order: a SISO block takes one axis, a MIMO block several.
+
+    Raises
+    ------
+    TwinInputError
+        If the blocks do not cover the machine's axes exactly.
+    """
+    out, start = [], 0
+    for b in blocks:
+        out.append((b, np.arange(start, start + b.n_axes)))
+        start += b.n_axes
+    if start != n_axes:
+        raise TwinInputError("controller", [getattr(b, "name", repr(b)) for b in blocks],
+                             f"blocks serve {start} axes, the machine has {n_axes}")
+    return out
+
+
+def simulate(machine: BuiltMachine, controllers: Sequence[ControlBlock], reference,
+             duration_s: float, control_period_s: float, *, drive: Drive | None = None,
+             encoder: Encoder | None = None, disturbances: Sequence[Disturbance] = (),
+             progress: bool | None = None) -> RunResult:
+    """Run the closed loop for ``duration_s`` and return its time series.
+
+    Parameters
+    ----------
+    machine : BuiltMachine
+    controllers : sequence of ControlBlock
+        Blocks in axis order (see :func:`assign_controllers`); each block's ``dt`` must equal
+        ``control_period_s``.
+    reference : object with ``n_axes`` and ``sample(t)``
+        See :mod:`twin.references`.
+    duration_s, control_period_s : float
+        Run length and control period (s).
+    drive, encoder : optional
+        Default: machine delay, no saturation; ideal encoder with the machine's sensor gains.
+    disturbances : sequence
+        See :class:`Disturbance`.
+    progress : bool or None
+        Progress bar; None shows one for runs over ``PROGRESS_STEPS`` physics steps.
+
+    Raises
+    ------
+    SimulationDiverged
+        Non-finite state, a MuJoCo instability warning or a table beyond ``RUNAWAY_M``.
+    TwinInputError
+        Inconsistent periods, references or controllers.
+    """
+    model = machine.model
+    n_axes = len(machine.axes)
+    dt = model.opt.timestep
+    substeps = substeps_per_tick(control_period_s, dt)
+    if not (duration_s > 0 and math.isfinite(duration_s)):
+        raise TwinInputError("duration_s", duration_s, "must be > 0")
+    if reference.n_axes != n_axes:
+        raise TwinInputError("reference", type(reference).__name__,
+                             f"has {reference.n_axes} axes, machine '{machine.name}' has {n_axes}")
+    blocks = assign_controllers(controllers, n_axes)
+    for b, _ in blocks:
+        if abs(b.dt - control_period_s) > 1e-12:
+            raise TwinInputError("controller.dt", b.dt, f"differs from control_period_s = {control_period_s}")
+        b.reset()
+    drive = drive or Drive(n_axes, substeps, dt, machine.delay_s)
+    encoder = encoder or Encoder(np.zeros(n_axes), np.zeros(n_axes), np.array(machine.sensor_gains))
+    drive.reset()
+    encoder.reset()
+
+    n = int(round(duration_s / control_period_s))
+    t = np.arange(n) * control_period_s
+    ref = reference.sample(t)
+    u_dist = np.zeros((n, n_axes))
+    step_hooks = []
+    for dist in disturbances:
+        if hasattr(dist, "input_V"):
+            u_dist += dist.input_V(t)
+        if hasattr(dist, "before_step"):
+            step_hooks.append(dist.before_step)
+
+    data = mujoco.MjData(model)
+    nq, nv, nu = model.nq, model.nv, model.nu
+    qpos_rec = np.empty((n, nq))
+    qvel_rec = np.empty((n, nv))
+    act_rec = np.empty((n, nu))
+    wp_rec = np.empty((n, 3))
+    meas_rec = np.empty((n, n_axes))
+    u_rec = np.empty((n, n_axes))
+    ua_rec = np.empty((n, n_axes))
+    q_idx = np.array([machine.joint_qpos_index(a.table_joint) for a in machine.axes])
+    v_idx = np.array([machine.joint_dof_index(a.table_joint) for a in machine.axes])
+    wp = machine.workpiece_body_id
+    bad_qacc = data.warning[mujoco.mjtWarning.mjWARN_BADQACC]
+    meas = np.zeros((n_axes, 2))
+    u = np.zeros(n_axes)
+    qpos, qvel, ctrl = data.qpos, data.qvel, data.ctrl
+
+    show = progress if progress is not None else n * substeps > PROGRESS_STEPS
+    bar = tqdm(total=n, desc=f"{machine.name}", unit="tick", disable=not show, mininterval=0.5,
+               leave=False)
+    chunk = max(1, n // 200)
+    for k in range(n):
+        pos = qpos[q_idx]
+        if not (abs(pos).max() < RUNAWAY_M):  # also catches NaN
+            bar.close()
+            raise SimulationDiverged(t[k], f"table position {pos.tolist()} m beyond {RUNAWAY_M} m or not finite")
+        qpos_rec[k] = qpos
+        qvel_rec[k] = qvel
+        act_rec[k] = data.actuator_force
+        wp_rec[k] = data.xfrc_applied[wp, :3]
+        meas[:, 0] = encoder.measure(pos)
+        meas[:, 1] = qvel[v_idx]
+        meas_rec[k] = meas[:, 0]
+        for block, idx in blocks:
+            u[idx] = block.step(ref[k, idx], meas[idx])
+        u_rec[k] = u
+        ua_rec[k] = drive.push(u + u_dist[k])
+        for nsteps, u_seg in drive.segments():
+            ctrl[:] = u_seg
+            if step_hooks:
+                for _ in range(nsteps):
+                    for hook in step_hooks:
+                        hook(model, data)
+                    mujoco.mj_step(model, data)
+            else:
+                mujoco.mj_step(model, data, nstep=nsteps)
+        if bad_qacc.number:
+            bar.close()
+            raise SimulationDiverged(t[k] + control_period_s, "MuJoCo reported unstable accelerations (BADQACC)")
+        if k % chunk == 0:
+            bar.update(chunk if k else 1)
+    bar.close()
+    return RunResult(machine, t, ref, meas_rec, u_rec, ua_rec, qpos_rec, qvel_rec, act_rec, wp_rec,
+                     control_period_s)
