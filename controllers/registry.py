@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import control
 
-from controllers import seed000
+from controllers import seed000, seed002
 from controllers.lti import DiscreteLTI
 from controllers.pid import pid_tf
 
@@ -16,6 +16,9 @@ CONTROLLERS = {
     "seed000_hinf": ("full 4th-order H-infinity, seed 000 eq. (28)", lambda p: seed000.HINF, ()),
     "seed000_hinf_reduced": ("reduced H-infinity 20.97/(s + 5.5), seed 000 eq. (29)",
                              lambda p: seed000.HINF_REDUCED, ()),
+    "seed002_pid": ("PID 0.8998 + 0.005155 s + 0.0006077/s (V/mm), seed 002 eq. (6); derivative "
+                    "filter tf_s (default 1e-4 s)",
+                    lambda p: seed002.pid(p.get("tf_s", 1e-4)), ("tf_s",)),
     "pid": ("kp + ki/s + kd s/(tf_s s + 1); gains in V/m, V/(m s), V s/m",
             lambda p: pid_tf(p.get("kp", 0.0), p.get("ki", 0.0), p.get("kd", 0.0), p.get("tf_s", 0.0)),
             ("kp", "ki", "kd", "tf_s")),

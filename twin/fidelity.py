@@ -10,7 +10,7 @@ integrator) from the sampling itself.
 (b) ``frf_max_mag_err_db`` / ``frf_max_phase_err_deg``: frequency response measured on the twin
     as on the real table (seed 003): closed loop around the integrator with a proportional
     position controller, a periodic multisine reference (Schroeder phases, one tone per
-    excited bin, 0.1-50 Hz), one experiment per axis, steady-state period only, and the MIMO
+    excited bin, 0.1-50 Hz), one experiment per axis, steady-state period only (after >= 5 s of settling), and the MIMO
     estimate G = Y U^-1 at each excited bin; compared with G's ZOH equivalent incl. delay.
 (c) ``coupling_slip_um``: worst motor-screw-table kinematic mismatch (um of table travel)
     under a full-scale +-10 V reversal on every axis at once.
@@ -84,7 +84,7 @@ def multisine_bins(period_s: float, f_min_hz: float, f_max_hz: float, n_tones: i
 
 
 def frequency_response_errors(bm, period_s: float = 10.0, f_max_hz: float = 50.0,
-                              n_tones: int = 40, crossover_hz: float = 2.0) -> dict:
+                              n_tones: int = 40, crossover_hz: float = 2.0, settle_s: float = 5.0) -> dict:
     """Check (b): measured-vs-model frequency response, worst magnitude (dB) and phase (deg)."""
     dt = bm.model.opt.timestep
     n_axes = len(bm.axes)
@@ -93,6 +93,7 @@ def frequency_response_errors(bm, period_s: float = 10.0, f_max_hz: float = 50.0
     # proportional gain per axis: loop gain 1 at crossover_hz on the diagonal channel
     kp = [1.0 / abs(bm.plant[i, i](2j * math.pi * crossover_hz)) for i in range(n_axes)]
     n_period = int(round(period_s / dt))
+    settle = max(1, math.ceil(settle_s / period_s))  # whole periods discarded as transient
     phases = -math.pi * bins * (bins - 1) / len(bins)  # Schroeder: low crest factor
     Y = np.zeros((len(bins), n_axes, n_axes), complex)
     U = np.zeros((len(bins), n_axes, n_axes), complex)
@@ -100,9 +101,9 @@ def frequency_response_errors(bm, period_s: float = 10.0, f_max_hz: float = 50.0
         amp = 0.2 / kp[k]  # about 0.2 V per tone at high frequency
         ref = SumOfSines((amp,) * len(bins), tuple(freqs), tuple(phases), n_axes=n_axes, axes=(k,))
         ctrls = [DiscreteLTI(control.tf([kp[i]], [1.0]), dt, name="P") for i in range(n_axes)]
-        res = simulate(bm, ctrls, ref, 2 * period_s, dt, progress=False)
-        y = res.table_position_m()[n_period:]
-        u = res.u_applied_V[n_period:]
+        res = simulate(bm, ctrls, ref, (settle + 1) * period_s, dt, progress=False)
+        y = res.table_position_m()[settle * n_period:]
+        u = res.u_applied_V[settle * n_period:]
         Y[:, :, k] = np.fft.rfft(y, axis=0)[bins]
         U[:, :, k] = np.fft.rfft(u, axis=0)[bins]
     G_meas = Y @ np.linalg.inv(U)

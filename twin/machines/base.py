@@ -239,9 +239,13 @@ def set_mass(spec: mujoco.MjSpec, body: str, mass_kg: float) -> None:
 
 
 def set_axial_inertia(spec: mujoco.MjSpec, body: str, axis: int, inertia_kg_m2: float) -> None:
-    """Set a body's principal inertia (kg m^2) about one of its axes (0 = x, 1 = y)."""
+    """Set a body's principal inertia (kg m^2) about one of its axes (0 = x, 1 = y).
+
+    The two other principal inertias are raised to at least this value so the tensor stays
+    physical (triangle inequality); they do not enter the dynamics of a one-axis joint.
+    """
     b = spec.body(body)
-    inertia = np.array(b.inertia)
+    inertia = np.maximum(np.array(b.inertia), inertia_kg_m2)
     inertia[axis] = inertia_kg_m2
     b.inertia = inertia
 

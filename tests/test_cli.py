@@ -1,0 +1,94 @@
+"""The command line: bad input gives one stderr line and exit code 2; runs and fidelity work."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from twin.recording import read_back
+
+TWIN = [sys.executable, "-m", "twin.cli"]
+
+GOOD = """
+machine = "cncmt"
+duration_s = 0.5
+control_period_s = 1e-3
+[controller]
+type = "seed000_imc"
+[reference]
+type = "step"
+amplitude_m = 0.01
+"""
+
+
+def _twin(*args, cwd=None):
+    return subprocess.run([*TWIN, *args], capture_output=True, text=True, cwd=cwd, timeout=300)
+
+
+@pytest.mark.parametrize("text, field", [
+    (GOOD.replace('"cncmt"', '"lathe"'), "machine = 'lathe'"),
+    (GOOD.replace('"seed000_imc"', '"lqg"'), "controller.type = 'lqg'"),
+    (GOOD + "\nspindle_rpm = 3000\n", "spindle_rpm"),
+    (GOOD.replace('machine = "cncmt"', 'machine = "cncmt"\noverrides = { m = -50.0 }'), "overrides.m = -50.0"),
+    (GOOD.replace("control_period_s = 1e-3", "control_period_s = 1.5e-4"), "control_period_s = 0.00015"),
+    (GOOD.replace("duration_s = 0.5", "duration_s = [0.5"), "malformed TOML"),
+    (GOOD.replace("duration_s = 0.5", "duration_s = -1.0"), "duration_s = -1.0"),
+])
+def test_bad_scenarios(tmp_path, text, field):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    r = _twin("run", str(path))
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and field in lines[0], r.stderr
+    assert "Traceback" not in r.stderr
+
+
+def test_run_json_and_recording(tmp_path):
+    path = tmp_path / "ok.toml"
+    path.write_text(GOOD)
+    r = _twin("run", str(path), "--json", "--rrd", str(tmp_path / "ok.rrd"))
+    assert r.returncode == 0, r.stderr
+    out = json.loads(r.stdout)
+    assert out["machine"] == "cncmt" and out["max_tracking_error_um"]["x"] == pytest.approx(10000.0, rel=1e-6)
+    assert read_back(tmp_path / "ok.rrd")["/machine/x/table/position"] == 500
+
+
+def test_divergence_exit_code(tmp_path):
+    path = tmp_path / "div.toml"
+    path.write_text(GOOD.replace('type = "seed000_imc"', 'type = "pid"\nparams = { kp = -500.0 }')
+                    .replace("duration_s = 0.5", "duration_s = 60.0"))
+    r = _twin("run", str(path))
+    assert r.returncode == 3 and "diverged at t =" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_demo_writes_recording(tmp_path):
+    r = _twin("demo", "--json", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert json.loads(r.stdout)["machine"] == "cncmt_xy"
+    assert read_back(tmp_path / "demo.rrd")["/contour/actual"] == 1
+
+
+def test_fidelity_json_keys():
+    r = _twin("fidelity", "--machine", "cncmt", "--set", "m=60", "--json")
+    assert r.returncode == 0, r.stderr
+    (res,) = json.loads(r.stdout)
+    for key in ("machine", "tf", "time_nrmse", "frf_max_mag_err_db", "frf_max_phase_err_deg",
+                "coupling_slip_um", "pass"):
+        assert key in res
+    assert res["tf"]["x"]["delay_s"] == 0.0 and res["pass"] is True
+
+
+def test_fidelity_bad_set():
+    r = _twin("fidelity", "--machine", "cncmt", "--set", "mass=3")
+    assert r.returncode == 2 and "overrides.mass" in r.stderr
+
+
+def test_list_and_bench():
+    r = _twin("list")
+    assert r.returncode == 0 and "linear_motor_xy" in r.stdout and "seed000_hinf" in r.stdout
+    r = _twin("bench", "--json", "--seconds", "0.05")
+    figures = json.loads(r.stdout)
+    assert figures["raw_steps_per_s"] > figures["closed_loop_steps_per_s"] > 0
+    assert figures["ratio"] == pytest.approx(figures["closed_loop_steps_per_s"] / figures["raw_steps_per_s"])

@@ -1,0 +1,35 @@
+"""Fidelity of the twins against their transfer functions (issue targets)."""
+
+import pytest
+
+from twin.fidelity import TARGETS, fidelity
+from twin.machines import MACHINES
+
+
+def _check(r):
+    for key, limit in TARGETS.items():
+        assert r[key] <= limit, (r["machine"], key, r[key])
+    assert r["pass"]
+
+
+@pytest.mark.parametrize("name", list(MACHINES))
+def test_fidelity_nominal(name):
+    # a 2 s multisine period (0.5-50 Hz) keeps the test short; `twin fidelity` uses 10 s (0.1-50 Hz)
+    r = fidelity(name, frf_period_s=2.0, frf_tones=15)
+    assert r["frf_band_hz"] == [0.5, 50.0]
+    _check(r)
+
+
+@pytest.mark.parametrize("corner", [
+    {"K1": 3.0, "K2": 5.0, "m": 30.0, "Im": 0.008},   # fastest corner of Table 1's box
+    {"K1": 1.0, "K2": 3.0, "m": 70.0, "Im": 0.012},   # slowest corner
+])
+def test_fidelity_cncmt_box_corners(corner):
+    _check(fidelity("cncmt", corner, frf_period_s=2.0, frf_tones=15))
+
+
+def test_fidelity_linear_motor_box_corner_with_friction_forced_off():
+    r = fidelity("linear_motor_xy", {"m_x": 52.3 * 1.3, "m_y": 17 * 0.6, "b_x": 232.2, "F_coul_x": 20.0},
+                 frf_period_s=2.0, frf_tones=15)
+    assert r["friction_forced_off"] == ["F_coul_x", "F_coul_y"]
+    _check(r)
