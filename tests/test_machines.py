@@ -92,3 +92,11 @@ def test_googol_realizes_identified_g_with_any_masses():
         # gear constraints (impedance 0.9999) take about 1e-4 of it
         assert d.qacc[bm.joint_dof_index("x_table")] == pytest.approx(78.02, rel=5e-4)
         assert d.qacc[bm.joint_dof_index("y_table")] == pytest.approx(78.02, rel=5e-4)
+
+
+@pytest.mark.parametrize("name, overrides, field", [("sabau_xy", {"m_y": 1.0}, "overrides.m_y"),
+                                                    ("linear_motor_xy", {"m_x": 10.0}, "overrides.m_x")])
+def test_stacked_axes_mass_order(name, overrides, field):
+    with pytest.raises(TwinInputError) as err:
+        build(name, overrides)
+    assert err.value.field == field

@@ -250,6 +250,16 @@ def set_axial_inertia(spec: mujoco.MjSpec, body: str, axis: int, inertia_kg_m2: 
     b.inertia = inertia
 
 
+def check_stacked_masses(params: dict[str, float]) -> None:
+    """Y rides on X: require m_x > m_y > m_workpiece (kg), naming the offending symbol."""
+    if params["m_y"] <= params["m_workpiece"]:
+        raise TwinInputError("overrides.m_y", params["m_y"],
+                             f"must exceed m_workpiece = {params['m_workpiece']:g} kg")
+    if params["m_x"] <= params["m_y"]:
+        raise TwinInputError("overrides.m_x", params["m_x"],
+                             f"must exceed m_y = {params['m_y']:g} kg (Y rides on X)")
+
+
 def diagonal_plant(channels: list[control.TransferFunction]) -> control.TransferFunction:
     """Diagonal MIMO transfer function from SISO channels."""
     n = len(channels)

@@ -13,7 +13,8 @@ from __future__ import annotations
 import control
 
 from twin.errors import TwinInputError
-from twin.machines.base import Axis, Machine, Parameter, diagonal_plant, set_mass
+from twin.machines.base import (Axis, Machine, Parameter, check_stacked_masses, diagonal_plant,
+                                set_mass)
 
 SEED = "seed 004 (Choi et al. 1999)"
 
@@ -43,12 +44,7 @@ class LinearMotorXY(Machine):
         for a in ("x", "y"):
             if params[f"F_coul_{a}"] < 0:
                 raise TwinInputError(f"overrides.F_coul_{a}", params[f"F_coul_{a}"], "must be >= 0")
-        if params["m_y"] <= params["m_workpiece"]:
-            raise TwinInputError("overrides.m_y", params["m_y"],
-                                 f"must exceed m_workpiece = {params['m_workpiece']:g} kg")
-        if params["m_x"] <= params["m_y"]:
-            raise TwinInputError("overrides.m_x", params["m_x"],
-                                 f"must exceed m_y = {params['m_y']:g} kg (Y rides on X)")
+        check_stacked_masses(params)
 
     def configure(self, spec, params):
         set_mass(spec, "x_carriage", params["m_x"] - params["m_y"])

@@ -15,8 +15,7 @@ from __future__ import annotations
 
 import control
 
-from twin.errors import TwinInputError
-from twin.machines.base import Axis, Machine, Parameter, set_mass
+from twin.machines.base import Axis, Machine, Parameter, check_stacked_masses, set_mass
 
 SEED = "seed 001 (Sabau 2022)"
 
@@ -41,12 +40,7 @@ class SabauXY(Machine):
     axes = (Axis("x", "x_drive", "x_table"), Axis("y", "y_drive", "y_table"))
 
     def check(self, params):
-        if params["m_y"] <= params["m_workpiece"]:
-            raise TwinInputError("overrides.m_y", params["m_y"],
-                                 f"must exceed m_workpiece = {params['m_workpiece']:g} kg")
-        if params["m_x"] <= params["m_y"]:
-            raise TwinInputError("overrides.m_x", params["m_x"],
-                                 f"must exceed m_y = {params['m_y']:g} kg (Y rides on X)")
+        check_stacked_masses(params)
 
     def configure(self, spec, params):
         mx, my = params["m_x"], params["m_y"]
