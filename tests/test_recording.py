@@ -3,7 +3,7 @@
 from controllers import make_controller
 from twin.machines import build
 from twin.recording import read_back, record
-from twin.references import Circle
+from twin.references import Circle, Step
 from twin.runner import simulate
 
 
@@ -24,8 +24,7 @@ def test_recording_entities_and_counts(tmp_path):
 
 def test_recording_decimates_long_runs(tmp_path):
     bm = build("cncmt")
-    res = simulate(bm, [make_controller("seed000_imc", 1e-4)], Circle(5.0, 600.0).__class__ and
-                   __import__("twin.references", fromlist=["Step"]).Step(0.01), 1.0, 1e-4)
+    res = simulate(bm, [make_controller("seed000_imc", 1e-4)], Step(0.01), 1.0, 1e-4)
     counts = read_back(record(res, tmp_path / "long.rrd", max_points=1000))
     assert counts["/machine/x/table/position"] == 1000
     assert "/contour/reference" not in counts

@@ -20,6 +20,7 @@ import math
 
 import control
 
+from twin.errors import TwinInputError
 from twin.machines.base import Axis, Machine, Parameter, diagonal_plant, set_axial_inertia, set_gear, set_mass
 
 SEED = "seed 002 (Anang et al.) eq. (1)"
@@ -43,7 +44,6 @@ class GoogolXY(Machine):
             Axis("y", "y_drive", "y_table", "y_motor", "y_screw"))
 
     def check(self, params):
-        from twin.errors import TwinInputError
         if params["Td"] < 0:
             raise TwinInputError("overrides.Td", params["Td"], "delay must be >= 0")
 
