@@ -14,8 +14,8 @@ from numba import njit
 
 
 @njit(cache=True)
-def _ss_step(A, B, C, D, x, e, u):  # pragma: no cover - compiled
-    """u = C x + D e; x <- A x + B e (in place)."""
+def ss_step(A, B, C, D, x, e, u, xn):  # pragma: no cover - compiled
+    """u = C x + D e; x <- A x + B e (in place; ``xn`` is scratch of x's size)."""
     n, m, p = A.shape[0], B.shape[1], C.shape[0]
     for i in range(p):
         acc = 0.0
@@ -24,7 +24,6 @@ def _ss_step(A, B, C, D, x, e, u):  # pragma: no cover - compiled
         for j in range(m):
             acc += D[i, j] * e[j]
         u[i] = acc
-    xn = np.empty(n)
     for i in range(n):
         acc = 0.0
         for j in range(n):
@@ -80,6 +79,7 @@ class DiscreteLTI:
         self.ka = np.broadcast_to(np.asarray(acceleration_ff, dtype=float), (self.n_axes,)).copy()
         self._feedforward = bool(self.kv.any() or self.ka.any())
         self.x = np.zeros(self.A.shape[0])
+        self._xn = np.zeros(self.A.shape[0])
         self._e = np.zeros(self.n_axes)
         self._u = np.zeros(self.n_axes)
 
@@ -90,10 +90,18 @@ class DiscreteLTI:
     def step(self, ref: np.ndarray, meas: np.ndarray) -> np.ndarray:
         """One control tick; see :mod:`controllers.base` for shapes and units."""
         np.subtract(ref[:, 0], meas[:, 0], out=self._e)
-        _ss_step(self.A, self.B, self.C, self.D, self.x, self._e, self._u)
+        ss_step(self.A, self.B, self.C, self.D, self.x, self._e, self._u, self._xn)
         if self._feedforward:
             return self._u + self.kv * ref[:, 1] + self.ka * ref[:, 2]
         return self._u.copy()
+
+    def discrete_state_space(self) -> tuple[np.ndarray, ...]:
+        """``(A, B, C, D, kv, ka, x)``: the discrete matrices, feedforward gains and state.
+
+        Blocks that offer this are linear; the runner then runs the whole loop compiled
+        (:mod:`twin.compiled_loop`) with the same arithmetic as :meth:`step`.
+        """
+        return self.A, self.B, self.C, self.D, self.kv, self.ka, self.x
 
     def __repr__(self) -> str:
         return f"DiscreteLTI({self.name or 'C(s)'}, dt={self.dt}, {self.method}, order={len(self.x)})"

@@ -19,6 +19,10 @@ from twin.errors import TwinInputError
 class Drive:
     """Saturation and transport delay between controller and actuator.
 
+    The input applied at physics step ``j`` (counted from the start of the run) is the
+    saturated command of tick ``(j - delay_steps) // substeps``, or zero before the first
+    delayed command arrives; a delay that is not a whole number of ticks falls inside one.
+
     Parameters
     ----------
     n_axes : int
@@ -45,39 +49,28 @@ class Drive:
                                  f"must be >= 0 and a whole multiple of the timestep {self.timestep_s:g} s")
         if self.saturation_V is not None and self.saturation_V <= 0:
             raise TwinInputError("drive.saturation_V", self.saturation_V, "must be > 0")
-        d = int(round(steps))
-        self.delay_ticks, self.split = divmod(d, self.substeps)
-        self._fifo = np.zeros((self.delay_ticks + 2, self.n_axes))
-        self._k = 0
+        self.delay_steps = int(round(steps))
+        self.delay_ticks, self.split = divmod(self.delay_steps, self.substeps)
 
-    def reset(self) -> None:
-        self._fifo[:] = 0.0
-        self._k = 0
+    @property
+    def limit_V(self) -> float:
+        """Saturation limit (V); ``inf`` when there is none."""
+        return math.inf if self.saturation_V is None else float(self.saturation_V)
 
-    def push(self, u: np.ndarray) -> np.ndarray:
-        """Queue this tick's command; return the saturated command (V)."""
-        if self.saturation_V is not None:
-            u = np.clip(u, -self.saturation_V, self.saturation_V)
-        self._fifo[self._k % len(self._fifo)] = u
-        self._k += 1
-        return u
+    def saturate(self, u: np.ndarray) -> np.ndarray:
+        """Clip a command to the saturation limit (V)."""
+        return np.clip(u, -self.limit_V, self.limit_V)
 
-    def segments(self):
-        """Inputs applied during the tick just pushed: ``[(n_steps, u), ...]``.
+    def segments(self, k: int) -> list[tuple[int, int]]:
+        """Physics steps of tick ``k`` as ``[(n_steps, source_tick), ...]``.
 
-        With a delay of D physics steps = ``delay_ticks`` * substeps + ``split``, the first
-        ``split`` steps still see the older command.
+        ``source_tick`` is the tick whose command acts during those steps, -1 for none yet:
+        the first ``split`` steps still see the older command.
         """
-        k = self._k - 1
-        n = len(self._fifo)
-        newer = self._fifo[(k - self.delay_ticks) % n] if k >= self.delay_ticks else None
-        older = self._fifo[(k - self.delay_ticks - 1) % n] if k >= self.delay_ticks + 1 else None
-        zero = np.zeros(self.n_axes)
-        segs = []
-        if self.split:
-            segs.append((self.split, zero if older is None else older))
-        segs.append((self.substeps - self.split, zero if newer is None else newer))
-        return segs
+        newer = k - self.delay_ticks
+        segs = [(self.split, newer - 1)] if self.split else []
+        segs.append((self.substeps - self.split, newer))
+        return [(n, src if src >= 0 else -1) for n, src in segs]
 
 
 @dataclass
@@ -108,22 +101,17 @@ class Encoder:
                 raise TwinInputError(f"sensors.{name}", arr.tolist(), "must be finite and >= 0")
             setattr(self, name, arr)
         self.gains = np.asarray(self.gains, float)
-        self._quantize = bool((self.resolution_m > 0).any())
-        self._noisy = bool((self.noise_std_m > 0).any())
-        self.reset()
 
-    def reset(self) -> None:
-        self.rng = np.random.default_rng(self.seed)
+    def noise_m(self, n_ticks: int) -> np.ndarray:
+        """The run's measurement noise (m), shape (n_ticks, n_axes), drawn from ``seed``."""
+        draws = np.random.default_rng(self.seed).standard_normal((n_ticks, len(self.gains)))
+        return draws * self.noise_std_m
 
-    def measure(self, position_m: np.ndarray) -> np.ndarray:
-        """Measured position (m) from true table positions (m)."""
+    def measure(self, position_m: np.ndarray, noise_m: np.ndarray) -> np.ndarray:
+        """Measured position (m) from true table positions (m) and this tick's noise (m)."""
         y = self.gains * position_m
-        if self._quantize:
-            res = np.where(self.resolution_m > 0, self.resolution_m, 1.0)
-            y = np.where(self.resolution_m > 0, np.round(y / res) * res, y)
-        if self._noisy:
-            y = y + self.noise_std_m * self.rng.standard_normal(y.shape)
-        return y
+        quantized = np.rint(y / np.where(self.resolution_m > 0, self.resolution_m, 1.0)) * self.resolution_m
+        return np.where(self.resolution_m > 0, quantized, y) + noise_m
 
 
 def substeps_per_tick(control_period_s: float, timestep_s: float) -> int:

@@ -21,6 +21,7 @@ import numpy as np
 from tqdm import tqdm
 
 from controllers.base import ControlBlock
+from twin import compiled_loop
 from twin.drive import Drive, Encoder, substeps_per_tick
 from twin.errors import SimulationDiverged, TwinInputError
 from twin.machines import BuiltMachine
@@ -113,7 +114,7 @@ def assign_controllers(blocks: Sequence[ControlBlock], n_axes: int) -> list[tupl
 def simulate(machine: BuiltMachine, controllers: Sequence[ControlBlock], reference,
              duration_s: float, control_period_s: float, *, drive: Drive | None = None,
              encoder: Encoder | None = None, disturbances: Sequence[Disturbance] = (),
-             progress: bool | None = None) -> RunResult:
+             progress: bool | None = None, compiled: bool | None = None) -> RunResult:
     """Run the closed loop for ``duration_s`` and return its time series.
 
     Parameters
@@ -132,13 +133,17 @@ def simulate(machine: BuiltMachine, controllers: Sequence[ControlBlock], referen
         See :class:`Disturbance`.
     progress : bool or None
         Progress bar; None shows one for runs over ``PROGRESS_STEPS`` physics steps.
+    compiled : bool or None
+        Run the loop compiled (:mod:`twin.compiled_loop`; linear blocks only, no per-step
+        hooks) or in Python.  None picks the compiled loop whenever it can run.
 
     Raises
     ------
     SimulationDiverged
         Non-finite state, a MuJoCo instability warning or a table beyond ``RUNAWAY_M``.
     TwinInputError
-        Inconsistent periods, references or controllers.
+        Inconsistent periods, references or controllers, or ``compiled=True`` where the
+        compiled loop cannot run.
     """
     model = machine.model
     n_axes = len(machine.axes)
@@ -156,8 +161,6 @@ def simulate(machine: BuiltMachine, controllers: Sequence[ControlBlock], referen
         b.reset()
     drive = drive or Drive(n_axes, substeps, dt, machine.delay_s)
     encoder = encoder or Encoder(np.zeros(n_axes), np.zeros(n_axes), np.array(machine.sensor_gains))
-    drive.reset()
-    encoder.reset()
 
     n = int(round(duration_s / control_period_s))
     t = np.arange(n) * control_period_s
@@ -169,58 +172,115 @@ def simulate(machine: BuiltMachine, controllers: Sequence[ControlBlock], referen
             u_dist += dist.input_V(t)
         if hasattr(dist, "before_step"):
             step_hooks.append(dist.before_step)
+    can_compile = (compiled_loop.available() and not step_hooks
+                   and all(hasattr(b, "discrete_state_space") for b, _ in blocks))
+    if compiled and not can_compile:
+        raise TwinInputError("compiled", True, "needs linear controller blocks, no per-step "
+                             "disturbance hooks and MuJoCo's shared library")
+    use_compiled = can_compile if compiled is None else compiled
 
     data = mujoco.MjData(model)
-    nq, nv, nu = model.nq, model.nv, model.nu
-    qpos_rec = np.empty((n, nq))
-    qvel_rec = np.empty((n, nv))
-    act_rec = np.empty((n, nu))
-    wp_rec = np.empty((n, 3))
-    meas_rec = np.empty((n, n_axes))
-    u_rec = np.empty((n, n_axes))
-    ua_rec = np.empty((n, n_axes))
-    q_idx = np.array([machine.joint_qpos_index(a.table_joint) for a in machine.axes])
-    v_idx = np.array([machine.joint_dof_index(a.table_joint) for a in machine.axes])
-    wp = machine.workpiece_body_id
-    bad_qacc = data.warning[mujoco.mjtWarning.mjWARN_BADQACC]
-    meas = np.zeros((n_axes, 2))
-    u = np.zeros(n_axes)
-    qpos, qvel, ctrl = data.qpos, data.qvel, data.ctrl
-
+    rec = {"qpos": np.empty((n, model.nq)), "qvel": np.empty((n, model.nv)),
+           "act": np.empty((n, model.nu)), "wp": np.empty((n, 3)), "meas": np.empty((n, n_axes)),
+           "u": np.empty((n, n_axes)), "ua": np.empty((n, n_axes))}
+    loop = _CompiledLoop if use_compiled else _PythonLoop
+    run = loop(machine, data, blocks, drive, encoder, encoder.noise_m(n), ref, u_dist, step_hooks, rec)
     show = progress if progress is not None else n * substeps > PROGRESS_STEPS
-    bar = tqdm(total=n, desc=f"{machine.name}", unit="tick", disable=not show, mininterval=0.5,
-               leave=False)
     chunk = max(1, n // 200)
-    for k in range(n):
-        pos = qpos[q_idx]
-        if not (abs(pos).max() < RUNAWAY_M):  # also catches NaN
-            bar.close()
-            raise SimulationDiverged(t[k], f"table position {pos.tolist()} m beyond {RUNAWAY_M} m or not finite")
-        qpos_rec[k] = qpos
-        qvel_rec[k] = qvel
-        act_rec[k] = data.actuator_force
-        wp_rec[k] = data.xfrc_applied[wp, :3]
-        meas[:, 0] = encoder.measure(pos)
-        meas[:, 1] = qvel[v_idx]
-        meas_rec[k] = meas[:, 0]
-        for block, idx in blocks:
-            u[idx] = block.step(ref[k, idx], meas[idx])
-        u_rec[k] = u
-        ua_rec[k] = drive.push(u + u_dist[k])
-        for nsteps, u_seg in drive.segments():
-            ctrl[:] = u_seg
-            if step_hooks:
-                for _ in range(nsteps):
-                    for hook in step_hooks:
-                        hook(model, data)
-                    mujoco.mj_step(model, data)
-            else:
-                mujoco.mj_step(model, data, nstep=nsteps)
-        if bad_qacc.number:
-            bar.close()
-            raise SimulationDiverged(t[k] + control_period_s, "MuJoCo reported unstable accelerations (BADQACC)")
-        if k % chunk == 0:
-            bar.update(chunk if k else 1)
-    bar.close()
-    return RunResult(machine, t, ref, meas_rec, u_rec, ua_rec, qpos_rec, qvel_rec, act_rec, wp_rec,
-                     control_period_s)
+    with tqdm(total=n, desc=f"{machine.name}", unit="tick", disable=not show, mininterval=0.5,
+              leave=False) as bar:
+        for k0 in range(0, n, chunk):
+            k1 = min(n, k0 + chunk)
+            status, k = run.ticks(k0, k1)
+            if status == compiled_loop.RUNAWAY:
+                pos = data.qpos[run.q_idx]
+                raise SimulationDiverged(t[k], f"table position {pos.tolist()} m beyond {RUNAWAY_M} m "
+                                         "or not finite")
+            if status == compiled_loop.BAD_QACC:
+                raise SimulationDiverged(t[k] + control_period_s,
+                                         "MuJoCo reported unstable accelerations (BADQACC)")
+            bar.update(k1 - k0)
+    run.finish()
+    return RunResult(machine, t, ref, rec["meas"], rec["u"], rec["ua"], rec["qpos"], rec["qvel"],
+                     rec["act"], rec["wp"], control_period_s,
+                     info={"loop": "compiled" if use_compiled else "python"})
+
+
+class _PythonLoop:
+    """The tick loop in Python: any control blocks, per-step disturbance hooks."""
+
+    def __init__(self, machine, data, blocks, drive, encoder, noise, ref, u_dist, step_hooks, rec):
+        self.model, self.data, self.blocks, self.drive, self.encoder = machine.model, data, blocks, drive, encoder
+        self.noise, self.ref, self.u_dist, self.hooks, self.rec = noise, ref, u_dist, step_hooks, rec
+        self.q_idx = np.array([machine.joint_qpos_index(a.table_joint) for a in machine.axes])
+        self.v_idx = np.array([machine.joint_dof_index(a.table_joint) for a in machine.axes])
+        self.wp = machine.workpiece_body_id
+        self.bad_qacc = data.warning[mujoco.mjtWarning.mjWARN_BADQACC]
+
+    def ticks(self, k0: int, k1: int) -> tuple[int, int]:
+        """Run ticks ``k0 <= k < k1``; returns ``(status, k)`` as the compiled loop does."""
+        model, data, rec = self.model, self.data, self.rec
+        qpos, qvel, ctrl = data.qpos, data.qvel, data.ctrl
+        n_axes = len(self.q_idx)
+        meas = np.zeros((n_axes, 2))
+        u = np.zeros(n_axes)
+        warn0 = self.bad_qacc.number
+        for k in range(k0, k1):
+            pos = qpos[self.q_idx]
+            if not (abs(pos).max() < RUNAWAY_M):  # also catches NaN
+                return compiled_loop.RUNAWAY, k
+            rec["qpos"][k] = qpos
+            rec["qvel"][k] = qvel
+            rec["act"][k] = data.actuator_force
+            rec["wp"][k] = data.xfrc_applied[self.wp, :3]
+            meas[:, 0] = self.encoder.measure(pos, self.noise[k])
+            meas[:, 1] = qvel[self.v_idx]
+            rec["meas"][k] = meas[:, 0]
+            for block, idx in self.blocks:
+                u[idx] = block.step(self.ref[k, idx], meas[idx])
+            rec["u"][k] = u
+            rec["ua"][k] = self.drive.saturate(u + self.u_dist[k])
+            for nsteps, src in self.drive.segments(k):
+                ctrl[:] = rec["ua"][src] if src >= 0 else 0.0
+                if self.hooks:
+                    for _ in range(nsteps):
+                        for hook in self.hooks:
+                            hook(model, data)
+                        mujoco.mj_step(model, data)
+                else:
+                    mujoco.mj_step(model, data, nstep=nsteps)
+            if self.bad_qacc.number != warn0:
+                return compiled_loop.BAD_QACC, k
+        return compiled_loop.OK, k1
+
+    def finish(self) -> None:
+        """Nothing to hand back: the blocks kept their own state."""
+
+
+class _CompiledLoop:
+    """The tick loop of :mod:`twin.compiled_loop` for linear blocks."""
+
+    def __init__(self, machine, data, blocks, drive, encoder, noise, ref, u_dist, step_hooks, rec):
+        self.model, self.data, self.blocks, self.rec = machine.model, data, blocks, rec
+        self.q_idx = np.array([machine.joint_qpos_index(a.table_joint) for a in machine.axes])
+        self.A, self.B, self.C, self.D, self.kv, self.ka = compiled_loop.combine([b for b, _ in blocks])
+        self.x = np.zeros(self.A.shape[0])
+        self.args = (data.qpos, data.qvel, data.ctrl, data.actuator_force, data.xfrc_applied,
+                     compiled_loop.warning_counter(data), self.q_idx, machine.workpiece_body_id,
+                     RUNAWAY_M, encoder.gains, encoder.resolution_m,
+                     noise, np.ascontiguousarray(ref), u_dist, drive.limit_V, drive.substeps,
+                     drive.delay_steps, self.A, self.B, self.C, self.D, self.kv, self.ka, self.x,
+                     np.zeros_like(self.x), rec["qpos"], rec["qvel"], rec["act"], rec["wp"],
+                     rec["meas"], rec["u"], rec["ua"])
+
+    def ticks(self, k0: int, k1: int) -> tuple[int, int]:
+        """Run ticks ``k0 <= k < k1``; returns ``(status, k)``."""
+        return compiled_loop.tick_loop(k0, k1, compiled_loop.MJ_STEP, self.model._address, self.data._address, *self.args)
+
+    def finish(self) -> None:
+        """Hand the final controller state back to the blocks, as the Python loop leaves it."""
+        start = 0
+        for block, _ in self.blocks:
+            x = block.discrete_state_space()[-1]
+            x[:] = self.x[start:start + len(x)]
+            start += len(x)
