@@ -92,3 +92,23 @@ def test_list_and_bench():
     figures = json.loads(r.stdout)
     assert figures["raw_steps_per_s"] > figures["closed_loop_steps_per_s"] > 0
     assert figures["ratio"] == pytest.approx(figures["closed_loop_steps_per_s"] / figures["raw_steps_per_s"])
+
+
+def test_reproduce_seed000_small_counts(tmp_path):
+    rrd = tmp_path / "s0.rrd"
+    r = _twin("reproduce", "seed000", "--json", "--samples", "5", "--twin-samples", "0",
+              "--rrd", str(rrd), "--plots", str(tmp_path / "plots"))
+    assert r.returncode == 0, r.stderr
+    res = json.loads(r.stdout)
+    assert res["twin_vs_tf_mismatches"] == []
+    assert res["robust_pi"]["eq17_coefficients"]["kp"] == pytest.approx(38.33, rel=0.02)
+    assert res["table2"]["hinf"]["tf_monte_carlo"]["overshoot_pct"][0] > 0
+    assert len(list((tmp_path / "plots").glob("*.png"))) == 4
+    counts = read_back(rrd)
+    assert counts["/hinf/machine/x/table/position"] == 20_000  # 12 s at 10 kHz, decimated
+
+
+def test_reproduce_unknown_source_exits_2():
+    r = _twin("reproduce", "seed999")
+    assert r.returncode == 2 and r.stderr.strip().splitlines() == [
+        "error: source = 'seed999': only seed000 can be reproduced so far"]

@@ -1,4 +1,4 @@
-"""Command line: ``twin run | demo | fidelity | list | bench``.
+"""Command line: ``twin run | demo | fidelity | reproduce | list | bench``.
 
 Bad input (unknown machine, controller or field, invalid values, malformed TOML) prints one
 line ``error: <field> = <value>: <reason>`` on stderr and exits with code 2; a diverging
@@ -120,6 +120,45 @@ def fidelity(machine: list[str] = typer.Option(None, "--machine", help="Machine(
     else:
         typer.echo("targets: " + ", ".join(f"{k} <= {v}" for k, v in TARGETS.items()))
     if not all(r["pass"] for r in results):
+        raise typer.Exit(1)
+
+
+@app.command()
+@_guard
+def reproduce(source: str = typer.Argument(..., help="Which paper: seed000"),
+              as_json: bool = typer.Option(False, "--json", help="Print everything as JSON"),
+              rrd: Path = typer.Option(None, "--rrd", help="Record the nominal twin step runs to this .rrd"),
+              plots: Path = typer.Option(None, "--plots", help="Write PNG step-response plots to this folder"),
+              samples: int = typer.Option(1000, "--samples", help="Monte Carlo samples on the transfer functions"),
+              twin_samples: int = typer.Option(20, "--twin-samples", help="Random box samples on the twin "
+                                                                          "(besides the paper's 10)"),
+              seed: int = typer.Option(0, "--seed", help="Seed of the random samples")):
+    """Reproduce a paper's design procedures and tables (paper | transfer function | twin).
+
+    Exits 1 if a twin number departs from its transfer-function number by more than 2 %.
+    """
+    if source != "seed000":
+        raise TwinInputError("source", source, "only seed000 can be reproduced so far")
+    if samples < 1 or twin_samples < 0:
+        raise TwinInputError("--samples" if samples < 1 else "--twin-samples",
+                             samples if samples < 1 else twin_samples, "must be >= 1 (--samples) / >= 0")
+    if rrd is not None and rrd.suffix != ".rrd":
+        raise TwinInputError("--rrd", str(rrd), "recording file must end in .rrd")
+    from twin import reproduce_seed000 as r
+    from twin.seed000_report import format_report, run_all, write_plots
+
+    res = run_all(samples, twin_samples, seed, progress=not as_json)
+    typer.echo(json.dumps(res, indent=1, default=float) if as_json else format_report(res))
+    if plots is not None:
+        for path in write_plots(plots):
+            typer.echo(f"plot written to {path}", err=as_json)
+    if rrd is not None:
+        from twin.recording import record_runs
+
+        nominal = r.nominal_params()
+        record_runs({name: r.twin_step_result(c, nominal) for name, c in r.TABLE2_CONTROLLERS.items()}, rrd)
+        typer.echo(f"recording written to {rrd} (view with: rerun {rrd})", err=as_json)
+    if res["twin_vs_tf_mismatches"]:
         raise typer.Exit(1)
 
 

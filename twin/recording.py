@@ -74,41 +74,64 @@ def record(result, path: str | Path, max_points: int = 20_000, application_id: s
     Path
         The file written.
     """
+    return record_runs({"": result}, path, max_points, application_id)
+
+
+def record_runs(results: dict, path: str | Path, max_points: int = 20_000,
+                application_id: str = "cnc_feed_drive_twin") -> Path:
+    """Write several runs to one ``.rrd`` file, each under its name (``<name>/machine/...``).
+
+    A single run under the name ``""`` keeps the plain entity paths of the module docstring.
+    """
     path = Path(path)
-    machine = result.machine
-    axes = result.axis_names
-    step = max(1, int(np.ceil(len(result.t_s) / max_points)))
-    sl = slice(None, None, step)
-    t = result.t_s[sl]
     rec = rr.RecordingStream(application_id)
     rec.save(str(path))
-    two_d = len(axes) == 2
-    gain = contour_gain(result) if two_d else 1
-    rec.send_blueprint(blueprint(axes, two_d, gain))
-    pos = result.table_position_m()
-    for i, axis in enumerate(machine.axes):
-        a = axis.name
-        for part, joint in (("motor", axis.motor_joint), ("screw", axis.screw_joint)):
-            if joint:
-                _series(rec, f"machine/{a}/{part}/angle", t, result.qpos[sl, machine.joint_qpos_index(joint)])
-                _series(rec, f"machine/{a}/{part}/velocity", t, result.qvel[sl, machine.joint_dof_index(joint)])
-        _series(rec, f"machine/{a}/table/position", t, pos[sl, i] * 1e3)
-        _series(rec, f"machine/{a}/table/velocity", t, result.qvel[sl, machine.joint_dof_index(axis.table_joint)] * 1e3)
-        _series(rec, f"machine/{a}/drive/force", t, result.actuator_force[sl, machine.model.actuator(axis.actuator).id])
-        _series(rec, f"reference/{a}", t, result.ref[sl, i, 0] * 1e3)
-        _series(rec, f"error/{a}", t, (result.ref[sl, i, 0] - pos[sl, i]) * 1e6)
-        _series(rec, f"control/{a}/u", t, result.u_V[sl, i])
-        _series(rec, f"cutting/force/{a}", t, result.workpiece_force_N[sl, i])
-    if two_d:
-        ref_xy = result.ref[sl, :, 0] * 1e3
-        act_xy = pos[sl] * 1e3
-        rec.log("contour/reference", rr.LineStrips2D([ref_xy], colors=[(120, 120, 120)]), static=True)
-        rec.log("contour/actual", rr.LineStrips2D([act_xy], colors=[(30, 140, 255)]), static=True)
-        rec.log(f"contour/error_x{gain}", rr.LineStrips2D([ref_xy + gain * (act_xy - ref_xy)],
-                                                          colors=[(230, 60, 60)]), static=True)
+    if list(results) == [""]:
+        result = results[""]
+        axes = result.axis_names
+        two_d = len(axes) == 2
+        gain = contour_gain(result) if two_d else 1
+        rec.send_blueprint(blueprint(axes, two_d, gain))
+        _log_run(rec, result, "", max_points, gain)
+    else:
+        rec.send_blueprint(rrb.Blueprint(rrb.Vertical(*[
+            rrb.TimeSeriesView(name=f"{name}: table position (mm)", origin=f"{name}/machine")
+            for name in results]), collapse_panels=True))
+        for name, result in results.items():
+            two_d = len(result.axis_names) == 2
+            _log_run(rec, result, f"{name}/", max_points, contour_gain(result) if two_d else 1)
     rec.flush()
     rec.disconnect()
     return path
+
+
+def _log_run(rec, result, prefix: str, max_points: int, gain: int) -> None:
+    """Send one run's series (and its contour for two axes) under ``prefix``."""
+    machine = result.machine
+    step = max(1, int(np.ceil(len(result.t_s) / max_points)))
+    sl = slice(None, None, step)
+    t = result.t_s[sl]
+    pos = result.table_position_m()
+    for i, axis in enumerate(machine.axes):
+        a = f"{prefix}machine/{axis.name}"
+        for part, joint in (("motor", axis.motor_joint), ("screw", axis.screw_joint)):
+            if joint:
+                _series(rec, f"{a}/{part}/angle", t, result.qpos[sl, machine.joint_qpos_index(joint)])
+                _series(rec, f"{a}/{part}/velocity", t, result.qvel[sl, machine.joint_dof_index(joint)])
+        _series(rec, f"{a}/table/position", t, pos[sl, i] * 1e3)
+        _series(rec, f"{a}/table/velocity", t, result.qvel[sl, machine.joint_dof_index(axis.table_joint)] * 1e3)
+        _series(rec, f"{a}/drive/force", t, result.actuator_force[sl, machine.model.actuator(axis.actuator).id])
+        _series(rec, f"{prefix}reference/{axis.name}", t, result.ref[sl, i, 0] * 1e3)
+        _series(rec, f"{prefix}error/{axis.name}", t, (result.ref[sl, i, 0] - pos[sl, i]) * 1e6)
+        _series(rec, f"{prefix}control/{axis.name}/u", t, result.u_V[sl, i])
+        _series(rec, f"{prefix}cutting/force/{axis.name}", t, result.workpiece_force_N[sl, i])
+    if len(machine.axes) == 2:
+        ref_xy = result.ref[sl, :, 0] * 1e3
+        act_xy = pos[sl] * 1e3
+        rec.log(f"{prefix}contour/reference", rr.LineStrips2D([ref_xy], colors=[(120, 120, 120)]), static=True)
+        rec.log(f"{prefix}contour/actual", rr.LineStrips2D([act_xy], colors=[(30, 140, 255)]), static=True)
+        rec.log(f"{prefix}contour/error_x{gain}", rr.LineStrips2D([ref_xy + gain * (act_xy - ref_xy)],
+                                                                   colors=[(230, 60, 60)]), static=True)
 
 
 def read_back(path: str | Path) -> dict[str, int]:

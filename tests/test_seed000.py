@@ -1,0 +1,165 @@
+"""Seed 000 in full: Kharitonov, robust PI, IMC, H-infinity, interval model, Table 2.
+
+Design procedures are checked on python-control models (controllers/ never sees MuJoCo);
+Table 2 is checked against the paper and the twin against the transfer functions.
+"""
+
+import itertools
+
+import control
+import numpy as np
+import pytest
+
+from controllers import seed000
+from controllers.hinf import central_controller, gamma_iteration, mixed_sensitivity_plant, reduce_balanced, shift_integrators
+from controllers.imc import imc_controller
+from controllers.kharitonov import (is_hurwitz, kharitonov_polynomials, robustly_stable,
+                                    stability_margin_third_order)
+from controllers.robust_pi import design_robust_pi, worst_case_margins
+from twin import reproduce_seed000 as r
+
+
+def _interval(center, rel):
+    c = np.asarray(center, float)
+    return c * (1 - rel), c * (1 + rel)
+
+
+# (lower, upper, robustly stable?) for degrees 3 to 5
+STABLE = [
+    # built on seed 000 eq. (31): its alpha1, alpha2 as lower and beta3 as upper bounds (other bounds ours)
+    ([1.0, 7.5, 115.0, 200.0], [1.0, 9.7, 186.0, 273.9]),
+    _interval(np.poly([-1, -2, -3, -4]), 0.05),       # (s+1)(s+2)(s+3)(s+4) +-5 %
+    _interval(np.poly([-1, -1, -1, -1, -1]), 0.03),   # (s+1)^5 +-3 %
+    _interval(np.poly([-0.5, -1 + 2j, -1 - 2j, -3]).real, 0.02),
+]
+UNSTABLE = [
+    ([1.0, 1.0, 1.0, 1.0], [1.0, 2.0, 2.0, 5.0]),    # a1 a2 = 1 < a0 a3 = 5 at a vertex
+    _interval(np.poly([-1, -2, -3, -4]), 0.9),        # +-90 %: a vertex loses the Routh test
+    _interval(np.poly([-1, -1, -1, -1, -1]), 0.5),    # (s+1)^5 +-50 %
+    _interval(np.poly([-0.05, -0.1 + 3j, -0.1 - 3j, -2, -5]).real, 0.2),
+]
+
+
+def _vertex_stable(lo, hi):
+    return all(is_hurwitz(np.where(np.array(pick, bool), hi, lo))
+               for pick in itertools.product((0, 1), repeat=len(lo)))
+
+
+@pytest.mark.parametrize("lo, hi, expected", [(*b, True) for b in STABLE] + [(*b, False) for b in UNSTABLE])
+def test_kharitonov_agrees_with_vertices_and_sampling(lo, hi, expected):
+    verdict = robustly_stable(lo, hi)
+    assert verdict == expected
+    assert verdict == _vertex_stable(np.asarray(lo), np.asarray(hi))
+    rng = np.random.default_rng(1)
+    samples = rng.uniform(lo, hi, size=(2000, len(lo)))
+    sampled = [np.roots(c).real.max() < 0 for c in samples]
+    if verdict:
+        assert all(sampled)
+    else:  # some member is unstable: a vertex (Kharitonov's polynomials are vertices)
+        assert not all(is_hurwitz(k) for k in kharitonov_polynomials(lo, hi).values())
+    if len(lo) == 4:  # eq. (5): SM > 0 iff robustly stable, for degree 3
+        assert (stability_margin_third_order(lo, hi) > 0) == verdict
+
+
+def test_kharitonov_polynomials_pattern():
+    lo, hi = np.array([1.0, 2, 3, 4, 5]), np.array([1.5, 2.5, 3.5, 4.5, 5.5])
+    k = kharitonov_polynomials(lo, hi)  # highest power first; K1 = a0(lo) + a1(lo) s + a2(hi) s^2 + ...
+    assert k["K1"][::-1].tolist() == [5.0, 4.0, 3.5, 2.5, 1.0]
+    assert k["K4"][::-1].tolist() == [5.5, 4.0, 3.0, 2.5, 1.5]
+
+
+def test_paper_stability_margins_follow_from_its_alphas():
+    """Eq. (5) on the paper's own alpha/beta gives its SM column of Table 2."""
+    for key, sm in (("pi_interval", 588.6), ("imc_interval", 145.46), ("hinf_interval", 410.43)):
+        p = r.PAPER[key]
+        lo, hi = [1.0, p["alpha1"], p["alpha2"], 0.0], [1.0, 1e3, 1e3, p["beta3"]]
+        assert stability_margin_third_order(lo, hi) == pytest.approx(sm, abs=0.06)
+
+
+def test_interval_model_is_exact_over_the_box():
+    """The coefficient bounds equal the min/max over all 16 vertices and bound random samples."""
+    nominal = r.nominal_params()
+    for ctrl in r.TABLE2_CONTROLLERS.values():
+        lo, hi = r.coefficient_interval(ctrl)
+        vert = np.array([r.characteristic_coefficients(ctrl, r.plant_gain(v), v) for v in r.box_vertices(nominal)])
+        assert np.allclose(lo, vert.min(axis=0)) and np.allclose(hi, vert.max(axis=0))
+        rand = np.array([r.characteristic_coefficients(ctrl, r.plant_gain(p), p) for p in r.random_samples(300, 2)])
+        assert (rand >= lo - 1e-9).all() and (rand <= hi + 1e-9).all()
+    # eq. (30) at nominal: s^3 + 9.697 s^2 + 4.848 Kp s + 4.848 Ki
+    c = r.characteristic_coefficients(seed000.ROBUST_PI, r.plant_gain(nominal), nominal)
+    assert c == pytest.approx([1.0, 9.697, 4.848 * 38.33, 4.848 * 45.65], rel=1e-3)
+
+
+def test_robust_pi_design_lands_on_the_paper_gains():
+    d = design_robust_pi(7.5, 3.0, 6.0, gm_db=10.0, pm_deg=60.0)  # eq. (17)'s coefficients
+    assert d.kp == pytest.approx(38.33, rel=0.02) and d.ki == pytest.approx(45.65, rel=0.02)
+    gm, pm = worst_case_margins(7.5, 3.0 * d.kp, 6.0 * d.ki)
+    assert (gm, pm) == pytest.approx((10.0, 60.0))
+    with pytest.raises(ValueError, match="pm_deg"):
+        design_robust_pi(7.5, 3.0, 6.0, pm_deg=95.0)
+
+
+def test_imc_reproduces_eq23_and_first_order_form():
+    C = imc_controller(control.tf([4.85], [1.0, 9.7, 0.0]), 1.0, 2)
+    num, den = (np.squeeze(x) for x in control.tfdata(C))
+    num, den = num / den[0], den / den[0]
+    assert round(num[0], 2) == 0.21 and num[1] == pytest.approx(2.0) and den == pytest.approx([1.0, 2.0])
+    # first-order plant k/(s + d), lambda = 1: C = (s + d)/(k mu s), a PI
+    C1 = imc_controller(control.tf([2.0], [1.0, 3.0]), 0.5, 1)
+    assert control.tf(C1).num[0][0] == pytest.approx([1.0, 3.0]) and control.tf(C1).den[0][0] == pytest.approx([1.0, 0.0])
+    with pytest.raises(ValueError, match="lam"):
+        imc_controller(control.tf([4.85], [1.0, 9.7, 0.0]), 1.0, 1)
+    for row, paper in zip(r.imc_design()["table3"], r.PAPER["table3"]):
+        assert (row["damping"], row["wn_rad_s"], row["st_4_over_xi_wn_s"]) == pytest.approx(
+            (paper[1], paper[2], paper[4]), rel=1e-5)
+
+
+def test_hinf_gamma_iteration_and_reduction():
+    """Reported beside eqs. (28)-(29): no threshold on the match, but gamma must respect its
+    lower bound |W3(0) T(0)| = 10 (integral action makes T(0) = 1) and be admissible."""
+    s = control.tf("s")
+    P = mixed_sensitivity_plant(shift_integrators(control.tf([4.85], [1.0, 9.7, 0.0]), 1e-6),
+                                20 / (s + 0.01), control.tf(1, 1), 1 / (s + 0.1))
+    it = gamma_iteration(P)
+    assert 10.0 <= it.gamma <= 10.1
+    with pytest.raises(ValueError, match="no admissible"):
+        central_controller(P, 9.0)
+    assert central_controller(P, 1 / r.PAPER["hinf_theta"]).nstates == 4  # the paper's order
+    # balanced truncation of the published eq. (28) to first order gives eq. (29)
+    red = reduce_balanced(seed000.HINF, 1)
+    num, den = red.num[0][0], red.den[0][0]
+    assert num[-1] / den[0] == pytest.approx(20.97, rel=0.005) and den[1] / den[0] == pytest.approx(5.5, rel=0.01)
+
+
+def test_table2_nominal_on_transfer_functions():
+    """Settling times and the non-trivial overshoots within 5 % of Table 2; the paper's RT is
+    the 0-100 % rise time where the response overshoots and 10-90 % for IMC (never reaches 1)."""
+    nominal = r.nominal_params()
+    m = {name: r.tf_step(c, nominal) for name, c in r.TABLE2_CONTROLLERS.items()}
+    for name, row in r.PAPER["table2"].items():
+        assert m[name]["settling_time_s"] == pytest.approx(row["nominal"][1], rel=0.05)
+    assert m["robust_pi"]["overshoot_pct"] == pytest.approx(41.2, rel=0.05)
+    assert m["hinf"]["overshoot_pct"] == pytest.approx(6.3, rel=0.05)
+    assert m["robust_pi"]["rise_time_0_100_s"] == pytest.approx(0.14, rel=0.05)
+    assert m["hinf"]["rise_time_0_100_s"] == pytest.approx(1.12, rel=0.05)
+    assert m["imc"]["rise_time_10_90_s"] == pytest.approx(3.36, rel=0.05)
+    # the 0.1 s delay of eq. (2): the robust PI loop is unstable with it, IMC is not
+    assert r.tf_step(seed000.ROBUST_PI, nominal, delay_s=0.1) is None
+    assert r.tf_step(seed000.IMC, nominal, delay_s=0.1) is not None
+
+
+def test_twin_matches_transfer_functions_on_table2_nominal():
+    nominal = r.nominal_params()
+    for name, ctrl in r.TABLE2_CONTROLLERS.items():
+        tf, twin = r.tf_step(ctrl, nominal), r.twin_step(ctrl, nominal)
+        for k in ("overshoot_pct", "settling_time_s", "rise_time_10_90_s"):
+            assert twin[k] == pytest.approx(tf[k], rel=0.02, abs=0.1 if k == "overshoot_pct" else 0), (name, k)
+
+
+def test_table2_bands_small_counts():
+    t2 = r.table2(mc_samples=20, twin_random=1, seed=3, progress=False)
+    assert not t2.mismatches
+    row = t2.rows["robust_pi"]
+    lo, hi = row["tf_paper_samples"]["overshoot_pct"]
+    assert lo < row["tf_nominal"]["overshoot_pct"] < hi
+    assert row["twin_paper_samples"]["overshoot_pct"] == pytest.approx((lo, hi), rel=0.02)

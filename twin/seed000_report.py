@@ -1,0 +1,144 @@
+"""Tables and plots of ``twin reproduce seed000`` (see :mod:`twin.reproduce_seed000`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from twin import reproduce_seed000 as r
+
+
+def run_all(mc_samples: int = 1000, twin_random: int = 20, seed: int = 0, progress: bool = True) -> dict:
+    """Every part of the reproduction, as one JSON-ready dict."""
+    t2 = r.table2(mc_samples, twin_random, seed, progress)
+    return {"interval": r.interval_table(), "robust_pi": r.robust_pi_designs(), "imc": r.imc_design(),
+            "hinf": r.hinf_design(), "table2": t2.rows, "twin_vs_tf_mismatches": t2.mismatches,
+            "disturbance_noise": r.disturbance_and_noise(),
+            "settings": {"mc_samples": mc_samples, "twin_random": twin_random, "seed": seed,
+                         "step_horizon_s": r.HORIZON_S, "sample_period_s": r.DT_S,
+                         "disturbance_V": r.DISTURBANCE_V, "disturbance_start_s": r.DISTURBANCE_START_S,
+                         "noise_std_m": r.NOISE_STD_M}}
+
+
+def _fmt(x, spec=".4g") -> str:
+    if x is None:
+        return "unstable"
+    if isinstance(x, tuple):  # a band
+        return " to ".join(_fmt(v, spec) for v in x)
+    if isinstance(x, list):  # coefficients
+        return "[" + ", ".join(_fmt(v, spec) for v in x) + "]"
+    return "never" if isinstance(x, float) and np.isnan(x) else format(x, spec)
+
+
+def format_report(res: dict) -> str:
+    """Plain-text tables: parts 2, 3, 5, 6 (paper | transfer function | twin) and 7."""
+    out = ["Seed 000 (Yadav, Pathak, Gaur 2020) reproduced: paper | ours", ""]
+    out.append("Interval model from Table 1's box (exact: coefficients affine in a = K1K2n/(p^2 m + n^2 Im))")
+    out.append(f"{'controller':<10} {'alpha1':>16} {'alpha2':>16} {'beta3':>16} {'SM eq.5':>18} "
+               f"{'Kharitonov':>11} {'family':>7}")
+    for row in res["interval"]:
+        p = row["paper"]
+        out.append(f"{row['controller']:<10} {p['alpha1']:>7.4g} | {row['alpha1']:<6.4g} {p['alpha2']:>7.4g} | "
+                   f"{row['alpha2']:<6.4g} {p['beta3']:>7.4g} | {row['beta3']:<6.4g} {p['sm']:>8.5g} | "
+                   f"{row['sm']:<7.4g} {'stable' if row['kharitonov_stable'] else 'not shown':>11} "
+                   f"{'stable' if row['family_stable'] else 'UNSTABLE':>7}")
+    out += ["", "Robust PI, eqs. (18)-(19), GM 10 dB, PM 60 deg"]
+    pi = res["robust_pi"]
+    out.append(f"  paper:                      Kp = {pi['paper']['kp']}, Ki = {pi['paper']['ki']} (Kp/Ki = 0.84)")
+    for label in ("eq17_coefficients", "box_coefficients"):
+        d = pi[label]
+        out.append(f"  ours on {label:<19} Kp = {d['kp']:.4g}, Ki = {d['ki']:.4g} (Kp/Ki = {d['kp_per_ki']:.4g}); "
+                   f"true nominal PM {d['nominal_pm_deg']:.1f} deg")
+    imc = res["imc"]
+    out += ["", f"IMC, mu = 1, lambda = 2: C = ({imc['num'][0]:.4g} s + {imc['num'][1]:.4g})/(s + {imc['den'][1]:.4g}) "
+                f"| paper (0.21 s + 2)/(s + 2)", f"  {imc['reduction']}", "  Table 3 (mu, xi, wn, pole, 4/(xi wn), 2 % ST):"]
+    for row, paper in zip(imc["table3"], imc["paper_table3"]):
+        out.append(f"    mu {row['mu_s']:>4}: xi {paper[1]} | {row['damping']:.3f}, wn {paper[2]} | {row['wn_rad_s']:.3f}, "
+                   f"pole {paper[3]} | {row['pole']:.3f}, ST {paper[4]} | {row['st_4_over_xi_wn_s']:.3f} "
+                   f"(2 % ST {row['st_2pct_s']:.3f} s)")
+    h = res["hinf"]
+    out += ["", f"H-infinity (integrator shifted to -{h['integrator_shift_eps']:g}): optimal gamma {h['gamma_opt']:.4f} "
+                f"(theta {h['theta_opt']:.4g}, {h['iterations']} bisections) | paper theta {h['paper_theta']} "
+                f"(gamma {1 / h['paper_theta']:.2f})"]
+    for key, label in (("controller_at_paper_gamma", "central controller at the paper's gamma"),
+                       ("paper_eq28", "paper eq. (28)"), ("reduced_eq28", "balred(eq. 28, 1)"),
+                       ("reduced_at_paper_gamma", "balred(ours at paper gamma, 1)"), ("paper_eq29", "paper eq. (29)"),
+                       ("controller_opt", "central controller at optimal gamma"), ("reduced_opt", "balred(optimal, 1)")):
+        c = h[key]
+        out.append(f"  {label:<38} num {_fmt(np.atleast_1d(c['num']).tolist())}  den {_fmt(c['den'])}")
+    out.append(f"  Fig. 6 claim (same singular values): max gap eq. 28 vs eq. 29 over 1e-3..1e3 rad/s = "
+               f"{h['sv_gap_eq28_vs_eq29_db']:.1f} dB at {h['sv_gap_eq28_vs_eq29_at_rad_s']:.3g} rad/s; "
+               f"above 0.1 rad/s {h['sv_gap_eq28_vs_eq29_above_0p1_db']:.2f} dB")
+    out += ["", "Table 2: unit step (OS %, ST 2 % s, RT s: 10-90 % and 0-100 %)",
+            f"{'controller':<10} {'source':<26} {'OS':>14} {'ST':>14} {'RT 10-90':>14} {'RT 0-100':>14}"]
+    keys = r.KEYS
+    for name, row in res["table2"].items():
+        nom, bnd = row["paper"]["nominal"], row["paper"]["band"]
+        out.append(f"{name:<10} {'paper nominal':<26} {nom[0]:>14} {nom[1]:>14} {'':>14} {nom[2]:>14}")
+        for label, m in (("tf nominal", row["tf_nominal"]), ("twin nominal", row["twin_nominal"]),
+                         ("tf nominal, 0.1 s delay", row["tf_nominal_with_0.1s_delay"])):
+            cells = [_fmt(m[k]) for k in keys] if m else ["unstable"] * 4
+            out.append(f"{'':<10} {label:<26} " + " ".join(f"{c:>14}" for c in cells))
+        out.append(f"{'':<10} {'paper uncertain':<26} {_fmt(bnd[0]):>14} {_fmt(bnd[1]):>14} {'':>14} {_fmt(bnd[2]):>14}")
+        for label, key in (("tf, paper's 10 samples", "tf_paper_samples"), ("twin, paper's 10 samples", "twin_paper_samples"),
+                           (f"tf, Monte Carlo {row['mc_samples']}", "tf_monte_carlo"),
+                           (f"twin, {row['twin_random']} random", "twin_random_samples")):
+            b = row[key]
+            if b is None:
+                continue
+            out.append(f"{'':<10} {label:<26} " + " ".join(f"{_fmt(b[k], '.3g'):>14}" for k in keys)
+                       + (f"  ({b['unstable']} unstable)" if b["unstable"] else ""))
+    out += ["", f"Disturbance ({res['settings']['disturbance_V']} V input step at {res['settings']['disturbance_start_s']} s) "
+                f"and encoder noise ({res['settings']['noise_std_m']} m RMS) on the nominal twin; effort of the unit step"]
+    out.append(f"{'controller':<10} {'u peak V':>10} {'u RMS V':>10} {'dist RMS m':>12} {'dist peak m':>12} "
+               f"{'dist final m':>13} {'noise RMS m':>12} {'noise u RMS V':>14}")
+    for name, d in res["disturbance_noise"].items():
+        out.append(f"{name:<10} {d['u_peak_V']:>10.4g} {d['u_rms_V']:>10.4g} {d['disturbance_dev_rms_m']:>12.4g} "
+                   f"{d['disturbance_dev_peak_m']:>12.4g} {d['disturbance_dev_final_m']:>13.4g} "
+                   f"{d['noise_dev_rms_m']:>12.4g} {d['noise_u_rms_V']:>14.4g}")
+    mism = res["twin_vs_tf_mismatches"]
+    out += ["", f"Twin vs transfer function (tolerance {r.TWIN_TOL_REL:.0%}, OS floor {r.TWIN_TOL_OS_PP} pp): "
+                + ("all within" if not mism else f"{len(mism)} outside:")] + [f"  {m}" for m in mism]
+    return "\n".join(out)
+
+
+def write_plots(directory: Path) -> list[Path]:
+    """PNG step responses as Figs. 7-10: per controller the nominal response with the band of
+    the paper's 10 samples (transfer functions) and the nominal twin, then all three nominal."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    directory.mkdir(parents=True, exist_ok=True)
+    nominal = r.nominal_params()
+    t = np.arange(0.0, r.HORIZON_S, r.DT_S)
+    written, nominal_curves = [], {}
+    for fig_no, (name, ctrl) in zip((7, 8, 9), r.TABLE2_CONTROLLERS.items()):
+        samples = np.array([r.tf_step_series(ctrl, p) for p in r.paper_samples()])
+        y_tf = r.tf_step_series(ctrl, nominal)
+        twin = r.twin_step_result(ctrl, nominal)
+        nominal_curves[name] = y_tf
+        fig, ax = plt.subplots(figsize=(7, 4))
+        ax.fill_between(t, samples.min(axis=0), samples.max(axis=0), color="tab:blue", alpha=0.2,
+                        label="paper's 10 samples (TF), band")
+        ax.plot(t, y_tf, color="tab:blue", label="nominal, transfer function")
+        ax.plot(twin.t_s, twin.table_position_m()[:, 0], "--", color="tab:red", label="nominal, MuJoCo twin")
+        ax.set(xlabel="time (s)", ylabel="table position (m), unit step", title=f"Fig. {fig_no}: {name}")
+        ax.grid(True, alpha=0.3)
+        ax.legend()
+        path = directory / f"seed000_fig{fig_no}_{name}.png"
+        fig.savefig(path, dpi=120, bbox_inches="tight")
+        plt.close(fig)
+        written.append(path)
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for name, y in nominal_curves.items():
+        ax.plot(t, y, label=name)
+    ax.set(xlabel="time (s)", ylabel="table position (m), unit step", title="Fig. 10: nominal, all controllers")
+    ax.grid(True, alpha=0.3)
+    ax.legend()
+    path = directory / "seed000_fig10_nominal.png"
+    fig.savefig(path, dpi=120, bbox_inches="tight")
+    plt.close(fig)
+    return written + [path]
