@@ -111,16 +111,6 @@ def gamma_iteration(P: control.StateSpace, gamma_max: float = 1e4, gamma_min: fl
     return GammaIteration(gamma=hi, controller=best, iterations=iterations)
 
 
-def hinf_norm(sys: control.LTI, w_rad_s: np.ndarray | None = None) -> float:
-    """Peak of the largest singular value over a frequency grid (default 1e-4..1e4 rad/s)."""
-    w = np.logspace(-4, 4, 4000) if w_rad_s is None else w_rad_s
-    resp = control.frequency_response(sys, w)
-    fr = np.asarray(resp.fresp)
-    if fr.ndim == 1:
-        fr = fr[None, None, :]
-    return float(max(np.linalg.svd(fr[:, :, k], compute_uv=False)[0] for k in range(fr.shape[2])))
-
-
 def reduce_balanced(controller: control.LTI, order: int) -> control.TransferFunction:
     """Balanced truncation to ``order`` (``control.balred``, method 'truncate')."""
     return control.tf(control.balred(control.ss(controller), order, method="truncate"))

@@ -33,10 +33,11 @@ from controllers.imc import imc_controller
 from controllers.kharitonov import kharitonov_polynomials, robustly_stable, stability_margin_third_order
 from controllers.lti import DiscreteLTI
 from controllers.robust_pi import design_robust_pi, worst_case_margins
-from twin.machines import build, get_machine
-from twin.metrics import step_metrics
 from twin.disturbances import VoltageStep
 from twin.drive import Encoder
+from twin.machines import build, get_machine
+from twin.machines.cncmt import leadscrew_tf
+from twin.metrics import step_metrics
 from twin.references import Step
 from twin.runner import simulate
 
@@ -159,14 +160,9 @@ def robust_pi_designs() -> dict:
     return out
 
 
-def nominal_plant() -> control.TransferFunction:
-    """Eq. (2) without the delay, from Table 1's nominal values."""
-    return get_machine("cncmt").build().plant[0, 0]
-
-
 def imc_design() -> dict:
     """Part 4: eq. (23) from mu = 1, lambda = 2 on eq. (2), and Table 3."""
-    G = nominal_plant()
+    G = _plant(nominal_params())
     C = imc_controller(G, 1.0, 2)
     num, den = (np.squeeze(c) for c in control.tfdata(C))
     num, den = num / den[0], den / den[0]
@@ -188,7 +184,7 @@ def imc_design() -> dict:
 def hinf_design(eps: float = 1e-6) -> dict:
     """Part 5: mixsyn with W1 = 20/(s+0.01), W2 = 1, W3 = 1/(s+0.1) on eq. (2), integrator shifted."""
     s = control.tf("s")
-    G = nominal_plant()
+    G = _plant(nominal_params())
     P = mixed_sensitivity_plant(shift_integrators(G, eps), 20 / (s + 0.01), control.tf(1, 1), 1 / (s + 0.1))
     opt = gamma_iteration(P)
     at_paper = control.tf(central_controller(P, 1.0 / PAPER["hinf_theta"]))
@@ -208,6 +204,7 @@ def hinf_design(eps: float = 1e-6) -> dict:
         num, den = (np.squeeze(c) for c in control.tfdata(tf))
         return {"num": (num / den[0]).tolist(), "den": (den / den[0]).tolist()}
 
+    gap_db, gap_at_rad_s = sv_gap_db(seed000.HINF, seed000.HINF_REDUCED)
     return {"integrator_shift_eps": eps, "gamma_opt": opt.gamma, "theta_opt": opt.theta,
             "iterations": opt.iterations, "paper_theta": PAPER["hinf_theta"],
             "gamma_floor_W3T_at_dc": 10.0,
@@ -215,8 +212,7 @@ def hinf_design(eps: float = 1e-6) -> dict:
             "controller_at_paper_gamma": coeffs(at_paper), "paper_eq28": coeffs(seed000.HINF),
             "reduced_opt": coeffs(reduced_opt), "reduced_at_paper_gamma": coeffs(reduced_at_paper),
             "reduced_eq28": coeffs(reduced_eq28), "paper_eq29": coeffs(seed000.HINF_REDUCED),
-            "sv_gap_eq28_vs_eq29_db": sv_gap_db(seed000.HINF, seed000.HINF_REDUCED)[0],
-            "sv_gap_eq28_vs_eq29_at_rad_s": sv_gap_db(seed000.HINF, seed000.HINF_REDUCED)[1],
+            "sv_gap_eq28_vs_eq29_db": gap_db, "sv_gap_eq28_vs_eq29_at_rad_s": gap_at_rad_s,
             "sv_gap_eq28_vs_eq29_above_0p1_db": sv_gap_db(seed000.HINF, seed000.HINF_REDUCED,
                                                           np.logspace(-1, 3, 400))[0],
             "sv_gap_opt_vs_reduced_db": sv_gap_db(control.tf(opt.controller), reduced_opt)[0]}
@@ -225,8 +221,8 @@ def hinf_design(eps: float = 1e-6) -> dict:
 # ---------------------------------------------------------------- Table 2
 
 def _plant(params: dict[str, float]) -> control.TransferFunction:
-    a = plant_gain(params)
-    return control.tf([a * params["p"]], [1.0, a * params["H2"], 0.0])
+    """Eq. (1) without the delay, as the cncmt machine builds it."""
+    return leadscrew_tf(**{k: params[k] for k in ("K1", "K2", "m", "Im", "p", "n", "H2")})
 
 
 def _loop(controller, params: dict[str, float], delay_s: float):
@@ -240,8 +236,9 @@ def _loop(controller, params: dict[str, float], delay_s: float):
     return control.feedback(open_loop, 1), dt, 4 * HORIZON_S
 
 
-def tf_step_series(controller, params: dict[str, float], delay_s: float = 0.0) -> np.ndarray | None:
-    """Unit-step response (m) of the transfer-function loop; None when the loop is unstable.
+def tf_step_series(controller, params: dict[str, float],
+                   delay_s: float = 0.0) -> tuple[np.ndarray, np.ndarray] | None:
+    """Unit-step response ``(t_s, y_m)`` of the transfer-function loop; None when unstable.
 
     Without delay the continuous loop is sampled exactly every ``DT_S`` (ZOH of a step input is
     exact); with a delay it is the sampled-data loop at 1 ms (ZOH plant, Tustin controller,
@@ -251,16 +248,14 @@ def tf_step_series(controller, params: dict[str, float], delay_s: float = 0.0) -
     if np.abs(np.linalg.eigvals(control.ss(loop).A)).max() >= 1.0:
         return None
     num, den = (np.atleast_1d(np.squeeze(c)) for c in control.tfdata(control.tf(loop)))
-    return lfilter(num, den, np.ones(int(round(horizon / dt))))
+    t = np.arange(int(round(horizon / dt))) * dt
+    return t, lfilter(num, den, np.ones_like(t))
 
 
 def tf_step(controller, params: dict[str, float], delay_s: float = 0.0) -> dict | None:
     """Step metrics of :func:`tf_step_series`; None when unstable."""
-    y = tf_step_series(controller, params, delay_s)
-    if y is None:
-        return None
-    dt = DT_S if delay_s == 0.0 else 1e-3
-    return step_metrics(np.arange(len(y)) * dt, y, final=1.0)
+    series = tf_step_series(controller, params, delay_s)
+    return None if series is None else step_metrics(*series, final=1.0)
 
 
 def twin_step_result(controller, params: dict[str, float]):
@@ -357,7 +352,7 @@ def table2(mc_samples: int = 1000, twin_random: int = 20, seed: int = 0, progres
             rows[name] = {
                 "paper": PAPER["table2"][name],
                 "tf_nominal": tf_nom, "twin_nominal": twin_nom, "tf_nominal_with_0.1s_delay": tf_delay,
-                "tf_paper_samples": band([tf_step(ctrl, p) for p in paper_pts]),
+                "tf_paper_samples": band(tf_pts[:len(paper_pts)]),
                 "twin_paper_samples": band(tw_pts[:len(paper_pts)]),
                 "tf_monte_carlo": band([tf_step(ctrl, p) for p in mc]),
                 "twin_random_samples": band(tw_pts[len(paper_pts):]) if twin_random else None,

@@ -85,8 +85,7 @@ class RunResult:
 
     def table_position_m(self) -> np.ndarray:
         """Table positions (m), shape (n, n_axes)."""
-        idx = [self.machine.joint_qpos_index(a.table_joint) for a in self.machine.axes]
-        return self.qpos[:, idx]
+        return self.qpos[:, self.machine.table_qpos_indices()]
 
     def error_m(self) -> np.ndarray:
         """Tracking error reference - table position (m), shape (n, n_axes)."""
@@ -212,7 +211,7 @@ class _PythonLoop:
     def __init__(self, machine, data, blocks, drive, encoder, noise, ref, u_dist, step_hooks, rec):
         self.model, self.data, self.blocks, self.drive, self.encoder = machine.model, data, blocks, drive, encoder
         self.noise, self.ref, self.u_dist, self.hooks, self.rec = noise, ref, u_dist, step_hooks, rec
-        self.q_idx = np.array([machine.joint_qpos_index(a.table_joint) for a in machine.axes])
+        self.q_idx = machine.table_qpos_indices()
         self.v_idx = np.array([machine.joint_dof_index(a.table_joint) for a in machine.axes])
         self.wp = machine.workpiece_body_id
         self.bad_qacc = data.warning[mujoco.mjtWarning.mjWARN_BADQACC]
@@ -262,7 +261,7 @@ class _CompiledLoop:
 
     def __init__(self, machine, data, blocks, drive, encoder, noise, ref, u_dist, step_hooks, rec):
         self.model, self.data, self.blocks, self.rec = machine.model, data, blocks, rec
-        self.q_idx = np.array([machine.joint_qpos_index(a.table_joint) for a in machine.axes])
+        self.q_idx = machine.table_qpos_indices()
         self.A, self.B, self.C, self.D, self.kv, self.ka = compiled_loop.combine([b for b, _ in blocks])
         self.x = np.zeros(self.A.shape[0])
         self.args = (data.qpos, data.qvel, data.ctrl, data.actuator_force, data.xfrc_applied,

@@ -113,13 +113,12 @@ def write_plots(directory: Path) -> list[Path]:
 
     directory.mkdir(parents=True, exist_ok=True)
     nominal = r.nominal_params()
-    t = np.arange(0.0, r.HORIZON_S, r.DT_S)
     written, nominal_curves = [], {}
     for fig_no, (name, ctrl) in zip((7, 8, 9), r.TABLE2_CONTROLLERS.items()):
-        samples = np.array([r.tf_step_series(ctrl, p) for p in r.paper_samples()])
-        y_tf = r.tf_step_series(ctrl, nominal)
+        samples = np.array([r.tf_step_series(ctrl, p)[1] for p in r.paper_samples()])
+        t, y_tf = r.tf_step_series(ctrl, nominal)
         twin = r.twin_step_result(ctrl, nominal)
-        nominal_curves[name] = y_tf
+        nominal_curves[name] = (t, y_tf)
         fig, ax = plt.subplots(figsize=(7, 4))
         ax.fill_between(t, samples.min(axis=0), samples.max(axis=0), color="tab:blue", alpha=0.2,
                         label="paper's 10 samples (TF), band")
@@ -133,7 +132,7 @@ def write_plots(directory: Path) -> list[Path]:
         plt.close(fig)
         written.append(path)
     fig, ax = plt.subplots(figsize=(7, 4))
-    for name, y in nominal_curves.items():
+    for name, (t, y) in nominal_curves.items():
         ax.plot(t, y, label=name)
     ax.set(xlabel="time (s)", ylabel="table position (m), unit step", title="Fig. 10: nominal, all controllers")
     ax.grid(True, alpha=0.3)

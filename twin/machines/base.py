@@ -118,6 +118,10 @@ class BuiltMachine:
         """Index of a joint's position in ``MjData.qpos``."""
         return int(self.model.jnt_qposadr[self.model.joint(joint).id])
 
+    def table_qpos_indices(self) -> np.ndarray:
+        """Indices of the axes' table positions in ``MjData.qpos``, in axis order."""
+        return np.array([self.joint_qpos_index(a.table_joint) for a in self.axes])
+
     def joint_dof_index(self, joint: str) -> int:
         """Index of a joint's velocity in ``MjData.qvel``."""
         return int(self.model.jnt_dofadr[self.model.joint(joint).id])
