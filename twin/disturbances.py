@@ -1,7 +1,12 @@
-"""Disturbance signals added to the drive input (V), as the runner's ``input_V(t)`` hook."""
+"""Disturbance signals added to the drive input (V), as the runner's ``input_V(t)`` hook.
+
+Forces on the workpiece (cutting) are in :mod:`twin.cutting`; sensor noise is the encoder's
+(:class:`twin.drive.Encoder`, seeded).
+"""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -9,17 +14,34 @@ import numpy as np
 from twin.errors import TwinInputError
 
 
+def _axis_mask(axes: tuple[int, ...] | None, n_axes: int) -> np.ndarray:
+    """1.0 on the disturbed axes (all when ``axes`` is None), shape (n_axes,)."""
+    if axes is None:
+        return np.ones(n_axes)
+    mask = np.zeros(n_axes)
+    mask[list(axes)] = 1.0
+    return mask
+
+
 @dataclass(frozen=True)
 class VoltageStep:
-    """Input (voltage) disturbance: ``amplitude_V`` added to every axis from ``start_s`` on.
+    """Input (voltage) disturbance: ``amplitude_V`` added from ``start_s`` on.
 
     Seed 000 (Figs. 12-13) perturbs the input voltage; its figure is lost in the extraction, so
     the shape (a step) and its size are the twin's choice, stated where used.
+
+    Parameters
+    ----------
+    amplitude_V, start_s : float
+    n_axes : int
+    axes : tuple of int or None
+        Disturbed axes (indices); None for all.
     """
 
     amplitude_V: float
     start_s: float
     n_axes: int = 1
+    axes: tuple[int, ...] | None = None
 
     def __post_init__(self):
         if not np.isfinite(self.amplitude_V):
@@ -30,4 +52,60 @@ class VoltageStep:
     def input_V(self, t_s: np.ndarray) -> np.ndarray:
         """Disturbance (V), shape (len(t_s), n_axes)."""
         on = (np.asarray(t_s) >= self.start_s).astype(float) * self.amplitude_V
-        return np.repeat(on[:, None], self.n_axes, axis=1)
+        return on[:, None] * _axis_mask(self.axes, self.n_axes)
+
+
+@dataclass(frozen=True)
+class HarmonicInput:
+    """Sum of sines added to the drive input (V): seed 003's harmonic input disturbances.
+
+    ``d(t) = sum_i A_i sin(2 pi f_i t + phase_i)``; seed 003 uses one, two and three harmonics
+    at 0.2, 0.5 and 0.8 Hz.  Its amplitudes are not in the extraction: they are the
+    scenario's choice.
+
+    Parameters
+    ----------
+    amplitudes_V, frequencies_hz : tuple of float
+    phases_rad : tuple of float or None
+        None draws each phase uniformly in [0, 2 pi) from ``seed``.
+    n_axes : int
+    axes : tuple of int or None
+        Disturbed axes (indices); None for all.
+    start_s : float
+    seed : int
+    """
+
+    amplitudes_V: tuple[float, ...]
+    frequencies_hz: tuple[float, ...]
+    phases_rad: tuple[float, ...] | None = None
+    n_axes: int = 1
+    axes: tuple[int, ...] | None = None
+    start_s: float = 0.0
+    seed: int = 0
+
+    def __post_init__(self):
+        if len(self.amplitudes_V) != len(self.frequencies_hz) or not self.amplitudes_V:
+            raise TwinInputError("disturbance.frequencies_hz", list(self.frequencies_hz),
+                                 "needs one entry per amplitude (at least one)")
+        if not all(math.isfinite(a) for a in self.amplitudes_V):
+            raise TwinInputError("disturbance.amplitudes_V", list(self.amplitudes_V), "must be finite")
+        if not all(f > 0 and math.isfinite(f) for f in self.frequencies_hz):
+            raise TwinInputError("disturbance.frequencies_hz", list(self.frequencies_hz), "must be > 0")
+        if self.phases_rad is not None and len(self.phases_rad) != len(self.amplitudes_V):
+            raise TwinInputError("disturbance.phases_rad", list(self.phases_rad), "needs one entry per amplitude")
+        if not self.start_s >= 0:
+            raise TwinInputError("disturbance.start_s", self.start_s, "must be >= 0")
+
+    def phases(self) -> np.ndarray:
+        """The phases in use (rad): given, or drawn from ``seed``."""
+        if self.phases_rad is not None:
+            return np.asarray(self.phases_rad, float)
+        return np.random.default_rng(self.seed).uniform(0.0, 2.0 * math.pi, len(self.amplitudes_V))
+
+    def input_V(self, t_s: np.ndarray) -> np.ndarray:
+        """Disturbance (V), shape (len(t_s), n_axes)."""
+        t = np.asarray(t_s, float)[:, None]
+        wave = (np.asarray(self.amplitudes_V) * np.sin(2 * math.pi * np.asarray(self.frequencies_hz) * t
+                                                         + self.phases())).sum(axis=1)
+        wave = np.where(t[:, 0] >= self.start_s, wave, 0.0)
+        return wave[:, None] * _axis_mask(self.axes, self.n_axes)

@@ -16,6 +16,11 @@ integrator) from the sampling itself.
     under a full-scale +-10 V reversal on every axis at once.
 
 Friction is forced off (the reference models have none).
+
+Besides one case per machine, ``linear_motor_xy+average_force`` runs ``linear_motor_xy`` with
+seed 004's average cutting force (:class:`twin.cutting.AverageForce`, Table 1's nominal
+k_il = -2500, k_c = 2500 N s/m, written into ``xfrc_applied`` every physics step) against the
+coupled 4-state model of eq. (11) (:func:`twin.machines.linear_motor.cutting_coupled_plant`).
 """
 
 from __future__ import annotations
@@ -25,9 +30,14 @@ import math
 import control
 import numpy as np
 
+from dataclasses import replace
+
 from controllers.lti import DiscreteLTI
 from controllers.open_loop import OpenLoop
-from twin.machines import build, get_machine
+from twin.cutting import AverageForce
+from twin.errors import TwinInputError
+from twin.machines import MACHINES, build, get_machine
+from twin.machines.linear_motor import cutting_coupled_plant
 from twin.references import Step, SumOfSines
 from twin.runner import simulate
 
@@ -35,6 +45,11 @@ TARGETS = {"time_nrmse": 0.005, "frf_max_mag_err_db": 0.2, "frf_max_phase_err_de
            "coupling_slip_um": 0.1}
 FULL_SCALE_V = 10.0
 FRICTION_SYMBOLS = ("F_coul_x", "F_coul_y")
+#: Seed 004 Table 1, up milling (N s/m).
+SEED004_CUTTING = AverageForce(k_il_N_s_per_m=-2500.0, k_c_N_s_per_m=2500.0)
+#: Fidelity cases: name -> (machine, cutting-force model or None).
+CASES = {**{name: (name, None) for name in MACHINES},
+         "linear_motor_xy+average_force": ("linear_motor_xy", SEED004_CUTTING)}
 
 
 def _discrete_reference(bm, dt):
@@ -45,19 +60,20 @@ def _discrete_reference(bm, dt):
 
 def _tf_listing(bm) -> dict:
     names = [a.name for a in bm.axes]
+    plant = control.tf(bm.plant)
     out = {}
     for i, yi in enumerate(names):
         for j, uj in enumerate(names):
-            num = np.trim_zeros(np.asarray(bm.plant.num[i][j], float), "f")
-            if not num.any():
+            num = np.trim_zeros(np.asarray(plant.num[i][j], float), "f")
+            if not (np.abs(num) > 1e-12 * np.abs(plant.den[i][j]).max()).any():
                 continue
             key = yi if len(names) == 1 or i == j else f"{yi}<-u_{uj}"
-            out[key] = {"num": num.tolist(), "den": np.asarray(bm.plant.den[i][j], float).tolist(),
+            out[key] = {"num": num.tolist(), "den": np.asarray(plant.den[i][j], float).tolist(),
                         "delay_s": bm.delay_s}
     return out
 
 
-def time_response_nrmse(bm, duration_s: float = 1.0) -> float:
+def time_response_nrmse(bm, duration_s: float = 1.0, disturbances=()) -> float:
     """Check (a): worst normalized RMS error of the open-loop response."""
     dt = bm.model.opt.timestep
     n_axes = len(bm.axes)
@@ -69,7 +85,8 @@ def time_response_nrmse(bm, duration_s: float = 1.0) -> float:
     for k in range(n_axes):
         u = np.zeros((n, n_axes))
         u[:, k] = test
-        res = simulate(bm, [OpenLoop(u, dt)], Step(0.0, n_axes=n_axes), duration_s, dt, progress=False)
+        res = simulate(bm, [OpenLoop(u, dt)], Step(0.0, n_axes=n_axes), duration_s, dt,
+                       disturbances=disturbances, progress=False)
         u_delayed = np.vstack([np.zeros((delay, n_axes)), u[: n - delay]]) if delay else u
         y_ref = np.atleast_2d(control.forced_response(g, T=t, U=u_delayed.T).outputs).T
         err = res.table_position_m() - y_ref
@@ -84,7 +101,8 @@ def multisine_bins(period_s: float, f_min_hz: float, f_max_hz: float, n_tones: i
 
 
 def frequency_response_errors(bm, period_s: float = 10.0, f_max_hz: float = 50.0,
-                              n_tones: int = 40, crossover_hz: float = 2.0, settle_s: float = 5.0) -> dict:
+                              n_tones: int = 40, crossover_hz: float = 2.0, settle_s: float = 5.0,
+                              disturbances=()) -> dict:
     """Check (b): measured-vs-model frequency response, worst magnitude (dB) and phase (deg)."""
     dt = bm.model.opt.timestep
     n_axes = len(bm.axes)
@@ -101,7 +119,7 @@ def frequency_response_errors(bm, period_s: float = 10.0, f_max_hz: float = 50.0
         amp = 0.2 / kp[k]  # about 0.2 V per tone at high frequency
         ref = SumOfSines((amp,) * len(bins), tuple(freqs), tuple(phases), n_axes=n_axes, axes=(k,))
         ctrls = [DiscreteLTI(control.tf([kp[i]], [1.0]), dt, name="P") for i in range(n_axes)]
-        res = simulate(bm, ctrls, ref, (settle + 1) * period_s, dt, progress=False)
+        res = simulate(bm, ctrls, ref, (settle + 1) * period_s, dt, disturbances=disturbances, progress=False)
         y = res.table_position_m()[settle * n_period:]
         u = res.u_applied_V[settle * n_period:]
         Y[:, :, k] = np.fft.rfft(y, axis=0)[bins]
@@ -136,23 +154,36 @@ def coupling_slip_um(bm, duration_s: float = 0.4) -> float:
     return float(bm.slip_m(res.qpos).max() * 1e6)
 
 
-def fidelity(machine: str, overrides: dict | None = None, *, frf_period_s: float = 10.0,
+def fidelity(case: str, overrides: dict | None = None, *, frf_period_s: float = 10.0,
              frf_tones: int = 40) -> dict:
-    """All three checks for one machine; see the module docstring.
+    """All three checks for one case of :data:`CASES` (a machine name, or a machine with a
+    cutting-force model); see the module docstring.
 
     Returns
     -------
     dict
-        ``machine``, ``overrides``, ``tf``, ``time_nrmse``, ``frf_max_mag_err_db``,
+        ``machine``, ``case``, ``overrides``, ``tf``, ``time_nrmse``, ``frf_max_mag_err_db``,
         ``frf_max_phase_err_deg``, ``coupling_slip_um``, ``targets``, ``pass`` and details.
+
+    Raises
+    ------
+    TwinInputError
+        Unknown case.
     """
+    if case not in CASES:
+        raise TwinInputError("machine", case, f"unknown fidelity case (known: {', '.join(CASES)})")
+    machine, cutting = CASES[case]
     overrides = dict(overrides or {})
     spec = get_machine(machine)
     forced = {s: 0.0 for s in FRICTION_SYMBOLS if s in spec.parameters}
     bm = build(machine, {**overrides, **forced})
-    out = {"machine": machine, "overrides": overrides, "friction_forced_off": sorted(forced),
-           "tf": _tf_listing(bm), "time_nrmse": time_response_nrmse(bm)}
-    out.update(frequency_response_errors(bm, frf_period_s, n_tones=frf_tones))
+    disturbances = ()
+    if cutting is not None:
+        bm = replace(bm, plant=cutting_coupled_plant(bm.params, cutting.k_il_N_s_per_m, cutting.k_c_N_s_per_m))
+        disturbances = (cutting,)
+    out = {"machine": machine, "case": case, "overrides": overrides, "friction_forced_off": sorted(forced),
+           "tf": _tf_listing(bm), "time_nrmse": time_response_nrmse(bm, disturbances=disturbances)}
+    out.update(frequency_response_errors(bm, frf_period_s, n_tones=frf_tones, disturbances=disturbances))
     out["coupling_slip_um"] = coupling_slip_um(bm)
     out["targets"] = TARGETS
     out["pass"] = all(out[k] <= v for k, v in TARGETS.items())

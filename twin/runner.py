@@ -7,7 +7,8 @@ One control tick (period ``control_period_s``, a whole multiple of the physics t
     -> physics steps (``mj_step``; per-step hooks write cutting forces into xfrc_applied)
 
 The state is recorded at the start of every tick, so ``u[k]`` is the input held over
-``[t[k], t[k+1])`` (zero-order hold).
+``[t[k], t[k+1])`` (zero-order hold); so is the workpiece force, recorded as the mean of
+the forces applied over that interval.
 """
 
 from __future__ import annotations
@@ -36,8 +37,8 @@ class Disturbance(Protocol):
     """A disturbance may add to the drive input and/or act before every physics step.
 
     ``input_V(t)`` returns ndarray (len(t), n_axes) added to the control input (V);
-    ``before_step(model, data)`` writes forces (e.g. ``data.xfrc_applied``) before each
-    ``mj_step``.  Either may be absent.
+    ``step_hook(machine)`` returns a fresh ``hook(model, data)`` for one run, called before
+    each ``mj_step`` to add its force to the workpiece's ``data.xfrc_applied`` (zeroed first).  Either may be absent.
     """
 
 
@@ -62,7 +63,7 @@ class RunResult:
     actuator_force : ndarray, shape (n, nu)
         Actuator force/torque (N or N m) at the last physics step before each tick.
     workpiece_force_N : ndarray, shape (n, 3)
-        External force on the workpiece (world frame, N) at the last physics step.
+        External force on the workpiece (world frame, N), mean over the tick's physics steps.
     control_period_s : float
     """
 
@@ -169,8 +170,8 @@ def simulate(machine: BuiltMachine, controllers: Sequence[ControlBlock], referen
     for dist in disturbances:
         if hasattr(dist, "input_V"):
             u_dist += dist.input_V(t)
-        if hasattr(dist, "before_step"):
-            step_hooks.append(dist.before_step)
+        if hasattr(dist, "step_hook"):
+            step_hooks.append(dist.step_hook(machine))
     can_compile = (compiled_loop.available() and not step_hooks
                    and all(hasattr(b, "discrete_state_space") for b, _ in blocks))
     if compiled and not can_compile:
@@ -231,7 +232,7 @@ class _PythonLoop:
             rec["qpos"][k] = qpos
             rec["qvel"][k] = qvel
             rec["act"][k] = data.actuator_force
-            rec["wp"][k] = data.xfrc_applied[self.wp, :3]
+            rec["wp"][k] = data.xfrc_applied[self.wp, :3]  # constant unless hooks write it
             meas[:, 0] = self.encoder.measure(pos, self.noise[k])
             meas[:, 1] = qvel[self.v_idx]
             rec["meas"][k] = meas[:, 0]
@@ -239,15 +240,20 @@ class _PythonLoop:
                 u[idx] = block.step(self.ref[k, idx], meas[idx])
             rec["u"][k] = u
             rec["ua"][k] = self.drive.saturate(u + self.u_dist[k])
+            force_sum = 0.0
             for nsteps, src in self.drive.segments(k):
                 ctrl[:] = rec["ua"][src] if src >= 0 else 0.0
                 if self.hooks:
                     for _ in range(nsteps):
+                        data.xfrc_applied[self.wp, :3] = 0.0  # hooks add their forces
                         for hook in self.hooks:
                             hook(model, data)
+                        force_sum = force_sum + data.xfrc_applied[self.wp, :3]
                         mujoco.mj_step(model, data)
                 else:
                     mujoco.mj_step(model, data, nstep=nsteps)
+            if self.hooks:
+                rec["wp"][k] = force_sum / self.drive.substeps
             if self.bad_qacc.number != warn0:
                 return compiled_loop.BAD_QACC, k
         return compiled_loop.OK, k1

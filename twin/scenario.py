@@ -8,6 +8,7 @@ seed.  See the README for the format; bundled scenarios live in ``twin/scenarios
 from __future__ import annotations
 
 import tomllib
+from dataclasses import replace
 from importlib import resources
 from pathlib import Path
 from typing import Annotated, Literal, Union
@@ -16,6 +17,8 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, PositiveFloat, ValidationError
 
 from controllers import CONTROLLERS, make_controller
+from twin.cutting import MATERIALS, AverageForce, EndMilling
+from twin.disturbances import HarmonicInput, VoltageStep
 from twin.drive import Drive, Encoder, substeps_per_tick
 from twin.errors import TwinInputError
 from twin.machines import build
@@ -91,6 +94,75 @@ class SensorSpec(_Strict):
     noise_std_m: float | list[float] = 0.0
 
 
+class CoefficientsSpec(_Strict):
+    """Overrides of the material's cutting (N/mm^2) and edge (N/mm) coefficients."""
+
+    K_tc: float | None = None
+    K_rc: float | None = None
+    K_ac: float | None = None
+    K_te: float | None = None
+    K_re: float | None = None
+    K_ae: float | None = None
+
+
+class EndMillingSpec(_Strict):
+    """Mechanistic end-milling force on the workpiece (:class:`twin.cutting.EndMilling`)."""
+
+    type: Literal["end_milling"]
+    spindle_rpm: PositiveFloat
+    n_flutes: int = Field(ge=1)
+    diameter_mm: PositiveFloat
+    axial_depth_mm: PositiveFloat
+    radial_depth_mm: PositiveFloat
+    mode: Literal["up", "down"] = "up"
+    material: Literal[tuple(MATERIALS)] = "aluminium_7075_t6"
+    coefficients: CoefficientsSpec = CoefficientsSpec()
+    start_s: float = Field(0.0, ge=0)
+    stop_s: PositiveFloat | None = None
+    spindle_phase_rad: float | None = Field(None, description="None: drawn from the seed")
+    seed: int | None = Field(None, description="default: the scenario's seed")
+
+
+class AverageForceSpec(_Strict):
+    """Seed 004's average cutting force (:class:`twin.cutting.AverageForce`)."""
+
+    type: Literal["average_force"]
+    k_il_N_s_per_m: float = -2500.0
+    k_c_N_s_per_m: float = 2500.0
+    harmonic_fraction: float = Field(0.0, ge=0, le=0.2)
+    spindle_rpm: PositiveFloat = 10000.0
+    n_flutes: int = Field(2, ge=1)
+    start_s: float = Field(0.0, ge=0)
+    stop_s: PositiveFloat | None = None
+    harmonic_phase_rad: float | None = None
+    seed: int | None = None
+
+
+class HarmonicInputSpec(_Strict):
+    """Sum of sines on the drive input, V (:class:`twin.disturbances.HarmonicInput`)."""
+
+    type: Literal["harmonic_input"]
+    amplitudes_V: list[float]
+    frequencies_hz: list[PositiveFloat]
+    phases_rad: list[float] | None = Field(None, description="None: drawn from the seed")
+    axes: list[str] | None = None
+    start_s: float = Field(0.0, ge=0)
+    seed: int | None = None
+
+
+class VoltageStepSpec(_Strict):
+    """Step on the drive input, V (:class:`twin.disturbances.VoltageStep`)."""
+
+    type: Literal["voltage_step"]
+    amplitude_V: float
+    start_s: float = Field(0.0, ge=0)
+    axes: list[str] | None = None
+
+
+DisturbanceSpec = Annotated[Union[EndMillingSpec, AverageForceSpec, HarmonicInputSpec, VoltageStepSpec],
+                            Field(discriminator="type")]
+
+
 class Scenario(_Strict):
     """A closed-loop run; every field in SI unless its name says otherwise."""
 
@@ -107,6 +179,7 @@ class Scenario(_Strict):
     reference: ReferenceSpec
     drive: DriveSpec = DriveSpec()
     sensors: SensorSpec = SensorSpec()
+    disturbances: list[DisturbanceSpec] = []
 
 
 def _first_error(err: ValidationError) -> TwinInputError:
@@ -158,16 +231,20 @@ def _per_axis(value, n_axes: int, field: str) -> np.ndarray:
     return arr
 
 
+def _axes_indices(names: list[str] | None, axis_names: list[str], field: str) -> tuple[int, ...] | None:
+    if names is None:
+        return None
+    for a in names:
+        if a not in axis_names:
+            raise TwinInputError(field, a, f"machine axes are {axis_names}")
+    return tuple(axis_names.index(a) for a in names)
+
+
 def _reference(spec, axis_names: list[str]):
     n = len(axis_names)
 
     def axes_idx(names):
-        if names is None:
-            return None
-        for a in names:
-            if a not in axis_names:
-                raise TwinInputError("reference.axes", a, f"machine axes are {axis_names}")
-        return tuple(axis_names.index(a) for a in names)
+        return _axes_indices(names, axis_names, "reference.axes")
 
     if isinstance(spec, (CircleRef, SquareRef, PolylineRef)) and n != 2:
         raise TwinInputError("reference.type", spec.type, f"a 2-D path needs two axes, the machine has {n}")
@@ -201,6 +278,33 @@ def _controller(spec: ControllerSpec, dt: float, field: str):
         raise TwinInputError(f"{field}.params", spec.params, str(exc)) from None
 
 
+def _disturbance(spec, index: int, axis_names: list[str], seed: int):
+    """Build one disturbance; errors name ``disturbances.<index>.<field>``."""
+    field = f"disturbances.{index}"
+    seed = seed if getattr(spec, "seed", None) is None else spec.seed
+    n = len(axis_names)
+    try:
+        if isinstance(spec, EndMillingSpec):
+            coeffs = replace(MATERIALS[spec.material], **spec.coefficients.model_dump(exclude_none=True))
+            return EndMilling(spec.spindle_rpm, spec.n_flutes, spec.diameter_mm, spec.axial_depth_mm,
+                              spec.radial_depth_mm, spec.mode, coeffs, spec.start_s, spec.stop_s,
+                              spec.spindle_phase_rad, seed)
+        if isinstance(spec, AverageForceSpec):
+            return AverageForce(spec.k_il_N_s_per_m, spec.k_c_N_s_per_m, spec.harmonic_fraction, spec.spindle_rpm,
+                                spec.n_flutes, spec.start_s, spec.stop_s, spec.harmonic_phase_rad, seed)
+        axes = _axes_indices(spec.axes, axis_names, f"{field}.axes")
+        if isinstance(spec, HarmonicInputSpec):
+            return HarmonicInput(tuple(spec.amplitudes_V), tuple(spec.frequencies_hz),
+                                 tuple(spec.phases_rad) if spec.phases_rad is not None else None,
+                                 n, axes, spec.start_s, seed)
+        return VoltageStep(spec.amplitude_V, spec.start_s, n, axes)
+    except TwinInputError as exc:
+        name = exc.field.removeprefix("disturbance.")
+        if name.startswith(field):
+            raise
+        raise TwinInputError(f"{field}.{name}", exc.value, exc.reason) from None
+
+
 def prepare(scn: Scenario):
     """Build everything a run needs, validating cross-field constraints.
 
@@ -229,7 +333,8 @@ def prepare(scn: Scenario):
                       np.array(machine.sensor_gains), scn.seed)
     return {"machine": machine, "controllers": ctrls, "reference": _reference(scn.reference, names),
             "duration_s": scn.duration_s, "control_period_s": scn.control_period_s,
-            "drive": drive, "encoder": encoder}
+            "drive": drive, "encoder": encoder,
+            "disturbances": [_disturbance(d, i, names, scn.seed) for i, d in enumerate(scn.disturbances)]}
 
 
 def run_scenario(scn: Scenario, progress: bool | None = None) -> RunResult:

@@ -43,6 +43,8 @@ class Parameter:
         (lower, upper) uncertainty box from the source, if it gives one.
     positive : bool
         Whether the value must be strictly positive.
+    nonnegative : bool
+        Whether the value must be >= 0 (for parameters that may be zero, e.g. friction).
     """
 
     value: float
@@ -50,6 +52,7 @@ class Parameter:
     description: str
     box: tuple[float, float] | None = None
     positive: bool = True
+    nonnegative: bool = False
 
 
 @dataclass(frozen=True)
@@ -131,6 +134,34 @@ class BuiltMachine:
         """Body id of the workpiece, where cutting forces go (``xfrc_applied``)."""
         return int(self.model.body("workpiece").id)
 
+    def workpiece_jacobian(self) -> np.ndarray:
+        """Matrix ``J``, shape (2, nv): world x/y velocity of the workpiece (m/s) = ``J @ qvel``.
+
+        The workpiece rides on slide joints only, so ``J`` does not depend on the configuration,
+        and its displacement from the model's reference pose is ``J @ qpos`` wherever ``J`` is
+        non-zero (a slide's qpos and qvel share their address in models of hinges and slides).
+
+        Raises
+        ------
+        ValueError
+            If a joint carrying the workpiece is not a slide, or the model has joints whose
+            positions and velocities are numbered differently (free or ball joints).
+        """
+        m = self.model
+        if m.nq != m.nv:
+            raise ValueError("workpiece_jacobian needs a model of hinge and slide joints only")
+        body = self.workpiece_body_id
+        while body:
+            for j in range(m.body_jntadr[body], m.body_jntadr[body] + m.body_jntnum[body]):
+                if m.jnt_type[j] != mujoco.mjtJoint.mjJNT_SLIDE:
+                    raise ValueError(f"joint {m.joint(j).name!r} carrying the workpiece is not a slide")
+            body = m.body_parentid[body]
+        data = mujoco.MjData(m)
+        mujoco.mj_forward(m, data)
+        jacp = np.zeros((3, m.nv))
+        mujoco.mj_jacBodyCom(m, data, jacp, None, self.workpiece_body_id)
+        return jacp[:2].copy()
+
     def slip_m(self, qpos: np.ndarray) -> np.ndarray:
         """Kinematic mismatch (m of table travel) of each gear coupling.
 
@@ -188,6 +219,9 @@ class Machine:
             if self.parameters[key].positive and value <= 0:
                 raise TwinInputError(f"overrides.{key}", value,
                                      f"must be > 0 ({self.parameters[key].description})")
+            if self.parameters[key].nonnegative and value < 0:
+                raise TwinInputError(f"overrides.{key}", value,
+                                     f"must be >= 0 ({self.parameters[key].description})")
             params[key] = value
         self.check(params)
         return params
@@ -223,10 +257,35 @@ class Machine:
         if timestep_s is not None:
             spec.option.timestep = timestep_s
         self.configure(spec, params)
+        for axis in self.axes:
+            spec.joint(axis.table_joint).frictionloss = params.get(f"F_coul_{axis.name}", 0.0)
         model = spec.compile()
         couplings, leads = self.couplings(params)
         return BuiltMachine(self.name, model, params, self.axes, self.plant(params, model),
                             self.delay(params), couplings, leads, self.sensor_gains(params))
+
+
+#: Rolling linear guides: friction coefficient 0.002-0.003 (Rollon Mono Rail catalogue,
+#: "Linear Line" p. MR-34; Thomson profile-rail FAQ), upper end used.
+GUIDE_FRICTION_COEFFICIENT = 0.003
+#: Seal resistance per carriage (N), Rollon Mono Rail size 25 (MRS25), catalogue Tab. 34.
+GUIDE_SEAL_RESISTANCE_N = 0.35
+#: Carriages per axis (two rails, two carriages each; assumed).
+GUIDE_CARRIAGES = 4
+
+
+def guideway_coulomb_estimate_N(moved_mass_kg: float) -> float:
+    """Catalogue estimate of a guideway's Coulomb friction (N): ``mu m g + n_carriages f_seal``."""
+    return GUIDE_FRICTION_COEFFICIENT * moved_mass_kg * 9.81 + GUIDE_CARRIAGES * GUIDE_SEAL_RESISTANCE_N
+
+
+def coulomb_friction_parameters(axes: tuple[str, ...], source: str = "") -> dict[str, Parameter]:
+    """``F_coul_<axis>``: Coulomb friction (N) on each axis's guideway (table slide), MuJoCo
+    ``frictionloss``; 0 by default (the papers' models have none), catalogue estimates in
+    the machine README (:func:`guideway_coulomb_estimate_N`)."""
+    note = source or "the source gives no value; catalogue estimate in the machine README"
+    return {f"F_coul_{a}": Parameter(0.0, "N", f"Coulomb friction on the {a.upper()} guideway ({note})",
+                                     positive=False, nonnegative=True) for a in axes}
 
 
 def set_gear(spec: mujoco.MjSpec, equality: str, ratio: float) -> None:

@@ -19,8 +19,8 @@ from __future__ import annotations
 import control
 
 from twin.errors import TwinInputError
-from twin.machines.base import (Axis, Machine, Parameter, diagonal_plant, set_axial_inertia,
-                                set_gear, set_mass)
+from twin.machines.base import (Axis, Machine, Parameter, coulomb_friction_parameters, diagonal_plant,
+                                set_axial_inertia, set_gear, set_mass)
 
 SEED = "seed 000 (Yadav et al. 2020)"
 
@@ -126,7 +126,7 @@ class CNCMT(_LeadScrewMachine):
     xml = "cncmt/cncmt.xml"
     summary = "seed 000 lead-screw axis: motor, gearbox n=2, lead screw, table + workpiece (50 kg)"
     suffixes = ("",)
-    parameters = {**leadscrew_parameters(""), **_LeadScrewMachine.common}
+    parameters = {**leadscrew_parameters(""), **_LeadScrewMachine.common, **coulomb_friction_parameters(("x",))}
     axes = (Axis("x", "x_drive", "x_table", "x_motor", "x_screw"),)
 
 
@@ -138,6 +138,6 @@ class CNCMTXY(_LeadScrewMachine):
     parameters = {**leadscrew_parameters("_x", 50.0, "mass of the X table alone (the Y axis "
                                                      "adds its own mass on top)"),
                   **leadscrew_parameters("_y", 50.0, "mass of Y table + workpiece"),
-                  **_LeadScrewMachine.common}
+                  **_LeadScrewMachine.common, **coulomb_friction_parameters(("x", "y"))}
     axes = (Axis("x", "x_drive", "x_table", "x_motor", "x_screw"),
             Axis("y", "y_drive", "y_table", "y_motor", "y_screw"))

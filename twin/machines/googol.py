@@ -21,7 +21,8 @@ import math
 import control
 
 from twin.errors import TwinInputError
-from twin.machines.base import Axis, Machine, Parameter, diagonal_plant, set_axial_inertia, set_gear, set_mass
+from twin.machines.base import (Axis, Machine, Parameter, coulomb_friction_parameters, diagonal_plant,
+                                set_axial_inertia, set_gear, set_mass)
 
 SEED = "seed 002 (Anang et al.) eq. (1)"
 
@@ -39,6 +40,7 @@ class GoogolXY(Machine):
         "Jm": Parameter(1.2e-4, "kg m^2", "motor rotor inertia (assumed, 400 W class servo)"),
         "Js": Parameter(1e-4, "kg m^2", "ball-screw inertia (assumed, 16 mm x 0.6 m)"),
         "m_workpiece": Parameter(2.0, "kg", "workpiece mass (assumed)"),
+        **coulomb_friction_parameters(("x", "y")),
     }
     axes = (Axis("x", "x_drive", "x_table", "x_motor", "x_screw"),
             Axis("y", "y_drive", "y_table", "y_motor", "y_screw"))

@@ -12,9 +12,8 @@ from __future__ import annotations
 
 import control
 
-from twin.errors import TwinInputError
-from twin.machines.base import (Axis, Machine, Parameter, check_stacked_masses, diagonal_plant,
-                                set_mass)
+from twin.machines.base import (Axis, Machine, Parameter, check_stacked_masses, coulomb_friction_parameters,
+                                diagonal_plant, set_mass)
 
 SEED = "seed 004 (Choi et al. 1999)"
 
@@ -32,18 +31,12 @@ class LinearMotorXY(Machine):
         "b_y": Parameter(36.0, "N s/m", f"viscous damping Y, {SEED} Table 1", (28.8, 43.2)),
         "k_x": Parameter(98.2, "N/V", "input gain X: 982 N peak force at 10 V (assumed)"),
         "k_y": Parameter(98.2, "N/V", "input gain Y: 982 N peak force at 10 V (assumed)"),
-        "F_coul_x": Parameter(0.0, "N", f"Coulomb friction X (eq. 1; no value in {SEED})",
-                              positive=False),
-        "F_coul_y": Parameter(0.0, "N", f"Coulomb friction Y (eq. 1; no value in {SEED})",
-                              positive=False),
+        **coulomb_friction_parameters(("x", "y"), f"eq. (1); no value in {SEED}"),
         "m_workpiece": Parameter(2.0, "kg", "workpiece mass, part of m_y (assumed)"),
     }
     axes = (Axis("x", "x_drive", "x_table"), Axis("y", "y_drive", "y_table"))
 
     def check(self, params):
-        for a in ("x", "y"):
-            if params[f"F_coul_{a}"] < 0:
-                raise TwinInputError(f"overrides.F_coul_{a}", params[f"F_coul_{a}"], "must be >= 0")
         check_stacked_masses(params)
 
     def configure(self, spec, params):
@@ -53,9 +46,27 @@ class LinearMotorXY(Machine):
         for a in ("x", "y"):
             joint = spec.joint(f"{a}_table")
             joint.damping = [params[f"b_{a}"], 0.0, 0.0]
-            joint.frictionloss = params[f"F_coul_{a}"]
             spec.actuator(f"{a}_drive").gainprm[0] = params[f"k_{a}"]
 
     def plant(self, params, model):
         return diagonal_plant([control.tf([params[f"k_{a}"]], [params[f"m_{a}"], params[f"b_{a}"], 0.0])
                                for a in ("x", "y")])
+
+
+def cutting_coupled_plant(params: dict[str, float], k_il_N_s_per_m: float, k_c_N_s_per_m: float) -> control.StateSpace:
+    """Seed 004's coupled 4-state model with the average cutting force, eq. (11).
+
+    State ``[y_x, v_x, y_y, v_y]`` (m, m/s), inputs ``u_x, u_y`` (V), outputs the positions (m);
+    A is eq. (11)'s (rows 2 and 4: ``(k_il - b_i)/m_i`` and ``-+k_c/m_i``), B takes the
+    ``k_i/m_i`` input columns of eq. (11)'s B (the uncertainty channels are left out).
+    """
+    mx, my, bx, by = params["m_x"], params["m_y"], params["b_x"], params["b_y"]
+    k_il, k_c = k_il_N_s_per_m, k_c_N_s_per_m
+    A = [[0.0, 1.0, 0.0, 0.0],
+         [0.0, (k_il - bx) / mx, 0.0, -k_c / mx],
+         [0.0, 0.0, 0.0, 1.0],
+         [0.0, k_c / my, 0.0, (k_il - by) / my]]
+    B = [[0.0, 0.0], [params["k_x"] / mx, 0.0], [0.0, 0.0], [0.0, params["k_y"] / my]]
+    C = [[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]]
+    return control.ss(A, B, C, [[0.0, 0.0], [0.0, 0.0]])
+

@@ -15,7 +15,8 @@ from __future__ import annotations
 
 import control
 
-from twin.machines.base import Axis, Machine, Parameter, check_stacked_masses, set_mass
+from twin.machines.base import (Axis, Machine, Parameter, check_stacked_masses, coulomb_friction_parameters,
+                                set_mass)
 
 SEED = "seed 001 (Sabau 2022)"
 
@@ -36,6 +37,7 @@ class SabauXY(Machine):
         "m_x": Parameter(25.0, "kg", "mass moved by X, Y carriage included (assumed)"),
         "m_y": Parameter(10.0, "kg", "mass moved by Y, workpiece included (assumed)"),
         "m_workpiece": Parameter(2.0, "kg", "workpiece mass (assumed)"),
+        **coulomb_friction_parameters(("x", "y")),
     }
     axes = (Axis("x", "x_drive", "x_table"), Axis("y", "y_drive", "y_table"))
 

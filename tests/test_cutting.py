@@ -1,0 +1,131 @@
+"""Milling forces (mechanistic and seed 004's average model) on the workpiece, in real MuJoCo runs."""
+
+import math
+
+import mujoco
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+from twin.cutting import (ALUMINIUM_7075_T6, AverageForce, EndMilling, immersion_angles, mean_tool_forces_N,
+                          step_tool_forces_N)
+from twin.errors import TwinInputError
+from twin.machines import build
+from twin.scenario import scenario_from_dict, run_scenario
+
+K = ALUMINIUM_7075_T6
+RPM, FLUTES, D_MM = 6000.0, 2, 10.0
+FEED_M_PER_S = 0.02  # 0.1 mm per tooth at 6000 rpm, 2 flutes
+SETTLED_S = 0.2      # mean forces taken after this; 0.4 s = 80 whole tooth periods
+
+
+def _slot_scenario(axial_mm=2.0, radial_mm=D_MM, mode="up", duration_s=0.6, **extra):
+    """X feed at constant speed on linear_motor_xy, stiff PIDs with feedforward, cutter engaged."""
+    cut = dict(type="end_milling", spindle_rpm=RPM, n_flutes=FLUTES, diameter_mm=D_MM,
+               axial_depth_mm=axial_mm, radial_depth_mm=radial_mm, mode=mode, **extra)
+    return scenario_from_dict(dict(
+        machine="linear_motor_xy", duration_s=duration_s, timestep_s=1e-4, control_period_s=5e-4,
+        controllers={"x": dict(type="pid", params=dict(kp=2e4, ki=2e5, kd=150, tf_s=5e-4),
+                               velocity_ff=1.97, acceleration_ff=0.533),
+                     "y": dict(type="pid", params=dict(kp=7e3, ki=7e4, kd=50, tf_s=5e-4),
+                               velocity_ff=0.367, acceleration_ff=0.173)},
+        reference=dict(type="ramp", rate_m_per_s=FEED_M_PER_S, axes=["x"]), disturbances=[cut]))
+
+
+def _mean_workpiece_force(result):
+    return result.workpiece_force_N[result.t_s >= SETTLED_S].mean(axis=0)
+
+
+def _expected_workpiece_force(axial_mm, radial_mm, mode):
+    """Closed-form mean force on the tool, feed frame; the tool feeds along -x (the table moves
+    +x), so feed = -x, normal = z x feed = -y: the workpiece gets (F_x, F_y, -F_z) in the world."""
+    c_mm = FEED_M_PER_S * 1e3 / (FLUTES * RPM / 60.0)
+    f = mean_tool_forces_N(K, FLUTES, axial_mm, c_mm, *immersion_angles(radial_mm, D_MM, mode))
+    return np.array([f[0], f[1], -f[2]])
+
+
+def test_closed_form_mean_equals_integral_of_instantaneous_model():
+    """Independent check: integrate the flute force F(phi) numerically (quad) over the immersion."""
+    a, c = 3.0, 0.12
+    for mode, ae in (("up", 3.0), ("down", 3.0), ("up", 10.0)):
+        st, ex = immersion_angles(ae, D_MM, mode)
+
+        def flute(phi, i):
+            h = c * math.sin(phi)
+            ft, fr, fa = a * (K.K_tc * h + K.K_te), a * (K.K_rc * h + K.K_re), a * (K.K_ac * h + K.K_ae)
+            return (-ft * math.cos(phi) - fr * math.sin(phi), ft * math.sin(phi) - fr * math.cos(phi), fa)[i]
+
+        numeric = [3 / (2 * math.pi) * quad(flute, st, ex, args=(i,))[0] for i in range(3)]
+        np.testing.assert_allclose(mean_tool_forces_N(K, 3, a, c, st, ex), numeric, rtol=1e-10)
+
+
+def test_step_average_carries_the_exact_impulse_over_a_revolution():
+    st, ex = immersion_angles(4.0, D_MM, "down")
+    n = 97  # a step that does not divide the revolution, with wrap-around past 2 pi
+    step = 2 * math.pi / n
+    forces = np.array([step_tool_forces_N(K, 3, 2.0, 0.1, st, ex, 0.3 + i * step, step) for i in range(n)])
+    np.testing.assert_allclose(forces.mean(axis=0), mean_tool_forces_N(K, 3, 2.0, 0.1, st, ex), rtol=1e-12)
+
+
+def test_slot_mean_forces_match_closed_form_and_spectrum_peaks_at_tooth_frequency():
+    res = run_scenario(_slot_scenario())
+    mean = _mean_workpiece_force(res)
+    expected = _expected_workpiece_force(2.0, D_MM, "up")
+    np.testing.assert_allclose(mean, expected, rtol=0.02)
+    assert abs(expected[1]) > 100.0  # a real load: ~112 N feed-normal in this slot
+
+    # spectra over the settled part: force and tracking error peak at N rpm / 60 = 200 Hz
+    sel = res.t_s >= SETTLED_S
+    dt = res.control_period_s
+    f = np.fft.rfftfreq(sel.sum(), dt)
+    tooth_hz = FLUTES * RPM / 60.0
+    fy = np.abs(np.fft.rfft(res.workpiece_force_N[sel, 1] - mean[1]))
+    high = f > 50.0  # above the servo bandwidth
+    peak = f[high][np.argmax(fy[high])]
+    assert peak == pytest.approx(tooth_hz, abs=f[1])
+    second = np.argmin(np.abs(f - 2 * tooth_hz))
+    assert fy[second] > 10 * np.median(fy[high])  # the harmonic stands out too
+    ey = np.abs(np.fft.rfft(res.error_m()[sel, 1]))
+    assert f[high][np.argmax(ey[high])] == pytest.approx(tooth_hz, abs=f[1])
+
+
+def test_doubling_axial_depth_doubles_mean_force():
+    f1 = _mean_workpiece_force(run_scenario(_slot_scenario(axial_mm=1.5)))
+    f2 = _mean_workpiece_force(run_scenario(_slot_scenario(axial_mm=3.0)))
+    np.testing.assert_allclose(f2, 2 * f1, rtol=0.02)
+
+
+def test_up_and_down_milling_mirror_the_force_signs():
+    """At 10 % radial immersion both the feed and the feed-normal mean forces change sign."""
+    up = _mean_workpiece_force(run_scenario(_slot_scenario(radial_mm=1.0, mode="up")))
+    down = _mean_workpiece_force(run_scenario(_slot_scenario(radial_mm=1.0, mode="down")))
+    np.testing.assert_allclose(up, _expected_workpiece_force(2.0, 1.0, "up"), rtol=0.02)
+    np.testing.assert_allclose(down, _expected_workpiece_force(2.0, 1.0, "down"), rtol=0.02)
+    assert np.sign(up[0]) == -np.sign(down[0]) and np.sign(up[1]) == -np.sign(down[1])
+
+
+def test_cutting_force_is_off_outside_its_window():
+    res = run_scenario(_slot_scenario(start_s=0.1, stop_s=0.3, duration_s=0.4))
+    force = np.abs(res.workpiece_force_N).max(axis=1)
+    assert force[res.t_s < 0.1 - 1e-9].max() == 0.0
+    assert force[res.t_s >= 0.3].max() == 0.0
+    assert force[(res.t_s > 0.15) & (res.t_s < 0.25)].min() > 10.0
+
+
+def test_average_force_model_is_seed_004_eq_4_5():
+    """F_x = k_il v_x - k_c v_y, F_y = k_il v_y + k_c v_x, checked against the run's velocities."""
+    bm = build("linear_motor_xy")
+    hook = AverageForce(-2500.0, 2500.0).step_hook(bm)
+    data = mujoco.MjData(bm.model)
+    data.qvel[bm.joint_dof_index("x_table")] = 0.03
+    data.qvel[bm.joint_dof_index("y_table")] = -0.01
+    hook(bm.model, data)
+    np.testing.assert_allclose(data.xfrc_applied[bm.workpiece_body_id, :3],
+                               [-2500 * 0.03 - 2500 * -0.01, -2500 * -0.01 + 2500 * 0.03, 0.0])
+
+
+def test_average_force_harmonic_fraction_bounded():
+    with pytest.raises(TwinInputError, match="harmonic_fraction"):
+        AverageForce(harmonic_fraction=0.25)
+    with pytest.raises(TwinInputError, match="radial_depth_mm"):
+        EndMilling(6000, 2, 10.0, 2.0, 12.0)
