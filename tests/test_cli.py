@@ -112,3 +112,26 @@ def test_reproduce_unknown_source_exits_2():
     r = _twin("reproduce", "seed999")
     assert r.returncode == 2 and r.stderr.strip().splitlines() == [
         "error: source = 'seed999': only seed000 can be reproduced so far"]
+
+
+def test_run_cutting_scenario_with_settings_and_recording(tmp_path):
+    rrd = tmp_path / "slot.rrd"
+    r = _twin("run", "slot_linear_motor", "--set", "duration_s=0.3", "--set", "disturbances.0.axial_depth_mm=1.0",
+              "--rrd", str(rrd), "--json")
+    assert r.returncode == 0, r.stderr
+    out = json.loads(r.stdout)
+    # 1 mm deep slot at 0.1 mm/tooth: the mean feed-normal force is ~56 N, peaks above it
+    assert 56.0 < out["max_cutting_force_N"]["y"] < 200.0
+    counts = read_back(rrd)
+    assert counts["/cutting/force/x"] == counts["/cutting/force/y"] == 600  # 0.3 s at 2 kHz
+
+
+@pytest.mark.parametrize("setting, message", [
+    ("disturbances.3.spindle_rpm=1", "--set disturbances.3.spindle_rpm = '3'"),
+    ("disturbances.0.radial_depth_mm=20", "disturbances.0.radial_depth_mm = 20"),
+    ("duration_s", "--set = 'duration_s'"),
+])
+def test_run_bad_setting(setting, message):
+    r = _twin("run", "slot_linear_motor", "--set", setting)
+    assert r.returncode == 2
+    assert message in r.stderr and "Traceback" not in r.stderr

@@ -2,8 +2,7 @@
 
 import pytest
 
-from twin.fidelity import TARGETS, fidelity
-from twin.machines import MACHINES
+from twin.fidelity import CASES, TARGETS, fidelity
 
 
 def _check(r):
@@ -12,8 +11,9 @@ def _check(r):
     assert r["pass"]
 
 
-@pytest.mark.parametrize("name", list(MACHINES))
+@pytest.mark.parametrize("name", list(CASES))
 def test_fidelity_nominal(name):
+    """Every machine, and linear_motor_xy with seed 004's average cutting force against eq. (11)."""
     # a 2 s multisine period (0.5-50 Hz) keeps the test short; `twin fidelity` uses 10 s (0.1-50 Hz)
     r = fidelity(name, frf_period_s=2.0, frf_tones=15)
     assert r["frf_band_hz"] == [0.5, 50.0]
@@ -33,3 +33,11 @@ def test_fidelity_linear_motor_box_corner_with_friction_forced_off():
                  frf_period_s=2.0, frf_tones=15)
     assert r["friction_forced_off"] == ["F_coul_x", "F_coul_y"]
     _check(r)
+
+
+def test_average_force_case_couples_the_axes():
+    r = fidelity("linear_motor_xy+average_force", frf_period_s=2.0, frf_tones=15)
+    # eq. (11): the cross channels x<-u_y and y<-u_x are k_c k_j/(m_i m_j) over the common denominator
+    assert r["tf"]["x<-u_y"]["num"][-1] == pytest.approx(-2500 * 98.2 / (52.3 * 17.0))
+    assert r["frf_cross_max_rel_err"] < 0.02
+

@@ -45,12 +45,12 @@ def _print_summary(name: str, summary: dict) -> None:
         typer.echo(f"  {key:<24} {value}")
 
 
-def _run(scenario: str, rrd: Path | None, as_json: bool) -> None:
+def _run(scenario: str, rrd: Path | None, as_json: bool, settings: list[str] | None = None) -> None:
     from twin.metrics import tracking_summary
     from twin.recording import record
     from twin.scenario import load_scenario, run_scenario
 
-    scn = load_scenario(scenario)
+    scn = load_scenario(scenario, settings)
     if rrd is not None and rrd.suffix != ".rrd":
         raise TwinInputError("--rrd", str(rrd), "recording file must end in .rrd")
     result = run_scenario(scn)
@@ -68,9 +68,11 @@ def _run(scenario: str, rrd: Path | None, as_json: bool) -> None:
 @_guard
 def run(scenario: str = typer.Argument(..., help="Scenario TOML file, or a bundled scenario name"),
         rrd: Path = typer.Option(None, "--rrd", help="Write a Rerun recording to this .rrd file"),
-        as_json: bool = typer.Option(False, "--json", help="Print metrics as JSON")):
+        as_json: bool = typer.Option(False, "--json", help="Print metrics as JSON"),
+        sets: list[str] = typer.Option(None, "--set", help="Change a field: PATH=VALUE, e.g. "
+                                                           "disturbances.0.spindle_rpm=2500")):
     """Run a closed-loop scenario and print its tracking metrics."""
-    _run(scenario, rrd, as_json)
+    _run(scenario, rrd, as_json, sets)
 
 
 @app.command()

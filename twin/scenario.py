@@ -7,6 +7,7 @@ seed.  See the README for the format; bundled scenarios live in ``twin/scenarios
 
 from __future__ import annotations
 
+import copy
 import tomllib
 from dataclasses import replace
 from importlib import resources
@@ -194,8 +195,49 @@ def bundled_scenarios() -> dict[str, Path]:
     return {Path(p.name).stem: Path(str(p)) for p in folder.iterdir() if p.name.endswith(".toml")}
 
 
-def load_scenario(source: str | Path) -> Scenario:
+def apply_settings(data: dict, settings: list[str]) -> dict:
+    """Set scenario fields from ``PATH=VALUE`` strings, e.g. ``disturbances.0.spindle_rpm=2500``.
+
+    ``PATH`` is dotted (list entries by index); ``VALUE`` is a TOML value (``2500``,
+    ``[0.02]``, ``"down"``; a bare word counts as a string).  Returns a modified deep copy.
+
+    Raises
+    ------
+    TwinInputError
+        A malformed setting or a path that does not lead into the scenario.
+    """
+    out = copy.deepcopy(data)
+    for item in settings:
+        path, sep, text = item.partition("=")
+        keys = path.strip().split(".")
+        if not sep or not all(keys):
+            raise TwinInputError("--set", item, "use PATH=VALUE, e.g. disturbances.0.spindle_rpm=2500")
+        try:
+            value = tomllib.loads(f"v = {text}")["v"]
+        except tomllib.TOMLDecodeError:
+            value = text.strip()
+        node = out
+        for depth, key in enumerate(keys):
+            last = depth == len(keys) - 1
+            if isinstance(node, list):
+                if not (key.isdigit() and int(key) < len(node)):
+                    raise TwinInputError(f"--set {path}", key, f"not an index of a list of {len(node)}")
+                key = int(key)
+            elif not isinstance(node, dict):
+                raise TwinInputError(f"--set {path}", key, "goes below a value")
+            if last:
+                node[key] = value
+            else:
+                if isinstance(node, dict) and key not in node:
+                    node[key] = {}
+                node = node[key]
+    return out
+
+
+def load_scenario(source: str | Path, settings: list[str] | None = None) -> Scenario:
     """Read and validate a scenario from a file path or a bundled scenario name.
+
+    ``settings`` (``PATH=VALUE``) change fields before validation; see :func:`apply_settings`.
 
     Raises
     ------
@@ -213,7 +255,7 @@ def load_scenario(source: str | Path) -> Scenario:
         data = tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as exc:
         raise TwinInputError("scenario file", str(path), f"malformed TOML: {exc}") from None
-    return scenario_from_dict(data)
+    return scenario_from_dict(apply_settings(data, settings or []))
 
 
 def scenario_from_dict(data: dict) -> Scenario:
