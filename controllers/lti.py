@@ -14,23 +14,22 @@ from numba import njit
 
 
 @njit(cache=True)
+def _affine(P, Q, x, e, out):  # pragma: no cover - compiled
+    """out = P x + Q e (in place)."""
+    for i in range(P.shape[0]):
+        acc = 0.0
+        for j in range(P.shape[1]):
+            acc += P[i, j] * x[j]
+        for j in range(Q.shape[1]):
+            acc += Q[i, j] * e[j]
+        out[i] = acc
+
+
+@njit(cache=True)
 def ss_step(A, B, C, D, x, e, u, xn):  # pragma: no cover - compiled
     """u = C x + D e; x <- A x + B e (in place; ``xn`` is scratch of x's size)."""
-    n, m, p = A.shape[0], B.shape[1], C.shape[0]
-    for i in range(p):
-        acc = 0.0
-        for j in range(n):
-            acc += C[i, j] * x[j]
-        for j in range(m):
-            acc += D[i, j] * e[j]
-        u[i] = acc
-    for i in range(n):
-        acc = 0.0
-        for j in range(n):
-            acc += A[i, j] * x[j]
-        for j in range(m):
-            acc += B[i, j] * e[j]
-        xn[i] = acc
+    _affine(C, D, x, e, u)
+    _affine(A, B, x, e, xn)
     x[:] = xn
 
 

@@ -154,6 +154,19 @@ def _active(start_s: float, stop_s: float | None, timestep_s: float = 0.0):
     return lambda t: lo <= t < hi
 
 
+def _check_cutter(spindle_rpm: float, n_flutes: int) -> None:
+    """Spindle speed (rev/min) > 0 and a whole number of flutes >= 1."""
+    if not spindle_rpm > 0:
+        raise TwinInputError("spindle_rpm", spindle_rpm, "must be > 0")
+    if int(n_flutes) != n_flutes or n_flutes < 1:
+        raise TwinInputError("n_flutes", n_flutes, "must be a whole number >= 1")
+
+
+def _tooth_frequency_hz(spindle_rpm: float, n_flutes: int) -> float:
+    """Tooth-passing frequency N rpm / 60 (Hz)."""
+    return n_flutes * spindle_rpm / 60.0
+
+
 def _spindle_phase(phase_rad: float | None, seed: int) -> float:
     """The given initial spindle angle, or one drawn from ``seed`` (rad)."""
     if phase_rad is not None:
@@ -195,18 +208,17 @@ class EndMilling:
     seed: int = 0
 
     def __post_init__(self):
-        for name in ("spindle_rpm", "diameter_mm", "axial_depth_mm"):
+        _check_cutter(self.spindle_rpm, self.n_flutes)
+        for name in ("diameter_mm", "axial_depth_mm"):
             if not getattr(self, name) > 0:
                 raise TwinInputError(name, getattr(self, name), "must be > 0")
-        if int(self.n_flutes) != self.n_flutes or self.n_flutes < 1:
-            raise TwinInputError("n_flutes", self.n_flutes, "must be a whole number >= 1")
         immersion_angles(self.radial_depth_mm, self.diameter_mm, self.mode)
         _active(self.start_s, self.stop_s)
 
     @property
     def tooth_frequency_hz(self) -> float:
         """Tooth-passing frequency N rpm / 60 (Hz)."""
-        return self.n_flutes * self.spindle_rpm / 60.0
+        return _tooth_frequency_hz(self.spindle_rpm, self.n_flutes)
 
     def step_hook(self, machine):
         """A ``hook(model, data)`` for the runner that adds the force before each ``mj_step``.
@@ -294,16 +306,13 @@ class AverageForce:
         if not 0 <= self.harmonic_fraction <= 0.2:
             raise TwinInputError("harmonic_fraction", self.harmonic_fraction,
                                  "must be in [0, 0.2]: seed 004 bounds the cyclic part at 20 % of the average")
-        if not self.spindle_rpm > 0:
-            raise TwinInputError("spindle_rpm", self.spindle_rpm, "must be > 0")
-        if int(self.n_flutes) != self.n_flutes or self.n_flutes < 1:
-            raise TwinInputError("n_flutes", self.n_flutes, "must be a whole number >= 1")
+        _check_cutter(self.spindle_rpm, self.n_flutes)
         _active(self.start_s, self.stop_s)
 
     def step_hook(self, machine):
         """A ``hook(model, data)`` for the runner that adds the force before each ``mj_step``."""
         k_il, k_c, r = self.k_il_N_s_per_m, self.k_c_N_s_per_m, self.harmonic_fraction
-        w = 2.0 * math.pi * self.n_flutes * self.spindle_rpm / 60.0
+        w = 2.0 * math.pi * _tooth_frequency_hz(self.spindle_rpm, self.n_flutes)
         phase = _spindle_phase(self.harmonic_phase_rad, self.seed)
         active = _active(self.start_s, self.stop_s, machine.model.opt.timestep)
         jac = machine.workpiece_jacobian()

@@ -26,11 +26,10 @@ coupled 4-state model of eq. (11) (:func:`twin.machines.linear_motor.cutting_cou
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import control
 import numpy as np
-
-from dataclasses import replace
 
 from controllers.lti import DiscreteLTI
 from controllers.open_loop import OpenLoop

@@ -38,7 +38,8 @@ class Disturbance(Protocol):
 
     ``input_V(t)`` returns ndarray (len(t), n_axes) added to the control input (V);
     ``step_hook(machine)`` returns a fresh ``hook(model, data)`` for one run, called before
-    each ``mj_step`` to add its force to the workpiece's ``data.xfrc_applied`` (zeroed first).  Either may be absent.
+    each ``mj_step`` to add its force to the workpiece's ``data.xfrc_applied`` (zeroed first).
+    Either may be absent.
     """
 
 
@@ -232,7 +233,6 @@ class _PythonLoop:
             rec["qpos"][k] = qpos
             rec["qvel"][k] = qvel
             rec["act"][k] = data.actuator_force
-            rec["wp"][k] = data.xfrc_applied[self.wp, :3]  # constant unless hooks write it
             meas[:, 0] = self.encoder.measure(pos, self.noise[k])
             meas[:, 1] = qvel[self.v_idx]
             rec["meas"][k] = meas[:, 0]
@@ -252,8 +252,8 @@ class _PythonLoop:
                         mujoco.mj_step(model, data)
                 else:
                     mujoco.mj_step(model, data, nstep=nsteps)
-            if self.hooks:
-                rec["wp"][k] = force_sum / self.drive.substeps
+            # without hooks nothing writes xfrc_applied: the force held over the whole tick
+            rec["wp"][k] = force_sum / self.drive.substeps if self.hooks else data.xfrc_applied[self.wp, :3]
             if self.bad_qacc.number != warn0:
                 return compiled_loop.BAD_QACC, k
         return compiled_loop.OK, k1
