@@ -1,10 +1,9 @@
-"""Control side of the twin: discrete-time control blocks and the papers' controllers.
+"""Control side of the twin: block kinds on a signal bus, design procedures, the papers' controllers.
 
-Never imports mujoco: every block is usable against python-control models alone.
+Never imports mujoco: every block runs on python-control models and plain arrays alone.
 """
 
-from controllers.base import ControlBlock
-from controllers.lti import DiscreteLTI
-from controllers.registry import CONTROLLERS, make_controller
+from controllers.blocks import Controller, Program, error_feedback, open_loop
+from controllers.registry import CONTROLLERS, OBSERVERS, make_controller
 
-__all__ = ["ControlBlock", "DiscreteLTI", "CONTROLLERS", "make_controller"]
+__all__ = ["CONTROLLERS", "OBSERVERS", "Controller", "Program", "error_feedback", "make_controller", "open_loop"]

@@ -1,35 +1,193 @@
-"""Controllers by name, as scenario files and the CLI refer to them."""
+"""Controllers by name, as scenario files and the CLI refer to them.
+
+Each entry builds a :class:`~controllers.blocks.core.Controller` of any block kind for the axes
+it serves.  Gains are SI (V per m of error, ...); the description of each says its units.
+"""
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+
 import control
+import numpy as np
 
-from controllers import seed000, seed002
-from controllers.lti import DiscreteLTI
-from controllers.pid import pid_tf
+from controllers.blocks import (NONLINEARITIES, Controller, Linear, cascade, error_feedback, inverse_model_observer,
+                                lure, sum_of, with_feedforward)
+from controllers.design.pid import pid_tf
+from controllers.papers import seed000, seed002
 
-#: name -> (description, builder(params) -> continuous LTI, allowed parameter names)
+
+@dataclass
+class Context:
+    """What a builder knows besides its parameters.
+
+    Attributes
+    ----------
+    dt : float
+        Control period (s).
+    axes : tuple of str
+        The axes the controller serves (one entry of ``[controllers.<axis>]``, or every axis
+        for ``[controller]``).
+    method : {"tustin", "zoh"}
+        Discretization of continuous models.
+    plants : dict of str to control.TransferFunction
+        The machine's nominal model per axis (m/V), for model-based blocks (observers).
+    parts : list of Controller
+        The already built parts of a ``sum``.
+    """
+
+    dt: float
+    axes: tuple[str, ...] = ("x",)
+    method: str = "tustin"
+    plants: dict = field(default_factory=dict)
+    parts: list = field(default_factory=list)
+
+
+def _each_axis(build_one):
+    """Builder that makes one controller per served axis, ``build_one(params, ctx, axis)``."""
+    def build(p, ctx):
+        parts = [build_one(p, ctx, a) for a in ctx.axes]
+        return Controller([b for c in parts for b in c.blocks], ctx.dt, parts[0].name)
+    return build
+
+
+def _per_axis_lti(make_tf):
+    """Builder of an error-feedback LTI controller ``make_tf(params)`` on each served axis."""
+    return _each_axis(lambda p, ctx, a: error_feedback(make_tf(p), ctx.dt, (a,), ctx.method, name=f"C.{a}"))
+
+
+def _cascade(p, ctx, a):
+    outer = pid_tf(p.get("kp_pos", 0.0), p.get("ki_pos", 0.0))
+    inner = pid_tf(p.get("kp_vel", 0.0), p.get("ki_vel", 0.0))
+    return cascade(outer, inner, ctx.dt, a, p.get("velocity_ref_ff", 0.0), ctx.method, f"cascade.{a}")
+
+
+def _generic_lure(p, ctx, a):
+    name = p.get("nonlinearity")
+    if name not in NONLINEARITIES:
+        raise ValueError(f"nonlinearity = {name!r}: use one of {', '.join(NONLINEARITIES)}")
+    keys = NONLINEARITIES[name][1]
+    missing = [k for k in keys if k not in p]
+    if missing:
+        raise ValueError(f"parameter {missing[0]!r} is needed by the {name} nonlinearity")
+    settings = [p[k] for k in keys]
+    return lure(control.tf(p["num"], p["den"]), name, settings, ctx.dt, a, ctx.method, f"lure.{a}")
+
+
+def _npid(p, ctx, a):
+    """Seed 002 eq. (6) PID behind Ke(e) = cosh(KO e), e clipped at e_max (eqs. 7-8)."""
+    settings = (p.get("ko_per_mm", seed002.KO_PER_MM) * 1e3, p.get("e_max_mm", seed002.E_MAX_MM) * 1e-3)
+    return lure(seed002.pid(p.get("tf_s", 1e-4)), "cosh_gain", settings, ctx.dt, a, ctx.method, f"npid.{a}")
+
+
+def _sum(p, ctx):
+    if not ctx.parts:
+        raise ValueError("a sum needs at least one part")
+    return sum_of(ctx.parts, "sum")
+
+
+def _qualify(names, axis):
+    return [n if "." in n else f"{n}.{axis}" for n in names]
+
+
+def _linear(p, ctx):
+    """Any state space on named signals; names without an axis are per served axis."""
+    inputs, outputs = list(p.get("inputs", ["error"])), list(p.get("outputs", ["u"]))
+    if p.get("domain", "discrete") not in ("discrete", "continuous"):
+        raise ValueError(f"domain = {p.get('domain')!r}: use 'discrete' or 'continuous'")
+    mats = [np.atleast_2d(np.asarray(p.get(k, np.zeros((0, 0))), float)) for k in "ABCD"]
+    per_axis = not all("." in n for n in inputs + outputs)
+    axes = ctx.axes if per_axis else (None,)
+    blocks = []
+    for a in axes:
+        ins, outs = (_qualify(inputs, a), _qualify(outputs, a)) if a else (inputs, outputs)
+        A, B, C, D = mats
+        if A.size == 0:
+            A, B, C = np.zeros((0, 0)), np.zeros((0, len(ins))), np.zeros((len(outs), 0))
+        if p.get("domain", "discrete") == "continuous":
+            sys = control.ss(A, B, C, D)
+            d = control.c2d(sys, ctx.dt, method=ctx.method)
+            A, B, C, D = d.A, d.B, d.C, d.D
+        blocks.append(Linear(A, B, C, D, tuple(ins), tuple(outs), name=f"linear.{a}" if a else "linear"))
+    return Controller(blocks, ctx.dt, "linear")
+
+
+#: name -> (description with units, builder(params, Context) -> Controller, parameter names)
 CONTROLLERS = {
-    "seed000_robust_pi": ("robust PI 38.33 + 45.65/s, seed 000 eqs. (18)-(19)",
-                          lambda p: seed000.ROBUST_PI, ()),
-    "seed000_imc": ("IMC (0.21 s + 2)/(s + 2), seed 000 eq. (23)", lambda p: seed000.IMC, ()),
-    "seed000_hinf": ("full 4th-order H-infinity, seed 000 eq. (28)", lambda p: seed000.HINF, ()),
+    "seed000_robust_pi": ("robust PI 38.33 + 45.65/s (V/m), seed 000 eqs. (18)-(19)",
+                          _per_axis_lti(lambda p: seed000.ROBUST_PI), ()),
+    "seed000_imc": ("IMC (0.21 s + 2)/(s + 2), seed 000 eq. (23)", _per_axis_lti(lambda p: seed000.IMC), ()),
+    "seed000_hinf": ("full 4th-order H-infinity, seed 000 eq. (28)", _per_axis_lti(lambda p: seed000.HINF), ()),
     "seed000_hinf_reduced": ("reduced H-infinity 20.97/(s + 5.5), seed 000 eq. (29)",
-                             lambda p: seed000.HINF_REDUCED, ()),
+                             _per_axis_lti(lambda p: seed000.HINF_REDUCED), ()),
     "seed002_pid": ("PID 0.8998 + 0.005155 s + 0.0006077/s (V/mm), seed 002 eq. (6); derivative "
-                    "filter tf_s (default 1e-4 s)",
-                    lambda p: seed002.pid(p.get("tf_s", 1e-4)), ("tf_s",)),
+                    "filter tf_s (default 1e-4 s)", _per_axis_lti(lambda p: seed002.pid(p.get("tf_s", 1e-4))),
+                    ("tf_s",)),
+    "seed002_npid": ("nonlinear PID, seed 002 eqs. (6)-(8): eq. (6) PID behind Ke = cosh(KO e), e clipped "
+                     "at e_max; ko_per_mm (default 6), e_max_mm (default 0.3), tf_s (default 1e-4 s)",
+                     _each_axis(_npid), ("tf_s", "ko_per_mm", "e_max_mm")),
     "pid": ("kp + ki/s + kd s/(tf_s s + 1); gains in V/m, V/(m s), V s/m",
-            lambda p: pid_tf(p.get("kp", 0.0), p.get("ki", 0.0), p.get("kd", 0.0), p.get("tf_s", 0.0)),
+            _per_axis_lti(lambda p: pid_tf(p.get("kp", 0.0), p.get("ki", 0.0), p.get("kd", 0.0), p.get("tf_s", 0.0))),
             ("kp", "ki", "kd", "tf_s")),
-    "tf": ("any C(s) = num/den (coefficients, highest power first), V/m",
-           lambda p: control.tf(p["num"], p["den"]), ("num", "den")),
+    "tf": ("any C(s) = num/den (coefficients, highest power first) on the error, V/m",
+           _per_axis_lti(lambda p: control.tf(p["num"], p["den"])), ("num", "den")),
+    "cascade": ("position P/PI around velocity P/PI: v_ref = (kp_pos + ki_pos/s) e + velocity_ref_ff "
+                "ref_vel (1/s, 1/s^2), u = (kp_vel + ki_vel/s)(v_ref - vel) (V s/m, V/m)",
+                _each_axis(_cascade), ("kp_pos", "ki_pos", "kp_vel", "ki_vel", "velocity_ref_ff")),
+    "lure": ("Lur'e: u = num/den (V/m) of f(error), f = nonlinearity: saturation (limit, m), dead_zone "
+             "(width, m) or cosh_gain (k 1/m, e_max m)",
+             _each_axis(_generic_lure), ("num", "den", "nonlinearity", "limit", "width", "k", "e_max")),
+    "sum": ("u = the sum of the parts' u: parts = [{ type = ... }, ...], each any kind", _sum, ()),
+    "linear": ("any state space A, B, C, D (domain discrete or continuous) from named inputs (default "
+               "['error']) to outputs (default ['u']); names without '.axis' are per axis",
+               _linear, ("A", "B", "C", "D", "inputs", "outputs", "domain")),
+}
+
+#: Observer add-ons: name -> (description, parameter names).
+OBSERVERS = {
+    "inverse_model": ("inverse-model disturbance observer d = Q (P_n^-1 pos - u_prev), Q = 1/(tau s + 1)^order, "
+                      "tau = 1/(2 pi cutoff_hz); P_n the machine's model unless num/den (m/V) are given",
+                      ("cutoff_hz", "order", "num", "den")),
 }
 
 
+def _check_params(name: str, params: dict, allowed) -> None:
+    extra = sorted(set(params) - set(allowed))
+    if extra:
+        raise ValueError(f"parameter {extra[0]!r} is not one of {name}'s ({', '.join(allowed) or 'none'})")
+
+
+def make_observers(name: str, params: dict, ctx: Context) -> list:
+    """Observer blocks of kind ``name`` for every served axis.
+
+    Raises
+    ------
+    KeyError
+        Unknown name.
+    ValueError
+        Parameters it does not take, or values it cannot use.
+    """
+    if name not in OBSERVERS:
+        raise KeyError(name)
+    _check_params(name, params, OBSERVERS[name][1])
+    out = []
+    for a in ctx.axes:
+        plant = control.tf(params["num"], params["den"]) if "num" in params else ctx.plants.get(a)
+        if plant is None:
+            raise ValueError(f"no nominal model for axis {a!r}: give num and den")
+        out.append(inverse_model_observer(plant, params.get("cutoff_hz", 100.0), params.get("order", 2),
+                                          ctx.dt, a, ctx.method, name=f"observer.{a}"))
+    return out
+
+
 def make_controller(name: str, dt: float, params: dict | None = None, method: str = "tustin",
-                    velocity_ff: float = 0.0, acceleration_ff: float = 0.0) -> DiscreteLTI:
-    """Build a named controller as a :class:`DiscreteLTI` block at period ``dt`` (s).
+                    velocity_ff=0.0, acceleration_ff=0.0, axes=("x",), plants: dict | None = None,
+                    parts=()) -> Controller:
+    """Build a named controller for ``axes`` at period ``dt`` (s).
+
+    ``velocity_ff``, ``acceleration_ff`` (V/(m/s), V/(m/s^2)) add reference feedforward to u;
+    ``plants`` are the machine's per-axis models (m/V); ``parts`` are the built controllers a
+    ``sum`` adds up.  An observer is added with ``with_correction(ctrl, make_observers(...))``.
 
     Raises
     ------
@@ -42,7 +200,8 @@ def make_controller(name: str, dt: float, params: dict | None = None, method: st
         raise KeyError(name)
     _, builder, allowed = CONTROLLERS[name]
     params = dict(params or {})
-    extra = sorted(set(params) - set(allowed))
-    if extra:
-        raise ValueError(f"parameter {extra[0]!r} is not one of {name}'s ({', '.join(allowed) or 'none'})")
-    return DiscreteLTI(builder(params), dt, method, velocity_ff, acceleration_ff, name=name)
+    _check_params(name, params, allowed)
+    ctx = Context(dt, tuple(axes), method, dict(plants or {}), list(parts))
+    ctrl = builder(params, ctx)
+    ctrl.name = name
+    return with_feedforward(ctrl, velocity_ff, acceleration_ff)

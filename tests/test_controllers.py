@@ -6,7 +6,7 @@ import pytest
 
 from controllers import DiscreteLTI, make_controller, seed000
 from controllers.open_loop import OpenLoop
-from controllers.pid import pid_tf
+from controllers.design.pid import pid_tf
 
 
 def _run_block(block, e):

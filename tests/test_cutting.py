@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from twin.cutting import (ALUMINIUM_7075_T6, AverageForce, EndMilling, immersion_angles, mean_tool_forces_N,
+from twin.process.cutting import (ALUMINIUM_7075_T6, AverageForce, EndMilling, immersion_angles, mean_tool_forces_N,
                           step_tool_forces_N)
 from twin.errors import TwinInputError
 from twin.machines import build

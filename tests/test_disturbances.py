@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from twin.disturbances import HarmonicInput
+from twin.process.disturbances import HarmonicInput
 from twin.errors import TwinInputError
 from twin.scenario import run_scenario, scenario_from_dict
 

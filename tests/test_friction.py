@@ -7,7 +7,7 @@ from controllers.open_loop import OpenLoop
 from twin.fidelity import TARGETS, coupling_slip_um
 from twin.machines import build
 from twin.references import Step
-from twin.runner import simulate
+from twin.sim.runner import simulate
 from twin.scenario import run_scenario, scenario_from_dict
 
 

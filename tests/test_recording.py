@@ -4,7 +4,7 @@ from controllers import make_controller
 from twin.machines import build
 from twin.recording import read_back, record
 from twin.references import Circle, Step
-from twin.runner import simulate
+from twin.sim.runner import simulate
 
 
 def test_recording_entities_and_counts(tmp_path):

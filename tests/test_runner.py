@@ -6,11 +6,11 @@ import pytest
 
 from controllers import DiscreteLTI, make_controller, seed000
 from controllers.open_loop import OpenLoop
-from twin.drive import Drive, Encoder
+from twin.sim.drive import Drive, Encoder
 from twin.errors import SimulationDiverged, TwinInputError
 from twin.machines import build
 from twin.references import Circle, Step
-from twin.runner import simulate
+from twin.sim.runner import simulate
 
 
 def test_closed_loop_step_matches_transfer_functions():

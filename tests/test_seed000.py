@@ -11,12 +11,12 @@ import numpy as np
 import pytest
 
 from controllers import seed000
-from controllers.hinf import central_controller, gamma_iteration, mixed_sensitivity_plant, reduce_balanced, shift_integrators
-from controllers.imc import imc_controller
-from controllers.kharitonov import (is_hurwitz, kharitonov_polynomials, robustly_stable,
+from controllers.design.hinf import central_controller, gamma_iteration, mixed_sensitivity_plant, reduce_balanced, shift_integrators
+from controllers.design.imc import imc_controller
+from controllers.design.kharitonov import (is_hurwitz, kharitonov_polynomials, robustly_stable,
                                     stability_margin_third_order)
-from controllers.robust_pi import design_robust_pi, worst_case_margins
-from twin import reproduce_seed000 as r
+from controllers.design.robust_pi import design_robust_pi, worst_case_margins
+from twin.reproduce.seed000 import procedure as r
 
 
 def _interval(center, rel):

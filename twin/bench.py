@@ -20,7 +20,7 @@ from controllers import make_controller
 from twin.machines import build
 from twin.recording import record
 from twin.references import Step
-from twin.runner import simulate
+from twin.sim.runner import simulate
 
 DT = 1e-4
 

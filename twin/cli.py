@@ -152,8 +152,8 @@ def reproduce(source: str = typer.Argument(..., help="Which paper: seed000"),
                              samples if samples < 1 else twin_samples, "must be >= 1 (--samples) / >= 0")
     if rrd is not None and rrd.suffix != ".rrd":
         raise TwinInputError("--rrd", str(rrd), "recording file must end in .rrd")
-    from twin import reproduce_seed000 as r
-    from twin.seed000_report import format_report, run_all, write_plots
+    from twin.reproduce.seed000 import procedure as r
+    from twin.reproduce.seed000.report import format_report, run_all, write_plots
 
     res = run_all(samples, twin_samples, seed, progress=not as_json)
     typer.echo(json.dumps(res, indent=1, default=float) if as_json else format_report(res))

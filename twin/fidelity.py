@@ -31,14 +31,13 @@ from dataclasses import replace
 import control
 import numpy as np
 
-from controllers.lti import DiscreteLTI
-from controllers.open_loop import OpenLoop
-from twin.cutting import AverageForce
+from controllers.blocks import error_feedback, open_loop
+from twin.process.cutting import AverageForce
 from twin.errors import TwinInputError
 from twin.machines import MACHINES, build, get_machine
 from twin.machines.linear_motor import cutting_coupled_plant
 from twin.references import Step, SumOfSines
-from twin.runner import simulate
+from twin.sim.runner import simulate
 
 TARGETS = {"time_nrmse": 0.005, "frf_max_mag_err_db": 0.2, "frf_max_phase_err_deg": 2.0,
            "coupling_slip_um": 0.1}
@@ -84,7 +83,7 @@ def time_response_nrmse(bm, duration_s: float = 1.0, disturbances=()) -> float:
     for k in range(n_axes):
         u = np.zeros((n, n_axes))
         u[:, k] = test
-        res = simulate(bm, [OpenLoop(u, dt)], Step(0.0, n_axes=n_axes), duration_s, dt,
+        res = simulate(bm, open_loop(u, dt, [a.name for a in bm.axes]), Step(0.0, n_axes=n_axes), duration_s, dt,
                        disturbances=disturbances, progress=False)
         u_delayed = np.vstack([np.zeros((delay, n_axes)), u[: n - delay]]) if delay else u
         y_ref = np.atleast_2d(control.forced_response(g, T=t, U=u_delayed.T).outputs).T
@@ -117,7 +116,8 @@ def frequency_response_errors(bm, period_s: float = 10.0, f_max_hz: float = 50.0
     for k in range(n_axes):
         amp = 0.2 / kp[k]  # about 0.2 V per tone at high frequency
         ref = SumOfSines((amp,) * len(bins), tuple(freqs), tuple(phases), n_axes=n_axes, axes=(k,))
-        ctrls = [DiscreteLTI(control.tf([kp[i]], [1.0]), dt, name="P") for i in range(n_axes)]
+        ctrls = [error_feedback(control.tf([kp[i]], [1.0]), dt, (a.name,), name=f"P.{a.name}")
+                 for i, a in enumerate(bm.axes)]
         res = simulate(bm, ctrls, ref, (settle + 1) * period_s, dt, disturbances=disturbances, progress=False)
         y = res.table_position_m()[settle * n_period:]
         u = res.u_applied_V[settle * n_period:]
@@ -149,7 +149,7 @@ def coupling_slip_um(bm, duration_s: float = 0.4) -> float:
     n_axes = len(bm.axes)
     u = np.full((n, n_axes), FULL_SCALE_V)
     u[n // 2:] = -FULL_SCALE_V
-    res = simulate(bm, [OpenLoop(u, dt)], Step(0.0, n_axes=n_axes), duration_s, dt, progress=False)
+    res = simulate(bm, open_loop(u, dt, [a.name for a in bm.axes]), Step(0.0, n_axes=n_axes), duration_s, dt, progress=False)
     return float(bm.slip_m(res.qpos).max() * 1e6)
 
 

@@ -131,18 +131,18 @@ def percent_reduction(before: float, after: float) -> float:
 
 
 def tracking_summary(result) -> dict:
-    """Max and RMS tracking error per axis (um), the largest cutting force per axis (N, tick
-    means, when there is one) and, for 2-D paths, max and RMS contour error (um)."""
-    e = result.error_m()
+    """Max and RMS tracking error per axis (um) and the largest cutting force per axis (N,
+    tick means, when there is one), all over every tick of the run; for 2-D paths, max and RMS
+    contour error (um) over the recorded ticks (none when only metrics were kept)."""
     out = {
-        "max_tracking_error_um": dict(zip(result.axis_names, (max_abs(e) * 1e6).round(3).tolist())),
-        "rmse_um": dict(zip(result.axis_names, (rmse(e) * 1e6).round(3).tolist())),
+        "max_tracking_error_um": dict(zip(result.axis_names, (result.error_max_m * 1e6).round(3).tolist())),
+        "rmse_um": dict(zip(result.axis_names, (result.error_rms_m * 1e6).round(3).tolist())),
     }
-    force = result.workpiece_force_N[:, :len(result.axis_names)]
-    if force.any():  # cutting: tick-mean force on the workpiece along each axis
-        out["max_cutting_force_N"] = dict(zip(result.axis_names, max_abs(force).round(1).tolist()))
-    if e.shape[1] == 2 and (np.ptp(result.ref[:, :, 0], axis=0) > 0).all():  # a 2-D path
-        ce = contour_error(result.table_position_m(), result.ref[:, :, 0])
+    if result.force_max_N.any():  # cutting: tick-mean force on the workpiece along each axis
+        out["max_cutting_force_N"] = dict(zip(result.axis_names, result.force_max_N.round(1).tolist()))
+    ref = result.ref[:, :, 0]
+    if ref.shape[1] == 2 and len(ref) > 1 and (np.ptp(ref, axis=0) > 0).all():  # a 2-D path
+        ce = contour_error(result.table_position_m(), ref)
         out["max_contour_error_um"] = round(float(ce.max() * 1e6), 3)
         out["rms_contour_error_um"] = round(float(np.sqrt(np.mean(ce**2)) * 1e6), 3)
     return out

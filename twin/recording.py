@@ -63,7 +63,7 @@ def record(result, path: str | Path, max_points: int = 20_000, application_id: s
 
     Parameters
     ----------
-    result : twin.runner.RunResult
+    result : twin.sim.runner.RunResult
     path : str or Path
         Output file.
     max_points : int

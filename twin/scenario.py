@@ -17,28 +17,40 @@ from typing import Annotated, Literal, Union
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, PositiveFloat, ValidationError
 
-from controllers import CONTROLLERS, make_controller
-from twin.cutting import MATERIALS, AverageForce, EndMilling
-from twin.disturbances import HarmonicInput, VoltageStep
-from twin.drive import Drive, Encoder, substeps_per_tick
+from controllers import CONTROLLERS, OBSERVERS, make_controller
+from controllers.blocks import with_correction
+from controllers.registry import Context, make_observers
+from twin.process.cutting import MATERIALS, AverageForce, EndMilling
+from twin.process.disturbances import HarmonicInput, VoltageStep
+from twin.sim.drive import Drive, Encoder, substeps_per_tick
 from twin.errors import TwinInputError
 from twin.machines import build
 from twin.references import Circle, Polyline, Ramp, Step, SumOfSines, square
-from twin.runner import RunResult, simulate
+from twin.sim.runner import RunResult, simulate
 
 
 class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
 
-class ControllerSpec(_Strict):
-    """One controller: a registry name, its parameters, discretization and feedforward."""
+class ObserverSpec(_Strict):
+    """An observer add-on: a name of ``controllers.OBSERVERS`` and its parameters."""
 
     type: str
     params: dict[str, float | list[float]] = {}
+
+
+class ControllerSpec(_Strict):
+    """One controller: a registry name (any block kind), its parameters, discretization,
+    feedforward, an optional observer add-on and, for ``type = "sum"``, its parts."""
+
+    type: str
+    params: dict[str, float | str | list[float] | list[list[float]] | list[str]] = {}
     discretization: Literal["tustin", "zoh"] = "tustin"
     velocity_ff: float = Field(0.0, description="V per m/s of reference velocity")
     acceleration_ff: float = Field(0.0, description="V per m/s^2 of reference acceleration")
+    observer: ObserverSpec | None = None
+    parts: list[ControllerSpec] | None = Field(None, description="the summed controllers of type 'sum'")
 
 
 class StepRef(_Strict):
@@ -93,6 +105,7 @@ class DriveSpec(_Strict):
 class SensorSpec(_Strict):
     encoder_resolution_m: float | list[float] = Field(0.0, description="0 for ideal")
     noise_std_m: float | list[float] = 0.0
+    velocity: Literal["backward_difference", "tachometer"] = "backward_difference"
 
 
 class CoefficientsSpec(_Strict):
@@ -175,6 +188,7 @@ class Scenario(_Strict):
     timestep_s: PositiveFloat = 1e-4
     control_period_s: PositiveFloat = 1e-3
     seed: int = 0
+    record_every_ticks: int = Field(1, ge=0, description="record every Nth tick; 0: metrics only")
     controller: ControllerSpec | None = None
     controllers: dict[str, ControllerSpec] | None = None
     reference: ReferenceSpec
@@ -310,14 +324,29 @@ def _reference(spec, axis_names: list[str]):
         raise TwinInputError("reference.points_mm", spec.points_mm, str(exc)) from None
 
 
-def _controller(spec: ControllerSpec, dt: float, field: str):
+def _controller(spec: ControllerSpec, dt: float, field: str, axes: list[str], plants: dict):
+    """Build one controller entry for ``axes``; errors name ``<field>.<what>``."""
     if spec.type not in CONTROLLERS:
         raise TwinInputError(f"{field}.type", spec.type, f"unknown controller (known: {', '.join(CONTROLLERS)})")
+    if (spec.type == "sum") != (spec.parts is not None):
+        raise TwinInputError(f"{field}.parts", spec.parts, "give parts for type 'sum', and only there")
+    parts = [_controller(p, dt, f"{field}.parts.{i}", axes, plants) for i, p in enumerate(spec.parts or [])]
     try:
-        return make_controller(spec.type, dt, spec.params, spec.discretization, spec.velocity_ff,
-                               spec.acceleration_ff)
+        ctrl = make_controller(spec.type, dt, spec.params, spec.discretization, spec.velocity_ff,
+                               spec.acceleration_ff, axes, plants, parts)
     except (ValueError, KeyError, TypeError) as exc:
         raise TwinInputError(f"{field}.params", spec.params, str(exc)) from None
+    if spec.observer is None:
+        return ctrl
+    if spec.observer.type not in OBSERVERS:
+        raise TwinInputError(f"{field}.observer.type", spec.observer.type,
+                             f"unknown observer (known: {', '.join(OBSERVERS)})")
+    try:
+        observers = make_observers(spec.observer.type, spec.observer.params,
+                                   Context(dt, tuple(axes), spec.discretization, plants))
+    except (ValueError, KeyError, TypeError) as exc:
+        raise TwinInputError(f"{field}.observer.params", spec.observer.params, str(exc)) from None
+    return with_correction(ctrl, observers)
 
 
 def _disturbance(spec, index: int, axis_names: list[str], seed: int):
@@ -357,6 +386,7 @@ def prepare(scn: Scenario):
     """
     machine = build(scn.machine, scn.overrides, scn.timestep_s)
     names = [a.name for a in machine.axes]
+    plants = {a: machine.plant[i, i] for i, a in enumerate(names)}
     substeps = substeps_per_tick(scn.control_period_s, scn.timestep_s)
     if (scn.controller is None) == (scn.controllers is None):
         raise TwinInputError("controller", None, "give either [controller] (all axes) or [controllers.<axis>]")
@@ -365,17 +395,18 @@ def prepare(scn: Scenario):
         unknown = [a for a in scn.controllers if a not in names]
         if unknown or missing:
             raise TwinInputError("controllers", sorted(scn.controllers), f"need exactly the axes {names}")
-        ctrls = [_controller(scn.controllers[a], scn.control_period_s, f"controllers.{a}") for a in names]
+        ctrls = [_controller(scn.controllers[a], scn.control_period_s, f"controllers.{a}", [a], plants)
+                 for a in names]
     else:
-        ctrls = [_controller(scn.controller, scn.control_period_s, "controller") for _ in names]
+        ctrls = [_controller(scn.controller, scn.control_period_s, "controller", names, plants)]
     delay = machine.delay_s if scn.drive.delay_s is None else scn.drive.delay_s
     drive = Drive(len(names), substeps, scn.timestep_s, delay, scn.drive.saturation_V)
     encoder = Encoder(_per_axis(scn.sensors.encoder_resolution_m, len(names), "sensors.encoder_resolution_m"),
                       _per_axis(scn.sensors.noise_std_m, len(names), "sensors.noise_std_m"),
-                      np.array(machine.sensor_gains), scn.seed)
+                      np.array(machine.sensor_gains), scn.seed, scn.sensors.velocity)
     return {"machine": machine, "controllers": ctrls, "reference": _reference(scn.reference, names),
             "duration_s": scn.duration_s, "control_period_s": scn.control_period_s,
-            "drive": drive, "encoder": encoder,
+            "drive": drive, "encoder": encoder, "record_every": scn.record_every_ticks,
             "disturbances": [_disturbance(d, i, names, scn.seed) for i, d in enumerate(scn.disturbances)]}
 
 

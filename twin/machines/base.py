@@ -260,6 +260,8 @@ class Machine:
         for axis in self.axes:
             spec.joint(axis.table_joint).frictionloss = params.get(f"F_coul_{axis.name}", 0.0)
         model = spec.compile()
+        # a diverged state stays in MjData (not reset to the initial one) so the runner reports it
+        model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_AUTORESET
         couplings, leads = self.couplings(params)
         return BuiltMachine(self.name, model, params, self.axes, self.plant(params, model),
                             self.delay(params), couplings, leads, self.sensor_gains(params))

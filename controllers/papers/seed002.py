@@ -8,11 +8,15 @@ is ideal; the twin needs a proper controller, so the derivative gets a first-ord
 
 from __future__ import annotations
 
-from controllers.pid import pid_tf
+from controllers.design.pid import pid_tf
 
 KP_V_PER_M = 0.8998e3
 KD_V_S_PER_M = 0.005155e3
 KI_V_PER_M_S = 0.0006077e3
+#: Eqs. (7)-(8): Ke(e) = cosh(KO e) with e clipped at e_max.  The paper does not state the unit
+#: of e; its plant (eq. 1) is in mm/V, so e is read in mm here (the seed-002 issue studies it).
+KO_PER_MM = 6.0
+E_MAX_MM = 0.3
 
 
 def pid(tf_s: float = 1e-4):

@@ -26,20 +26,20 @@ import numpy as np
 from scipy.signal import lfilter
 from tqdm import tqdm
 
-from controllers import seed000
-from controllers.hinf import (central_controller, gamma_iteration, mixed_sensitivity_plant, reduce_balanced,
+from controllers.blocks import error_feedback
+from controllers.papers import seed000
+from controllers.design.hinf import (central_controller, gamma_iteration, mixed_sensitivity_plant, reduce_balanced,
                               shift_integrators)
-from controllers.imc import imc_controller
-from controllers.kharitonov import kharitonov_polynomials, robustly_stable, stability_margin_third_order
-from controllers.lti import DiscreteLTI
-from controllers.robust_pi import design_robust_pi, worst_case_margins
-from twin.disturbances import VoltageStep
-from twin.drive import Encoder
+from controllers.design.imc import imc_controller
+from controllers.design.kharitonov import kharitonov_polynomials, robustly_stable, stability_margin_third_order
+from controllers.design.robust_pi import design_robust_pi, worst_case_margins
+from twin.process.disturbances import VoltageStep
+from twin.sim.drive import Encoder
 from twin.machines import build, get_machine
 from twin.machines.cncmt import leadscrew_tf
 from twin.metrics import step_metrics
 from twin.references import Step
-from twin.runner import simulate
+from twin.sim.runner import simulate
 
 #: The paper's published numbers, for side-by-side tables only.
 PAPER = {
@@ -261,7 +261,7 @@ def tf_step(controller, params: dict[str, float], delay_s: float = 0.0) -> dict 
 def twin_step_result(controller, params: dict[str, float]):
     """The MuJoCo cncmt twin closed by the controller at 10 kHz (Tustin), unit step."""
     machine = build("cncmt", {k: params[k] for k in BOX_SYMBOLS})
-    return simulate(machine, [DiscreteLTI(controller, DT_S)], Step(1.0), HORIZON_S, DT_S, progress=False)
+    return simulate(machine, error_feedback(controller, DT_S), Step(1.0), HORIZON_S, DT_S, progress=False)
 
 
 def twin_step(controller, params: dict[str, float]) -> dict:
@@ -376,7 +376,7 @@ def disturbance_and_noise() -> dict:
     out = {}
     for name, ctrl in TABLE2_CONTROLLERS.items():
         def run(**kw):
-            return simulate(machine, [DiscreteLTI(ctrl, DT_S)], Step(1.0), HORIZON_S, DT_S, progress=False, **kw)
+            return simulate(machine, error_feedback(ctrl, DT_S), Step(1.0), HORIZON_S, DT_S, progress=False, **kw)
         clean = run()
         dist = run(disturbances=[VoltageStep(DISTURBANCE_V, DISTURBANCE_START_S)])
         noisy = run(encoder=Encoder(np.zeros(1), np.full(1, NOISE_STD_M), np.ones(1), NOISE_SEED))

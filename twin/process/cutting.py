@@ -41,6 +41,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from twin.errors import TwinInputError
 
@@ -58,6 +59,10 @@ class CuttingCoefficients:
     K_te: float
     K_re: float
     K_ae: float
+
+    def as_array(self) -> np.ndarray:
+        """``[K_tc, K_rc, K_ac, K_te, K_re, K_ae]``, the order the kernels take."""
+        return np.array([self.K_tc, self.K_rc, self.K_ac, self.K_te, self.K_re, self.K_ae])
 
 
 #: Al7075-T6, carbide, dry (see the module docstring for the source).
@@ -85,12 +90,12 @@ def immersion_angles(radial_depth_mm: float, diameter_mm: float, mode: str) -> t
     raise TwinInputError("mode", mode, "must be 'up' or 'down'")
 
 
-def flute_force_integral(k: CuttingCoefficients, axial_depth_mm: float, feed_per_tooth_mm: float,
-                         phi: float) -> tuple[float, float, float]:
+@njit(cache=True)
+def flute_force_integral(k, axial_depth_mm, feed_per_tooth_mm, phi):  # pragma: no cover - compiled
     """Primitive ``Q(phi)`` of one engaged flute's force on the tool over its angle (N rad).
 
-    With ``h = c sin(phi)``, ``F_x = -F_t cos(phi) - F_r sin(phi)``, ``F_y = F_t sin(phi) - F_r cos(phi)``
-    and ``F_z = F_a``:
+    ``k`` is :meth:`CuttingCoefficients.as_array`.  With ``h = c sin(phi)``,
+    ``F_x = -F_t cos(phi) - F_r sin(phi)``, ``F_y = F_t sin(phi) - F_r cos(phi)`` and ``F_z = F_a``:
     ``Q_x = a c/4 [K_tc cos 2phi - K_rc (2phi - sin 2phi)] + a [-K_te sin phi + K_re cos phi]``,
     ``Q_y = a c/4 [K_tc (2phi - sin 2phi) + K_rc cos 2phi] - a [K_te cos phi + K_re sin phi]``,
     ``Q_z = a [-K_ac c cos phi + K_ae phi]``.
@@ -98,9 +103,9 @@ def flute_force_integral(k: CuttingCoefficients, axial_depth_mm: float, feed_per
     a, c = axial_depth_mm, feed_per_tooth_mm
     s2, c2 = math.sin(2.0 * phi), math.cos(2.0 * phi)
     s1, c1 = math.sin(phi), math.cos(phi)
-    qx = a * c / 4.0 * (k.K_tc * c2 - k.K_rc * (2.0 * phi - s2)) + a * (-k.K_te * s1 + k.K_re * c1)
-    qy = a * c / 4.0 * (k.K_tc * (2.0 * phi - s2) + k.K_rc * c2) - a * (k.K_te * c1 + k.K_re * s1)
-    qz = a * (-k.K_ac * c * c1 + k.K_ae * phi)
+    qx = a * c / 4.0 * (k[0] * c2 - k[1] * (2.0 * phi - s2)) + a * (-k[3] * s1 + k[4] * c1)
+    qy = a * c / 4.0 * (k[0] * (2.0 * phi - s2) + k[1] * c2) - a * (k[3] * c1 + k[4] * s1)
+    qz = a * (-k[2] * c * c1 + k[5] * phi)
     return qx, qy, qz
 
 
@@ -110,20 +115,21 @@ def mean_tool_forces_N(k: CuttingCoefficients, n_flutes: int, axial_depth_mm: fl
 
     ``N/(2 pi) [Q(phi_ex) - Q(phi_st)]`` with :func:`flute_force_integral` (Altintas eq. 2.64).
     """
-    hi = flute_force_integral(k, axial_depth_mm, feed_per_tooth_mm, phi_ex)
-    lo = flute_force_integral(k, axial_depth_mm, feed_per_tooth_mm, phi_st)
+    hi = flute_force_integral(k.as_array(), axial_depth_mm, feed_per_tooth_mm, phi_ex)
+    lo = flute_force_integral(k.as_array(), axial_depth_mm, feed_per_tooth_mm, phi_st)
     return n_flutes / (2.0 * math.pi) * (np.array(hi) - np.array(lo))
 
 
-def step_tool_forces_N(k: CuttingCoefficients, n_flutes: int, axial_depth_mm: float, feed_per_tooth_mm: float,
-                       phi_st: float, phi_ex: float, spindle_angle_rad: float,
-                       step_angle_rad: float) -> tuple[float, float, float]:
+@njit(cache=True)
+def step_tool_forces_N(k, n_flutes, axial_depth_mm, feed_per_tooth_mm, phi_st, phi_ex,
+                       spindle_angle_rad, step_angle_rad):  # pragma: no cover - compiled
     """Force on the tool, feed frame (N), averaged over one physics step, summed over the flutes.
 
-    Flute 0 turns from ``spindle_angle_rad`` through ``step_angle_rad`` (> 0) during the step;
-    flute j trails it by ``2 pi j/N``.  The average is exact (the integral of
-    :func:`flute_force_integral` over the engaged part of the step), so the force the twin
-    applies carries the same impulse as the continuous model, whatever the timestep.
+    ``k`` is :meth:`CuttingCoefficients.as_array`.  Flute 0 turns from ``spindle_angle_rad``
+    through ``step_angle_rad`` (> 0) during the step; flute j trails it by ``2 pi j/N``.  The
+    average is exact (the integral of :func:`flute_force_integral` over the engaged part of the
+    step), so the force the twin applies carries the same impulse as the continuous model,
+    whatever the timestep.
     """
     fx = fy = fz = 0.0
     two_pi = 2.0 * math.pi
@@ -142,16 +148,15 @@ def step_tool_forces_N(k: CuttingCoefficients, n_flutes: int, axial_depth_mm: fl
     return fx / step_angle_rad, fy / step_angle_rad, fz / step_angle_rad
 
 
-def _active(start_s: float, stop_s: float | None, timestep_s: float = 0.0):
-    """Predicate ``start_s <= t < stop_s`` on a step's start time, with half a step of slack
-    for the rounding of MuJoCo's accumulated ``data.time``."""
+def _window(start_s: float, stop_s: float | None, timestep_s: float = 0.0) -> tuple[float, float]:
+    """``(lo, hi)``: the force acts on steps starting at ``lo <= t < hi``, that is
+    ``start_s <= t < stop_s`` with half a step of slack for the rounding of the accumulated
+    simulation time."""
     if not start_s >= 0:
         raise TwinInputError("start_s", start_s, "must be >= 0")
     if stop_s is not None and not stop_s > start_s:
         raise TwinInputError("stop_s", stop_s, f"must be > start_s = {start_s}")
-    lo = start_s - 0.5 * timestep_s
-    hi = math.inf if stop_s is None else stop_s - 0.5 * timestep_s
-    return lambda t: lo <= t < hi
+    return start_s - 0.5 * timestep_s, math.inf if stop_s is None else stop_s - 0.5 * timestep_s
 
 
 def _check_cutter(spindle_rpm: float, n_flutes: int) -> None:
@@ -213,61 +218,37 @@ class EndMilling:
             if not getattr(self, name) > 0:
                 raise TwinInputError(name, getattr(self, name), "must be > 0")
         immersion_angles(self.radial_depth_mm, self.diameter_mm, self.mode)
-        _active(self.start_s, self.stop_s)
+        _window(self.start_s, self.stop_s)
 
     @property
     def tooth_frequency_hz(self) -> float:
         """Tooth-passing frequency N rpm / 60 (Hz)."""
         return _tooth_frequency_hz(self.spindle_rpm, self.n_flutes)
 
-    def step_hook(self, machine):
-        """A ``hook(model, data)`` for the runner that adds the force before each ``mj_step``.
+    def kernel_arrays(self, machine) -> tuple[int, np.ndarray, np.ndarray]:
+        """``(END_MILLING, params, state)`` for :func:`workpiece_forces`.
 
         The feed per tooth and its direction are the workpiece's displacement over the last
         tooth period, ``c = |r(t - T) - r(t)|`` (linear interpolation between physics steps;
         the pose at t = 0 before that): the chip the previous flute left.  Vibration of the
         table at the tooth frequency and its harmonics cancels out of it, as in the
-        regenerative chip-thickness model with a rigid tool.
+        regenerative chip-thickness model with a rigid tool.  The state holds the step count,
+        the feed direction (held through stops) and a ring buffer of workpiece positions (m).
         """
-        k, N, a = self.coefficients, int(self.n_flutes), self.axial_depth_mm
         phi_st, phi_ex = immersion_angles(self.radial_depth_mm, self.diameter_mm, self.mode)
         dt = machine.model.opt.timestep
-        omega = 2.0 * math.pi * self.spindle_rpm / 60.0
         lag_steps = 1.0 / self.tooth_frequency_hz / dt
         lag_lo = int(lag_steps)
-        frac = lag_steps - lag_lo
-        history = np.empty((lag_lo + 2, 2))  # ring buffer of workpiece positions (m)
-        phase0 = _spindle_phase(self.spindle_phase_rad, self.seed)
-        active = _active(self.start_s, self.stop_s, dt)
-        jac = machine.workpiece_jacobian()
-        wp = machine.workpiece_body_id
-        state = {"step": 0, "feed": (1.0, 0.0)}  # feed: unit direction, held through stops
-
-        def hook(model, data):
-            i = state["step"]
-            state["step"] = i + 1
-            n = len(history)
-            history[i % n] = jac @ data.qpos
-            if i == 0:
-                history[:] = history[0]
-            if not active(data.time):
-                return
-            # position one tooth period ago, between steps i - lag_lo - 1 and i - lag_lo
-            p0, p1 = history[max(i - lag_lo, 0) % n], history[max(i - lag_lo - 1, 0) % n]
-            dx = (1.0 - frac) * p0[0] + frac * p1[0] - history[i % n, 0]
-            dy = (1.0 - frac) * p0[1] + frac * p1[1] - history[i % n, 1]
-            c_m = math.hypot(dx, dy)
-            if c_m > MIN_FEED_M:
-                state["feed"] = (dx / c_m, dy / c_m)
-            ux, uy = state["feed"]
-            fx, fy, fz = step_tool_forces_N(k, N, a, c_m * 1e3, phi_st, phi_ex, phase0 + omega * data.time,
-                                            omega * dt)
-            f = data.xfrc_applied[wp]
-            # feed frame -> world; the workpiece gets the reaction of the force on the tool
-            f[0] -= fx * ux - fy * uy
-            f[1] -= fx * uy + fy * ux
-            f[2] -= fz
-        return hook
+        n_hist = lag_lo + 2
+        params = np.concatenate([
+            self.coefficients.as_array(),
+            [int(self.n_flutes), self.axial_depth_mm, phi_st, phi_ex, 2.0 * math.pi * self.spindle_rpm / 60.0,
+             _spindle_phase(self.spindle_phase_rad, self.seed), dt, lag_lo, lag_steps - lag_lo,
+             *_window(self.start_s, self.stop_s, dt), n_hist],
+            machine.workpiece_jacobian().ravel()])
+        state = np.zeros(3 + 2 * n_hist)
+        state[1] = 1.0  # feed direction +x until the workpiece first moves
+        return END_MILLING, params, state
 
 
 @dataclass(frozen=True)
@@ -307,23 +288,112 @@ class AverageForce:
             raise TwinInputError("harmonic_fraction", self.harmonic_fraction,
                                  "must be in [0, 0.2]: seed 004 bounds the cyclic part at 20 % of the average")
         _check_cutter(self.spindle_rpm, self.n_flutes)
-        _active(self.start_s, self.stop_s)
+        _window(self.start_s, self.stop_s)
 
-    def step_hook(self, machine):
-        """A ``hook(model, data)`` for the runner that adds the force before each ``mj_step``."""
-        k_il, k_c, r = self.k_il_N_s_per_m, self.k_c_N_s_per_m, self.harmonic_fraction
-        w = 2.0 * math.pi * _tooth_frequency_hz(self.spindle_rpm, self.n_flutes)
-        phase = _spindle_phase(self.harmonic_phase_rad, self.seed)
-        active = _active(self.start_s, self.stop_s, machine.model.opt.timestep)
-        jac = machine.workpiece_jacobian()
-        wp = machine.workpiece_body_id
+    def kernel_arrays(self, machine) -> tuple[int, np.ndarray, np.ndarray]:
+        """``(AVERAGE_FORCE, params, state)`` for :func:`workpiece_forces`."""
+        params = np.concatenate([
+            [self.k_il_N_s_per_m, self.k_c_N_s_per_m, self.harmonic_fraction,
+             2.0 * math.pi * _tooth_frequency_hz(self.spindle_rpm, self.n_flutes),
+             _spindle_phase(self.harmonic_phase_rad, self.seed),
+             *_window(self.start_s, self.stop_s, machine.model.opt.timestep)],
+            machine.workpiece_jacobian().ravel()])
+        return AVERAGE_FORCE, params, np.zeros(0)
 
-        def hook(model, data):
-            if not active(data.time):
-                return
-            f = data.xfrc_applied[wp]
-            vx, vy = jac @ data.qvel
-            gain = 1.0 + r * math.sin(w * data.time + phase) if r else 1.0
-            f[0] += gain * (k_il * vx - k_c * vy)
-            f[1] += gain * (k_il * vy + k_c * vx)
-        return hook
+
+#: Kinds of :func:`workpiece_forces`.
+END_MILLING, AVERAGE_FORCE = 0, 1
+
+
+@njit(cache=True)
+def _end_milling(par, state, qpos, t, out):  # pragma: no cover - compiled
+    """Add one step's mechanistic milling force on the workpiece (world frame, N) to ``out``."""
+    k = par[0:6]
+    n_flutes, a, phi_st, phi_ex, omega, phase0, dt = int(par[6]), par[7], par[8], par[9], par[10], par[11], par[12]
+    lag_lo, frac, lo, hi, n = int(par[13]), par[14], par[15], par[16], int(par[17])
+    jac = par[18:].reshape((2, -1))
+    hist = state[3:].reshape((n, 2))
+    i = int(state[0])
+    state[0] = i + 1
+    for r in range(2):
+        acc = 0.0
+        for j in range(jac.shape[1]):
+            acc += jac[r, j] * qpos[j]
+        hist[i % n, r] = acc
+    if i == 0:
+        for m in range(1, n):
+            hist[m, 0], hist[m, 1] = hist[0, 0], hist[0, 1]
+    if not (lo <= t < hi):
+        return
+    # position one tooth period ago, between steps i - lag_lo - 1 and i - lag_lo
+    p0, p1 = max(i - lag_lo, 0) % n, max(i - lag_lo - 1, 0) % n
+    dx = (1.0 - frac) * hist[p0, 0] + frac * hist[p1, 0] - hist[i % n, 0]
+    dy = (1.0 - frac) * hist[p0, 1] + frac * hist[p1, 1] - hist[i % n, 1]
+    c_m = math.hypot(dx, dy)
+    if c_m > MIN_FEED_M:
+        state[1], state[2] = dx / c_m, dy / c_m
+    ux, uy = state[1], state[2]
+    fx, fy, fz = step_tool_forces_N(k, n_flutes, a, c_m * 1e3, phi_st, phi_ex, phase0 + omega * t, omega * dt)
+    # feed frame -> world; the workpiece gets the reaction of the force on the tool
+    out[0] -= fx * ux - fy * uy
+    out[1] -= fx * uy + fy * ux
+    out[2] -= fz
+
+
+@njit(cache=True)
+def _average_force(par, qvel, t, out):  # pragma: no cover - compiled
+    """Add seed 004's average cutting force on the workpiece (N) to ``out``."""
+    k_il, k_c, r, w, phase, lo, hi = par[0], par[1], par[2], par[3], par[4], par[5], par[6]
+    if not (lo <= t < hi):
+        return
+    jac = par[7:].reshape((2, -1))
+    vx = vy = 0.0
+    for j in range(jac.shape[1]):
+        vx += jac[0, j] * qvel[j]
+        vy += jac[1, j] * qvel[j]
+    gain = 1.0 + r * math.sin(w * t + phase) if r else 1.0
+    out[0] += gain * (k_il * vx - k_c * vy)
+    out[1] += gain * (k_il * vy + k_c * vx)
+
+
+@njit(cache=True)
+def workpiece_forces(fops, fpar, fstate, qpos, qvel, t, out):  # pragma: no cover - compiled
+    """Zero ``out`` (3,) and add every force model's force on the workpiece for the physics step
+    starting at time ``t`` (s).  ``fops`` rows: ``kind, par_start, par_len, state_start, state_len``."""
+    out[:] = 0.0
+    for m in range(fops.shape[0]):
+        kind, p0, pn, s0, sn = fops[m, 0], fops[m, 1], fops[m, 2], fops[m, 3], fops[m, 4]
+        if kind == END_MILLING:
+            _end_milling(fpar[p0:p0 + pn], fstate[s0:s0 + sn], qpos, t, out)
+        else:
+            _average_force(fpar[p0:p0 + pn], qvel, t, out)
+
+
+class ForceModels:
+    """Force models on the workpiece packed for :func:`workpiece_forces`: one run's arrays.
+
+    Parameters
+    ----------
+    models : sequence of EndMilling or AverageForce
+    machine : BuiltMachine
+    """
+
+    def __init__(self, models, machine):
+        rows, pars, states = [], [], []
+        p0 = s0 = 0
+        for m in models:
+            kind, par, state = m.kernel_arrays(machine)
+            rows.append([kind, p0, len(par), s0, len(state)])
+            pars.append(par)
+            states.append(state)
+            p0, s0 = p0 + len(par), s0 + len(state)
+        self.fops = np.array(rows, np.int64).reshape(-1, 5)
+        self.fpar = np.concatenate(pars) if pars else np.zeros(0)
+        self.fstate = np.concatenate(states) if states else np.zeros(0)
+
+    def __len__(self) -> int:
+        return len(self.fops)
+
+    def apply(self, qpos, qvel, t, out) -> None:
+        """:func:`workpiece_forces` on these models."""
+        workpiece_forces(self.fops, self.fpar, self.fstate, qpos, qvel, t, out)

@@ -1,4 +1,4 @@
-"""Tables and plots of ``twin reproduce seed000`` (see :mod:`twin.reproduce_seed000`)."""
+"""Tables and plots of ``twin reproduce seed000`` (see :mod:`twin.reproduce.seed000.procedure`)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from twin import reproduce_seed000 as r
+from twin.reproduce.seed000 import procedure as r
 
 
 def run_all(mc_samples: int = 1000, twin_random: int = 20, seed: int = 0, progress: bool = True) -> dict:

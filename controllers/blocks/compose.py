@@ -1,0 +1,189 @@
+"""Controllers built from the block kinds: error feedback, cascade, Lur'e, observers, sums.
+
+Each function returns a :class:`~controllers.blocks.core.Controller` whose blocks read the
+loop's signals (:mod:`controllers.blocks.signals`) and write ``u.<axis>`` (V).  Signals a
+controller uses only inside itself are named ``<controller name>:<signal>`` so that several
+controllers share one bus.  Continuous python-control models are discretized at the control
+period with ``control.c2d`` (Tustin by default, or zero-order hold), as each docstring states.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import control
+import numpy as np
+
+from controllers.blocks.core import Controller, Linear, Sequence, Static, Sum
+
+
+def lti_block(sys, dt: float, inputs, outputs, method: str = "tustin", name: str = "linear") -> Linear:
+    """A :class:`Linear` block from a python-control LTI model.
+
+    Parameters
+    ----------
+    sys : control.LTI
+        Continuous (discretized here with ``method``) or discrete with ``sys.dt == dt``;
+        ``len(inputs)`` inputs and ``len(outputs)`` outputs, proper.
+    dt : float
+        Control period (s).
+    method : {"tustin", "zoh"}
+
+    Raises
+    ------
+    ValueError
+        Wrong method, mismatched sizes or period, or an improper model.
+    """
+    if method not in ("tustin", "zoh"):
+        raise ValueError(f"method = {method!r}: use 'tustin' or 'zoh'")
+    if (sys.ninputs, sys.noutputs) != (len(inputs), len(outputs)):
+        raise ValueError(f"block {name!r}: the model has {sys.ninputs} inputs and {sys.noutputs} outputs, "
+                         f"wired to {len(inputs)} and {len(outputs)} signals")
+    ss = control.ss(sys)
+    if ss.isctime():
+        ss = control.c2d(ss, dt, method=method)
+    elif not np.isclose(ss.dt, dt):
+        raise ValueError(f"block {name!r}: discrete model dt = {ss.dt} differs from the control period {dt}")
+    return Linear(ss.A, ss.B, ss.C, ss.D, tuple(inputs), tuple(outputs), name=name)
+
+
+def error_feedback(sys, dt: float, axes=("x",), method: str = "tustin", name: str = "C") -> Controller:
+    """``u = C(z) e`` with ``e = ref - pos`` per axis: C square, one input and output per axis."""
+    axes = tuple(axes)
+    block = lti_block(sys, dt, [f"error.{a}" for a in axes], [f"u.{a}" for a in axes], method, name)
+    return Controller([block], dt, name)
+
+
+def with_feedforward(ctrl: Controller, velocity_ff, acceleration_ff) -> Controller:
+    """Add ``kv * ref_vel + ka * ref_acc`` (gains V/(m/s), V/(m/s^2), per driven axis) to u.
+
+    Nothing is added where both gains are zero.
+    """
+    axes = ctrl.drives
+    kv = np.broadcast_to(np.asarray(velocity_ff, float), (len(axes),))
+    ka = np.broadcast_to(np.asarray(acceleration_ff, float), (len(axes),))
+    if not (kv.any() or ka.any()):
+        return ctrl
+    inner = rename(ctrl, {f"u.{a}": f"{ctrl.name}:u.{a}" for a in axes})
+    sums = [Sum((1.0, kv[i], ka[i]), (f"{ctrl.name}:u.{a}", f"ref_vel.{a}", f"ref_acc.{a}"), f"u.{a}",
+                name=f"feedforward.{a}") for i, a in enumerate(axes)]
+    return Controller(inner.blocks + sums, ctrl.dt, ctrl.name)
+
+
+def cascade(outer, inner, dt: float, axis: str = "x", velocity_ref_ff: float = 0.0,
+            method: str = "tustin", name: str = "cascade") -> Controller:
+    """Position loop around a velocity loop on one axis.
+
+    ``v_ref = C_pos(z) error + velocity_ref_ff * ref_vel`` (m/s), then
+    ``u = C_vel(z) (v_ref - vel)`` (V).
+
+    Parameters
+    ----------
+    outer : control.LTI
+        Position controller, (m/s) per m, for example ``kp`` (1/s) or ``kp + ki/s``.
+    inner : control.LTI
+        Velocity controller, V per (m/s).
+    velocity_ref_ff : float
+        Share of the reference velocity fed forward into the velocity reference (0..1 usually).
+    """
+    v_ref, v_err = f"{name}:v_ref.{axis}", f"{name}:v_error.{axis}"
+    blocks = [lti_block(outer, dt, [f"error.{axis}"], [v_ref], method, "position"),
+              Sum((1.0, velocity_ref_ff, -1.0), (v_ref, f"ref_vel.{axis}", f"vel.{axis}"), v_err, "velocity_error"),
+              lti_block(inner, dt, [v_err], [f"u.{axis}"], method, "velocity")]
+    return Controller(blocks, dt, name)
+
+
+def lure(sys, nonlinearity: str, settings, dt: float, axis: str = "x", method: str = "tustin",
+         name: str = "lure") -> Controller:
+    """Lur'e form: a static nonlinearity on the error, then a linear part:
+    ``u = C(z) f(error)`` (see :data:`controllers.blocks.core.NONLINEARITIES`)."""
+    shaped = f"{name}:f_error.{axis}"
+    blocks = [Static(nonlinearity, tuple(settings), (f"error.{axis}",), (shaped,), "nonlinearity"),
+              lti_block(sys, dt, [shaped], [f"u.{axis}"], method, "linear")]
+    return Controller(blocks, dt, name)
+
+
+def inverse_model_observer(plant, cutoff_hz: float, order: int, dt: float, axis: str = "x",
+                           method: str = "tustin", name: str = "dob") -> Linear:
+    """Inverse-model disturbance observer: ``d_hat = Q (P_n^-1 pos - u_prev)`` (V).
+
+    ``Q(s) = 1/(tau s + 1)^order`` with ``tau = 1/(2 pi cutoff_hz)``; ``order`` must be at least
+    the relative degree of the nominal plant ``P_n`` (m/V) so that ``Q/P_n`` is proper.  The
+    input is the previous tick's drive input (the current one is not known yet): a delay of one
+    control period, small against 1/cutoff.
+
+    Raises
+    ------
+    ValueError
+        Non-positive cutoff, or ``order`` below the plant's relative degree.
+    """
+    if not (cutoff_hz > 0 and math.isfinite(cutoff_hz)):
+        raise ValueError(f"cutoff_hz = {cutoff_hz!r}: must be > 0")
+    p = control.tf(plant)
+    num, den = np.trim_zeros(np.atleast_1d(np.squeeze(p.num[0][0])), "f"), np.atleast_1d(np.squeeze(p.den[0][0]))
+    if int(order) != order or order < len(den) - len(num):
+        raise ValueError(f"order = {order!r}: Q/P_n is improper unless order >= the plant's relative "
+                         f"degree {len(den) - len(num)}")
+    tau = 1.0 / (2.0 * math.pi * cutoff_hz)
+    q_den = np.array([1.0])
+    for _ in range(int(order)):
+        q_den = np.polymul(q_den, [tau, 1.0])
+    observer = control.tf([[den, [-1.0]]], [[np.polymul(num, q_den), q_den]])
+    return lti_block(observer, dt, [f"pos.{axis}", f"u_prev.{axis}"], [f"{name}:d_hat.{axis}"], method, name)
+
+
+def with_correction(ctrl: Controller, observers) -> Controller:
+    """Observer add-on: ``u = u_ctrl - d_hat`` on each axis an observer estimates.
+
+    ``observers`` are blocks each writing ``<name>:d_hat.<axis>`` (V), such as
+    :func:`inverse_model_observer`; they run after the controller.
+    """
+    blocks, sums, renames = [], [], {}
+    for obs in observers:
+        for out in obs.outputs:
+            axis = out.rsplit(".", 1)[1]
+            u_c = f"{ctrl.name}:u_ctrl.{axis}"
+            renames[f"u.{axis}"] = u_c
+            sums.append(Sum((1.0, -1.0), (u_c, out), f"u.{axis}", f"correction.{axis}"))
+        blocks.append(obs)
+    inner = rename(ctrl, renames)
+    return Controller(inner.blocks + blocks + sums, ctrl.dt, ctrl.name)
+
+
+def sum_of(parts, name: str = "sum") -> Controller:
+    """``u = sum of the parts' u`` on every axis they drive (same period)."""
+    dts = {p.dt for p in parts}
+    if len(dts) != 1:
+        raise ValueError(f"controller {name!r}: parts run at different periods {sorted(dts)}")
+    blocks, terms = [], {}
+    for i, p in enumerate(parts):
+        mapping = {f"u.{a}": f"{name}:part{i}.{a}" for a in p.drives}
+        blocks += rename(p, mapping).blocks
+        for a in p.drives:
+            terms.setdefault(a, []).append(mapping[f"u.{a}"])
+    sums = [Sum((1.0,) * len(t), tuple(t), f"u.{a}", f"sum.{a}") for a, t in terms.items()]
+    return Controller(blocks + sums, dts.pop(), name)
+
+
+def open_loop(values, dt: float, axes=("x",), name: str = "open_loop") -> Controller:
+    """Plays ``values[k]`` (V), shape (n_ticks, len(axes)), ignoring the measurement."""
+    return Controller([Sequence(values, tuple(f"u.{a}" for a in axes), name)], dt, name)
+
+
+def rename(ctrl: Controller, mapping: dict[str, str]) -> Controller:
+    """The same controller with signals renamed (``mapping`` old -> new) in every block."""
+    def names(seq):
+        return tuple(mapping.get(s, s) for s in seq)
+
+    blocks = []
+    for b in ctrl.blocks:
+        if isinstance(b, Sum):
+            blocks.append(replace(b, inputs=names(b.inputs), output=mapping.get(b.output, b.output)))
+        elif isinstance(b, Sequence):
+            blocks.append(replace(b, outputs=names(b.outputs)))
+        elif isinstance(b, (Linear, Static)):
+            blocks.append(replace(b, inputs=names(b.inputs), outputs=names(b.outputs)))
+        else:
+            raise ValueError(f"block {b.name!r} of controller {ctrl.name!r} is a Python block: it cannot be rewired")
+    return Controller(blocks, ctrl.dt, ctrl.name)

@@ -1,0 +1,56 @@
+"""Names of the signals on the bus that every block can read.
+
+At each control tick the loop writes, for every machine axis ``<a>``:
+
+======================  ==========================================================  ======
+name                    what                                                         unit
+======================  ==========================================================  ======
+``ref.<a>``             reference position r[k]                                      m
+``ref_vel.<a>``         reference velocity                                           m/s
+``ref_acc.<a>``         reference acceleration                                       m/s^2
+``pos.<a>``             encoder position y[k] (quantized, noisy)                     m
+``vel.<a>``             velocity measurement: backward difference (y[k]-y[k-1])/T    m/s
+                        of the encoder (default) or an ideal tachometer
+``error.<a>``           ``ref.<a> - pos.<a>``                                        m
+``u_prev.<a>``          drive input of the previous tick after the input            V
+                        disturbance and saturation (0 at k = 0)
+``preview.<a>.<i>``     reference position i ticks ahead, r[k+i], i = 1..P           m
+======================  ==========================================================  ======
+
+and ``tick``, the tick index k.  Blocks add their own outputs to the bus; a controller's
+outputs are ``u.<a>`` (V), one per axis it drives.  P is the largest ``i`` any block reads.
+"""
+
+from __future__ import annotations
+
+#: Per-axis signals, in bus order (the loop's sensor kernel writes them at these offsets).
+AXIS_SIGNALS = ("ref", "ref_vel", "ref_acc", "pos", "vel", "error", "u_prev")
+
+
+def standard_signals(axes, preview_ticks: int = 0) -> list[str]:
+    """Bus layout of the loop's signals: ``tick``, then per axis :data:`AXIS_SIGNALS`, then
+    per axis ``preview.<a>.1 .. preview.<a>.P``."""
+    names = ["tick"]
+    for a in axes:
+        names += [f"{s}.{a}" for s in AXIS_SIGNALS]
+    for a in axes:
+        names += [f"preview.{a}.{i}" for i in range(1, preview_ticks + 1)]
+    return names
+
+
+def preview_ticks_needed(signals) -> int:
+    """Largest ``i`` of the ``preview.<a>.<i>`` names in ``signals`` (0 if none).
+
+    Raises
+    ------
+    ValueError
+        A preview name whose ``i`` is not a whole number >= 1.
+    """
+    most = 0
+    for name in signals:
+        parts = name.split(".")
+        if parts[0] == "preview":
+            if len(parts) != 3 or not parts[2].isdigit() or int(parts[2]) < 1:
+                raise ValueError(f"{name!r}: a preview signal is preview.<axis>.<ticks ahead, >= 1>")
+            most = max(most, int(parts[2]))
+    return most

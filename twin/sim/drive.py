@@ -1,0 +1,215 @@
+"""Drive and sensor models between the controller and MuJoCo, and their per-tick kernels.
+
+Drive: an input disturbance (V), saturation of the control input (V) and a transport delay
+realized at the physics timestep (a whole number of steps), held in its own delay buffer.
+Sensors: encoder quantization (resolution in m), Gaussian measurement noise from a seeded
+generator, and a velocity measurement (backward difference of the encoder, or an ideal
+tachometer).  The kernels are the arithmetic both loops call (:mod:`twin.sim.loop`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from controllers.blocks.signals import AXIS_SIGNALS
+from twin.errors import TwinInputError
+
+
+@dataclass
+class Drive:
+    """Saturation and transport delay between controller and actuator.
+
+    The input applied at physics step ``j`` (counted from the start of the run) is the
+    saturated command of tick ``(j - delay_steps) // substeps``, or zero before the first
+    delayed command arrives; a delay that is not a whole number of ticks falls inside one.
+
+    Parameters
+    ----------
+    n_axes : int
+    substeps : int
+        Physics steps per control period.
+    timestep_s : float
+        Physics timestep (s).
+    delay_s : float
+        Transport delay (s); rounded to whole physics steps (must be within 1e-9 s of one).
+    saturation_V : float or None
+        Symmetric limit on the applied input (V); None for none.
+    """
+
+    n_axes: int
+    substeps: int
+    timestep_s: float
+    delay_s: float = 0.0
+    saturation_V: float | None = None
+
+    def __post_init__(self):
+        steps = self.delay_s / self.timestep_s
+        if self.delay_s < 0 or abs(steps - round(steps)) * self.timestep_s > 1e-9:
+            raise TwinInputError("drive.delay_s", self.delay_s,
+                                 f"must be >= 0 and a whole multiple of the timestep {self.timestep_s:g} s")
+        if self.saturation_V is not None and self.saturation_V <= 0:
+            raise TwinInputError("drive.saturation_V", self.saturation_V, "must be > 0")
+        self.delay_steps = int(round(steps))
+        self.delay_ticks, self.split = divmod(self.delay_steps, self.substeps)
+
+    @property
+    def limit_V(self) -> float:
+        """Saturation limit (V); ``inf`` when there is none."""
+        return math.inf if self.saturation_V is None else float(self.saturation_V)
+
+    def delay_line(self) -> np.ndarray:
+        """A fresh delay buffer: the saturated commands of the last ``delay_ticks + 2`` ticks
+        (V), shape (delay_ticks + 2, n_axes), indexed by tick modulo its length."""
+        return np.zeros((self.delay_ticks + 2, self.n_axes))
+
+
+@dataclass
+class Encoder:
+    """Quantized, noisy position measurement.
+
+    Parameters
+    ----------
+    resolution_m : ndarray, shape (n_axes,)
+        Encoder resolution (m); 0 for ideal.
+    noise_std_m : ndarray, shape (n_axes,)
+        Standard deviation of additive Gaussian noise (m).
+    gains : ndarray, shape (n_axes,)
+        Sensor gain (the machine's H1).
+    seed : int
+        Seed of the noise generator.
+    velocity : {"backward_difference", "tachometer"}
+        Velocity measurement: backward difference of the encoder (the papers' drives) or an
+        ideal tachometer on the table.
+    """
+
+    resolution_m: np.ndarray
+    noise_std_m: np.ndarray
+    gains: np.ndarray
+    seed: int = 0
+    velocity: str = "backward_difference"
+
+    def __post_init__(self):
+        for name in ("resolution_m", "noise_std_m"):
+            arr = np.asarray(getattr(self, name), float)
+            if (arr < 0).any() or not np.isfinite(arr).all():
+                raise TwinInputError(f"sensors.{name}", arr.tolist(), "must be finite and >= 0")
+            setattr(self, name, arr)
+        self.gains = np.asarray(self.gains, float)
+        if self.velocity not in ("backward_difference", "tachometer"):
+            raise TwinInputError("sensors.velocity", self.velocity, "must be 'backward_difference' or 'tachometer'")
+
+    def noise_source(self):
+        """``draw(n_ticks)`` -> the next ``n_ticks`` rows of the run's measurement noise (m),
+        shape (n_ticks, n_axes), from one generator seeded with ``seed``: drawing in chunks
+        gives the same sequence as drawing at once."""
+        rng = np.random.default_rng(self.seed)
+        return lambda n_ticks: rng.standard_normal((n_ticks, len(self.gains))) * self.noise_std_m
+
+
+def substeps_per_tick(control_period_s: float, timestep_s: float) -> int:
+    """Whole number of physics steps per control period.
+
+    Raises
+    ------
+    TwinInputError
+        If the control period is not a whole multiple of the timestep.
+    """
+    if timestep_s <= 0 or not math.isfinite(timestep_s):
+        raise TwinInputError("timestep_s", timestep_s, "must be > 0")
+    ratio = control_period_s / timestep_s
+    n = round(ratio)
+    if n < 1 or abs(ratio - n) > 1e-6:
+        raise TwinInputError("control_period_s", control_period_s,
+                             f"must be a whole multiple of timestep_s = {timestep_s:g} s")
+    return int(n)
+
+
+#: Stride of the per-axis signals on the bus (:func:`controllers.blocks.signals.standard_signals`).
+STRIDE = len(AXIS_SIGNALS)
+#: Largest magnitude MuJoCo accepts in ``ctrl``, ``qacc`` (``mjMAXVAL``); beyond it, divergence.
+MAX_VALUE = 1e10
+
+
+@njit(cache=True)
+def table_in_bounds(qpos, q_idx, runaway_m):  # pragma: no cover - compiled
+    """Whether every table position is finite and within ``runaway_m`` (m)."""
+    for a in range(q_idx.shape[0]):
+        if not abs(qpos[q_idx[a]]) < runaway_m:
+            return False
+    return True
+
+
+@njit(cache=True)
+def sense(k, row, qpos, qvel, q_idx, v_idx, gains, resolution, noise, ref, tachometer, period_s,
+          meas_prev, ua_prev, preview, bus):  # pragma: no cover - compiled
+    """Write tick ``k``'s loop signals onto the bus (layout of ``standard_signals``).
+
+    ``row`` is tick k's row in the chunk arrays ``noise`` (n, n_axes) and ``ref``
+    (n + preview, n_axes, 3).  The encoder reads ``gains * table position`` quantized to
+    ``resolution`` (m; 0 for ideal) plus noise.  The velocity is ``(y[k] - y[k-1]) / period_s``
+    (0 at k = 0) or, with ``tachometer``, ``gains * table velocity``.  ``meas_prev`` (the last
+    encoder reading) is updated in place.
+    """
+    n_axes = q_idx.shape[0]
+    bus[0] = k
+    for a in range(n_axes):
+        y = gains[a] * qpos[q_idx[a]]
+        if resolution[a] > 0:
+            y = np.rint(y / resolution[a]) * resolution[a]
+        y = y + noise[row, a]
+        base = 1 + STRIDE * a
+        bus[base] = ref[row, a, 0]
+        bus[base + 1] = ref[row, a, 1]
+        bus[base + 2] = ref[row, a, 2]
+        bus[base + 3] = y
+        if tachometer:
+            bus[base + 4] = gains[a] * qvel[v_idx[a]]
+        else:
+            bus[base + 4] = (y - meas_prev[a]) / period_s if k > 0 else 0.0
+        bus[base + 5] = ref[row, a, 0] - y
+        bus[base + 6] = ua_prev[a]
+        meas_prev[a] = y
+        for i in range(preview):
+            bus[1 + STRIDE * n_axes + a * preview + i] = ref[row + 1 + i, a, 0]
+
+
+@njit(cache=True)
+def drive_command(k, row, bus, u_idx, u_dist, limit, u, ua, delay_line):  # pragma: no cover - compiled
+    """Tick ``k``'s controller outputs ``u`` (from the bus) and drive input
+    ``ua = clip(u + disturbance, -limit, limit)`` (V), stored in the delay line.
+
+    Returns False if an input is not finite or beyond :data:`MAX_VALUE` (divergence).
+    """
+    ok = True
+    n = delay_line.shape[0]
+    for a in range(u_idx.shape[0]):
+        u[a] = bus[u_idx[a]]
+        ua[a] = min(max(u[a] + u_dist[row, a], -limit), limit)
+        delay_line[k % n, a] = ua[a]
+        if not abs(ua[a]) <= MAX_VALUE:
+            ok = False
+    return ok
+
+
+@njit(cache=True)
+def actuator_input(k, s, substeps, delay_steps, delay_line, ctrl):  # pragma: no cover - compiled
+    """Set ``ctrl`` for physics step ``s`` of tick ``k``: the command of tick
+    ``(k substeps + s - delay_steps) // substeps``, or 0 before the first one arrives."""
+    j = k * substeps + s - delay_steps
+    n = delay_line.shape[0]
+    for a in range(ctrl.shape[0]):
+        ctrl[a] = delay_line[(j // substeps) % n, a] if j >= 0 else 0.0
+
+
+@njit(cache=True)
+def accelerations_ok(qacc):  # pragma: no cover - compiled
+    """MuJoCo's own instability test (``mjWARN_BADQACC``): every acceleration finite and within
+    :data:`MAX_VALUE`."""
+    for i in range(qacc.shape[0]):
+        if not abs(qacc[i]) <= MAX_VALUE:
+            return False
+    return True

@@ -1,0 +1,260 @@
+"""Closed-loop runner: controllers on the signal bus + drive + MuJoCo machine + encoders.
+
+One control tick (period ``control_period_s``, a whole multiple of the physics timestep):
+
+    table positions -> encoder, velocity measurement, reference (and its preview) -> signal bus
+    -> the controllers' blocks -> u (V) -> drive (input disturbance, saturation, delay line)
+    -> MjData.ctrl -> physics steps (``mj_step``; force models write the workpiece's
+    ``xfrc_applied`` before each step)
+
+The loop (:mod:`twin.sim.loop`) runs compiled whenever every block has a compiled kernel
+(every kind but Python blocks), in chunks of ticks; between chunks the runner samples the next
+stretch of the reference and disturbances, draws the noise, updates the progress bar and
+reads MuJoCo's warning counters.  The state is recorded at the start of every recorded tick,
+so ``u[k]`` is the input held over ``[t[k], t[k+1])`` (zero-order hold); so is the workpiece
+force, recorded as the mean of the forces applied over that interval.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Protocol, Sequence
+
+import mujoco
+import numpy as np
+from tqdm import tqdm
+
+from controllers.blocks import Controller, Program, SignalError, preview_ticks_needed, standard_signals
+from twin.errors import SimulationDiverged, TwinInputError
+from twin.machines import BuiltMachine
+from twin.process.cutting import ForceModels
+from twin.sim import loop, mujoco_c
+from twin.sim.drive import Drive, Encoder, substeps_per_tick
+
+#: Table travel (m) beyond which a run counts as runaway.
+RUNAWAY_M = 10.0
+#: Simulated physics steps above which a progress bar is shown (about 5 s of wall time).
+PROGRESS_STEPS = 1_000_000
+#: Ticks per chunk at most (bounds the reference, noise and disturbance arrays held at once).
+CHUNK_TICKS = 8192
+#: MuJoCo warnings that mean the simulation is no longer valid.
+FATAL_WARNINGS = (mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQVEL,
+                  mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADCTRL)
+
+
+class Disturbance(Protocol):
+    """A disturbance adds to the drive input, or acts on the workpiece before each physics step.
+
+    ``input_V(t)`` returns ndarray (len(t), n_axes) added to the control input (V);
+    ``kernel_arrays(machine)`` returns ``(kind, params, state)`` of a compiled force model
+    (:mod:`twin.process.cutting`).  A disturbance has one of the two.
+    """
+
+
+@dataclass
+class RunResult:
+    """Time series of one closed-loop run at the recorded ticks, and metrics over every tick.
+
+    Attributes
+    ----------
+    machine : BuiltMachine
+    t_s : ndarray, shape (n,)
+        Times of the recorded ticks (s).
+    ref : ndarray, shape (n, n_axes, 3)
+        Reference position (m), velocity (m/s), acceleration (m/s^2).
+    meas_m : ndarray, shape (n, n_axes)
+        Encoder readings (m).
+    u_V : ndarray, shape (n, n_axes)
+        Controller outputs (V), before the drive.
+    u_applied_V : ndarray, shape (n, n_axes)
+        Drive input after disturbance and saturation (V), before the delay.
+    qpos, qvel : ndarray, shape (n, nq), (n, nv)
+        Every joint's position (m or rad) and velocity (m/s or rad/s).
+    actuator_force : ndarray, shape (n, nu)
+        Actuator force/torque (N or N m) at the last physics step before each tick.
+    workpiece_force_N : ndarray, shape (n, 3)
+        External force on the workpiece (world frame, N), mean over the tick's physics steps.
+    control_period_s : float
+    error_max_m, error_rms_m : ndarray, shape (n_axes,)
+        Max |ref - table position| and its RMS over every tick, recorded or not (m).
+    force_max_N : ndarray, shape (n_axes,)
+        Largest tick-mean workpiece force along each axis (N).
+    info : dict
+        ``loop`` ("compiled" or "python"), ``record_every`` (ticks; 0: metrics only).
+    """
+
+    machine: BuiltMachine
+    t_s: np.ndarray
+    ref: np.ndarray
+    meas_m: np.ndarray
+    u_V: np.ndarray
+    u_applied_V: np.ndarray
+    qpos: np.ndarray
+    qvel: np.ndarray
+    actuator_force: np.ndarray
+    workpiece_force_N: np.ndarray
+    control_period_s: float
+    error_max_m: np.ndarray
+    error_rms_m: np.ndarray
+    force_max_N: np.ndarray
+    info: dict = field(default_factory=dict)
+
+    @property
+    def axis_names(self) -> list[str]:
+        return [a.name for a in self.machine.axes]
+
+    def table_position_m(self) -> np.ndarray:
+        """Table positions (m), shape (n, n_axes)."""
+        return self.qpos[:, self.machine.table_qpos_indices()]
+
+    def error_m(self) -> np.ndarray:
+        """Tracking error reference - table position (m), shape (n, n_axes)."""
+        return self.ref[:, :, 0] - self.table_position_m()
+
+
+def _program(machine: BuiltMachine, controllers: Sequence[Controller], control_period_s: float) -> tuple[Program, int]:
+    """The controllers compiled onto the machine's bus, and the preview length (ticks) they read;
+    checks that they drive each axis once."""
+    names = [a.name for a in machine.axes]
+    driven = []
+    for c in controllers:
+        if abs(c.dt - control_period_s) > 1e-12:
+            raise TwinInputError(f"controller {c.name}.dt", c.dt, f"differs from control_period_s = {control_period_s}")
+        driven += c.drives
+    if sorted(driven) != sorted(names):
+        raise TwinInputError("controller", [c.name for c in controllers],
+                             f"drive axes {driven}; machine '{machine.name}' needs each of {names} once")
+    try:
+        preview = preview_ticks_needed(s for c in controllers for b in c.blocks for s in b.inputs)
+        return Program(controllers, standard_signals(names, preview)), preview
+    except SignalError as exc:
+        raise TwinInputError(f"controller block {exc.block}", exc.signal, exc.reason) from None
+    except ValueError as exc:
+        raise TwinInputError("controller", [c.name for c in controllers], str(exc)) from None
+
+
+def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controller, reference,
+             duration_s: float, control_period_s: float, *, drive: Drive | None = None,
+             encoder: Encoder | None = None, disturbances: Sequence[Disturbance] = (),
+             record_every: int = 1, progress: bool | None = None, compiled: bool | None = None) -> RunResult:
+    """Run the closed loop for ``duration_s`` and return its time series and metrics.
+
+    Parameters
+    ----------
+    machine : BuiltMachine
+    controllers : Controller or sequence of Controller
+        Together they write ``u.<axis>`` for every machine axis once; each ``dt`` must equal
+        ``control_period_s``.
+    reference : object with ``n_axes`` and ``sample(t)``
+        See :mod:`twin.paths`.
+    duration_s, control_period_s : float
+        Run length and control period (s).
+    drive, encoder : optional
+        Default: machine delay, no saturation; ideal encoder with the machine's sensor gains.
+    disturbances : sequence
+        See :class:`Disturbance`.
+    record_every : int
+        Record every Nth tick; 0 records no series (metrics only).
+    progress : bool or None
+        Progress bar; None shows one for runs over ``PROGRESS_STEPS`` physics steps.
+    compiled : bool or None
+        Run the compiled loop (every block compiled) or the Python loop.  None picks the
+        compiled loop whenever it can run.
+
+    Raises
+    ------
+    SimulationDiverged
+        Non-finite or huge state, acceleration or drive input, a fatal MuJoCo warning, or a
+        table beyond ``RUNAWAY_M``; with the simulated time.
+    TwinInputError
+        Inconsistent periods, references or controllers (a block reading a signal nothing
+        provides), or ``compiled=True`` where the compiled loop cannot run.
+    """
+    model = machine.model
+    names = [a.name for a in machine.axes]
+    n_axes = len(names)
+    dt = model.opt.timestep
+    substeps = substeps_per_tick(control_period_s, dt)
+    if not (duration_s > 0 and math.isfinite(duration_s)):
+        raise TwinInputError("duration_s", duration_s, "must be > 0")
+    if reference.n_axes != n_axes:
+        raise TwinInputError("reference", type(reference).__name__,
+                             f"has {reference.n_axes} axes, machine '{machine.name}' has {n_axes}")
+    if int(record_every) != record_every or record_every < 0:
+        raise TwinInputError("record_every", record_every, "must be a whole number >= 0")
+    controllers = [controllers] if isinstance(controllers, Controller) else list(controllers)
+    program, preview = _program(machine, controllers, control_period_s)
+    program.reset()
+    can_compile = mujoco_c.available() and program.compiled
+    if compiled and not can_compile:
+        raise TwinInputError("compiled", True, "needs compiled blocks only (no Python block) and MuJoCo's "
+                             "shared library")
+    use_compiled = can_compile if compiled is None else compiled
+    drive = drive or Drive(n_axes, substeps, dt, machine.delay_s)
+    encoder = encoder or Encoder(np.zeros(n_axes), np.zeros(n_axes), np.array(machine.sensor_gains))
+    input_disturbances = [d for d in disturbances if hasattr(d, "input_V")]
+    forces = ForceModels([d for d in disturbances if hasattr(d, "kernel_arrays")], machine)
+
+    n = int(round(duration_s / control_period_s))
+    data = mujoco.MjData(model)
+    n_rec = 0 if record_every == 0 else -(-n // record_every)
+    rec = (int(record_every), np.empty((n_rec, model.nq)), np.empty((n_rec, model.nv)),
+           np.empty((n_rec, model.nu)), np.empty((n_rec, n_axes, 3)), np.empty((n_rec, n_axes)),
+           np.empty((n_rec, n_axes)), np.empty((n_rec, n_axes)), np.empty((n_rec, 3)))
+    acc = (np.zeros((n_axes, 2)), np.zeros(n_axes))
+    mj = (data.qpos, data.qvel, data.qacc, data.ctrl, data.actuator_force, data.xfrc_applied)
+    sensor = (machine.table_qpos_indices(),
+              np.array([machine.joint_dof_index(a.table_joint) for a in machine.axes]),
+              encoder.gains, encoder.resolution_m, encoder.velocity == "tachometer", float(control_period_s),
+              RUNAWAY_M, np.zeros(n_axes), preview)
+    drive_args = (np.array([program.index(f"u.{a}") for a in names]), drive.limit_V, substeps,
+                  drive.delay_steps, drive.delay_line(), np.zeros(n_axes), np.zeros(n_axes))
+    force = (forces.fops, forces.fpar, forces.fstate, machine.workpiece_body_id, dt,
+             np.array([data.time]), np.zeros(3), np.zeros(3))
+    draw_noise = encoder.noise_source()
+    if use_compiled:
+        addresses = mujoco_c.struct_addresses(model, data)
+        prog = (program.ops, program.io, program.par, program.state, program.scratch, program.bus)
+
+    def run_chunk(k0, k1, chunk):
+        if use_compiled:
+            return loop.compiled_ticks(k0, k1, mujoco_c.MJ_STEP, *addresses, mj, sensor, drive_args, prog,
+                                       force, chunk, rec, acc)
+        return loop.python_ticks(k0, k1, model, data, program, mj, sensor, drive_args, force, chunk, rec, acc)
+
+    show = progress if progress is not None else n * substeps > PROGRESS_STEPS
+    size = min(CHUNK_TICKS, max(1, n // 200))
+    warnings0 = [data.warning[w].number for w in FATAL_WARNINGS]
+    with tqdm(total=n, desc=f"{machine.name}", unit="tick", disable=not show, mininterval=0.5,
+              leave=False) as bar:
+        for k0 in range(0, n, size):
+            k1 = min(n, k0 + size)
+            t = np.arange(k0, k1 + preview) * control_period_s
+            u_dist = np.zeros((k1 - k0, n_axes))
+            for dist in input_disturbances:
+                u_dist += dist.input_V(t[:k1 - k0])
+            chunk = (np.ascontiguousarray(reference.sample(t)), draw_noise(k1 - k0), u_dist)
+            status, k, s = run_chunk(k0, k1, chunk)
+            _check(status, k, s, data, sensor[0], drive_args[6], control_period_s, dt, warnings0)
+            bar.update(k1 - k0)
+    rows = np.arange(0, n, record_every) if record_every else np.zeros(0, int)
+    return RunResult(machine, rows * control_period_s, rec[4], rec[5], rec[6], rec[7], rec[1], rec[2], rec[3],
+                     rec[8], control_period_s, acc[0][:, 0].copy(), np.sqrt(acc[0][:, 1] / n), acc[1].copy(),
+                     info={"loop": "compiled" if use_compiled else "python", "record_every": int(record_every)})
+
+
+def _check(status, k, s, data, q_idx, ua, period, dt, warnings0) -> None:
+    """Raise :class:`SimulationDiverged` for a failed chunk or a new fatal MuJoCo warning."""
+    t_tick = k * period
+    if status == loop.RUNAWAY:
+        raise SimulationDiverged(t_tick, f"table position {data.qpos[q_idx].tolist()} m beyond {RUNAWAY_M} m "
+                                         "or not finite")
+    if status == loop.BAD_CONTROL:
+        raise SimulationDiverged(t_tick, f"drive input {ua.tolist()} V not finite or beyond 1e10")
+    if status == loop.BAD_QACC:
+        raise SimulationDiverged(t_tick + (s + 1) * dt, "accelerations not finite or beyond 1e10 "
+                                                        "(MuJoCo's BADQACC test)")
+    for w, before in zip(FATAL_WARNINGS, warnings0):
+        if data.warning[w].number != before:
+            raise SimulationDiverged(data.time, f"MuJoCo warning {mujoco.mjtWarning(w).name}")
