@@ -10,7 +10,8 @@ A controller is compiled (:class:`controllers.blocks.program.Program`) into flat
 - ``scratch``, float64: work space;
 - ``bus``, float64: the signal bus (:mod:`controllers.blocks.signals`).
 
-A block reads its inputs from the bus and writes its outputs to it.  Block kinds:
+:func:`run_blocks` runs a range of blocks: each reads its inputs from the bus and writes its
+outputs to it.  Block kinds:
 
 :data:`LINEAR`
     Discrete state space: ``y = C x + D v``, then ``x <- A x + B v`` (``par`` holds A, B, C, D
@@ -40,70 +41,58 @@ NL_SATURATION, NL_DEAD_ZONE, NL_COSH_GAIN = 0, 1, 2
 KIND, IN_START, N_IN, OUT_START, N_OUT, PAR_START, STATE_START, N_STATE = range(8)
 
 
-@njit(cache=True)
-def affine(P, Q, x, v, out):  # pragma: no cover - compiled
-    """out = P x + Q v (in place), accumulated in that order."""
-    for i in range(P.shape[0]):
-        acc = 0.0
-        for j in range(P.shape[1]):
-            acc += P[i, j] * x[j]
-        for j in range(Q.shape[1]):
-            acc += Q[i, j] * v[j]
-        out[i] = acc
-
-
-@njit(cache=True)
-def static_nonlinearity(code, p, v):  # pragma: no cover - compiled
-    """One value through the static nonlinearity ``code`` with parameters ``p``."""
-    if code == NL_SATURATION:
-        return min(max(v, -p[0]), p[0])
-    if code == NL_DEAD_ZONE:
-        if abs(v) <= p[0]:
-            return 0.0
-        return v - p[0] if v > 0 else v + p[0]
-    # NL_COSH_GAIN
-    e = min(max(v, -p[1]), p[1])
-    return math.cosh(p[0] * e) * v
-
-
-@njit(cache=True)
-def run_block(b, ops, io, par, state, scratch, bus):  # pragma: no cover - compiled
-    """Run block ``b`` once: read its inputs from ``bus``, update its state, write its outputs."""
-    kind = ops[b, KIND]
-    i0, ni, o0, no = ops[b, IN_START], ops[b, N_IN], ops[b, OUT_START], ops[b, N_OUT]
-    p0, s0, ns = ops[b, PAR_START], ops[b, STATE_START], ops[b, N_STATE]
-    if kind == LINEAR:
-        v = scratch[:ni]
-        for j in range(ni):
-            v[j] = bus[io[i0 + j]]
-        x = state[s0:s0 + ns]
-        a = p0 + ns * ns
-        c = a + ns * ni
-        d = c + no * ns
-        y = scratch[ni:ni + no]
-        xn = scratch[ni + no:ni + no + ns]
-        affine(par[c:d].reshape((no, ns)), par[d:d + no * ni].reshape((no, ni)), x, v, y)
-        affine(par[p0:a].reshape((ns, ns)), par[a:c].reshape((ns, ni)), x, v, xn)
-        x[:] = xn
-        for i in range(no):
-            bus[io[o0 + i]] = y[i]
-    elif kind == SUM:
-        acc = 0.0
-        for j in range(ni):
-            acc += par[p0 + j] * bus[io[i0 + j]]
-        bus[io[o0]] = acc
-    elif kind == STATIC:
-        code = int(par[p0])
-        for j in range(ni):
-            bus[io[o0 + j]] = static_nonlinearity(code, par[p0 + 1:], bus[io[i0 + j]])
-    elif kind == SEQUENCE:
-        k = int(bus[io[i0]])
-        for i in range(no):
-            bus[io[o0 + i]] = par[p0 + k * no + i] if k < ns else 0.0
-
-
-@njit(cache=True)
-def run_program(ops, io, par, state, scratch, bus):  # pragma: no cover - compiled
-    """Run every block in order (compiled blocks only: no :data:`PYTHON` block)."""
-    for b in range(ops.shape[0]):
-        run_block(b, ops, io, par, state, scratch, bus)
+@njit(cache=True, inline="always")
+def run_blocks(b0, b1, ops, io, par, state, scratch, bus):  # pragma: no cover - compiled
+    """Run blocks ``b0 <= b < b1`` in order: read their inputs from ``bus``, update their
+    state, write their outputs.  (Written as one flat function: in numba, helper calls on
+    arrays cost reference counting on every tick.)"""
+    for b in range(b0, b1):
+        kind = ops[b, KIND]
+        i0, ni, o0, no = ops[b, IN_START], ops[b, N_IN], ops[b, OUT_START], ops[b, N_OUT]
+        p0, s0, ns = ops[b, PAR_START], ops[b, STATE_START], ops[b, N_STATE]
+        if kind == LINEAR:
+            # y = C x + D v, then x <- A x + B v, each accumulated in that order;
+            # scratch: v at 0, y at ni, the next x at ni + no; A at p0, B at pb, C at pc, D at pd
+            pb = p0 + ns * ns
+            pc = pb + ns * ni
+            pd = pc + no * ns
+            for j in range(ni):
+                scratch[j] = bus[io[i0 + j]]
+            for i in range(no):
+                acc = 0.0
+                for j in range(ns):
+                    acc += par[pc + i * ns + j] * state[s0 + j]
+                for j in range(ni):
+                    acc += par[pd + i * ni + j] * scratch[j]
+                scratch[ni + i] = acc
+            for i in range(ns):
+                acc = 0.0
+                for j in range(ns):
+                    acc += par[p0 + i * ns + j] * state[s0 + j]
+                for j in range(ni):
+                    acc += par[pb + i * ni + j] * scratch[j]
+                scratch[ni + no + i] = acc
+            for i in range(ns):
+                state[s0 + i] = scratch[ni + no + i]
+            for i in range(no):
+                bus[io[o0 + i]] = scratch[ni + i]
+        elif kind == SUM:
+            acc = 0.0
+            for j in range(ni):
+                acc += par[p0 + j] * bus[io[i0 + j]]
+            bus[io[o0]] = acc
+        elif kind == STATIC:
+            code, p1, p2 = int(par[p0]), par[p0 + 1], par[p0 + 2]
+            for j in range(ni):
+                v = bus[io[i0 + j]]
+                if code == NL_SATURATION:
+                    y = min(max(v, -p1), p1)
+                elif code == NL_DEAD_ZONE:
+                    y = 0.0 if abs(v) <= p1 else (v - p1 if v > 0 else v + p1)
+                else:  # NL_COSH_GAIN: p1 = k, p2 = e_max
+                    y = math.cosh(p1 * min(max(v, -p2), p2)) * v
+                bus[io[o0 + j]] = y
+        elif kind == SEQUENCE:
+            k = int(bus[io[i0]])
+            for i in range(no):
+                bus[io[o0 + i]] = par[p0 + k * no + i] if k < ns else 0.0

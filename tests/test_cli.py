@@ -88,10 +88,14 @@ def test_fidelity_bad_set():
 def test_list_and_bench():
     r = _twin("list")
     assert r.returncode == 0 and "linear_motor_xy" in r.stdout and "seed000_hinf" in r.stdout
-    r = _twin("bench", "--json", "--seconds", "0.05")
-    figures = json.loads(r.stdout)
-    assert figures["raw_steps_per_s"] > figures["closed_loop_steps_per_s"] > 0
-    assert figures["ratio"] == pytest.approx(figures["closed_loop_steps_per_s"] / figures["raw_steps_per_s"])
+    assert "cascade" in r.stdout and "inverse_model" in r.stdout and "reproductions" in r.stdout
+    r = _twin("bench", "--json", "--seconds", "0.05", "--repeats", "3")
+    cases = json.loads(r.stdout)["cases"]
+    assert sorted(cases) == ["cascade_dob_googol", "cutting_circle_linear_motor", "hinf_cncmt", "npid_googol"]
+    for figures in cases.values():  # a ratio of medians can differ from the median of ratios, not by 3x
+        assert figures["loop"] == "compiled" and figures["raw_steps_per_s"] > 0
+        assert figures["closed_loop_steps_per_s"] * figures["timestep_s"] == pytest.approx(figures["realtime_factor"])
+        assert 0.3 < figures["ratio"] / (figures["closed_loop_steps_per_s"] / figures["raw_steps_per_s"]) < 3
 
 
 def test_reproduce_seed000_small_counts(tmp_path):
@@ -111,7 +115,7 @@ def test_reproduce_seed000_small_counts(tmp_path):
 def test_reproduce_unknown_source_exits_2():
     r = _twin("reproduce", "seed999")
     assert r.returncode == 2 and r.stderr.strip().splitlines() == [
-        "error: source = 'seed999': only seed000 can be reproduced so far"]
+        "error: source = 'seed999': no reproduction of that paper yet (known: seed000)"]
 
 
 def test_run_cutting_scenario_with_settings_and_recording(tmp_path):

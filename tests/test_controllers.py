@@ -1,48 +1,151 @@
-"""Control blocks against python-control (no MuJoCo)."""
+"""Block kinds on the signal bus against python-control and closed forms (no MuJoCo)."""
 
 import control
 import numpy as np
 import pytest
 
-from controllers import DiscreteLTI, make_controller, seed000
-from controllers.open_loop import OpenLoop
+from controllers import CONTROLLERS, Program, error_feedback, make_controller, open_loop
+from controllers.blocks import (Controller, Linear, SignalError, Static, Sum, cascade, inverse_model_observer, lure,
+                                preview_ticks_needed, standard_signals, with_correction)
 from controllers.design.pid import pid_tf
+from controllers.papers import seed000
+from controllers.registry import Context, make_observers
 
 
-def _run_block(block, e):
+def _controller(blocks, dt=1e-3):
+    return Controller(blocks, dt, "test")
+
+
+def _drive(program, inputs: dict, n: int, outputs):
+    """Run ``n`` ticks, setting bus signals from ``inputs[name][k]``; return the outputs' series."""
+    program.reset()
     out = []
-    for ek in e:
-        ref = np.zeros((block.n_axes, 3))
-        ref[:, 0] = ek
-        out.append(block.step(ref, np.zeros((block.n_axes, 2))))
+    for k in range(n):
+        program.bus[program.index("tick")] = k
+        for name, series in inputs.items():
+            program.bus[program.index(name)] = series[k]
+        program.run()
+        out.append([program.bus[program.index(o)] for o in outputs])
     return np.array(out)
 
 
 @pytest.mark.parametrize("method", ["tustin", "zoh"])
-def test_discrete_lti_matches_c2d(method):
-    dt = 1e-3
-    block = DiscreteLTI(seed000.HINF, dt, method)
-    n = 2000
+def test_linear_block_matches_python_control(method):
+    """Eq. (28) discretized: same realization, simulated independently by python-control."""
+    dt, n = 1e-3, 2000
+    ctrl = error_feedback(seed000.HINF, dt, method=method)
     e = np.sin(np.arange(n) * dt * 7.0)
-    u = _run_block(block, e)[:, 0]
-    ref = control.forced_response(control.c2d(seed000.HINF, dt, method), T=np.arange(n) * dt, U=e).outputs
-    # independent realization (TF vs our state space): rounding of the ill-conditioned eq. (28)
-    assert np.abs(u - ref).max() <= 1e-5 * np.abs(ref).max()
+    u = _drive(Program([ctrl], standard_signals("x")), {"error.x": e}, n, ["u.x"])[:, 0]
+    ref = control.forced_response(control.c2d(control.ss(seed000.HINF), dt, method), T=np.arange(n) * dt, U=e).outputs
+    assert np.abs(u - ref).max() <= 1e-12 * np.abs(ref).max()
 
 
-def test_mimo_block():
+def test_mimo_linear_block_steady_state():
     c = control.tf([[[2.0], [1.0]], [[0.0], [3.0]]], [[[1.0, 1.0], [1.0]], [[1.0], [1.0, 2.0]]])
-    block = DiscreteLTI(c, 1e-3)
-    assert block.n_axes == 2
-    u = _run_block(block, np.ones(20000))[-1]
-    # steady state of a unit error on both inputs: C(0) @ [1, 1]
-    assert u == pytest.approx([2.0 + 1.0, 0.0 + 1.5], rel=1e-6)
+    ctrl = error_feedback(c, 1e-3, axes=("x", "y"))
+    u = _drive(Program([ctrl], standard_signals("xy")), {"error.x": np.ones(20000), "error.y": np.ones(20000)},
+               20000, ["u.x", "u.y"])[-1]
+    assert u == pytest.approx([2.0 + 1.0, 0.0 + 1.5], rel=1e-6)  # C(0) @ [1, 1]
 
 
 def test_feedforward_adds_velocity_and_acceleration():
-    block = DiscreteLTI(control.tf([0.0], [1.0]), 1e-3, velocity_ff=2.0, acceleration_ff=0.5)
-    u = block.step(np.array([[0.0, 3.0, 4.0]]), np.zeros((1, 2)))
-    assert u[0] == pytest.approx(2.0 * 3.0 + 0.5 * 4.0)
+    ctrl = make_controller("tf", 1e-3, {"num": [0.0], "den": [1.0]}, velocity_ff=2.0, acceleration_ff=0.5)
+    u = _drive(Program([ctrl], standard_signals("x")), {"ref_vel.x": [3.0], "ref_acc.x": [4.0]}, 1, ["u.x"])
+    assert u[0, 0] == 2.0 * 3.0 + 0.5 * 4.0
+
+
+def test_static_nonlinearities():
+    v = np.array([-2.0, -0.5, 0.0, 0.3, 1.5])
+    for name, settings, expected in [
+        ("saturation", (1.0,), np.clip(v, -1.0, 1.0)),
+        ("dead_zone", (0.5,), np.where(np.abs(v) <= 0.5, 0.0, v - 0.5 * np.sign(v))),
+        ("cosh_gain", (6.0, 0.3), np.cosh(6.0 * np.clip(v, -0.3, 0.3)) * v),
+    ]:
+        prog = Program([_controller([Static(name, settings, ("error.x",), ("u.x",))])], standard_signals("x"))
+        out = _drive(prog, {"error.x": v}, len(v), ["u.x"])[:, 0]
+        np.testing.assert_allclose(out, expected, rtol=1e-15, atol=0)
+    with pytest.raises(ValueError, match="cosh_gain takes k, e_max"):
+        Static("cosh_gain", (6.0,), ("error.x",), ("u.x",))
+
+
+def test_npid_is_the_pid_of_the_shaped_error():
+    """Seed 002 eqs. (6)-(8): u = PID(cosh(KO e) e), e clipped at e_max inside cosh (mm read)."""
+    dt, n = 1e-4, 3000
+    e = 0.5e-3 * np.sin(np.arange(n) * dt * 40.0)  # +-0.5 mm: the clip at 0.3 mm is active
+    npid = make_controller("seed002_npid", dt)
+    u = _drive(Program([npid], standard_signals("x")), {"error.x": e}, n, ["u.x"])[:, 0]
+    shaped = np.cosh(6e3 * np.clip(e, -0.3e-3, 0.3e-3)) * e
+    from controllers.papers import seed002
+    ref = control.forced_response(control.c2d(control.ss(seed002.pid(1e-4)), dt, "tustin"), T=np.arange(n) * dt,
+                                  U=shaped).outputs
+    assert np.abs(u - ref).max() <= 1e-9 * np.abs(ref).max()
+    # the gain at the clip is the paper's Ke = 3.1075 at KO = 6, e_max = 0.3
+    assert (shaped / np.where(e == 0, 1, e)).max() == pytest.approx(3.1075, abs=1e-4)
+
+
+def test_cascade_is_the_two_loop_law():
+    """v_ref = kp_pos e + ff ref_vel, u = kp_vel (v_ref - vel) + ki_vel sum(T (.))  (Tustin)."""
+    dt, n = 1e-3, 50
+    rng = np.random.default_rng(1)
+    e, rv, vel = rng.normal(size=(3, n))
+    ctrl = make_controller("cascade", dt, {"kp_pos": 40.0, "kp_vel": 2.0, "ki_vel": 30.0, "velocity_ref_ff": 1.0})
+    u = _drive(Program([ctrl], standard_signals("x")), {"error.x": e, "ref_vel.x": rv, "vel.x": vel}, n, ["u.x"])
+    v_err = 40.0 * e + rv - vel
+    pi = control.c2d(control.ss(pid_tf(2.0, 30.0)), dt, "tustin")
+    ref = control.forced_response(pi, T=np.arange(n) * dt, U=v_err).outputs
+    np.testing.assert_allclose(u[:, 0], ref, rtol=1e-12, atol=1e-12)
+
+
+def test_inverse_model_observer_recovers_an_input_disturbance():
+    """Plant P_n = 78.02/(s^2 + 163 s + 193.3) m/V (seed 002 eq. 1) under u + d: d_hat -> d."""
+    dt, n = 1e-4, 20000
+    plant = control.tf([78.02], [1.0, 163.0, 193.3])
+    obs = inverse_model_observer(plant, 50.0, 2, dt)
+    u = 0.2 * np.sin(np.arange(n) * dt * 2 * np.pi * 1.0)
+    d = np.where(np.arange(n) * dt > 0.5, 0.05, 0.0)
+    y = control.forced_response(control.c2d(plant, dt, "zoh"), T=np.arange(n) * dt, U=u + d).outputs
+    u_prev = np.concatenate([[0.0], u[:-1]])
+    prog = Program([_controller([obs], dt)], standard_signals("x"))
+    d_hat = _drive(prog, {"pos.x": y, "u_prev.x": u_prev}, n, ["dob:d_hat.x"])[:, 0]
+    settled = np.arange(n) * dt > 1.0
+    assert np.abs(d_hat[settled] - d[settled]).max() < 0.01 * 0.05 + 0.01 * 0.2
+
+
+def test_observer_add_on_subtracts_the_estimate():
+    dt = 1e-3
+    base = make_controller("pid", dt, {"kp": 1.0})
+    obs = make_observers("inverse_model", {"cutoff_hz": 20.0, "order": 2},
+                         Context(dt, ("x",), plants={"x": control.tf([1.0], [1.0, 1.0])}))
+    ctrl = with_correction(base, obs)
+    prog = Program([ctrl], standard_signals("x"))
+    out = _drive(prog, {"error.x": [0.3] * 5, "pos.x": [0.1] * 5}, 5, ["u.x", "observer.x:d_hat.x"])
+    np.testing.assert_allclose(out[:, 0], 0.3 - out[:, 1], rtol=0, atol=1e-15)
+    assert np.abs(out[:, 1]).max() > 0
+
+
+def test_preview_signals_and_sum():
+    """A D-only linear block on preview.x.3 plays r[k+3]; a sum adds two parts."""
+    assert preview_ticks_needed(["preview.x.3", "ref.x"]) == 3
+    with pytest.raises(ValueError, match="preview"):
+        preview_ticks_needed(["preview.x.0"])
+    ff = _controller([Linear(np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), [[2.0]], ["preview.x.3"],
+                             ["u.x"])])
+    names = standard_signals("x", 3)
+    assert names[-3:] == ["preview.x.1", "preview.x.2", "preview.x.3"]
+    out = _drive(Program([ff], names), {"preview.x.3": [1.0, 5.0]}, 2, ["u.x"])
+    assert out[:, 0].tolist() == [2.0, 10.0]
+    total = make_controller("sum", 1e-3, parts=[make_controller("pid", 1e-3, {"kp": 2.0}),
+                                                make_controller("pid", 1e-3, {"kp": 3.0})])
+    assert _drive(Program([total], standard_signals("x")), {"error.x": [1.0]}, 1, ["u.x"])[0, 0] == 5.0
+
+
+def test_missing_signal_names_block_and_signal():
+    ctrl = make_controller("linear", 1e-3, {"inputs": ["vel.z"], "D": [[1.0]]})
+    with pytest.raises(SignalError) as err:
+        Program([ctrl], standard_signals("xy"))
+    assert err.value.signal == "vel.z" and "linear" in err.value.block
+    with pytest.raises(SignalError, match="already written"):
+        Program([_controller([Sum((1.0,), ("error.x",), "pos.x")])], standard_signals("x"))
 
 
 def test_pid_tf():
@@ -57,15 +160,29 @@ def test_pid_tf():
 def test_published_seed000_controllers():
     assert seed000.ROBUST_PI(1j) == pytest.approx(38.33 + 45.65 / 1j)
     assert seed000.HINF_REDUCED(0) == pytest.approx(20.97 / 5.5)
-    assert make_controller("seed000_hinf", 1e-4).x.size == 4
+    assert make_controller("seed000_hinf", 1e-4).blocks[0].n_state == 4
 
 
-def test_registry_rejects_unknown_parameters():
+def test_registry_rejects_unknown_parameters_and_builds_every_kind():
     with pytest.raises(ValueError, match="gain"):
         make_controller("pid", 1e-3, {"gain": 1.0})
+    params = {"tf": {"num": [1.0], "den": [1.0]}, "lure": {"num": [1.0], "den": [1.0], "nonlinearity": "dead_zone",
+                                                           "width": 1e-6},
+              "linear": {"D": [[1.0]]}, "sum": {}}
+    for name in CONTROLLERS:
+        parts = [make_controller("pid", 1e-3, {"kp": 1.0}, axes=("x", "y"))] if name == "sum" else ()
+        ctrl = make_controller(name, 1e-3, params.get(name, {}), axes=("x", "y"), parts=parts)
+        assert sorted(ctrl.drives) == ["x", "y"], name
+        Program([ctrl], standard_signals("xy"))  # every signal it reads exists
 
 
 def test_open_loop_block_plays_sequence():
-    block = OpenLoop(np.array([[1.0], [2.0]]), 1e-3)
-    out = _run_block(block, [0, 0, 0])[:, 0]
-    assert out.tolist() == [1.0, 2.0, 0.0]
+    out = _drive(Program([open_loop(np.array([[1.0], [2.0]]), 1e-3)], standard_signals("x")), {}, 3, ["u.x"])
+    assert out[:, 0].tolist() == [1.0, 2.0, 0.0]
+
+
+def test_lure_block_is_nonlinearity_then_linear():
+    ctrl = lure(control.tf([3.0], [1.0]), "saturation", (0.5,), 1e-3)
+    out = _drive(Program([ctrl], standard_signals("x")), {"error.x": [0.2, 2.0, -2.0]}, 3, ["u.x"])
+    np.testing.assert_allclose(out[:, 0], [0.6, 1.5, -1.5], rtol=1e-15)
+    assert cascade(control.tf(1, 1), control.tf(1, 1), 1e-3, "y").drives == ["y"]

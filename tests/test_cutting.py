@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from twin.process.cutting import (ALUMINIUM_7075_T6, AverageForce, EndMilling, immersion_angles, mean_tool_forces_N,
-                          step_tool_forces_N)
+from twin.process.cutting import (ALUMINIUM_7075_T6, AverageForce, EndMilling, ForceModels, immersion_angles,
+                                  mean_tool_forces_N, step_tool_forces_N)
 from twin.errors import TwinInputError
 from twin.machines import build
 from twin.scenario import scenario_from_dict, run_scenario
@@ -63,7 +63,7 @@ def test_step_average_carries_the_exact_impulse_over_a_revolution():
     st, ex = immersion_angles(4.0, D_MM, "down")
     n = 97  # a step that does not divide the revolution, with wrap-around past 2 pi
     step = 2 * math.pi / n
-    forces = np.array([step_tool_forces_N(K, 3, 2.0, 0.1, st, ex, 0.3 + i * step, step) for i in range(n)])
+    forces = np.array([step_tool_forces_N(K.as_array(), 3, 2.0, 0.1, st, ex, 0.3 + i * step, step) for i in range(n)])
     np.testing.assert_allclose(forces.mean(axis=0), mean_tool_forces_N(K, 3, 2.0, 0.1, st, ex), rtol=1e-12)
 
 
@@ -115,13 +115,11 @@ def test_cutting_force_is_off_outside_its_window():
 def test_average_force_model_is_seed_004_eq_4_5():
     """F_x = k_il v_x - k_c v_y, F_y = k_il v_y + k_c v_x, checked against the run's velocities."""
     bm = build("linear_motor_xy")
-    hook = AverageForce(-2500.0, 2500.0).step_hook(bm)
+    forces = ForceModels([AverageForce(-2500.0, 2500.0)], bm)
     data = mujoco.MjData(bm.model)
     data.qvel[bm.joint_dof_index("x_table")] = 0.03
     data.qvel[bm.joint_dof_index("y_table")] = -0.01
-    hook(bm.model, data)
-    np.testing.assert_allclose(data.xfrc_applied[bm.workpiece_body_id, :3],
-                               [-2500 * 0.03 - 2500 * -0.01, -2500 * -0.01 + 2500 * 0.03, 0.0])
+    np.testing.assert_allclose(forces.force_N(data.qpos, data.qvel, 0.0), [-2500 * 0.03 - 2500 * -0.01, -2500 * -0.01 + 2500 * 0.03, 0.0])
 
 
 def test_average_force_harmonic_fraction_bounded():

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from controllers.open_loop import OpenLoop
+from controllers import open_loop
 from twin.fidelity import TARGETS, coupling_slip_um
 from twin.machines import build
 from twin.references import Step
@@ -15,7 +15,8 @@ def _open_loop(bm, u_V, duration_s):
     dt = bm.model.opt.timestep
     n = int(round(duration_s / dt))
     u = np.tile(np.asarray(u_V, float), (n, 1))
-    return simulate(bm, [OpenLoop(u, dt)], Step(0.0, n_axes=len(bm.axes)), duration_s, dt, progress=False)
+    return simulate(bm, open_loop(u, dt, [a.name for a in bm.axes]), Step(0.0, n_axes=len(bm.axes)), duration_s, dt,
+                    progress=False)
 
 
 def test_coulomb_friction_holds_below_and_subtracts_above_breakaway():

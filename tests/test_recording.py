@@ -9,7 +9,7 @@ from twin.sim.runner import simulate
 
 def test_recording_entities_and_counts(tmp_path):
     bm = build("cncmt_xy")
-    res = simulate(bm, [make_controller("seed000_robust_pi", 1e-3) for _ in range(2)],
+    res = simulate(bm, make_controller("seed000_robust_pi", 1e-3, axes=("x", "y")),
                    Circle(5.0, 600.0), 0.5, 1e-3)
     path = record(res, tmp_path / "run.rrd")
     counts = read_back(path)
@@ -24,7 +24,7 @@ def test_recording_entities_and_counts(tmp_path):
 
 def test_recording_decimates_long_runs(tmp_path):
     bm = build("cncmt")
-    res = simulate(bm, [make_controller("seed000_imc", 1e-4)], Step(0.01), 1.0, 1e-4)
+    res = simulate(bm, make_controller("seed000_imc", 1e-4), Step(0.01), 1.0, 1e-4)
     counts = read_back(record(res, tmp_path / "long.rrd", max_points=1000))
     assert counts["/machine/x/table/position"] == 1000
     assert "/contour/reference" not in counts

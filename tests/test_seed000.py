@@ -10,7 +10,7 @@ import control
 import numpy as np
 import pytest
 
-from controllers import seed000
+from controllers.papers import seed000
 from controllers.design.hinf import central_controller, gamma_iteration, mixed_sensitivity_plant, reduce_balanced, shift_integrators
 from controllers.design.imc import imc_controller
 from controllers.design.kharitonov import (is_hurwitz, kharitonov_polynomials, robustly_stable,

@@ -1,65 +1,100 @@
-"""``twin bench``: physics steps per second, bare and in closed loop.
+"""``twin bench``: physics steps per second, bare and in closed loop, for four controller kinds.
 
-Measured in one process and one call: bare ``mj_step`` on the cncmt axis at a 0.1 ms step
-(``mj_step(nstep=N)``, physics only), then the same model closed by the 4th-order H-infinity
-controller of seed 000 eq. (28) at 10 kHz (one physics step per control tick) through the
-general runner, with recording off, and again with a Rerun recording written.  The runner
-picks its compiled loop (:mod:`twin.compiled_loop`) because the controller is a linear
-block, as it does for every scenario with linear controllers and no per-step hooks.
+For each case, in one process: bare ``mj_step`` on the case's model at its timestep
+(``mj_step(nstep=N)``, physics only, no controller, no force) and the same model in closed loop
+through the general runner (:func:`twin.sim.runner.simulate`, recording every tick as ``twin
+run`` does), alternating, ``repeats`` times.  Reported: the medians of each figure and the
+median of the per-repeat ratios closed/bare (each ratio from two timings taken back to back,
+so a busy core shows up in both and not in the ratio).
+
+Cases:
+
+(a) ``hinf_cncmt``: seed 000's eq. (28) H-infinity (4th order) on ``cncmt`` at 10 kHz;
+(b) ``cascade_dob_googol``: position P around velocity PI with an inverse-model disturbance
+    observer on ``googol_xy`` at 10 kHz (the velocity is the encoder's backward difference);
+(c) ``npid_googol``: seed 002's nonlinear PID (eqs. 6-8) on ``googol_xy`` at 10 kHz;
+(d) ``cutting_circle_linear_motor``: the bundled ``seed004_cutting_circle`` (mechanistic end
+    milling every physics step, PID + feedforward at 2 kHz, 0.1 ms physics).
 """
 
 from __future__ import annotations
 
-import tempfile
+import statistics
 import time
-from pathlib import Path
 
 import mujoco
 
 from controllers import make_controller
+from controllers.blocks import with_correction
+from controllers.registry import Context, make_observers
 from twin.machines import build
-from twin.recording import record
-from twin.references import Step
+from twin.references import Step, SumOfSines
+from twin.scenario import load_scenario, prepare
 from twin.sim.runner import simulate
 
-DT = 1e-4
+#: Gains of case (b): P position loop (1/s), PI velocity loop (V s/m, V/m), observer (Hz, order).
+CASCADE = {"kp_pos": 200.0, "kp_vel": 7.0, "ki_vel": 400.0}
+OBSERVER = {"cutoff_hz": 20.0, "order": 2}
 
 
-def _closed_loop(machine, seconds: float):
-    ctrl = make_controller("seed000_hinf", DT)
-    t0 = time.perf_counter()
-    result = simulate(machine, [ctrl], Step(0.01), seconds, DT, progress=False)
-    return result, time.perf_counter() - t0
-
-
-def run_bench(seconds: float = 2.0) -> dict:
-    """Measure and return the figures (steps/s and their ratios)."""
-    machine = build("cncmt", timestep_s=DT)
-    n = int(round(seconds / DT))
-    data = mujoco.MjData(machine.model)
-    data.ctrl[:] = 0.1
-    mujoco.mj_step(machine.model, data, nstep=100)  # warm-up
-    t0 = time.perf_counter()
-    mujoco.mj_step(machine.model, data, nstep=n)
-    raw = n / (time.perf_counter() - t0)
-    _closed_loop(machine, 0.01)  # warm-up: JIT of the controller kernel
-    _, wall = _closed_loop(machine, seconds)
-    closed = n / wall
-    result, wall_rec = _closed_loop(machine, seconds)
-    with tempfile.TemporaryDirectory() as tmp:
-        t0 = time.perf_counter()
-        record(result, Path(tmp) / "bench.rrd")
-        wall_rec += time.perf_counter() - t0
+def _cases() -> dict:
+    """name -> (machine, run(seconds) -> RunResult); controllers are built here, outside the
+    timed runs, so the timing is the loop's."""
+    cncmt = build("cncmt", timestep_s=1e-4)
+    hinf = make_controller("seed000_hinf", 1e-4)
+    googol = build("googol_xy", timestep_s=1e-4)
+    sine = SumOfSines((0.01,), (0.5,), n_axes=2, axes=(0,))
+    ctx = Context(1e-4, ("x", "y"), plants={a.name: googol.plant[i, i] for i, a in enumerate(googol.axes)})
+    cascade_dob = with_correction(make_controller("cascade", 1e-4, CASCADE, axes=ctx.axes),
+                                  make_observers("inverse_model", OBSERVER, ctx))
+    npid = make_controller("seed002_npid", 1e-4, axes=ctx.axes)
+    cutting = prepare(load_scenario("seed004_cutting_circle"))
+    cutting.pop("duration_s")
+    cutting_machine = cutting.pop("machine")
     return {
-        "machine": "cncmt",
-        "timestep_s": DT,
-        "control_rate_hz": 1.0 / DT,
-        "controller": "seed000_hinf (eq. 28, 4th order)",
-        "simulated_s": seconds,
-        "raw_steps_per_s": raw,
-        "closed_loop_steps_per_s": closed,
-        "ratio": closed / raw,
-        "realtime_factor": closed * DT,
-        "recording_steps_per_s": n / wall_rec,
-        "loop": result.info["loop"],
+        "hinf_cncmt": (cncmt, lambda sec: simulate(cncmt, hinf, Step(0.01), sec, 1e-4, progress=False)),
+        "cascade_dob_googol": (googol, lambda sec: simulate(googol, cascade_dob, sine, sec, 1e-4, progress=False)),
+        "npid_googol": (googol, lambda sec: simulate(googol, npid, sine, sec, 1e-4, progress=False)),
+        "cutting_circle_linear_motor": (cutting_machine, lambda sec: simulate(cutting_machine, **cutting, duration_s=sec,
+                                                                               progress=False)),
     }
+
+
+def _bare_steps_per_s(model, n: int) -> float:
+    data = mujoco.MjData(model)
+    data.ctrl[:] = 0.1
+    t0 = time.perf_counter()
+    mujoco.mj_step(model, data, nstep=n)
+    return n / (time.perf_counter() - t0)
+
+
+def run_bench(seconds: float = 2.0, repeats: int = 5) -> dict:
+    """Measure every case; figures as in the module docstring.
+
+    Returns
+    -------
+    dict
+        ``cases.<name>.{raw_steps_per_s, closed_loop_steps_per_s, ratio, realtime_factor, loop,
+        timestep_s}``, ``simulated_s``, ``repeats``.
+    """
+    out = {"simulated_s": seconds, "repeats": repeats, "cases": {}}
+    for name, (bm, run) in _cases().items():
+        dt = bm.model.opt.timestep
+        n = int(round(seconds / dt))
+        run(0.01)  # warm-up: load the compiled loop
+        raw, closed, ratios = [], [], []
+        for _ in range(repeats):
+            raw.append(_bare_steps_per_s(bm.model, n))
+            t0 = time.perf_counter()
+            result = run(seconds)
+            closed.append(n / (time.perf_counter() - t0))
+            ratios.append(closed[-1] / raw[-1])
+        out["cases"][name] = {
+            "raw_steps_per_s": statistics.median(raw),
+            "closed_loop_steps_per_s": statistics.median(closed),
+            "ratio": statistics.median(ratios),
+            "realtime_factor": statistics.median(closed) * dt,
+            "loop": result.info["loop"],
+            "timestep_s": dt,
+        }
+    return out

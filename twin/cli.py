@@ -54,7 +54,7 @@ def _run(scenario: str, rrd: Path | None, as_json: bool, settings: list[str] | N
     if rrd is not None and rrd.suffix != ".rrd":
         raise TwinInputError("--rrd", str(rrd), "recording file must end in .rrd")
     result = run_scenario(scn)
-    summary = tracking_summary(result)
+    summary = {**tracking_summary(result), "loop": result.info["loop"]}
     if as_json:
         typer.echo(json.dumps({"scenario": scn.name, "machine": scn.machine, **summary}, indent=2))
     else:
@@ -133,7 +133,7 @@ def fidelity(machine: list[str] = typer.Option(None, "--machine", help="Machine(
 
 @app.command()
 @_guard
-def reproduce(source: str = typer.Argument(..., help="Which paper: seed000"),
+def reproduce(source: str = typer.Argument(..., help="Which paper, e.g. seed000 (twin list shows them)"),
               as_json: bool = typer.Option(False, "--json", help="Print everything as JSON"),
               rrd: Path = typer.Option(None, "--rrd", help="Record the nominal twin step runs to this .rrd"),
               plots: Path = typer.Option(None, "--plots", help="Write PNG step-response plots to this folder"),
@@ -145,62 +145,75 @@ def reproduce(source: str = typer.Argument(..., help="Which paper: seed000"),
 
     Exits 1 if a twin number departs from its transfer-function number by more than 2 %.
     """
-    if source != "seed000":
-        raise TwinInputError("source", source, "only seed000 can be reproduced so far")
+    from twin.reproduce import REPRODUCTIONS, reproduction
+
+    if source not in REPRODUCTIONS:
+        raise TwinInputError("source", source, f"no reproduction of that paper yet (known: {', '.join(REPRODUCTIONS)})")
     if samples < 1 or twin_samples < 0:
         raise TwinInputError("--samples" if samples < 1 else "--twin-samples",
                              samples if samples < 1 else twin_samples, "must be >= 1 (--samples) / >= 0")
     if rrd is not None and rrd.suffix != ".rrd":
         raise TwinInputError("--rrd", str(rrd), "recording file must end in .rrd")
-    from twin.reproduce.seed000 import procedure as r
-    from twin.reproduce.seed000.report import format_report, run_all, write_plots
-
-    res = run_all(samples, twin_samples, seed, progress=not as_json)
-    typer.echo(json.dumps(res, indent=1, default=float) if as_json else format_report(res))
+    paper = reproduction(source)
+    res = paper.run(samples, twin_samples, seed, progress=not as_json)
+    typer.echo(json.dumps(res, indent=1, default=float) if as_json else paper.report(res))
     if plots is not None:
-        for path in write_plots(plots):
+        for path in paper.write_plots(plots):
             typer.echo(f"plot written to {path}", err=as_json)
     if rrd is not None:
-        from twin.recording import record_runs
-
-        nominal = r.nominal_params()
-        record_runs({name: r.twin_step_result(c, nominal) for name, c in r.TABLE2_CONTROLLERS.items()}, rrd)
+        paper.record(rrd)
         typer.echo(f"recording written to {rrd} (view with: rerun {rrd})", err=as_json)
-    if res["twin_vs_tf_mismatches"]:
+    if paper.failed(res):
         raise typer.Exit(1)
 
 
 @app.command("list")
 def list_things():
-    """Machines, controllers and bundled scenarios."""
-    from controllers import CONTROLLERS
+    """Machines, controller kinds, observers, bundled scenarios and reproducible papers."""
+    from controllers import CONTROLLERS, OBSERVERS
     from twin.machines import MACHINES
+    from twin.reproduce import REPRODUCTIONS
     from twin.scenario import bundled_scenarios, load_scenario
+
+    def params(names):
+        return f" [params: {', '.join(names)}]" if names else ""
 
     typer.echo("machines:")
     for name, m in MACHINES.items():
         typer.echo(f"  {name:<22} {m.summary}")
-    typer.echo("controllers:")
-    for name, (desc, _, _) in CONTROLLERS.items():
-        typer.echo(f"  {name:<22} {desc}")
+    typer.echo("controllers (type = ...):")
+    for name, (desc, _, allowed) in CONTROLLERS.items():
+        typer.echo(f"  {name:<22} {desc}{params(allowed)}")
+    typer.echo("observers ([controller.observer] type = ...):")
+    for name, (desc, allowed) in OBSERVERS.items():
+        typer.echo(f"  {name:<22} {desc}{params(allowed)}")
     typer.echo("scenarios:")
     for name in sorted(bundled_scenarios()):
         typer.echo(f"  {name:<30} {load_scenario(name).description}")
+    typer.echo(f"reproductions (twin reproduce ...): {', '.join(REPRODUCTIONS)}")
 
 
 @app.command()
 @_guard
 def bench(as_json: bool = typer.Option(False, "--json", help="Print the figures as JSON"),
-          seconds: float = typer.Option(2.0, help="Simulated time per measurement (s)")):
-    """Steps per second: bare mj_step vs the closed loop with eq. (28) at 10 kHz."""
+          seconds: float = typer.Option(2.0, help="Simulated time per measurement (s)"),
+          repeats: int = typer.Option(5, help="Alternating bare/closed-loop repeats; medians are reported")):
+    """Steps per second, bare mj_step vs the closed loop, for four controller kinds (twin/bench.py)."""
     from twin.bench import run_bench
 
-    figures = run_bench(seconds)
+    if not (seconds > 0 and seconds <= 600):
+        raise TwinInputError("--seconds", seconds, "must be in (0, 600]")
+    if not 1 <= repeats <= 100:
+        raise TwinInputError("--repeats", repeats, "must be in 1..100")
+    figures = run_bench(seconds, repeats)
     if as_json:
         typer.echo(json.dumps(figures, indent=2))
-    else:
-        for k, v in figures.items():
-            typer.echo(f"{k:<28} {v:,.3f}" if isinstance(v, float) else f"{k:<28} {v}")
+        return
+    typer.echo(f"medians of {repeats} alternating repeats, {seconds:g} s simulated each")
+    typer.echo(f"{'case':<30} {'bare steps/s':>14} {'closed steps/s':>15} {'ratio':>6} {'x realtime':>11}  loop")
+    for name, f in figures["cases"].items():
+        typer.echo(f"{name:<30} {f['raw_steps_per_s']:>14,.0f} {f['closed_loop_steps_per_s']:>15,.0f} "
+                   f"{f['ratio']:>6.3f} {f['realtime_factor']:>11.1f}  {f['loop']}")
 
 
 def main() -> None:

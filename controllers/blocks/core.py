@@ -119,7 +119,8 @@ class Static:
             raise ValueError(f"block {self.name!r}: needs as many outputs as inputs")
 
     def params(self) -> np.ndarray:
-        return np.array([NONLINEARITIES[self.nonlinearity][0], *self.settings], float)
+        """``[code, p1, p2]``: the kernel reads two settings, the unused one is 0."""
+        return np.array([NONLINEARITIES[self.nonlinearity][0], *self.settings, 0.0, 0.0][:3], float)
 
 
 @dataclass

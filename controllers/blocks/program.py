@@ -103,11 +103,11 @@ class Program:
     def run(self) -> None:
         """One tick of every block on the current bus: the kernels, and Python blocks' ``step``."""
         if self.compiled:
-            kernels.run_program(self.ops, self.io, self.par, self.state, self.scratch, self.bus)
+            kernels.run_blocks(0, len(self.blocks), self.ops, self.io, self.par, self.state, self.scratch, self.bus)
             return
         for i, b in enumerate(self.blocks):
             if hasattr(b, "kind"):
-                kernels.run_block(i, self.ops, self.io, self.par, self.state, self.scratch, self.bus)
+                kernels.run_blocks(i, i + 1, self.ops, self.io, self.par, self.state, self.scratch, self.bus)
             else:
                 row = self.ops[i]
                 ins = self.io[row[kernels.IN_START]:row[kernels.IN_START] + row[kernels.N_IN]]

@@ -357,16 +357,20 @@ def _average_force(par, qvel, t, out):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def workpiece_forces(fops, fpar, fstate, qpos, qvel, t, out):  # pragma: no cover - compiled
-    """Zero ``out`` (3,) and add every force model's force on the workpiece for the physics step
-    starting at time ``t`` (s).  ``fops`` rows: ``kind, par_start, par_len, state_start, state_len``."""
-    out[:] = 0.0
+def workpiece_forces(fops, fpar, fstate, qpos, qvel, t, xfrc, body, f_sum):  # pragma: no cover - compiled
+    """Write the summed force of every model on the workpiece for the physics step starting at
+    time ``t`` (s) into ``xfrc[body, :3]`` (N, world frame) and add it to ``f_sum`` (3,).
+    ``fops`` rows: ``kind, par_start, par_len, state_start, state_len``."""
+    out = np.zeros(3)
     for m in range(fops.shape[0]):
         kind, p0, pn, s0, sn = fops[m, 0], fops[m, 1], fops[m, 2], fops[m, 3], fops[m, 4]
         if kind == END_MILLING:
             _end_milling(fpar[p0:p0 + pn], fstate[s0:s0 + sn], qpos, t, out)
         else:
             _average_force(fpar[p0:p0 + pn], qvel, t, out)
+    for i in range(3):
+        xfrc[body, i] = out[i]
+        f_sum[i] += out[i]
 
 
 class ForceModels:
@@ -394,6 +398,9 @@ class ForceModels:
     def __len__(self) -> int:
         return len(self.fops)
 
-    def apply(self, qpos, qvel, t, out) -> None:
-        """:func:`workpiece_forces` on these models."""
-        workpiece_forces(self.fops, self.fpar, self.fstate, qpos, qvel, t, out)
+    def force_N(self, qpos, qvel, t: float) -> np.ndarray:
+        """:func:`workpiece_forces` of these models for one step starting at ``t`` (s): the
+        force on the workpiece (N, world frame), shape (3,)."""
+        xfrc, total = np.zeros((1, 6)), np.zeros(3)
+        workpiece_forces(self.fops, self.fpar, self.fstate, qpos, qvel, t, xfrc, 0, total)
+        return total

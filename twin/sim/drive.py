@@ -134,7 +134,7 @@ STRIDE = len(AXIS_SIGNALS)
 MAX_VALUE = 1e10
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def table_in_bounds(qpos, q_idx, runaway_m):  # pragma: no cover - compiled
     """Whether every table position is finite and within ``runaway_m`` (m)."""
     for a in range(q_idx.shape[0]):
@@ -143,7 +143,7 @@ def table_in_bounds(qpos, q_idx, runaway_m):  # pragma: no cover - compiled
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def sense(k, row, qpos, qvel, q_idx, v_idx, gains, resolution, noise, ref, tachometer, period_s,
           meas_prev, ua_prev, preview, bus):  # pragma: no cover - compiled
     """Write tick ``k``'s loop signals onto the bus (layout of ``standard_signals``).
@@ -177,7 +177,7 @@ def sense(k, row, qpos, qvel, q_idx, v_idx, gains, resolution, noise, ref, tacho
             bus[1 + STRIDE * n_axes + a * preview + i] = ref[row + 1 + i, a, 0]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def drive_command(k, row, bus, u_idx, u_dist, limit, u, ua, delay_line):  # pragma: no cover - compiled
     """Tick ``k``'s controller outputs ``u`` (from the bus) and drive input
     ``ua = clip(u + disturbance, -limit, limit)`` (V), stored in the delay line.
@@ -195,7 +195,7 @@ def drive_command(k, row, bus, u_idx, u_dist, limit, u, ua, delay_line):  # prag
     return ok
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def actuator_input(k, s, substeps, delay_steps, delay_line, ctrl):  # pragma: no cover - compiled
     """Set ``ctrl`` for physics step ``s`` of tick ``k``: the command of tick
     ``(k substeps + s - delay_steps) // substeps``, or 0 before the first one arrives."""
@@ -205,7 +205,7 @@ def actuator_input(k, s, substeps, delay_steps, delay_line, ctrl):  # pragma: no
         ctrl[a] = delay_line[(j // substeps) % n, a] if j >= 0 else 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def accelerations_ok(qacc):  # pragma: no cover - compiled
     """MuJoCo's own instability test (``mjWARN_BADQACC``): every acceleration finite and within
     :data:`MAX_VALUE`."""

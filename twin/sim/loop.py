@@ -2,12 +2,12 @@
 (:func:`python_ticks`, the reference implementation, which also runs Python blocks).
 
 Both run ticks ``k0 <= k < k1`` of one closed-loop run and call the same kernels for every
-piece of arithmetic: :func:`start_tick` (metrics, state recording and
-:func:`twin.sim.drive.sense`: encoder, velocity, signals onto the bus),
-:func:`controllers.kernels.run_program` (the blocks), :func:`twin.sim.drive.drive_command`
+piece of arithmetic: :func:`start_tick` (metrics, state recording),
+:func:`twin.sim.drive.sense` (encoder, velocity, signals onto the bus),
+:func:`controllers.kernels.run_blocks` (the blocks), :func:`twin.sim.drive.drive_command`
 (disturbance, saturation, delay line), :func:`twin.sim.drive.actuator_input`,
 :func:`twin.process.cutting.workpiece_forces` (into ``xfrc_applied`` before each physics step)
-and :func:`end_tick`.  They differ only in how they step MuJoCo (ctypes ``mj_step`` on the
+and :func:`end_tick` (recording, force maxima).  They differ only in how they step MuJoCo (ctypes ``mj_step`` on the
 struct addresses, with the simulation time accumulated as MuJoCo accumulates it, against
 ``mujoco.mj_step`` and ``data.time``) and in running Python blocks.  The state they carry
 between chunks lives in the argument arrays.
@@ -20,7 +20,8 @@ Argument groups (tuples, so that both loops take the same ones):
 - ``drive``: ``u_idx, limit, substeps, delay_steps, delay_line, u, ua`` (``ua`` holds the
   previous tick's drive input until :func:`twin.sim.drive.drive_command` overwrites it);
 - ``prog``: ``ops, io, par, state, scratch, bus`` (:class:`controllers.blocks.Program`);
-- ``force``: ``fops, fpar, fstate, workpiece_body, timestep_s, clock, f_step, f_sum``;
+- ``force``: ``fops, fpar, fstate, workpiece_body, timestep_s, clock, f_sum`` (``f_sum``: the
+  tick's summed workpiece force, N);
 - ``chunk``: ``ref`` (rows k0 .. k1 + preview), ``noise``, ``u_dist`` (rows k0 .. k1);
 - ``rec``: ``every, qpos, qvel, actuator_force, ref, meas, u, ua, workpiece_force``: tick k is
   recorded in row ``k // every`` when ``k % every == 0``; ``every = 0`` records nothing;
@@ -38,20 +39,17 @@ from __future__ import annotations
 import mujoco
 from numba import njit
 
-from controllers.kernels import run_program
+from controllers.kernels import run_blocks
 from twin.process.cutting import workpiece_forces
 from twin.sim.drive import STRIDE, accelerations_ok, actuator_input, drive_command, sense, table_in_bounds
 
 OK, RUNAWAY, BAD_CONTROL, BAD_QACC = 0, 1, 2, 3
 
 
-@njit(cache=True)
-def start_tick(k, row, mj, sensor, drive, chunk, rec, acc, bus):  # pragma: no cover - compiled
-    """Tick k's error metrics, state recording and loop signals; False if the table ran away."""
-    qpos, qvel, act = mj[0], mj[1], mj[4]
-    q_idx, v_idx, gains, resolution, tachometer, period_s, runaway_m, meas_prev, preview = sensor
-    ref, noise = chunk[0], chunk[1]
-    every, error = rec[0], acc[0]
+@njit(cache=True, inline="always")
+def start_tick(k, row, every, qpos, qvel, act, q_idx, runaway_m, ref, error, rec_qpos, rec_qvel, rec_act,
+               rec_ref):  # pragma: no cover - compiled
+    """Tick k's error metrics and state recording; False if the table ran away."""
     if not table_in_bounds(qpos, q_idx, runaway_m):
         return False
     for a in range(q_idx.shape[0]):
@@ -60,76 +58,91 @@ def start_tick(k, row, mj, sensor, drive, chunk, rec, acc, bus):  # pragma: no c
         error[a, 1] += e * e
     if every > 0 and k % every == 0:
         r = k // every
-        rec[1][r, :] = qpos
-        rec[2][r, :] = qvel
-        rec[3][r, :] = act
-        rec[4][r, :, :] = ref[row]
-    sense(k, row, qpos, qvel, q_idx, v_idx, gains, resolution, noise, ref, tachometer, period_s,
-          meas_prev, drive[6], preview, bus)
+        for i in range(qpos.shape[0]):
+            rec_qpos[r, i] = qpos[i]
+        for i in range(qvel.shape[0]):
+            rec_qvel[r, i] = qvel[i]
+        for i in range(act.shape[0]):
+            rec_act[r, i] = act[i]
+        for a in range(q_idx.shape[0]):
+            for i in range(3):
+                rec_ref[r, a, i] = ref[row, a, i]
     return True
 
 
-@njit(cache=True)
-def end_tick(k, drive, force, rec, acc, bus):  # pragma: no cover - compiled
+@njit(cache=True, inline="always")
+def end_tick(k, every, substeps, u, ua, f_sum, force_max, bus, rec_meas, rec_u, rec_ua,
+             rec_force):  # pragma: no cover - compiled
     """Record tick k's measurement, inputs and mean workpiece force; update the force maxima."""
-    substeps, u, ua = drive[2], drive[5], drive[6]
-    f_sum = force[7]
-    every, force_max = rec[0], acc[1]
     for a in range(u.shape[0]):
         force_max[a] = max(force_max[a], abs(f_sum[a] / substeps))
     if every > 0 and k % every == 0:
         r = k // every
         for a in range(u.shape[0]):
-            rec[5][r, a] = bus[1 + STRIDE * a + 3]
-        rec[6][r, :] = u
-        rec[7][r, :] = ua
+            rec_meas[r, a] = bus[1 + STRIDE * a + 3]
+            rec_u[r, a] = u[a]
+            rec_ua[r, a] = ua[a]
         for i in range(3):
-            rec[8][r, i] = f_sum[i] / substeps
+            rec_force[r, i] = f_sum[i] / substeps
 
 
 @njit(cache=True)
 def compiled_ticks(k0, k1, mj_step, m_addr, d_addr, mj, sensor, drive, prog, force, chunk, rec,
                    acc):  # pragma: no cover - compiled
     """Ticks ``k0 <= k < k1``, compiled; ``mj_step`` is :data:`twin.sim.mujoco_c.MJ_STEP`
-    (an argument, so numba can cache the loop), ``m_addr``/``d_addr`` the struct addresses."""
-    qpos, qvel, qacc, ctrl, xfrc = mj[0], mj[1], mj[2], mj[3], mj[5]
+    (an argument, so numba can cache the loop), ``m_addr``/``d_addr`` the struct addresses.
+    The groups are unpacked once, before the loop (numba reference-counts every array taken
+    out of a tuple)."""
+    qpos, qvel, qacc, ctrl, act, xfrc = mj
+    q_idx, v_idx, gains, resolution, tachometer, period_s, runaway_m, meas_prev, preview = sensor
     u_idx, limit, substeps, delay_steps, delay_line, u, ua = drive
     ops, io, par, state, scratch, bus = prog
-    fops, fpar, fstate, wp, dt, clock, f_step, f_sum = force
-    u_dist = chunk[2]
+    fops, fpar, fstate, wp, dt, clock, f_sum = force
+    ref, noise, u_dist = chunk
+    every, rec_qpos, rec_qvel, rec_act, rec_ref, rec_meas, rec_u, rec_ua, rec_force = rec
+    error, force_max = acc
+    n_blocks = ops.shape[0]
     for k in range(k0, k1):
         row = k - k0
-        if not start_tick(k, row, mj, sensor, drive, chunk, rec, acc, bus):
+        if not start_tick(k, row, every, qpos, qvel, act, q_idx, runaway_m, ref, error, rec_qpos, rec_qvel,
+                          rec_act, rec_ref):
             return RUNAWAY, k, 0
-        run_program(ops, io, par, state, scratch, bus)
+        sense(k, row, qpos, qvel, q_idx, v_idx, gains, resolution, noise, ref, tachometer, period_s,
+              meas_prev, ua, preview, bus)
+        run_blocks(0, n_blocks, ops, io, par, state, scratch, bus)
         if not drive_command(k, row, bus, u_idx, u_dist, limit, u, ua, delay_line):
             return BAD_CONTROL, k, 0
         f_sum[:] = 0.0
         for s in range(substeps):
             actuator_input(k, s, substeps, delay_steps, delay_line, ctrl)
             if fops.shape[0]:
-                workpiece_forces(fops, fpar, fstate, qpos, qvel, clock[0], f_step)
-                xfrc[wp, 0:3] = f_step
-                f_sum += f_step
+                workpiece_forces(fops, fpar, fstate, qpos, qvel, clock[0], xfrc, wp, f_sum)
             mj_step(m_addr, d_addr)
             clock[0] += dt
             if not accelerations_ok(qacc):
                 return BAD_QACC, k, s
-        end_tick(k, drive, force, rec, acc, bus)
+        end_tick(k, every, substeps, u, ua, f_sum, force_max, bus, rec_meas, rec_u, rec_ua, rec_force)
     return OK, k1, 0
 
 
 def python_ticks(k0, k1, model, data, program, mj, sensor, drive, force, chunk, rec, acc):
     """Ticks ``k0 <= k < k1`` in Python: ``program.run()`` (Python blocks too) and
     ``mujoco.mj_step``; the simulation time is ``data.time``."""
-    qpos, qvel, qacc, ctrl, xfrc = mj[0], mj[1], mj[2], mj[3], mj[5]
+    qpos, qvel, qacc, ctrl, act, xfrc = mj
+    q_idx, v_idx, gains, resolution, tachometer, period_s, runaway_m, meas_prev, preview = sensor
     u_idx, limit, substeps, delay_steps, delay_line, u, ua = drive
-    fops, fpar, fstate, wp, dt, clock, f_step, f_sum = force
-    u_dist, bus = chunk[2], program.bus
+    fops, fpar, fstate, wp, dt, clock, f_sum = force
+    ref, noise, u_dist = chunk
+    every, rec_qpos, rec_qvel, rec_act, rec_ref, rec_meas, rec_u, rec_ua, rec_force = rec
+    error, force_max = acc
+    bus = program.bus
     for k in range(k0, k1):
         row = k - k0
-        if not start_tick(k, row, mj, sensor, drive, chunk, rec, acc, bus):
+        if not start_tick(k, row, every, qpos, qvel, act, q_idx, runaway_m, ref, error, rec_qpos, rec_qvel,
+                          rec_act, rec_ref):
             return RUNAWAY, k, 0
+        sense(k, row, qpos, qvel, q_idx, v_idx, gains, resolution, noise, ref, tachometer, period_s,
+              meas_prev, ua, preview, bus)
         program.run()
         if not drive_command(k, row, bus, u_idx, u_dist, limit, u, ua, delay_line):
             return BAD_CONTROL, k, 0
@@ -137,11 +150,9 @@ def python_ticks(k0, k1, model, data, program, mj, sensor, drive, force, chunk, 
         for s in range(substeps):
             actuator_input(k, s, substeps, delay_steps, delay_line, ctrl)
             if fops.shape[0]:
-                workpiece_forces(fops, fpar, fstate, qpos, qvel, data.time, f_step)
-                xfrc[wp, 0:3] = f_step
-                f_sum += f_step
+                workpiece_forces(fops, fpar, fstate, qpos, qvel, data.time, xfrc, wp, f_sum)
             mujoco.mj_step(model, data)
             if not accelerations_ok(qacc):
                 return BAD_QACC, k, s
-        end_tick(k, drive, force, rec, acc, bus)
+        end_tick(k, every, substeps, u, ua, f_sum, force_max, bus, rec_meas, rec_u, rec_ua, rec_force)
     return OK, k1, 0

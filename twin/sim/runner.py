@@ -18,6 +18,7 @@ force, recorded as the mean of the forces applied over that interval.
 from __future__ import annotations
 
 import math
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Protocol, Sequence
 
@@ -211,7 +212,7 @@ def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controll
     drive_args = (np.array([program.index(f"u.{a}") for a in names]), drive.limit_V, substeps,
                   drive.delay_steps, drive.delay_line(), np.zeros(n_axes), np.zeros(n_axes))
     force = (forces.fops, forces.fpar, forces.fstate, machine.workpiece_body_id, dt,
-             np.array([data.time]), np.zeros(3), np.zeros(3))
+             np.array([data.time]), np.zeros(3))
     draw_noise = encoder.noise_source()
     if use_compiled:
         addresses = mujoco_c.struct_addresses(model, data)
@@ -224,10 +225,11 @@ def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controll
         return loop.python_ticks(k0, k1, model, data, program, mj, sensor, drive_args, force, chunk, rec, acc)
 
     show = progress if progress is not None else n * substeps > PROGRESS_STEPS
-    size = min(CHUNK_TICKS, max(1, n // 200))
+    size = min(CHUNK_TICKS, n)
     warnings0 = [data.warning[w].number for w in FATAL_WARNINGS]
-    with tqdm(total=n, desc=f"{machine.name}", unit="tick", disable=not show, mininterval=0.5,
-              leave=False) as bar:
+    messages = []
+    with _mujoco_warnings_into(messages), tqdm(total=n, desc=f"{machine.name}", unit="tick", disable=not show,
+                                               mininterval=0.5, leave=False) as bar:
         for k0 in range(0, n, size):
             k1 = min(n, k0 + size)
             t = np.arange(k0, k1 + preview) * control_period_s
@@ -236,7 +238,7 @@ def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controll
                 u_dist += dist.input_V(t[:k1 - k0])
             chunk = (np.ascontiguousarray(reference.sample(t)), draw_noise(k1 - k0), u_dist)
             status, k, s = run_chunk(k0, k1, chunk)
-            _check(status, k, s, data, sensor[0], drive_args[6], control_period_s, dt, warnings0)
+            _check(status, k, s, data, sensor[0], drive_args[6], control_period_s, dt, warnings0, messages)
             bar.update(k1 - k0)
     rows = np.arange(0, n, record_every) if record_every else np.zeros(0, int)
     return RunResult(machine, rows * control_period_s, rec[4], rec[5], rec[6], rec[7], rec[1], rec[2], rec[3],
@@ -244,8 +246,23 @@ def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controll
                      info={"loop": "compiled" if use_compiled else "python", "record_every": int(record_every)})
 
 
-def _check(status, k, s, data, q_idx, ua, period, dt, warnings0) -> None:
-    """Raise :class:`SimulationDiverged` for a failed chunk or a new fatal MuJoCo warning."""
+@contextmanager
+def _mujoco_warnings_into(messages: list):
+    """Collect MuJoCo's warning texts in ``messages`` instead of printing them and writing
+    ``MUJOCO_LOG.TXT`` into the working folder (``mujoco.set_mju_user_warning``)."""
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(messages.append)
+    try:
+        yield
+    finally:
+        mujoco.set_mju_user_warning(previous)
+
+
+def _check(status, k, s, data, q_idx, ua, period, dt, warnings0, messages) -> None:
+    """Raise :class:`SimulationDiverged` for a failed chunk or a new fatal MuJoCo warning
+    (with MuJoCo's own words where it gave any)."""
+    if status != loop.OK and messages:
+        raise SimulationDiverged(_failure_time(status, k, s, period, dt), f"{messages[0]} (MuJoCo)")
     t_tick = k * period
     if status == loop.RUNAWAY:
         raise SimulationDiverged(t_tick, f"table position {data.qpos[q_idx].tolist()} m beyond {RUNAWAY_M} m "
@@ -253,8 +270,13 @@ def _check(status, k, s, data, q_idx, ua, period, dt, warnings0) -> None:
     if status == loop.BAD_CONTROL:
         raise SimulationDiverged(t_tick, f"drive input {ua.tolist()} V not finite or beyond 1e10")
     if status == loop.BAD_QACC:
-        raise SimulationDiverged(t_tick + (s + 1) * dt, "accelerations not finite or beyond 1e10 "
-                                                        "(MuJoCo's BADQACC test)")
+        raise SimulationDiverged(_failure_time(status, k, s, period, dt),
+                                 "accelerations not finite or beyond 1e10 (MuJoCo's BADQACC test)")
     for w, before in zip(FATAL_WARNINGS, warnings0):
         if data.warning[w].number != before:
-            raise SimulationDiverged(data.time, f"MuJoCo warning {mujoco.mjtWarning(w).name}")
+            raise SimulationDiverged(data.time, " ".join(messages) or f"MuJoCo warning {mujoco.mjtWarning(w).name}")
+
+
+def _failure_time(status, k, s, period, dt) -> float:
+    """Simulated time (s) of a failure: the start of tick k, or the end of its physics step s."""
+    return k * period + (s + 1) * dt if status == loop.BAD_QACC else k * period

@@ -1,0 +1,18 @@
+"""Each paper's reproduction, one package per seed, behind one registry.
+
+A reproduction package offers ``run(samples, twin_samples, seed, progress) -> dict``,
+``report(results) -> str``, ``write_plots(folder) -> list of Path``, ``record(path)`` and
+``failed(results) -> bool``; ``twin reproduce SEED`` dispatches through :data:`REPRODUCTIONS`.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+#: Seed name -> package of its reproduction.
+REPRODUCTIONS = {"seed000": "twin.reproduce.seed000"}
+
+
+def reproduction(seed: str):
+    """The reproduction package of ``seed`` (imported on demand)."""
+    return importlib.import_module(REPRODUCTIONS[seed])

@@ -1,0 +1,44 @@
+"""Seed 000 (Yadav, Pathak, Gaur 2020): the entry points ``twin reproduce seed000`` calls.
+
+:mod:`.procedure` computes (interval model, designs, Table 2 on the transfer functions and the
+twin, disturbance runs); :mod:`.report` prints and plots.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def run(samples: int, twin_samples: int, seed: int, progress: bool) -> dict:
+    """Every number of the reproduction (see :func:`.report.run_all`)."""
+    from twin.reproduce.seed000.report import run_all
+
+    return run_all(samples, twin_samples, seed, progress=progress)
+
+
+def report(results: dict) -> str:
+    """The text tables: paper | transfer function | twin."""
+    from twin.reproduce.seed000.report import format_report
+
+    return format_report(results)
+
+
+def write_plots(folder: Path) -> list[Path]:
+    """PNG step responses as the paper's Figs. 7-10."""
+    from twin.reproduce.seed000.report import write_plots as plots
+
+    return plots(folder)
+
+
+def record(path: Path) -> None:
+    """Rerun recording of the nominal twin step runs of Table 2."""
+    from twin.recording import record_runs
+    from twin.reproduce.seed000 import procedure as r
+
+    nominal = r.nominal_params()
+    record_runs({name: r.twin_step_result(c, nominal) for name, c in r.TABLE2_CONTROLLERS.items()}, path)
+
+
+def failed(results: dict) -> bool:
+    """Whether a twin number departs from its transfer-function number by more than 2 %."""
+    return bool(results["twin_vs_tf_mismatches"])
