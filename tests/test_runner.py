@@ -51,9 +51,10 @@ def test_delay_splits_inside_a_tick():
         line[k % len(line), 0] = 10.0 + k  # the command of tick k
     seen = []
     for k, s in [(0, 1), (2, 1), (2, 2), (3, 1), (3, 2)]:
-        ctrl = np.full(1, -1.0)
-        actuator_input(k, s, 5, drive.delay_steps, line, ctrl)
-        seen.append(ctrl[0])
+        ctrl = np.full(2, -1.0)
+        actuator_input(k, s, 5, drive.delay_steps, line, np.array([1]), ctrl)  # the axis drives actuator 1
+        assert ctrl[0] == -1.0
+        seen.append(ctrl[1])
     # step s of tick k sees the command of tick (5k + s - 12) // 5, none before step 12
     assert seen == [0.0, 0.0, 10.0, 10.0, 11.0]
     with pytest.raises(TwinInputError, match="drive.delay_s"):

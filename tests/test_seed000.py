@@ -135,6 +135,17 @@ def test_hinf_gamma_iteration_and_reduction():
     assert num[-1] / den[0] == pytest.approx(20.97, rel=0.005) and den[1] / den[0] == pytest.approx(5.5, rel=0.01)
 
 
+def test_hinf_design_reports_the_gamma_floor_it_computes():
+    """The reported floor |W3(0) T(0)| is computed from the design: W3(0) = 10 and T(0) just below
+    1 (the integrator is shifted by 1e-6), and the optimal gamma respects it."""
+    d = r.hinf_design()
+    assert 9.99 < d["gamma_floor_W3T_at_dc"] < 10.0 <= d["gamma_opt"]
+    g0 = 4.85 / (1e-6 * 9.7)  # eq. (2) at s = 0 with the integrator moved to -1e-6
+    k = d["controller_opt"]
+    loop0 = g0 * k["num"][-1] / k["den"][-1]
+    assert d["gamma_floor_W3T_at_dc"] == pytest.approx(10.0 * loop0 / (1 + loop0), rel=1e-6)
+
+
 def test_table2_nominal_on_transfer_functions():
     """Settling times and the non-trivial overshoots within 5 % of Table 2; the paper's RT is
     the 0-100 % rise time where the response overshoots and 10-90 % for IMC (never reaches 1)."""

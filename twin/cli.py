@@ -53,6 +53,8 @@ def _run(scenario: str, rrd: Path | None, as_json: bool, settings: list[str] | N
     scn = load_scenario(scenario, settings)
     if rrd is not None and rrd.suffix != ".rrd":
         raise TwinInputError("--rrd", str(rrd), "recording file must end in .rrd")
+    if rrd is not None and scn.record_every_ticks == 0:
+        raise TwinInputError("record_every_ticks", 0, "the run keeps metrics only: nothing to write to --rrd")
     result = run_scenario(scn)
     summary = {**tracking_summary(result), "loop": result.info["loop"]}
     if as_json:

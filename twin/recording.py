@@ -82,7 +82,15 @@ def record_runs(results: dict, path: str | Path, max_points: int = 20_000,
     """Write several runs to one ``.rrd`` file, each under its name (``<name>/machine/...``).
 
     A single run under the name ``""`` keeps the plain entity paths of the module docstring.
+
+    Raises
+    ------
+    ValueError
+        A run that recorded no series (``record_every = 0``, metrics only).
     """
+    empty = [name for name, r in results.items() if len(r.t_s) == 0]
+    if empty:
+        raise ValueError(f"run {empty[0]!r} kept metrics only (record_every = 0): nothing to record")
     path = Path(path)
     rec = rr.RecordingStream(application_id)
     rec.save(str(path))

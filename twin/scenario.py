@@ -329,7 +329,8 @@ def _controller(spec: ControllerSpec, dt: float, field: str, axes: list[str], pl
     if spec.type not in CONTROLLERS:
         raise TwinInputError(f"{field}.type", spec.type, f"unknown controller (known: {', '.join(CONTROLLERS)})")
     if (spec.type == "sum") != (spec.parts is not None):
-        raise TwinInputError(f"{field}.parts", spec.parts, "give parts for type 'sum', and only there")
+        raise TwinInputError(f"{field}.parts", [p.type for p in spec.parts or []],
+                             "give parts for type 'sum', and only there")
     parts = [_controller(p, dt, f"{field}.parts.{i}", axes, plants) for i, p in enumerate(spec.parts or [])]
     try:
         ctrl = make_controller(spec.type, dt, spec.params, spec.discretization, spec.velocity_ff,

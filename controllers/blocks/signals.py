@@ -23,6 +23,8 @@ outputs are ``u.<a>`` (V), one per axis it drives.  P is the largest ``i`` any b
 
 from __future__ import annotations
 
+#: Longest reference preview a block may read (ticks): bounds the bus and the sampled reference.
+MAX_PREVIEW_TICKS = 10_000
 #: Per-axis signals, in bus order (the loop's sensor kernel writes them at these offsets).
 AXIS_SIGNALS = ("ref", "ref_vel", "ref_acc", "pos", "vel", "error", "u_prev")
 
@@ -44,13 +46,14 @@ def preview_ticks_needed(signals) -> int:
     Raises
     ------
     ValueError
-        A preview name whose ``i`` is not a whole number >= 1.
+        A preview name whose ``i`` is not a whole number in 1 .. :data:`MAX_PREVIEW_TICKS`.
     """
     most = 0
     for name in signals:
         parts = name.split(".")
         if parts[0] == "preview":
-            if len(parts) != 3 or not parts[2].isdigit() or int(parts[2]) < 1:
-                raise ValueError(f"{name!r}: a preview signal is preview.<axis>.<ticks ahead, >= 1>")
+            if len(parts) != 3 or not parts[2].isdigit() or not 1 <= int(parts[2]) <= MAX_PREVIEW_TICKS:
+                raise ValueError(f"{name!r}: a preview signal is preview.<axis>.<ticks ahead, "
+                                 f"1 to {MAX_PREVIEW_TICKS}>")
             most = max(most, int(parts[2]))
     return most

@@ -196,13 +196,14 @@ def drive_command(k, row, bus, u_idx, u_dist, limit, u, ua, delay_line):  # prag
 
 
 @njit(cache=True, inline="always")
-def actuator_input(k, s, substeps, delay_steps, delay_line, ctrl):  # pragma: no cover - compiled
-    """Set ``ctrl`` for physics step ``s`` of tick ``k``: the command of tick
-    ``(k substeps + s - delay_steps) // substeps``, or 0 before the first one arrives."""
+def actuator_input(k, s, substeps, delay_steps, delay_line, act_idx, ctrl):  # pragma: no cover - compiled
+    """Set each axis's actuator ``ctrl[act_idx[a]]`` for physics step ``s`` of tick ``k``: the
+    command of tick ``(k substeps + s - delay_steps) // substeps``, or 0 before the first one
+    arrives."""
     j = k * substeps + s - delay_steps
     n = delay_line.shape[0]
-    for a in range(ctrl.shape[0]):
-        ctrl[a] = delay_line[(j // substeps) % n, a] if j >= 0 else 0.0
+    for a in range(act_idx.shape[0]):
+        ctrl[act_idx[a]] = delay_line[(j // substeps) % n, a] if j >= 0 else 0.0
 
 
 @njit(cache=True, inline="always")

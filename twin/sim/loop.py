@@ -17,7 +17,8 @@ Argument groups (tuples, so that both loops take the same ones):
 - ``mj``: ``qpos, qvel, qacc, ctrl, actuator_force, xfrc_applied`` views of ``MjData``;
 - ``sensor``: ``q_idx, v_idx, gains, resolution, tachometer, period_s, runaway_m, meas_prev,
   preview``;
-- ``drive``: ``u_idx, limit, substeps, delay_steps, delay_line, u, ua`` (``ua`` holds the
+- ``drive``: ``u_idx, act_idx, limit, substeps, delay_steps, delay_line, u, ua`` (bus indices of
+  ``u.<axis>``, the axes' actuator ids in ``ctrl``; ``ua`` holds the
   previous tick's drive input until :func:`twin.sim.drive.drive_command` overwrites it);
 - ``prog``: ``ops, io, par, state, scratch, bus`` (:class:`controllers.blocks.Program`);
 - ``force``: ``fops, fpar, fstate, workpiece_body, timestep_s, clock, f_sum`` (``f_sum``: the
@@ -95,7 +96,7 @@ def compiled_ticks(k0, k1, mj_step, m_addr, d_addr, mj, sensor, drive, prog, for
     out of a tuple)."""
     qpos, qvel, qacc, ctrl, act, xfrc = mj
     q_idx, v_idx, gains, resolution, tachometer, period_s, runaway_m, meas_prev, preview = sensor
-    u_idx, limit, substeps, delay_steps, delay_line, u, ua = drive
+    u_idx, act_idx, limit, substeps, delay_steps, delay_line, u, ua = drive
     ops, io, par, state, scratch, bus = prog
     fops, fpar, fstate, wp, dt, clock, f_sum = force
     ref, noise, u_dist = chunk
@@ -114,7 +115,7 @@ def compiled_ticks(k0, k1, mj_step, m_addr, d_addr, mj, sensor, drive, prog, for
             return BAD_CONTROL, k, 0
         f_sum[:] = 0.0
         for s in range(substeps):
-            actuator_input(k, s, substeps, delay_steps, delay_line, ctrl)
+            actuator_input(k, s, substeps, delay_steps, delay_line, act_idx, ctrl)
             if fops.shape[0]:
                 workpiece_forces(fops, fpar, fstate, qpos, qvel, clock[0], xfrc, wp, f_sum)
             mj_step(m_addr, d_addr)
@@ -130,7 +131,7 @@ def python_ticks(k0, k1, model, data, program, mj, sensor, drive, force, chunk, 
     ``mujoco.mj_step``; the simulation time is ``data.time``."""
     qpos, qvel, qacc, ctrl, act, xfrc = mj
     q_idx, v_idx, gains, resolution, tachometer, period_s, runaway_m, meas_prev, preview = sensor
-    u_idx, limit, substeps, delay_steps, delay_line, u, ua = drive
+    u_idx, act_idx, limit, substeps, delay_steps, delay_line, u, ua = drive
     fops, fpar, fstate, wp, dt, clock, f_sum = force
     ref, noise, u_dist = chunk
     every, rec_qpos, rec_qvel, rec_act, rec_ref, rec_meas, rec_u, rec_ua, rec_force = rec
@@ -148,7 +149,7 @@ def python_ticks(k0, k1, model, data, program, mj, sensor, drive, force, chunk, 
             return BAD_CONTROL, k, 0
         f_sum[:] = 0.0
         for s in range(substeps):
-            actuator_input(k, s, substeps, delay_steps, delay_line, ctrl)
+            actuator_input(k, s, substeps, delay_steps, delay_line, act_idx, ctrl)
             if fops.shape[0]:
                 workpiece_forces(fops, fpar, fstate, qpos, qvel, data.time, xfrc, wp, f_sum)
             mujoco.mj_step(model, data)
