@@ -6,7 +6,7 @@ import control
 import numpy as np
 import pytest
 
-from twin.metrics import contour_error, fft_peaks, percent_reduction, rmse, step_metrics
+from twin.metrics import contour_error, step_metrics
 from twin.references import Circle, Polyline, SumOfSines, square
 
 
@@ -30,15 +30,6 @@ def test_contour_error_of_offset_circle():
     path = np.stack([np.cos(th), np.sin(th)], 1)
     actual = 1.01 * path[::7]
     assert contour_error(actual, path) == pytest.approx(np.full(len(actual), 0.01), abs=1e-6)
-
-
-def test_fft_peak_amplitude_and_rmse():
-    dt = 1e-3
-    t = np.arange(10000) * dt
-    e = 0.3 * np.sin(2 * np.pi * 5 * t)
-    assert fft_peaks(e, dt, [5.0])[0] == pytest.approx(0.3, rel=1e-6)
-    assert rmse(e[:, None])[0] == pytest.approx(0.3 / math.sqrt(2), rel=1e-6)
-    assert percent_reduction(10.0, 6.7) == pytest.approx(33.0)
 
 
 def test_circle_radius_and_feed():

@@ -45,7 +45,7 @@ def test_saturation_and_delay():
 def test_delay_splits_inside_a_tick():
     """1.2 ms delay at a 0.5 ms control period (googol): 2 ticks + 2 physics steps."""
     drive = Drive(1, 5, 1e-4, delay_s=1.2e-3)
-    assert (drive.delay_ticks, drive.split) == (2, 2)
+    assert (drive.delay_steps, drive.delay_ticks) == (12, 2)
     line = drive.delay_line()
     for k in range(4):
         line[k % len(line), 0] = 10.0 + k  # the command of tick k

@@ -65,38 +65,6 @@ def step_metrics(t_s: np.ndarray, y: np.ndarray, final: float | None = None,
     }
 
 
-def max_abs(e: np.ndarray) -> np.ndarray:
-    """Maximum absolute error per column (same unit as ``e``)."""
-    return np.abs(np.asarray(e)).max(axis=0)
-
-
-def rmse(e: np.ndarray) -> np.ndarray:
-    """Root-mean-square error per column (same unit as ``e``)."""
-    return np.sqrt(np.mean(np.square(np.asarray(e)), axis=0))
-
-
-def fft_peaks(e: np.ndarray, dt_s: float, frequencies_hz) -> np.ndarray:
-    """Single-sided amplitude spectrum of ``e`` at the bins nearest ``frequencies_hz``.
-
-    Parameters
-    ----------
-    e : ndarray, shape (n,)
-    dt_s : float
-        Sample period (s).
-    frequencies_hz : sequence of float
-
-    Returns
-    -------
-    ndarray
-        Amplitude (unit of ``e``): a sine of amplitude A on a bin reads A.
-    """
-    e = np.asarray(e, float)
-    n = e.size
-    spec = np.abs(np.fft.rfft(e)) * 2.0 / n
-    f = np.fft.rfftfreq(n, dt_s)
-    return np.array([spec[np.argmin(np.abs(f - fq))] for fq in frequencies_hz])
-
-
 def contour_error(actual_xy: np.ndarray, path_xy: np.ndarray) -> np.ndarray:
     """Distance (same unit) from each actual point to the reference path.
 
@@ -123,11 +91,6 @@ def contour_error(actual_xy: np.ndarray, path_xy: np.ndarray) -> np.ndarray:
         d = np.linalg.norm(q - (a + s[..., None] * ab), axis=-1)
         out[start:start + 512] = d.min(axis=1)
     return out
-
-
-def percent_reduction(before: float, after: float) -> float:
-    """100 (before - after) / before, in %."""
-    return 100.0 * (before - after) / before
 
 
 def tracking_summary(result) -> dict:

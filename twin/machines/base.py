@@ -77,11 +77,6 @@ class Axis:
     motor_joint: str | None = None
     screw_joint: str | None = None
 
-    @property
-    def joints(self) -> tuple[str, ...]:
-        """Every joint of the axis, motor first."""
-        return tuple(j for j in (self.motor_joint, self.screw_joint, self.table_joint) if j)
-
 
 @dataclass
 class BuiltMachine:
@@ -267,24 +262,10 @@ class Machine:
                             self.delay(params), couplings, leads, self.sensor_gains(params))
 
 
-#: Rolling linear guides: friction coefficient 0.002-0.003 (Rollon Mono Rail catalogue,
-#: "Linear Line" p. MR-34; Thomson profile-rail FAQ), upper end used.
-GUIDE_FRICTION_COEFFICIENT = 0.003
-#: Seal resistance per carriage (N), Rollon Mono Rail size 25 (MRS25), catalogue Tab. 34.
-GUIDE_SEAL_RESISTANCE_N = 0.35
-#: Carriages per axis (two rails, two carriages each; assumed).
-GUIDE_CARRIAGES = 4
-
-
-def guideway_coulomb_estimate_N(moved_mass_kg: float) -> float:
-    """Catalogue estimate of a guideway's Coulomb friction (N): ``mu m g + n_carriages f_seal``."""
-    return GUIDE_FRICTION_COEFFICIENT * moved_mass_kg * 9.81 + GUIDE_CARRIAGES * GUIDE_SEAL_RESISTANCE_N
-
-
 def coulomb_friction_parameters(axes: tuple[str, ...], source: str = "") -> dict[str, Parameter]:
     """``F_coul_<axis>``: Coulomb friction (N) on each axis's guideway (table slide), MuJoCo
-    ``frictionloss``; 0 by default (the papers' models have none), catalogue estimates in
-    the machine README (:func:`guideway_coulomb_estimate_N`)."""
+    ``frictionloss``; 0 by default (the papers' models have none); the catalogue estimates
+    mu m g + 4 seals in the machine READMEs."""
     note = source or "the source gives no value; catalogue estimate in the machine README"
     return {f"F_coul_{a}": Parameter(0.0, "N", f"Coulomb friction on the {a.upper()} guideway ({note})",
                                      positive=False, nonnegative=True) for a in axes}

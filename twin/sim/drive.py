@@ -54,7 +54,7 @@ class Drive:
         if self.saturation_V is not None and self.saturation_V <= 0:
             raise TwinInputError("drive.saturation_V", self.saturation_V, "must be > 0")
         self.delay_steps = int(round(steps))
-        self.delay_ticks, self.split = divmod(self.delay_steps, self.substeps)
+        self.delay_ticks = self.delay_steps // self.substeps
 
     @property
     def limit_V(self) -> float:
