@@ -18,7 +18,7 @@ integrator) from the sampling itself.
 Friction is forced off (the reference models have none).
 
 Besides one case per machine, ``linear_motor_xy+average_force`` runs ``linear_motor_xy`` with
-seed 004's average cutting force (:class:`twin.cutting.AverageForce`, Table 1's nominal
+seed 004's average cutting force (:class:`twin.process.cutting.AverageForce`, Table 1's nominal
 k_il = -2500, k_c = 2500 N s/m, written into ``xfrc_applied`` every physics step) against the
 coupled 4-state model of eq. (11) (:func:`twin.machines.linear_motor.cutting_coupled_plant`).
 """

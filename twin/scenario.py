@@ -120,7 +120,7 @@ class CoefficientsSpec(_Strict):
 
 
 class EndMillingSpec(_Strict):
-    """Mechanistic end-milling force on the workpiece (:class:`twin.cutting.EndMilling`)."""
+    """Mechanistic end-milling force on the workpiece (:class:`twin.process.cutting.EndMilling`)."""
 
     type: Literal["end_milling"]
     spindle_rpm: PositiveFloat
@@ -138,7 +138,7 @@ class EndMillingSpec(_Strict):
 
 
 class AverageForceSpec(_Strict):
-    """Seed 004's average cutting force (:class:`twin.cutting.AverageForce`)."""
+    """Seed 004's average cutting force (:class:`twin.process.cutting.AverageForce`)."""
 
     type: Literal["average_force"]
     k_il_N_s_per_m: float = -2500.0
@@ -383,7 +383,7 @@ def prepare(scn: Scenario):
     Returns
     -------
     dict
-        Keyword arguments for :func:`twin.runner.simulate` plus ``machine``.
+        Keyword arguments for :func:`twin.sim.runner.simulate` plus ``machine``.
     """
     machine = build(scn.machine, scn.overrides, scn.timestep_s)
     names = [a.name for a in machine.axes]

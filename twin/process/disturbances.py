@@ -1,7 +1,10 @@
 """Disturbance signals added to the drive input (V), as the runner's ``input_V(t)`` hook.
 
-Forces on the workpiece (cutting) are in :mod:`twin.cutting`; sensor noise is the encoder's
-(:class:`twin.drive.Encoder`, seeded).
+The runner samples them once per chunk of ticks (vectorized numpy, the same arrays for the
+compiled and the Python loop); they have no state, so a chunked evaluation equals a whole one.
+
+Forces on the workpiece (cutting) are in :mod:`twin.process.cutting`; sensor noise is the encoder's
+(:class:`twin.sim.drive.Encoder`, seeded).
 """
 
 from __future__ import annotations

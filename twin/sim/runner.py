@@ -148,7 +148,7 @@ def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controll
         Together they write ``u.<axis>`` for every machine axis once; each ``dt`` must equal
         ``control_period_s``.
     reference : object with ``n_axes`` and ``sample(t)``
-        See :mod:`twin.paths`.
+        See :mod:`twin.references`.
     duration_s, control_period_s : float
         Run length and control period (s).
     drive, encoder : optional
