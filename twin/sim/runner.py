@@ -194,10 +194,19 @@ def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controll
     use_compiled = can_compile if compiled is None else compiled
     drive = drive or Drive(n_axes, substeps, dt, machine.delay_s)
     encoder = encoder or Encoder(np.zeros(n_axes), np.zeros(n_axes), np.array(machine.sensor_gains))
+    if drive.n_axes != n_axes or drive.substeps != substeps:
+        raise TwinInputError("drive", (drive.n_axes, drive.substeps), f"needs {n_axes} axes and {substeps} "
+                             "physics steps per tick")
+    for name in ("gains", "resolution_m", "noise_std_m"):
+        if getattr(encoder, name).shape != (n_axes,):
+            raise TwinInputError(f"encoder.{name}", getattr(encoder, name).tolist(), f"needs one value per axis "
+                                 f"({n_axes})")
     input_disturbances = [d for d in disturbances if hasattr(d, "input_V")]
     forces = ForceModels([d for d in disturbances if hasattr(d, "kernel_arrays")], machine)
 
     n = int(round(duration_s / control_period_s))
+    if n < 1:
+        raise TwinInputError("duration_s", duration_s, f"shorter than one control period ({control_period_s:g} s)")
     data = mujoco.MjData(model)
     n_rec = 0 if record_every == 0 else -(-n // record_every)
     rec = (int(record_every), np.empty((n_rec, model.nq)), np.empty((n_rec, model.nv)),
