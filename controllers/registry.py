@@ -34,6 +34,8 @@ class Context:
         The machine's nominal model per axis (m/V), for model-based blocks (observers).
     parts : list of Controller
         The already built parts of a ``sum``.
+    delay_s : float
+        The machine's drive delay (s), for model-based blocks.
     """
 
     dt: float
@@ -41,6 +43,7 @@ class Context:
     method: str = "tustin"
     plants: dict = field(default_factory=dict)
     parts: list = field(default_factory=list)
+    delay_s: float = 0.0
 
 
 def _each_axis(build_one):
@@ -145,9 +148,10 @@ CONTROLLERS = {
 
 #: Observer add-ons: name -> (description, parameter names).
 OBSERVERS = {
-    "inverse_model": ("inverse-model disturbance observer d = Q (P_n^-1 pos - u_prev), Q = 1/(tau s + 1)^order, "
-                      "tau = 1/(2 pi cutoff_hz); P_n the machine's model unless num/den (m/V) are given",
-                      ("cutoff_hz", "order", "num", "den")),
+    "inverse_model": ("inverse-model disturbance observer d = Q P_n^-1 pos - Q z^-m u_prev, Q = 1/(tau s + 1)^order, "
+                      "tau = 1/(2 pi cutoff_hz); P_n the machine's model unless num/den (m/V) are given; u_prev "
+                      "delayed to match delay_s (s, default the machine's drive delay)",
+                      ("cutoff_hz", "order", "num", "den", "delay_s")),
 }
 
 
@@ -176,7 +180,8 @@ def make_observers(name: str, params: dict, ctx: Context) -> list:
         if plant is None:
             raise ValueError(f"no nominal model for axis {a!r}: give num and den")
         out.append(inverse_model_observer(plant, params.get("cutoff_hz", 100.0), params.get("order", 2),
-                                          ctx.dt, a, ctx.method, name=f"observer.{a}"))
+                                          ctx.dt, a, ctx.method, name=f"observer.{a}",
+                                          delay_s=params.get("delay_s", ctx.delay_s)))
     return out
 
 

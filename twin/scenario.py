@@ -324,14 +324,14 @@ def _reference(spec, axis_names: list[str]):
         raise TwinInputError("reference.points_mm", spec.points_mm, str(exc)) from None
 
 
-def _controller(spec: ControllerSpec, dt: float, field: str, axes: list[str], plants: dict):
+def _controller(spec: ControllerSpec, dt: float, field: str, axes: list[str], plants: dict, delay_s: float):
     """Build one controller entry for ``axes``; errors name ``<field>.<what>``."""
     if spec.type not in CONTROLLERS:
         raise TwinInputError(f"{field}.type", spec.type, f"unknown controller (known: {', '.join(CONTROLLERS)})")
     if (spec.type == "sum") != (spec.parts is not None):
         raise TwinInputError(f"{field}.parts", [p.type for p in spec.parts or []],
                              "give parts for type 'sum', and only there")
-    parts = [_controller(p, dt, f"{field}.parts.{i}", axes, plants) for i, p in enumerate(spec.parts or [])]
+    parts = [_controller(p, dt, f"{field}.parts.{i}", axes, plants, delay_s) for i, p in enumerate(spec.parts or [])]
     try:
         ctrl = make_controller(spec.type, dt, spec.params, spec.discretization, spec.velocity_ff,
                                spec.acceleration_ff, axes, plants, parts)
@@ -344,7 +344,7 @@ def _controller(spec: ControllerSpec, dt: float, field: str, axes: list[str], pl
                              f"unknown observer (known: {', '.join(OBSERVERS)})")
     try:
         observers = make_observers(spec.observer.type, spec.observer.params,
-                                   Context(dt, tuple(axes), spec.discretization, plants))
+                                   Context(dt, tuple(axes), spec.discretization, plants, delay_s=delay_s))
     except (ValueError, KeyError, TypeError) as exc:
         raise TwinInputError(f"{field}.observer.params", spec.observer.params, str(exc)) from None
     return with_correction(ctrl, observers)
@@ -389,6 +389,7 @@ def prepare(scn: Scenario):
     names = [a.name for a in machine.axes]
     plants = {a: machine.plant[i, i] for i, a in enumerate(names)}
     substeps = substeps_per_tick(scn.control_period_s, scn.timestep_s)
+    delay = machine.delay_s if scn.drive.delay_s is None else scn.drive.delay_s
     if (scn.controller is None) == (scn.controllers is None):
         raise TwinInputError("controller", None, "give either [controller] (all axes) or [controllers.<axis>]")
     if scn.controllers is not None:
@@ -396,11 +397,10 @@ def prepare(scn: Scenario):
         unknown = [a for a in scn.controllers if a not in names]
         if unknown or missing:
             raise TwinInputError("controllers", sorted(scn.controllers), f"need exactly the axes {names}")
-        ctrls = [_controller(scn.controllers[a], scn.control_period_s, f"controllers.{a}", [a], plants)
+        ctrls = [_controller(scn.controllers[a], scn.control_period_s, f"controllers.{a}", [a], plants, delay)
                  for a in names]
     else:
-        ctrls = [_controller(scn.controller, scn.control_period_s, "controller", names, plants)]
-    delay = machine.delay_s if scn.drive.delay_s is None else scn.drive.delay_s
+        ctrls = [_controller(scn.controller, scn.control_period_s, "controller", names, plants, delay)]
     drive = Drive(len(names), substeps, scn.timestep_s, delay, scn.drive.saturation_V)
     encoder = Encoder(_per_axis(scn.sensors.encoder_resolution_m, len(names), "sensors.encoder_resolution_m"),
                       _per_axis(scn.sensors.noise_std_m, len(names), "sensors.noise_std_m"),

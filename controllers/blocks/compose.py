@@ -105,18 +105,20 @@ def lure(sys, nonlinearity: str, settings, dt: float, axis: str = "x", method: s
 
 
 def inverse_model_observer(plant, cutoff_hz: float, order: int, dt: float, axis: str = "x",
-                           method: str = "tustin", name: str = "dob") -> Linear:
-    """Inverse-model disturbance observer: ``d_hat = Q (P_n^-1 pos - u_prev)`` (V).
+                           method: str = "tustin", name: str = "dob", delay_s: float = 0.0) -> Linear:
+    """Inverse-model disturbance observer: ``d_hat = Q P_n^-1 pos - Q z^-m u_prev`` (V).
 
     ``Q(s) = 1/(tau s + 1)^order`` with ``tau = 1/(2 pi cutoff_hz)``; ``order`` must be at least
-    the relative degree of the nominal plant ``P_n`` (m/V) so that ``Q/P_n`` is proper.  The
-    input is the previous tick's drive input (the current one is not known yet): a delay of one
-    control period, small against 1/cutoff.
+    the relative degree of the nominal plant ``P_n`` (m/V, without its delay) so that ``Q/P_n``
+    is proper.  The plant's transport delay ``delay_s`` is matched on the input side: ``u_prev``
+    (the command of the previous tick, already one period old) is delayed by
+    ``m = round(delay_s/dt) - 1`` more ticks, so that the position and the input the observer
+    compares belong together.  Both parts are discretized with ``method``.
 
     Raises
     ------
     ValueError
-        Non-positive cutoff, or ``order`` below the plant's relative degree.
+        Non-positive cutoff, ``order`` below the plant's relative degree, or a negative delay.
     """
     if not (cutoff_hz > 0 and math.isfinite(cutoff_hz)):
         raise ValueError(f"cutoff_hz = {cutoff_hz!r}: must be > 0")
@@ -129,7 +131,12 @@ def inverse_model_observer(plant, cutoff_hz: float, order: int, dt: float, axis:
     q_den = np.array([1.0])
     for _ in range(int(order)):
         q_den = np.polymul(q_den, [tau, 1.0])
-    observer = control.tf([[den, [-1.0]]], [[np.polymul(num, q_den), q_den]])
+    if not (delay_s >= 0 and math.isfinite(delay_s)):
+        raise ValueError(f"delay_s = {delay_s!r}: must be >= 0")
+    lag = max(int(round(delay_s / dt)) - 1, 0)
+    from_pos = control.c2d(control.tf(den, np.polymul(num, q_den)), dt, method)
+    from_u = control.c2d(control.tf([-1.0], q_den), dt, method) * control.tf([1.0], [1.0] + [0.0] * lag, dt)
+    observer = control.tf([[from_pos.num[0][0], from_u.num[0][0]]], [[from_pos.den[0][0], from_u.den[0][0]]], dt)
     return lti_block(observer, dt, [f"pos.{axis}", f"u_prev.{axis}"], [f"{name}:d_hat.{axis}"], method, name)
 
 

@@ -12,8 +12,9 @@ name                    what                                                    
 ``vel.<a>``             velocity measurement: backward difference (y[k]-y[k-1])/T    m/s
                         of the encoder (default) or an ideal tachometer
 ``error.<a>``           ``ref.<a> - pos.<a>``                                        m
-``u_prev.<a>``          drive input of the previous tick after the input            V
-                        disturbance and saturation (0 at k = 0)
+``u_prev.<a>``          the previous tick's command after saturation: what the       V
+                        controller knows it applied (an input disturbance, unknown
+                        to it, is not in it; 0 at k = 0)
 ``preview.<a>.<i>``     reference position i ticks ahead, r[k+i], i = 1..P           m
 ======================  ==========================================================  ======
 

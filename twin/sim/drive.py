@@ -145,7 +145,7 @@ def table_in_bounds(qpos, q_idx, runaway_m):  # pragma: no cover - compiled
 
 @njit(cache=True, inline="always")
 def sense(k, row, qpos, qvel, q_idx, v_idx, gains, resolution, noise, ref, tachometer, period_s,
-          meas_prev, ua_prev, preview, bus):  # pragma: no cover - compiled
+          meas_prev, u_prev, preview, bus):  # pragma: no cover - compiled
     """Write tick ``k``'s loop signals onto the bus (layout of ``standard_signals``).
 
     ``row`` is tick k's row in the chunk arrays ``noise`` (n, n_axes) and ``ref``
@@ -171,16 +171,18 @@ def sense(k, row, qpos, qvel, q_idx, v_idx, gains, resolution, noise, ref, tacho
         else:
             bus[base + 4] = (y - meas_prev[a]) / period_s if k > 0 else 0.0
         bus[base + 5] = ref[row, a, 0] - y
-        bus[base + 6] = ua_prev[a]
+        bus[base + 6] = u_prev[a]
         meas_prev[a] = y
         for i in range(preview):
             bus[1 + STRIDE * n_axes + a * preview + i] = ref[row + 1 + i, a, 0]
 
 
 @njit(cache=True, inline="always")
-def drive_command(k, row, bus, u_idx, u_dist, limit, u, ua, delay_line):  # pragma: no cover - compiled
-    """Tick ``k``'s controller outputs ``u`` (from the bus) and drive input
-    ``ua = clip(u + disturbance, -limit, limit)`` (V), stored in the delay line.
+def drive_command(k, row, bus, u_idx, u_dist, limit, u, ua, u_sat, delay_line):  # pragma: no cover - compiled
+    """Tick ``k``'s controller outputs ``u`` (from the bus), drive input
+    ``ua = clip(u + disturbance, -limit, limit)`` (V, stored in the delay line) and
+    ``u_sat = clip(u, -limit, limit)`` (V): what the controller knows it applied (the next
+    tick's ``u_prev``; the disturbance is unknown to it).
 
     Returns False if an input is not finite or beyond :data:`MAX_VALUE` (divergence).
     """
@@ -188,6 +190,7 @@ def drive_command(k, row, bus, u_idx, u_dist, limit, u, ua, delay_line):  # prag
     n = delay_line.shape[0]
     for a in range(u_idx.shape[0]):
         u[a] = bus[u_idx[a]]
+        u_sat[a] = min(max(u[a], -limit), limit)
         ua[a] = min(max(u[a] + u_dist[row, a], -limit), limit)
         delay_line[k % n, a] = ua[a]
         if not abs(ua[a]) <= MAX_VALUE:

@@ -17,9 +17,10 @@ Argument groups (tuples, so that both loops take the same ones):
 - ``mj``: ``qpos, qvel, qacc, ctrl, actuator_force, xfrc_applied`` views of ``MjData``;
 - ``sensor``: ``q_idx, v_idx, gains, resolution, tachometer, period_s, runaway_m, meas_prev,
   preview``;
-- ``drive``: ``u_idx, act_idx, limit, substeps, delay_steps, delay_line, u, ua`` (bus indices of
-  ``u.<axis>``, the axes' actuator ids in ``ctrl``; ``ua`` holds the
-  previous tick's drive input until :func:`twin.sim.drive.drive_command` overwrites it);
+- ``drive``: ``u_idx, act_idx, limit, substeps, delay_steps, delay_line, u, ua, u_sat`` (bus
+  indices of ``u.<axis>``, the axes' actuator ids in ``ctrl``; ``u_sat`` holds the previous
+  tick's saturated command, the ``u_prev`` signal, until :func:`twin.sim.drive.drive_command`
+  overwrites it);
 - ``prog``: ``ops, io, par, state, scratch, bus`` (:class:`controllers.blocks.Program`);
 - ``force``: ``fops, fpar, fstate, workpiece_body, timestep_s, clock, f_sum`` (``f_sum``: the
   tick's summed workpiece force, N);
@@ -96,7 +97,7 @@ def compiled_ticks(k0, k1, mj_step, m_addr, d_addr, mj, sensor, drive, prog, for
     out of a tuple)."""
     qpos, qvel, qacc, ctrl, act, xfrc = mj
     q_idx, v_idx, gains, resolution, tachometer, period_s, runaway_m, meas_prev, preview = sensor
-    u_idx, act_idx, limit, substeps, delay_steps, delay_line, u, ua = drive
+    u_idx, act_idx, limit, substeps, delay_steps, delay_line, u, ua, u_sat = drive
     ops, io, par, state, scratch, bus = prog
     fops, fpar, fstate, wp, dt, clock, f_sum = force
     ref, noise, u_dist = chunk
@@ -109,9 +110,9 @@ def compiled_ticks(k0, k1, mj_step, m_addr, d_addr, mj, sensor, drive, prog, for
                           rec_act, rec_ref):
             return RUNAWAY, k, 0
         sense(k, row, qpos, qvel, q_idx, v_idx, gains, resolution, noise, ref, tachometer, period_s,
-              meas_prev, ua, preview, bus)
+              meas_prev, u_sat, preview, bus)
         run_blocks(0, n_blocks, ops, io, par, state, scratch, bus)
-        if not drive_command(k, row, bus, u_idx, u_dist, limit, u, ua, delay_line):
+        if not drive_command(k, row, bus, u_idx, u_dist, limit, u, ua, u_sat, delay_line):
             return BAD_CONTROL, k, 0
         f_sum[:] = 0.0
         for s in range(substeps):
@@ -131,7 +132,7 @@ def python_ticks(k0, k1, model, data, program, mj, sensor, drive, force, chunk, 
     ``mujoco.mj_step``; the simulation time is ``data.time``."""
     qpos, qvel, qacc, ctrl, act, xfrc = mj
     q_idx, v_idx, gains, resolution, tachometer, period_s, runaway_m, meas_prev, preview = sensor
-    u_idx, act_idx, limit, substeps, delay_steps, delay_line, u, ua = drive
+    u_idx, act_idx, limit, substeps, delay_steps, delay_line, u, ua, u_sat = drive
     fops, fpar, fstate, wp, dt, clock, f_sum = force
     ref, noise, u_dist = chunk
     every, rec_qpos, rec_qvel, rec_act, rec_ref, rec_meas, rec_u, rec_ua, rec_force = rec
@@ -143,9 +144,9 @@ def python_ticks(k0, k1, model, data, program, mj, sensor, drive, force, chunk, 
                           rec_act, rec_ref):
             return RUNAWAY, k, 0
         sense(k, row, qpos, qvel, q_idx, v_idx, gains, resolution, noise, ref, tachometer, period_s,
-              meas_prev, ua, preview, bus)
+              meas_prev, u_sat, preview, bus)
         program.run()
-        if not drive_command(k, row, bus, u_idx, u_dist, limit, u, ua, delay_line):
+        if not drive_command(k, row, bus, u_idx, u_dist, limit, u, ua, u_sat, delay_line):
             return BAD_CONTROL, k, 0
         f_sum[:] = 0.0
         for s in range(substeps):

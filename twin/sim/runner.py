@@ -220,7 +220,7 @@ def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controll
               RUNAWAY_M, np.zeros(n_axes), preview)
     drive_args = (np.array([program.index(f"u.{a}") for a in names]),
                   np.array([model.actuator(a.actuator).id for a in machine.axes]), drive.limit_V, substeps,
-                  drive.delay_steps, drive.delay_line(), np.zeros(n_axes), np.zeros(n_axes))
+                  drive.delay_steps, drive.delay_line(), np.zeros(n_axes), np.zeros(n_axes), np.zeros(n_axes))
     force = (forces.fops, forces.fpar, forces.fstate, machine.workpiece_body_id, dt,
              np.array([data.time]), np.zeros(3))
     draw_noise = encoder.noise_source()
@@ -248,7 +248,7 @@ def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controll
                 u_dist += dist.input_V(t[:k1 - k0])
             chunk = (np.ascontiguousarray(reference.sample(t)), draw_noise(k1 - k0), u_dist)
             status, k, s = run_chunk(k0, k1, chunk)
-            _check(status, k, s, data, sensor[0], drive_args[-1], control_period_s, dt, warnings0, messages)
+            _check(status, k, s, data, sensor[0], drive_args[7], control_period_s, dt, warnings0, messages)
             bar.update(k1 - k0)
     rows = np.arange(0, n, record_every) if record_every else np.zeros(0, int)
     return RunResult(machine, rows * control_period_s, rec[4], rec[5], rec[6], rec[7], rec[1], rec[2], rec[3],
