@@ -12,7 +12,7 @@ import control
 import numpy as np
 
 from controllers.blocks import (NONLINEARITIES, Controller, Linear, cascade, error_feedback, inverse_model_observer,
-                                lure, sum_of, with_feedforward)
+                                lti_block, lure, sum_of, with_feedforward)
 from controllers.design.pid import pid_tf
 from controllers.papers import seed000, seed002
 
@@ -104,14 +104,11 @@ def _linear(p, ctx):
     blocks = []
     for a in axes:
         ins, outs = (_qualify(inputs, a), _qualify(outputs, a)) if a else (inputs, outputs)
-        A, B, C, D = mats
-        if A.size == 0:
-            A, B, C = np.zeros((0, 0)), np.zeros((0, len(ins))), np.zeros((len(outs), 0))
+        block = Linear(*mats, tuple(ins), tuple(outs), name=f"linear.{a}" if a else "linear")  # checks shapes
         if p.get("domain", "discrete") == "continuous":
-            sys = control.ss(A, B, C, D)
-            d = control.c2d(sys, ctx.dt, method=ctx.method)
-            A, B, C, D = d.A, d.B, d.C, d.D
-        blocks.append(Linear(A, B, C, D, tuple(ins), tuple(outs), name=f"linear.{a}" if a else "linear"))
+            block = lti_block(control.ss(block.A, block.B, block.C, block.D), ctx.dt, ins, outs, ctx.method,
+                              block.name)
+        blocks.append(block)
     return Controller(blocks, ctx.dt, "linear")
 
 

@@ -112,6 +112,12 @@ def test_reproduce_seed000_small_counts(tmp_path):
     assert counts["/hinf/machine/x/table/position"] == 20_000  # 12 s at 10 kHz, decimated
 
 
+def test_reproduce_seed000_text_report():
+    r = _twin("reproduce", "seed000", "--samples", "3", "--twin-samples", "0")
+    assert r.returncode == 0, r.stderr
+    assert "Table 2" in r.stdout and "38.33" in r.stdout  # the paper's Kp beside ours
+
+
 def test_reproduce_unknown_source_exits_2():
     r = _twin("reproduce", "seed999")
     assert r.returncode == 2 and r.stderr.strip().splitlines() == [

@@ -158,7 +158,7 @@ def reproduce(source: str = typer.Argument(..., help="Which paper, e.g. seed000 
         raise TwinInputError("--rrd", str(rrd), "recording file must end in .rrd")
     paper = reproduction(source)
     res = paper.run(samples, twin_samples, seed, progress=not as_json)
-    typer.echo(json.dumps(res, indent=1, default=float) if as_json else paper.report(res))
+    typer.echo(json.dumps(res, indent=1, default=float) if as_json else paper.format_report(res))
     if plots is not None:
         for path in paper.write_plots(plots):
             typer.echo(f"plot written to {path}", err=as_json)

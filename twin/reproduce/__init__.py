@@ -1,7 +1,7 @@
 """Each paper's reproduction, one package per seed, behind one registry.
 
 A reproduction package offers ``run(samples, twin_samples, seed, progress) -> dict``,
-``report(results) -> str``, ``write_plots(folder) -> list of Path``, ``record(path)`` and
+``format_report(results) -> str``, ``write_plots(folder) -> list of Path``, ``record(path)`` and
 ``failed(results) -> bool``; ``twin reproduce SEED`` dispatches through :data:`REPRODUCTIONS`.
 """
 

@@ -16,11 +16,11 @@ def run(samples: int, twin_samples: int, seed: int, progress: bool) -> dict:
     return run_all(samples, twin_samples, seed, progress=progress)
 
 
-def report(results: dict) -> str:
+def format_report(results: dict) -> str:
     """The text tables: paper | transfer function | twin."""
-    from twin.reproduce.seed000.report import format_report
+    from twin.reproduce.seed000 import report
 
-    return format_report(results)
+    return report.format_report(results)
 
 
 def write_plots(folder: Path) -> list[Path]:
