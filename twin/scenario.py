@@ -324,17 +324,19 @@ def _reference(spec, axis_names: list[str]):
         raise TwinInputError("reference.points_mm", spec.points_mm, str(exc)) from None
 
 
-def _controller(spec: ControllerSpec, dt: float, field: str, axes: list[str], plants: dict, delay_s: float):
-    """Build one controller entry for ``axes``; errors name ``<field>.<what>``."""
+def _controller(spec: ControllerSpec, field: str, base: Context):
+    """Build one controller entry for the axes of ``base`` (period, plants, delay); errors name
+    ``<field>.<what>``."""
     if spec.type not in CONTROLLERS:
         raise TwinInputError(f"{field}.type", spec.type, f"unknown controller (known: {', '.join(CONTROLLERS)})")
     if (spec.type == "sum") != (spec.parts is not None):
         raise TwinInputError(f"{field}.parts", [p.type for p in spec.parts or []],
                              "give parts for type 'sum', and only there")
-    parts = [_controller(p, dt, f"{field}.parts.{i}", axes, plants, delay_s) for i, p in enumerate(spec.parts or [])]
+    parts = [_controller(p, f"{field}.parts.{i}", base) for i, p in enumerate(spec.parts or [])]
+    ctx = replace(base, method=spec.discretization)
     try:
-        ctrl = make_controller(spec.type, dt, spec.params, spec.discretization, spec.velocity_ff,
-                               spec.acceleration_ff, axes, plants, parts)
+        ctrl = make_controller(spec.type, ctx.dt, spec.params, ctx.method, spec.velocity_ff,
+                               spec.acceleration_ff, ctx.axes, ctx.plants, parts)
     except (ValueError, KeyError, TypeError) as exc:
         raise TwinInputError(f"{field}.params", spec.params, str(exc)) from None
     if spec.observer is None:
@@ -343,8 +345,7 @@ def _controller(spec: ControllerSpec, dt: float, field: str, axes: list[str], pl
         raise TwinInputError(f"{field}.observer.type", spec.observer.type,
                              f"unknown observer (known: {', '.join(OBSERVERS)})")
     try:
-        observers = make_observers(spec.observer.type, spec.observer.params,
-                                   Context(dt, tuple(axes), spec.discretization, plants, delay_s=delay_s))
+        observers = make_observers(spec.observer.type, spec.observer.params, ctx)
     except (ValueError, KeyError, TypeError) as exc:
         raise TwinInputError(f"{field}.observer.params", spec.observer.params, str(exc)) from None
     return with_correction(ctrl, observers)
@@ -387,9 +388,10 @@ def prepare(scn: Scenario):
     """
     machine = build(scn.machine, scn.overrides, scn.timestep_s)
     names = [a.name for a in machine.axes]
-    plants = {a: machine.plant[i, i] for i, a in enumerate(names)}
     substeps = substeps_per_tick(scn.control_period_s, scn.timestep_s)
     delay = machine.delay_s if scn.drive.delay_s is None else scn.drive.delay_s
+    base = Context(scn.control_period_s, tuple(names), plants={a: machine.plant[i, i] for i, a in enumerate(names)},
+                   delay_s=delay)
     if (scn.controller is None) == (scn.controllers is None):
         raise TwinInputError("controller", None, "give either [controller] (all axes) or [controllers.<axis>]")
     if scn.controllers is not None:
@@ -397,10 +399,9 @@ def prepare(scn: Scenario):
         unknown = [a for a in scn.controllers if a not in names]
         if unknown or missing:
             raise TwinInputError("controllers", sorted(scn.controllers), f"need exactly the axes {names}")
-        ctrls = [_controller(scn.controllers[a], scn.control_period_s, f"controllers.{a}", [a], plants, delay)
-                 for a in names]
+        ctrls = [_controller(scn.controllers[a], f"controllers.{a}", replace(base, axes=(a,))) for a in names]
     else:
-        ctrls = [_controller(scn.controller, scn.control_period_s, "controller", names, plants, delay)]
+        ctrls = [_controller(scn.controller, "controller", base)]
     drive = Drive(len(names), substeps, scn.timestep_s, delay, scn.drive.saturation_V)
     encoder = Encoder(_per_axis(scn.sensors.encoder_resolution_m, len(names), "sensors.encoder_resolution_m"),
                       _per_axis(scn.sensors.noise_std_m, len(names), "sensors.noise_std_m"),
