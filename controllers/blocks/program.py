@@ -52,8 +52,8 @@ class Program:
     def __init__(self, controllers, loop_signals: list[str]):
         self.names = list(loop_signals)
         index = {s: i for i, s in enumerate(self.names)}
-        self.blocks, self.labels = [], []
-        ops, io, par, n_state, scratch = [], [], [], 0, 0
+        self.blocks = []
+        ops, io, pars, n_par, n_state, scratch = [], [], [], 0, 0, 0
         for ctrl in controllers:
             for b in ctrl.blocks:
                 label = f"{ctrl.name}/{b.name}"
@@ -73,16 +73,16 @@ class Program:
                 kind = getattr(b, "kind", kernels.PYTHON)
                 p = b.params() if kind != kernels.PYTHON else np.zeros(0)
                 length = len(b.values) if kind == kernels.SEQUENCE else getattr(b, "n_state", 0)
-                ops.append([kind, len(io), len(ins), len(io) + len(ins), len(outs), len(par), n_state, length])
+                ops.append([kind, len(io), len(ins), len(io) + len(ins), len(outs), n_par, n_state, length])
                 io += ins + outs
-                par += p.tolist()
+                pars.append(p)
+                n_par += len(p)
                 n_state += b.n_state if kind == kernels.LINEAR else 0
                 scratch = max(scratch, len(ins) + len(outs) + (b.n_state if kind == kernels.LINEAR else 0))
                 self.blocks.append(b)
-                self.labels.append(label)
         self.ops = np.array(ops, np.int64).reshape(-1, 8)
         self.io = np.array(io, np.int64)
-        self.par = np.array(par, float)
+        self.par = np.concatenate(pars) if pars else np.zeros(0)
         self.state = np.zeros(n_state)
         self.scratch = np.zeros(scratch)
         self.bus = np.zeros(len(self.names))
