@@ -32,6 +32,28 @@ def test_contour_error_of_offset_circle():
     assert contour_error(actual, path) == pytest.approx(np.full(len(actual), 0.01), abs=1e-6)
 
 
+def _brute_contour_error(actual, path):
+    """Distance to every segment of the path, the minimum taken: O(n m), the reference."""
+    a, b = path[:-1], path[1:]
+    ab = b - a
+    s = np.clip(((actual[:, None] - a) * ab).sum(-1) / np.maximum((ab**2).sum(1), 1e-300), 0.0, 1.0)
+    return np.linalg.norm(actual[:, None] - (a + s[..., None] * ab), axis=-1).min(axis=1)
+
+
+@pytest.mark.parametrize("stride", [1, 5, 40])
+def test_contour_error_follows_the_path_and_equals_the_full_search(stride):
+    """An open spiral with a square corner, tracked with lag and noise: the windowed O(n)
+    search equals the distance to every segment (the path never comes back near itself)."""
+    t = np.linspace(0.0, 6.0, 3000)
+    r = 0.01 + 0.004 * t
+    path = np.stack([r * np.cos(t), r * np.sin(t)], 1)
+    path = np.vstack([path, path[-1] + np.outer(np.linspace(0, 0.02, 300)[1:], [0.0, 1.0])])
+    rng = np.random.default_rng(4)
+    lagged = np.vstack([np.repeat(path[:1], 12, axis=0), path[:-12]])  # 12 samples behind
+    actual = lagged[::stride] + rng.normal(scale=2e-5, size=lagged[::stride].shape)
+    np.testing.assert_allclose(contour_error(actual, path), _brute_contour_error(actual, path), rtol=0, atol=1e-15)
+
+
 def test_circle_radius_and_feed():
     c = Circle(20.0, 2400.0)
     s = c.sample(np.linspace(0, c.period_s, 1000))

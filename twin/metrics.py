@@ -7,7 +7,10 @@ response reaches its final value), which some papers call rise time.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+from numba import njit
 
 
 def step_metrics(t_s: np.ndarray, y: np.ndarray, final: float | None = None,
@@ -66,31 +69,61 @@ def step_metrics(t_s: np.ndarray, y: np.ndarray, final: float | None = None,
 
 
 def contour_error(actual_xy: np.ndarray, path_xy: np.ndarray) -> np.ndarray:
-    """Distance (same unit) from each actual point to the reference path.
+    """Distance (same unit) from each actual point to the reference path near it, in O(n).
 
     Parameters
     ----------
     actual_xy : ndarray, shape (n, 2)
+        Points in time order.
     path_xy : ndarray, shape (m, 2)
-        Densely sampled reference path, treated as a polyline.
+        Reference path in time order, treated as a polyline (the reference positions of the
+        same run, or any denser sampling of it).
 
     Returns
     -------
     ndarray, shape (n,)
-        Shortest distance from every actual point to the polyline's segments.
+        Shortest distance from every actual point to the polyline's segments within a window
+        around the segment nearest the previous point (the first point searches the whole
+        path).  The window is 64 segments plus four times the path's samples per point, so it
+        follows the path however the two are sampled; the work is linear in n + m.  Where the
+        path comes back near itself, this is the distance to the part of the path the tool
+        is on, as a contour error should be.
     """
-    p = np.asarray(actual_xy, float)
-    a = np.asarray(path_xy, float)[:-1]
-    b = np.asarray(path_xy, float)[1:]
-    ab = b - a
-    len2 = np.maximum((ab**2).sum(1), 1e-300)
+    p = np.ascontiguousarray(actual_xy, float)
+    path = np.ascontiguousarray(path_xy, float)
     out = np.empty(len(p))
-    for start in range(0, len(p), 512):  # bounded memory: 512 x segments at a time
-        q = p[start:start + 512, None, :]
-        s = np.clip(((q - a) * ab).sum(-1) / len2, 0.0, 1.0)
-        d = np.linalg.norm(q - (a + s[..., None] * ab), axis=-1)
-        out[start:start + 512] = d.min(axis=1)
+    if len(p) == 0:
+        return out
+    if len(path) < 2:
+        return np.hypot(*(p - path[0]).T)
+    window = 64 + 4 * -(-len(path) // len(p))
+    _contour_walk(p, path, window, out)
     return out
+
+
+@njit(cache=True)
+def _segment_distance(px, py, path, j):  # pragma: no cover - compiled
+    """Distance from (px, py) to segment j of ``path`` (a zero-length one is a point)."""
+    ax, ay = path[j, 0], path[j, 1]
+    dx, dy = path[j + 1, 0] - ax, path[j + 1, 1] - ay
+    len2 = dx * dx + dy * dy
+    s = 0.0 if len2 <= 0.0 else min(max(((px - ax) * dx + (py - ay) * dy) / len2, 0.0), 1.0)
+    return math.hypot(px - ax - s * dx, py - ay - s * dy)
+
+
+@njit(cache=True)
+def _contour_walk(p, path, window, out):  # pragma: no cover - compiled
+    """:func:`contour_error`'s search: segments within ``window`` of the last nearest one."""
+    n_seg = path.shape[0] - 1
+    best_j, lo, hi = 0, 0, n_seg
+    for i in range(p.shape[0]):
+        best = math.inf
+        for j in range(lo, hi):
+            d = _segment_distance(p[i, 0], p[i, 1], path, j)
+            if d < best:
+                best, best_j = d, j
+        out[i] = best
+        lo, hi = max(best_j - window, 0), min(best_j + window + 1, n_seg)
 
 
 def tracking_summary(result) -> dict:

@@ -188,7 +188,8 @@ class Scenario(_Strict):
     timestep_s: PositiveFloat = 1e-4
     control_period_s: PositiveFloat = 1e-3
     seed: int = 0
-    record_every_ticks: int = Field(1, ge=0, description="record every Nth tick; 0: metrics only")
+    record_every_ticks: int | None = Field(None, ge=0, description="record every Nth tick; 0: metrics only; "
+                                                                    "default every tick up to 100 000 ticks")
     controller: ControllerSpec | None = None
     controllers: dict[str, ControllerSpec] | None = None
     reference: ReferenceSpec

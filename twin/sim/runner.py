@@ -39,6 +39,9 @@ RUNAWAY_M = 10.0
 PROGRESS_STEPS = 1_000_000
 #: Ticks per chunk at most (bounds the reference, noise and disturbance arrays held at once).
 CHUNK_TICKS = 8192
+#: Recorded ticks at most when ``record_every`` is left to the runner: longer runs are decimated,
+#: so memory stays bounded whatever the duration (about 25 MB for a two-axis machine).
+MAX_RECORDED_TICKS = 100_000
 #: MuJoCo warnings that mean the simulation is no longer valid.
 FATAL_WARNINGS = (mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQVEL,
                   mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADCTRL)
@@ -138,7 +141,8 @@ def _program(machine: BuiltMachine, controllers: Sequence[Controller], control_p
 def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controller, reference,
              duration_s: float, control_period_s: float, *, drive: Drive | None = None,
              encoder: Encoder | None = None, disturbances: Sequence[Disturbance] = (),
-             record_every: int = 1, progress: bool | None = None, compiled: bool | None = None) -> RunResult:
+             record_every: int | None = None, progress: bool | None = None,
+             compiled: bool | None = None) -> RunResult:
     """Run the closed loop for ``duration_s`` and return its time series and metrics.
 
     Parameters
@@ -155,8 +159,9 @@ def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controll
         Default: machine delay, no saturation; ideal encoder with the machine's sensor gains.
     disturbances : sequence
         See :class:`Disturbance`.
-    record_every : int
-        Record every Nth tick; 0 records no series (metrics only).
+    record_every : int or None
+        Record every Nth tick; 0 records no series (metrics only); None: every tick, or every
+        Nth for runs over ``MAX_RECORDED_TICKS`` ticks so that at most that many are kept.
     progress : bool or None
         Progress bar; None shows one for runs over ``PROGRESS_STEPS`` physics steps.
     compiled : bool or None
@@ -182,7 +187,7 @@ def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controll
     if reference.n_axes != n_axes:
         raise TwinInputError("reference", type(reference).__name__,
                              f"has {reference.n_axes} axes, machine '{machine.name}' has {n_axes}")
-    if int(record_every) != record_every or record_every < 0:
+    if record_every is not None and (int(record_every) != record_every or record_every < 0):
         raise TwinInputError("record_every", record_every, "must be a whole number >= 0")
     controllers = [controllers] if isinstance(controllers, Controller) else list(controllers)
     program, preview = _program(machine, controllers, control_period_s)
@@ -207,6 +212,8 @@ def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controll
     n = int(round(duration_s / control_period_s))
     if n < 1:
         raise TwinInputError("duration_s", duration_s, f"shorter than one control period ({control_period_s:g} s)")
+    if record_every is None:
+        record_every = -(-n // MAX_RECORDED_TICKS)
     data = mujoco.MjData(model)
     n_rec = 0 if record_every == 0 else -(-n // record_every)
     rec = (int(record_every), np.empty((n_rec, model.nq)), np.empty((n_rec, model.nv)),
