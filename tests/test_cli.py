@@ -145,3 +145,70 @@ def test_run_bad_setting(setting, message):
     r = _twin("run", "slot_linear_motor", "--set", setting)
     assert r.returncode == 2
     assert message in r.stderr and "Traceback" not in r.stderr
+
+
+@pytest.mark.parametrize("args, field", [
+    (["--set", "duration_s=nan"], "duration_s = nan"),
+    (["--set", "overrides.n_x=1e200"], "overrides.n_x = 1e+200"),
+    (["--set", "duration_s=1e308"], "duration_s = 1e+308"),
+    (["--set", "timestep_s=5e-324"], "control_period_s"),
+    (["--set", "seed=-1"], "seed = -1"),
+    (["--set", "reference.radius_mm=5e-324"], "reference.circle.radius_mm"),
+    (["--set", "duration_s=1e-5"], "shorter than one control period"),
+    (["--max-steps", "1000"], "more than the 1,000 allowed"),
+    (["--rrd", "/nonexistent-folder/x.rrd"], "--rrd = '/nonexistent-folder/x.rrd'"),
+    (["--set", "machine=\x1b[31m" + "a" * 300], "machine = '\\x1b[31maaaa"),
+])
+def test_hostile_input_is_one_error_line(args, field):
+    """Each is refused before the run, in one line naming the field (values escaped, shortened)."""
+    r = _twin("run", "demo_circle_cncmt_xy", *args)
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1 and field in lines[0], r.stderr
+    assert len(lines[0]) < 700 and "\x1b" not in lines[0]
+
+
+def test_scenario_that_is_a_folder_or_not_utf8(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_bytes(b"machine = \"cncmt\"\n\xff\xfe\n")
+    for target, words in ((tmp_path, "not a file"), (bad, "not UTF-8")):
+        r = _twin("run", str(target))
+        assert r.returncode == 2 and words in r.stderr and "Traceback" not in r.stderr
+
+
+def test_divergence_keeps_the_partial_run(tmp_path):
+    """Exit 3 after printing how far the run got and writing its recording up to there."""
+    path = tmp_path / "div.toml"
+    path.write_text(GOOD.replace('type = "seed000_imc"', 'type = "pid"\nparams = { kp = -500.0 }')
+                    .replace("duration_s = 0.5", "duration_s = 60.0"))
+    r = _twin("run", str(path), "--json", "--rrd", str(tmp_path / "div.rrd"))
+    assert r.returncode == 3 and r.stderr.strip().splitlines()[-1].startswith("error: simulation diverged at t = 0.17")
+    out = json.loads(r.stdout)
+    assert out["status"] == "diverged" and out["completed_ticks"] == 170 and out["sim_time_s"] == pytest.approx(0.17)
+    assert read_back(tmp_path / "div.rrd")["/machine/x/table/position"] == 170
+
+
+def test_interrupt_keeps_the_partial_run(tmp_path):
+    """SIGINT in a long run: exit 130, JSON of the ticks done, a valid recording of them."""
+    import signal
+    import threading
+    import time
+
+    p = subprocess.Popen([*TWIN, "run", "demo_circle_cncmt_xy", "--set", "duration_s=600", "--json",
+                          "--rrd", str(tmp_path / "cut.rrd")], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True)
+    err = []
+    reader = threading.Thread(target=lambda: err.extend(iter(lambda: p.stderr.read(1), "")), daemon=True)
+    reader.start()
+    deadline = time.time() + 120
+    while "tick" not in "".join(err) and time.time() < deadline:  # the progress bar: the loop runs
+        time.sleep(0.2)
+    time.sleep(2.0)
+    p.send_signal(signal.SIGINT)
+    out = p.stdout.read()
+    p.wait(timeout=60)
+    reader.join(timeout=10)
+    lines = "".join(err).strip().splitlines()
+    assert p.returncode == 130 and lines[-1].startswith("error: interrupted at t = "), lines[-3:]
+    result = json.loads(out)
+    assert result["status"] == "interrupted" and 0 < result["completed_ticks"] < 600_000
+    assert read_back(tmp_path / "cut.rrd")["/reference/x"] > 0

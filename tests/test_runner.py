@@ -216,3 +216,27 @@ def test_controllers_must_drive_every_axis_once_and_read_existing_signals():
     bad = make_controller("linear", 1e-3, {"inputs": ["vel.z"], "outputs": ["u.x", "u.y"], "D": [[1.0], [1.0]]})
     with pytest.raises(TwinInputError, match="vel.z"):
         simulate(bm, bad, Step(0.0, n_axes=2), 0.01, 1e-3)
+
+
+def test_long_runs_are_recorded_decimated_by_default(monkeypatch):
+    """Over MAX_RECORDED_TICKS ticks the runner keeps every Nth (memory bounded); metrics
+    still cover every tick."""
+    import twin.sim.runner as runner
+
+    bm = build("cncmt")
+    ctrl = make_controller("seed000_robust_pi", 1e-3)
+    full = simulate(bm, ctrl, Step(0.01), 1.0, 1e-3)
+    monkeypatch.setattr(runner, "MAX_RECORDED_TICKS", 300)
+    sparse = simulate(bm, ctrl, Step(0.01), 1.0, 1e-3)
+    assert sparse.info["record_every"] == 4 and len(sparse.t_s) == 250
+    assert np.array_equal(sparse.qpos, full.qpos[::4]) and np.array_equal(sparse.error_max_m, full.error_max_m)
+
+
+def test_divergence_carries_the_run_up_to_it():
+    bm = build("cncmt")
+    with pytest.raises(SimulationDiverged) as err:
+        simulate(bm, error_feedback(control.tf([-500.0], [1.0]), 1e-3), Step(0.01), 50.0, 1e-3)
+    part = err.value.result
+    done = part.info["completed_ticks"]
+    assert done == round(err.value.sim_time_s / 1e-3) and len(part.t_s) == done
+    assert np.isfinite(part.qpos).all() and abs(part.table_position_m()[-1, 0]) < 10.0

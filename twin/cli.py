@@ -8,13 +8,14 @@ simulation prints the simulated time and exits with code 3.
 from __future__ import annotations
 
 import json
+import signal
 import sys
 from functools import wraps
 from pathlib import Path
 
 import typer
 
-from twin.errors import SimulationDiverged, TwinInputError
+from twin.errors import RunInterrupted, SimulationDiverged, TwinInputError
 
 app = typer.Typer(add_completion=False, pretty_exceptions_enable=False, no_args_is_help=True,
                   help="Digital twin of CNC XY feed drives (MuJoCo).")
@@ -32,7 +33,22 @@ def _guard(func):
         except SimulationDiverged as exc:
             typer.echo(f"error: {exc}", err=True)
             raise typer.Exit(3) from None
+        except RunInterrupted as exc:
+            typer.echo(f"error: {exc}", err=True)
+            raise typer.Exit(130) from None
     return wrapper
+
+
+def _check_output(option: str, path: Path | None, suffix: str | None = None) -> None:
+    """Refuse an output path before any work: wrong suffix, or a folder that does not exist."""
+    if path is None:
+        return
+    if suffix and path.suffix != suffix:
+        raise TwinInputError(option, str(path), f"the file must end in {suffix}")
+    if not path.parent.is_dir():
+        raise TwinInputError(option, str(path), f"folder {str(path.parent)!r} does not exist")
+    if path.is_dir():
+        raise TwinInputError(option, str(path), "is a folder")
 
 
 def _print_summary(name: str, summary: dict) -> None:
@@ -45,23 +61,40 @@ def _print_summary(name: str, summary: dict) -> None:
         typer.echo(f"  {key:<24} {value}")
 
 
-def _run(scenario: str, rrd: Path | None, as_json: bool, settings: list[str] | None = None) -> None:
-    from twin.metrics import tracking_summary
-    from twin.recording import record
+def _run(scenario: str, rrd: Path | None, as_json: bool, settings: list[str] | None = None,
+         max_steps: int | None = None) -> None:
+    """Run a scenario and report it; a run that diverges or is interrupted still reports and
+    records what it computed before the error line."""
     from twin.scenario import load_scenario, run_scenario
+    from twin.sim.runner import MAX_PHYSICS_STEPS
 
+    _check_output("--rrd", rrd, ".rrd")
     scn = load_scenario(scenario, settings)
-    if rrd is not None and rrd.suffix != ".rrd":
-        raise TwinInputError("--rrd", str(rrd), "recording file must end in .rrd")
     if rrd is not None and scn.record_every_ticks == 0:
         raise TwinInputError("record_every_ticks", 0, "the run keeps metrics only: nothing to write to --rrd")
-    result = run_scenario(scn)
-    summary = {**tracking_summary(result), "loop": result.info["loop"]}
+    try:
+        result = run_scenario(scn, max_physics_steps=max_steps or MAX_PHYSICS_STEPS)
+    except (SimulationDiverged, RunInterrupted) as exc:
+        status = "diverged" if isinstance(exc, SimulationDiverged) else "interrupted"
+        if exc.result is not None:
+            _report(scn, exc.result, rrd, as_json, {"status": status, "sim_time_s": exc.sim_time_s})
+        raise
+    _report(scn, result, rrd, as_json, {"status": "ok"})
+
+
+def _report(scn, result, rrd: Path | None, as_json: bool, status: dict) -> None:
+    """Print the run's summary (text or JSON) and write its recording."""
+    from twin.metrics import tracking_summary
+    from twin.recording import record
+
+    done = result.info["completed_ticks"]
+    summary = {**status, "completed_ticks": done, **(tracking_summary(result) if done else {}),
+               "loop": result.info["loop"]}
     if as_json:
-        typer.echo(json.dumps({"scenario": scn.name, "machine": scn.machine, **summary}, indent=2))
+        typer.echo(json.dumps({"scenario": scn.name, "machine": scn.machine, **summary}, indent=2, allow_nan=False))
     else:
         _print_summary(f"{scn.name}: {scn.description}", summary)
-    if rrd is not None:
+    if rrd is not None and len(result.t_s):
         record(result, rrd)
         typer.echo(f"recording written to {rrd} (view with: rerun {rrd})", err=as_json)
 
@@ -72,9 +105,11 @@ def run(scenario: str = typer.Argument(..., help="Scenario TOML file, or a bundl
         rrd: Path = typer.Option(None, "--rrd", help="Write a Rerun recording to this .rrd file"),
         as_json: bool = typer.Option(False, "--json", help="Print metrics as JSON"),
         sets: list[str] = typer.Option(None, "--set", help="Change a field: PATH=VALUE, e.g. "
-                                                           "disturbances.0.spindle_rpm=2500")):
+                                                           "disturbances.0.spindle_rpm=2500"),
+        max_steps: int = typer.Option(None, "--max-steps", min=1, help="Physics steps a run may take (default "
+                                                                      "100 000 000, about 5 minutes)")):
     """Run a closed-loop scenario and print its tracking metrics."""
-    _run(scenario, rrd, as_json, sets)
+    _run(scenario, rrd, as_json, sets, max_steps)
 
 
 @app.command()
@@ -154,8 +189,9 @@ def reproduce(source: str = typer.Argument(..., help="Which paper, e.g. seed000 
     if samples < 1 or twin_samples < 0:
         raise TwinInputError("--samples" if samples < 1 else "--twin-samples",
                              samples if samples < 1 else twin_samples, "must be >= 1 (--samples) / >= 0")
-    if rrd is not None and rrd.suffix != ".rrd":
-        raise TwinInputError("--rrd", str(rrd), "recording file must end in .rrd")
+    _check_output("--rrd", rrd, ".rrd")
+    if plots is not None and plots.exists() and not plots.is_dir():
+        raise TwinInputError("--plots", str(plots), "exists and is not a folder")
     paper = reproduction(source)
     res = paper.run(samples, twin_samples, seed, progress=not as_json)
     typer.echo(json.dumps(res, indent=1, default=float) if as_json else paper.format_report(res))
@@ -218,8 +254,14 @@ def bench(as_json: bool = typer.Option(False, "--json", help="Print the figures 
                    f"{f['ratio']:>6.3f} {f['realtime_factor']:>11.1f}  {f['loop']}")
 
 
+def _terminate(signum, frame):
+    """SIGTERM ends a run as Ctrl-C does: what was computed is kept and reported."""
+    raise KeyboardInterrupt
+
+
 def main() -> None:
     """Console-script entry point."""
+    signal.signal(signal.SIGTERM, _terminate)
     app(prog_name="twin")
 
 

@@ -11,7 +11,13 @@ class TwinInputError(ValueError):
         self.field = field
         self.value = value
         self.reason = reason
-        super().__init__(f"{field} = {value!r}: {reason}")
+        super().__init__(f"{_short(field, 80)} = {_short(repr(value), 100)}: {_short(reason, 400)}")
+
+
+def _short(text: str, limit: int) -> str:
+    """One line: control characters escaped, at most ``limit`` characters."""
+    text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in str(text))
+    return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
 class SimulationDiverged(RuntimeError):
@@ -21,9 +27,28 @@ class SimulationDiverged(RuntimeError):
     ----------
     sim_time_s : float
         Simulated time (s) at which the divergence was detected.
+    result : twin.sim.runner.RunResult or None
+        The run up to the last whole tick before it.
     """
 
     def __init__(self, sim_time_s: float, reason: str):
         self.sim_time_s = sim_time_s
         self.reason = reason
-        super().__init__(f"simulation diverged at t = {sim_time_s:.6f} s: {reason}")
+        self.result = None  # the run up to the divergence, where the runner attaches it
+        super().__init__(f"simulation diverged at t = {sim_time_s:.6f} s: {_short(reason, 300)}")
+
+
+class RunInterrupted(RuntimeError):
+    """The user stopped a run (Ctrl-C or SIGTERM); ``result`` holds what was computed.
+
+    Attributes
+    ----------
+    sim_time_s : float
+        Simulated time (s) the run had reached.
+    result : twin.sim.runner.RunResult
+    """
+
+    def __init__(self, sim_time_s: float, result):
+        self.sim_time_s = sim_time_s
+        self.result = result
+        super().__init__(f"interrupted at t = {sim_time_s:.6f} s")

@@ -84,7 +84,7 @@ def time_response_nrmse(bm, duration_s: float = 1.0, disturbances=()) -> float:
         u = np.zeros((n, n_axes))
         u[:, k] = test
         res = simulate(bm, open_loop(u, dt, [a.name for a in bm.axes]), Step(0.0, n_axes=n_axes), duration_s, dt,
-                       disturbances=disturbances, progress=False)
+                       disturbances=disturbances, progress=False, record_every=1)
         u_delayed = np.vstack([np.zeros((delay, n_axes)), u[: n - delay]]) if delay else u
         y_ref = np.atleast_2d(control.forced_response(g, T=t, U=u_delayed.T).outputs).T
         err = res.table_position_m() - y_ref
@@ -118,7 +118,8 @@ def frequency_response_errors(bm, period_s: float = 10.0, f_max_hz: float = 50.0
         ref = SumOfSines((amp,) * len(bins), tuple(freqs), tuple(phases), n_axes=n_axes, axes=(k,))
         ctrls = [error_feedback(control.tf([kp[i]], [1.0]), dt, (a.name,), name=f"P.{a.name}")
                  for i, a in enumerate(bm.axes)]
-        res = simulate(bm, ctrls, ref, (settle + 1) * period_s, dt, disturbances=disturbances, progress=False)
+        res = simulate(bm, ctrls, ref, (settle + 1) * period_s, dt, disturbances=disturbances, progress=False,
+                       record_every=1)
         y = res.table_position_m()[settle * n_period:]
         u = res.u_applied_V[settle * n_period:]
         Y[:, :, k] = np.fft.rfft(y, axis=0)[bins]
@@ -149,7 +150,8 @@ def coupling_slip_um(bm, duration_s: float = 0.4) -> float:
     n_axes = len(bm.axes)
     u = np.full((n, n_axes), FULL_SCALE_V)
     u[n // 2:] = -FULL_SCALE_V
-    res = simulate(bm, open_loop(u, dt, [a.name for a in bm.axes]), Step(0.0, n_axes=n_axes), duration_s, dt, progress=False)
+    res = simulate(bm, open_loop(u, dt, [a.name for a in bm.axes]), Step(0.0, n_axes=n_axes), duration_s, dt,
+                   progress=False, record_every=1)
     return float(bm.slip_m(res.qpos).max() * 1e6)
 
 

@@ -123,6 +123,8 @@ class Polyline:
         if p.ndim != 2 or p.shape[1] != 2 or len(p) < 2:
             raise ValueError("points_mm must hold at least two (x, y) points")
         seg = np.linalg.norm(np.diff(p, axis=0), axis=1)
+        if not (seg > 0).all():
+            raise ValueError(f"points_mm: point {int(np.argmin(seg > 0)) + 1} repeats the one before it")
         self._p = p
         self._knots_s = np.concatenate([[0.0], np.cumsum(seg)]) / (self.feed_mm_per_min * 1e-3 / 60.0)
 

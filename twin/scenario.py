@@ -26,11 +26,13 @@ from twin.sim.drive import Drive, Encoder, substeps_per_tick
 from twin.errors import TwinInputError
 from twin.machines import build
 from twin.references import Circle, Polyline, Ramp, Step, SumOfSines, square
-from twin.sim.runner import RunResult, simulate
+from twin.sim.runner import MAX_PHYSICS_STEPS, RunResult, simulate
 
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    """Unknown fields and non-finite numbers (nan, inf) are errors."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
 
 class ObserverSpec(_Strict):
@@ -75,22 +77,26 @@ class SinesRef(_Strict):
     axes: list[str] | None = None
 
 
+#: Smallest path size (mm) and feed (mm/min) a 2-D path may have: 1 um and 1 um/min.
+MIN_PATH_MM, MIN_FEED_MM_PER_MIN = 1e-3, 1e-3
+
+
 class CircleRef(_Strict):
     type: Literal["circle"]
-    radius_mm: PositiveFloat
-    feed_mm_per_min: PositiveFloat
+    radius_mm: float = Field(ge=MIN_PATH_MM)
+    feed_mm_per_min: float = Field(ge=MIN_FEED_MM_PER_MIN)
 
 
 class SquareRef(_Strict):
     type: Literal["square"]
-    side_mm: PositiveFloat
-    feed_mm_per_min: PositiveFloat
+    side_mm: float = Field(ge=MIN_PATH_MM)
+    feed_mm_per_min: float = Field(ge=MIN_FEED_MM_PER_MIN)
 
 
 class PolylineRef(_Strict):
     type: Literal["polyline"]
     points_mm: list[tuple[float, float]]
-    feed_mm_per_min: PositiveFloat
+    feed_mm_per_min: float = Field(ge=MIN_FEED_MM_PER_MIN)
 
 
 ReferenceSpec = Annotated[Union[StepRef, RampRef, SinesRef, CircleRef, SquareRef, PolylineRef],
@@ -99,7 +105,7 @@ ReferenceSpec = Annotated[Union[StepRef, RampRef, SinesRef, CircleRef, SquareRef
 
 class DriveSpec(_Strict):
     saturation_V: PositiveFloat | None = None
-    delay_s: float | None = Field(None, ge=0, description="default: the machine's delay")
+    delay_s: float | None = Field(None, ge=0, le=10.0, description="default: the machine's delay; at most 10 s")
 
 
 class SensorSpec(_Strict):
@@ -123,7 +129,7 @@ class EndMillingSpec(_Strict):
     """Mechanistic end-milling force on the workpiece (:class:`twin.process.cutting.EndMilling`)."""
 
     type: Literal["end_milling"]
-    spindle_rpm: PositiveFloat
+    spindle_rpm: float = Field(ge=1.0, description="rev/min; at least 1 (a tooth period of at most 60 s)")
     n_flutes: int = Field(ge=1)
     diameter_mm: PositiveFloat
     axial_depth_mm: PositiveFloat
@@ -134,7 +140,7 @@ class EndMillingSpec(_Strict):
     start_s: float = Field(0.0, ge=0)
     stop_s: PositiveFloat | None = None
     spindle_phase_rad: float | None = Field(None, description="None: drawn from the seed")
-    seed: int | None = Field(None, description="default: the scenario's seed")
+    seed: int | None = Field(None, ge=0, description="default: the scenario's seed")
 
 
 class AverageForceSpec(_Strict):
@@ -144,12 +150,12 @@ class AverageForceSpec(_Strict):
     k_il_N_s_per_m: float = -2500.0
     k_c_N_s_per_m: float = 2500.0
     harmonic_fraction: float = Field(0.0, ge=0, le=0.2)
-    spindle_rpm: PositiveFloat = 10000.0
+    spindle_rpm: float = Field(10000.0, ge=1.0)
     n_flutes: int = Field(2, ge=1)
     start_s: float = Field(0.0, ge=0)
     stop_s: PositiveFloat | None = None
     harmonic_phase_rad: float | None = None
-    seed: int | None = None
+    seed: int | None = Field(None, ge=0)
 
 
 class HarmonicInputSpec(_Strict):
@@ -161,7 +167,7 @@ class HarmonicInputSpec(_Strict):
     phases_rad: list[float] | None = Field(None, description="None: drawn from the seed")
     axes: list[str] | None = None
     start_s: float = Field(0.0, ge=0)
-    seed: int | None = None
+    seed: int | None = Field(None, ge=0)
 
 
 class VoltageStepSpec(_Strict):
@@ -187,7 +193,7 @@ class Scenario(_Strict):
     duration_s: PositiveFloat
     timestep_s: PositiveFloat = 1e-4
     control_period_s: PositiveFloat = 1e-3
-    seed: int = 0
+    seed: int = Field(0, ge=0)
     record_every_ticks: int | None = Field(None, ge=0, description="record every Nth tick; 0: metrics only; "
                                                                     "default every tick up to 100 000 ticks")
     controller: ControllerSpec | None = None
@@ -266,10 +272,16 @@ def load_scenario(source: str | Path, settings: list[str] | None = None) -> Scen
             raise TwinInputError("scenario", str(source),
                                  f"no such file or bundled scenario (bundled: {', '.join(sorted(bundled))})")
         path = bundled[str(source)]
+    if not path.is_file():
+        raise TwinInputError("scenario", str(source), "not a file")
     try:
-        data = tomllib.loads(path.read_text())
+        data = tomllib.loads(path.read_bytes().decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        raise TwinInputError("scenario file", str(path), f"not UTF-8 text (byte {exc.start})") from None
     except tomllib.TOMLDecodeError as exc:
         raise TwinInputError("scenario file", str(path), f"malformed TOML: {exc}") from None
+    except OSError as exc:
+        raise TwinInputError("scenario file", str(path), f"cannot be read ({exc.strerror})") from None
     return scenario_from_dict(apply_settings(data, settings or []))
 
 
@@ -413,7 +425,7 @@ def prepare(scn: Scenario):
             "disturbances": [_disturbance(d, i, names, scn.seed) for i, d in enumerate(scn.disturbances)]}
 
 
-def run_scenario(scn: Scenario, progress: bool | None = None) -> RunResult:
-    """Validate and run a scenario."""
+def run_scenario(scn: Scenario, progress: bool | None = None, max_physics_steps: int = MAX_PHYSICS_STEPS) -> RunResult:
+    """Validate and run a scenario (see :func:`twin.sim.runner.simulate`)."""
     kwargs = prepare(scn)
-    return simulate(kwargs.pop("machine"), **kwargs, progress=progress)
+    return simulate(kwargs.pop("machine"), **kwargs, progress=progress, max_physics_steps=max_physics_steps)

@@ -182,6 +182,11 @@ class BuiltMachine:
         return np.stack(cols, axis=1) if cols else np.zeros((len(qpos), 0))
 
 
+#: An override must lie within this factor of its nominal value (or below it in magnitude where
+#: the nominal is 0): beyond, the models lose their meaning and their arithmetic overflows.
+OVERRIDE_RANGE = 1e6
+
+
 class Machine:
     """Base class: subclasses set the class attributes and implement the two hooks."""
 
@@ -211,6 +216,11 @@ class Machine:
                 raise TwinInputError(f"overrides.{key}", value, "must be a number") from None
             if not math.isfinite(value):
                 raise TwinInputError(f"overrides.{key}", value, "must be finite")
+            nominal = self.parameters[key].value
+            limit = OVERRIDE_RANGE * abs(nominal) if nominal else OVERRIDE_RANGE
+            if abs(value) > limit or (nominal and value and abs(value) < abs(nominal) / OVERRIDE_RANGE):
+                raise TwinInputError(f"overrides.{key}", value, f"must be within a factor {OVERRIDE_RANGE:g} of the "
+                                     f"nominal {nominal:g} {self.parameters[key].unit}")
             if self.parameters[key].positive and value <= 0:
                 raise TwinInputError(f"overrides.{key}", value,
                                      f"must be > 0 ({self.parameters[key].description})")

@@ -18,6 +18,9 @@ from numba import njit
 from controllers.blocks.signals import AXIS_SIGNALS
 from twin.errors import TwinInputError
 
+#: Physics steps per control period at most.
+MAX_SUBSTEPS = 1_000_000
+
 
 @dataclass
 class Drive:
@@ -48,9 +51,9 @@ class Drive:
 
     def __post_init__(self):
         steps = self.delay_s / self.timestep_s
-        if self.delay_s < 0 or abs(steps - round(steps)) * self.timestep_s > 1e-9:
+        if not 0 <= self.delay_s <= 10.0 or abs(steps - round(steps)) * self.timestep_s > 1e-9:
             raise TwinInputError("drive.delay_s", self.delay_s,
-                                 f"must be >= 0 and a whole multiple of the timestep {self.timestep_s:g} s")
+                                 f"must be in [0, 10] s and a whole multiple of the timestep {self.timestep_s:g} s")
         if self.saturation_V is not None and self.saturation_V <= 0:
             raise TwinInputError("drive.saturation_V", self.saturation_V, "must be > 0")
         self.delay_steps = int(round(steps))
@@ -121,6 +124,9 @@ def substeps_per_tick(control_period_s: float, timestep_s: float) -> int:
     if timestep_s <= 0 or not math.isfinite(timestep_s):
         raise TwinInputError("timestep_s", timestep_s, "must be > 0")
     ratio = control_period_s / timestep_s
+    if not ratio <= MAX_SUBSTEPS:
+        raise TwinInputError("control_period_s", control_period_s, f"more than {MAX_SUBSTEPS:,} physics steps of "
+                             f"{timestep_s:g} s per control period")
     n = round(ratio)
     if n < 1 or abs(ratio - n) > 1e-6:
         raise TwinInputError("control_period_s", control_period_s,

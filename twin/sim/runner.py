@@ -27,7 +27,7 @@ import numpy as np
 from tqdm import tqdm
 
 from controllers.blocks import Controller, Program, SignalError, preview_ticks_needed, standard_signals
-from twin.errors import SimulationDiverged, TwinInputError
+from twin.errors import RunInterrupted, SimulationDiverged, TwinInputError
 from twin.machines import BuiltMachine
 from twin.process.cutting import ForceModels
 from twin.sim import loop, mujoco_c
@@ -39,6 +39,10 @@ RUNAWAY_M = 10.0
 PROGRESS_STEPS = 1_000_000
 #: Ticks per chunk at most (bounds the reference, noise and disturbance arrays held at once).
 CHUNK_TICKS = 8192
+#: Physics steps per chunk at most: the loop returns to Python (progress, Ctrl-C) about every second.
+CHUNK_STEPS = 200_000
+#: Physics steps one run may take unless the caller allows more (about 5 minutes of wall time).
+MAX_PHYSICS_STEPS = 100_000_000
 #: Recorded ticks at most when ``record_every`` is left to the runner: longer runs are decimated,
 #: so memory stays bounded whatever the duration (about 25 MB for a two-axis machine).
 MAX_RECORDED_TICKS = 100_000
@@ -85,7 +89,8 @@ class RunResult:
     force_max_N : ndarray, shape (n_axes,)
         Largest tick-mean workpiece force along each axis (N).
     info : dict
-        ``loop`` ("compiled" or "python"), ``record_every`` (ticks; 0: metrics only).
+        ``loop`` ("compiled" or "python"), ``record_every`` (ticks; 0: metrics only),
+        ``completed_ticks`` (all of them, unless the run diverged or was interrupted).
     """
 
     machine: BuiltMachine
@@ -142,7 +147,7 @@ def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controll
              duration_s: float, control_period_s: float, *, drive: Drive | None = None,
              encoder: Encoder | None = None, disturbances: Sequence[Disturbance] = (),
              record_every: int | None = None, progress: bool | None = None,
-             compiled: bool | None = None) -> RunResult:
+             compiled: bool | None = None, max_physics_steps: int = MAX_PHYSICS_STEPS) -> RunResult:
     """Run the closed loop for ``duration_s`` and return its time series and metrics.
 
     Parameters
@@ -167,12 +172,17 @@ def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controll
     compiled : bool or None
         Run the compiled loop (every block compiled) or the Python loop.  None picks the
         compiled loop whenever it can run.
+    max_physics_steps : int
+        A run that would take more physics steps is refused before it starts.
 
     Raises
     ------
     SimulationDiverged
         Non-finite or huge state, acceleration or drive input, a fatal MuJoCo warning, or a
-        table beyond ``RUNAWAY_M``; with the simulated time.
+        table beyond ``RUNAWAY_M``; with the simulated time and, as ``result``, the run up to
+        the last whole tick.
+    RunInterrupted
+        Ctrl-C (KeyboardInterrupt) during the run, with the run up to the last whole chunk.
     TwinInputError
         Inconsistent periods, references or controllers (a block reading a signal nothing
         provides), or ``compiled=True`` where the compiled loop cannot run.
@@ -184,6 +194,9 @@ def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controll
     substeps = substeps_per_tick(control_period_s, dt)
     if not (duration_s > 0 and math.isfinite(duration_s)):
         raise TwinInputError("duration_s", duration_s, "must be > 0")
+    if not duration_s / dt <= max_physics_steps:
+        raise TwinInputError("duration_s", duration_s, f"needs {duration_s / dt:.3g} physics steps of {dt:g} s, more "
+                             f"than the {max_physics_steps:,} allowed (twin run --max-steps)")
     if reference.n_axes != n_axes:
         raise TwinInputError("reference", type(reference).__name__,
                              f"has {reference.n_axes} axes, machine '{machine.name}' has {n_axes}")
@@ -241,26 +254,40 @@ def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controll
                                        force, chunk, rec, acc)
         return loop.python_ticks(k0, k1, model, data, program, mj, sensor, drive_args, force, chunk, rec, acc)
 
+    def result(ticks: int, accumulated: int) -> RunResult:
+        """The run's first ``ticks`` ticks (metrics over the ``accumulated`` ones)."""
+        rows = 0 if record_every == 0 else -(-ticks // record_every)
+        return RunResult(machine, np.arange(rows) * record_every * control_period_s, rec[4][:rows], rec[5][:rows],
+                         rec[6][:rows], rec[7][:rows], rec[1][:rows], rec[2][:rows], rec[3][:rows], rec[8][:rows],
+                         control_period_s, acc[0][:, 0].copy(), np.sqrt(acc[0][:, 1] / max(accumulated, 1)),
+                         acc[1].copy(), info={"loop": "compiled" if use_compiled else "python",
+                                              "record_every": int(record_every), "completed_ticks": ticks})
+
     show = progress if progress is not None else n * substeps > PROGRESS_STEPS
-    size = min(CHUNK_TICKS, n)
+    size = max(1, min(CHUNK_TICKS, CHUNK_STEPS // substeps, n))
     warnings0 = [data.warning[w].number for w in FATAL_WARNINGS]
-    messages = []
-    with _mujoco_warnings_into(messages), tqdm(total=n, desc=f"{machine.name}", unit="tick", disable=not show,
-                                               mininterval=0.5, leave=False) as bar:
-        for k0 in range(0, n, size):
-            k1 = min(n, k0 + size)
-            t = np.arange(k0, k1 + preview) * control_period_s
-            u_dist = np.zeros((k1 - k0, n_axes))
-            for dist in input_disturbances:
-                u_dist += dist.input_V(t[:k1 - k0])
-            chunk = (np.ascontiguousarray(reference.sample(t)), draw_noise(k1 - k0), u_dist)
-            status, k, s = run_chunk(k0, k1, chunk)
-            _check(status, k, s, data, sensor[0], drive_args[7], control_period_s, dt, warnings0, messages)
-            bar.update(k1 - k0)
-    rows = np.arange(0, n, record_every) if record_every else np.zeros(0, int)
-    return RunResult(machine, rows * control_period_s, rec[4], rec[5], rec[6], rec[7], rec[1], rec[2], rec[3],
-                     rec[8], control_period_s, acc[0][:, 0].copy(), np.sqrt(acc[0][:, 1] / n), acc[1].copy(),
-                     info={"loop": "compiled" if use_compiled else "python", "record_every": int(record_every)})
+    messages, done = [], 0
+    try:
+        with _mujoco_warnings_into(messages), tqdm(total=n, desc=f"{machine.name}", unit="tick", disable=not show,
+                                                   mininterval=0.5, leave=False) as bar:
+            for k0 in range(0, n, size):
+                k1 = min(n, k0 + size)
+                t = np.arange(k0, k1 + preview) * control_period_s
+                u_dist = np.zeros((k1 - k0, n_axes))
+                for dist in input_disturbances:
+                    u_dist += dist.input_V(t[:k1 - k0])
+                chunk = (np.ascontiguousarray(reference.sample(t)), draw_noise(k1 - k0), u_dist)
+                status, k, s = run_chunk(k0, k1, chunk)
+                try:
+                    _check(status, k, s, data, sensor[0], drive_args[7], control_period_s, dt, warnings0, messages)
+                except SimulationDiverged as exc:  # keep what was computed: the ticks before k
+                    exc.result = result(k, k + (status in (loop.BAD_CONTROL, loop.BAD_QACC)))
+                    raise
+                done = k1
+                bar.update(k1 - k0)
+    except KeyboardInterrupt:
+        raise RunInterrupted(done * control_period_s, result(done, done)) from None
+    return result(n, n)
 
 
 @contextmanager

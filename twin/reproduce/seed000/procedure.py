@@ -265,7 +265,8 @@ def tf_step(controller, params: dict[str, float], delay_s: float = 0.0) -> dict 
 def twin_step_result(controller, params: dict[str, float]):
     """The MuJoCo cncmt twin closed by the controller at 10 kHz (Tustin), unit step."""
     machine = build("cncmt", {k: params[k] for k in BOX_SYMBOLS})
-    return simulate(machine, error_feedback(controller, DT_S), Step(1.0), HORIZON_S, DT_S, progress=False)
+    return simulate(machine, error_feedback(controller, DT_S), Step(1.0), HORIZON_S, DT_S, progress=False,
+                    record_every=1)
 
 
 def twin_step(controller, params: dict[str, float]) -> dict:
@@ -380,7 +381,8 @@ def disturbance_and_noise() -> dict:
     out = {}
     for name, ctrl in TABLE2_CONTROLLERS.items():
         def run(**kw):
-            return simulate(machine, error_feedback(ctrl, DT_S), Step(1.0), HORIZON_S, DT_S, progress=False, **kw)
+            return simulate(machine, error_feedback(ctrl, DT_S), Step(1.0), HORIZON_S, DT_S, progress=False,
+                            record_every=1, **kw)
         clean = run()
         dist = run(disturbances=[VoltageStep(DISTURBANCE_V, DISTURBANCE_START_S)])
         noisy = run(encoder=Encoder(np.zeros(1), np.full(1, NOISE_STD_M), np.ones(1), NOISE_SEED))
