@@ -85,7 +85,6 @@ def _run(scenario: str, rrd: Path | None, as_json: bool, settings: list[str] | N
 def _report(scn, result, rrd: Path | None, as_json: bool, status: dict) -> None:
     """Print the run's summary (text or JSON) and write its recording."""
     from twin.metrics import tracking_summary
-    from twin.recording import record
 
     done = result.info["completed_ticks"]
     summary = {**status, "completed_ticks": done, **(tracking_summary(result) if done else {}),
@@ -95,6 +94,8 @@ def _report(scn, result, rrd: Path | None, as_json: bool, status: dict) -> None:
     else:
         _print_summary(f"{scn.name}: {scn.description}", summary)
     if rrd is not None and len(result.t_s):
+        from twin.recording import record  # rerun is imported only when a recording is asked for
+
         record(result, rrd)
         typer.echo(f"recording written to {rrd} (view with: rerun {rrd})", err=as_json)
 
