@@ -31,7 +31,7 @@ from twin.errors import RunInterrupted, SimulationDiverged, TwinInputError
 from twin.machines import BuiltMachine
 from twin.process.cutting import ForceModels
 from twin.sim import loop, mujoco_c
-from twin.sim.drive import Drive, Encoder, substeps_per_tick
+from twin.sim.drive import MAX_VALUE, Drive, Encoder, substeps_per_tick
 
 #: Table travel (m) beyond which a run counts as runaway.
 RUNAWAY_M = 10.0
@@ -238,9 +238,10 @@ def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controll
               np.array([machine.joint_dof_index(a.table_joint) for a in machine.axes]),
               encoder.gains, encoder.resolution_m, encoder.velocity == "tachometer", float(control_period_s),
               RUNAWAY_M, np.zeros(n_axes), preview)
+    u_applied = np.zeros(n_axes)  # the drive input of the last tick (V), reported on divergence
     drive_args = (np.array([program.index(f"u.{a}") for a in names]),
                   np.array([model.actuator(a.actuator).id for a in machine.axes]), drive.limit_V, substeps,
-                  drive.delay_steps, drive.delay_line(), np.zeros(n_axes), np.zeros(n_axes), np.zeros(n_axes))
+                  drive.delay_steps, drive.delay_line(), np.zeros(n_axes), u_applied, np.zeros(n_axes))
     force = (forces.fops, forces.fpar, forces.fstate, machine.workpiece_body_id, dt,
              np.array([data.time]), np.zeros(3))
     draw_noise = encoder.noise_source()
@@ -257,11 +258,12 @@ def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controll
     def result(ticks: int, accumulated: int) -> RunResult:
         """The run's first ``ticks`` ticks (metrics over the ``accumulated`` ones)."""
         rows = 0 if record_every == 0 else -(-ticks // record_every)
-        return RunResult(machine, np.arange(rows) * record_every * control_period_s, rec[4][:rows], rec[5][:rows],
-                         rec[6][:rows], rec[7][:rows], rec[1][:rows], rec[2][:rows], rec[3][:rows], rec[8][:rows],
-                         control_period_s, acc[0][:, 0].copy(), np.sqrt(acc[0][:, 1] / max(accumulated, 1)),
-                         acc[1].copy(), info={"loop": "compiled" if use_compiled else "python",
-                                              "record_every": int(record_every), "completed_ticks": ticks})
+        qpos, qvel, act, ref, meas, u, ua, force_N = (a[:rows] for a in rec[1:])
+        error, force_max = acc
+        return RunResult(machine, np.arange(rows) * record_every * control_period_s, ref, meas, u, ua, qpos, qvel,
+                         act, force_N, control_period_s, error[:, 0].copy(), np.sqrt(error[:, 1] / max(accumulated, 1)),
+                         force_max.copy(), info={"loop": "compiled" if use_compiled else "python",
+                                                 "record_every": int(record_every), "completed_ticks": ticks})
 
     show = progress if progress is not None else n * substeps > PROGRESS_STEPS
     size = max(1, min(CHUNK_TICKS, CHUNK_STEPS // substeps, n))
@@ -279,7 +281,7 @@ def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controll
                 chunk = (np.ascontiguousarray(reference.sample(t)), draw_noise(k1 - k0), u_dist)
                 status, k, s = run_chunk(k0, k1, chunk)
                 try:
-                    _check(status, k, s, data, sensor[0], drive_args[7], control_period_s, dt, warnings0, messages)
+                    _check(status, k, s, data, sensor[0], u_applied, control_period_s, dt, warnings0, messages)
                 except SimulationDiverged as exc:  # keep what was computed: the ticks before k
                     exc.result = result(k, k + (status in (loop.BAD_CONTROL, loop.BAD_QACC)))
                     raise
@@ -305,17 +307,15 @@ def _mujoco_warnings_into(messages: list):
 def _check(status, k, s, data, q_idx, ua, period, dt, warnings0, messages) -> None:
     """Raise :class:`SimulationDiverged` for a failed chunk or a new fatal MuJoCo warning
     (with MuJoCo's own words where it gave any)."""
+    t = _failure_time(status, k, s, period, dt)
     if status != loop.OK and messages:
-        raise SimulationDiverged(_failure_time(status, k, s, period, dt), f"{messages[0]} (MuJoCo)")
-    t_tick = k * period
+        raise SimulationDiverged(t, f"{messages[0]} (MuJoCo)")
     if status == loop.RUNAWAY:
-        raise SimulationDiverged(t_tick, f"table position {data.qpos[q_idx].tolist()} m beyond {RUNAWAY_M} m "
-                                         "or not finite")
+        raise SimulationDiverged(t, f"table position {data.qpos[q_idx].tolist()} m beyond {RUNAWAY_M} m or not finite")
     if status == loop.BAD_CONTROL:
-        raise SimulationDiverged(t_tick, f"drive input {ua.tolist()} V not finite or beyond 1e10")
+        raise SimulationDiverged(t, f"drive input {ua.tolist()} V not finite or beyond {MAX_VALUE:g}")
     if status == loop.BAD_QACC:
-        raise SimulationDiverged(_failure_time(status, k, s, period, dt),
-                                 "accelerations not finite or beyond 1e10 (MuJoCo's BADQACC test)")
+        raise SimulationDiverged(t, f"accelerations not finite or beyond {MAX_VALUE:g} (MuJoCo's BADQACC test)")
     for w, before in zip(FATAL_WARNINGS, warnings0):
         if data.warning[w].number != before:
             raise SimulationDiverged(data.time, " ".join(messages) or f"MuJoCo warning {mujoco.mjtWarning(w).name}")
