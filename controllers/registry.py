@@ -8,12 +8,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import control
 import numpy as np
 
 from controllers.blocks import (NONLINEARITIES, Controller, Linear, cascade, error_feedback, inverse_model_observer,
                                 lti_block, lure, sum_of, with_feedforward)
 from controllers.design.pid import pid_tf
+from controllers.lti import SisoTf
 from controllers.papers import seed000, seed002
 
 
@@ -30,7 +30,7 @@ class Context:
         for ``[controller]``).
     method : {"tustin", "zoh"}
         Discretization of continuous models.
-    plants : dict of str to control.TransferFunction
+    plants : dict of str to SisoTf
         The machine's nominal model per axis (m/V), for model-based blocks (observers).
     parts : list of Controller
         The already built parts of a ``sum``.
@@ -74,7 +74,7 @@ def _generic_lure(p, ctx, a):
     if missing:
         raise ValueError(f"parameter {missing[0]!r} is needed by the {name} nonlinearity")
     settings = [p[k] for k in keys]
-    return lure(control.tf(p["num"], p["den"]), name, settings, ctx.dt, a, ctx.method, f"lure.{a}")
+    return lure(SisoTf(p["num"], p["den"]), name, settings, ctx.dt, a, ctx.method, f"lure.{a}")
 
 
 def _npid(p, ctx, a):
@@ -106,8 +106,7 @@ def _linear(p, ctx):
         ins, outs = (_qualify(inputs, a), _qualify(outputs, a)) if a else (inputs, outputs)
         block = Linear(*mats, tuple(ins), tuple(outs), name=f"linear.{a}" if a else "linear")  # checks shapes
         if p.get("domain", "discrete") == "continuous":
-            block = lti_block(control.ss(block.A, block.B, block.C, block.D), ctx.dt, ins, outs, ctx.method,
-                              block.name)
+            block = lti_block((block.A, block.B, block.C, block.D), ctx.dt, ins, outs, ctx.method, block.name)
         blocks.append(block)
     return Controller(blocks, ctx.dt, "linear")
 
@@ -130,7 +129,7 @@ CONTROLLERS = {
             _per_axis_lti(lambda p: pid_tf(p.get("kp", 0.0), p.get("ki", 0.0), p.get("kd", 0.0), p.get("tf_s", 0.0))),
             ("kp", "ki", "kd", "tf_s")),
     "tf": ("any C(s) = num/den (coefficients, highest power first) on the error, V/m",
-           _per_axis_lti(lambda p: control.tf(p["num"], p["den"])), ("num", "den")),
+           _per_axis_lti(lambda p: SisoTf(p["num"], p["den"])), ("num", "den")),
     "cascade": ("position P/PI around velocity P/PI: v_ref = (kp_pos + ki_pos/s) e + velocity_ref_ff "
                 "ref_vel (1/s, 1/s^2), u = (kp_vel + ki_vel/s)(v_ref - vel) (V s/m, V/m)",
                 _each_axis(_cascade), ("kp_pos", "ki_pos", "kp_vel", "ki_vel", "velocity_ref_ff")),
@@ -173,7 +172,7 @@ def make_observers(name: str, params: dict, ctx: Context) -> list:
     _check_params(name, params, OBSERVERS[name][1])
     out = []
     for a in ctx.axes:
-        plant = control.tf(params["num"], params["den"]) if "num" in params else ctx.plants.get(a)
+        plant = SisoTf(params["num"], params["den"]) if "num" in params else ctx.plants.get(a)
         if plant is None:
             raise ValueError(f"no nominal model for axis {a!r}: give num and den")
         out.append(inverse_model_observer(plant, params.get("cutoff_hz", 100.0), params.get("order", 2),

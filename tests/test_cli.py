@@ -90,7 +90,11 @@ def test_list_and_bench():
     assert r.returncode == 0 and "linear_motor_xy" in r.stdout and "seed000_hinf" in r.stdout
     assert "cascade" in r.stdout and "inverse_model" in r.stdout and "reproductions" in r.stdout
     r = _twin("bench", "--json", "--seconds", "0.05", "--repeats", "3")
-    cases = json.loads(r.stdout)["cases"]
+    figures = json.loads(r.stdout)
+    start = figures["startup"]  # a new process does the in-process work and more; --help much less
+    assert start["run_in_process_s"] < start["run_process_s"] and 0 < start["help_process_s"] < start["run_process_s"]
+    assert 0 < start["overhead_s"] < start["run_process_s"]
+    cases = figures["cases"]
     assert sorted(cases) == ["cascade_dob_googol", "cutting_circle_linear_motor", "hinf_cncmt", "npid_googol"]
     for figures in cases.values():  # a ratio of medians can differ from the median of ratios, not by 3x
         assert figures["loop"] == "compiled" and figures["raw_steps_per_s"] > 0
@@ -212,3 +216,17 @@ def test_interrupt_keeps_the_partial_run(tmp_path):
     result = json.loads(out)
     assert result["status"] == "interrupted" and 0 < result["completed_ticks"] < 600_000
     assert read_back(tmp_path / "cut.rrd")["/reference/x"] > 0
+
+
+@pytest.mark.parametrize("scenario", ["cascade_observer_googol", "step_cncmt_hinf", "seed004_cutting_circle"])
+def test_run_imports_only_what_it_needs(scenario):
+    """twin run of a bundled scenario (observer, 4th-order H-infinity, milling) loads neither
+    python-control nor scipy.signal, matplotlib or rerun (without --rrd): together about 2 s of
+    start-up."""
+    code = ("import sys; from twin.cli import main; sys.argv = ['twin', 'run', %r, '--json', '--set', "
+            "'duration_s=0.01']\ntry:\n    main()\nexcept SystemExit as e:\n    assert not e.code, e.code\n"
+            "print(sorted(m for m in ('control', 'scipy.signal', 'matplotlib', 'rerun') if m in sys.modules))"
+            % scenario)
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip().splitlines()[-1] == "[]"

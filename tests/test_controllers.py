@@ -8,6 +8,7 @@ from controllers import CONTROLLERS, Program, error_feedback, make_controller, o
 from controllers.blocks import (Controller, Linear, SignalError, Static, Sum, cascade, inverse_model_observer, lure,
                                 preview_ticks_needed, standard_signals, with_correction)
 from controllers.design.pid import pid_tf
+from controllers.lti import SisoTf
 from controllers.papers import seed000
 from controllers.registry import Context, make_observers
 
@@ -31,12 +32,13 @@ def _drive(program, inputs: dict, n: int, outputs):
 
 @pytest.mark.parametrize("method", ["tustin", "zoh"])
 def test_linear_block_matches_python_control(method):
-    """Eq. (28) discretized: same realization, simulated independently by python-control."""
+    """Eq. (28) discretized by our realization and formulas, against python-control's own
+    realization (slycot) and ``c2d`` (scipy): equal up to rounding."""
     dt, n = 1e-3, 2000
     ctrl = error_feedback(seed000.HINF, dt, method=method)
     e = np.sin(np.arange(n) * dt * 7.0)
     u = _drive(Program([ctrl], standard_signals("x")), {"error.x": e}, n, ["u.x"])[:, 0]
-    ref = control.forced_response(control.c2d(control.ss(seed000.HINF), dt, method), T=np.arange(n) * dt, U=e).outputs
+    ref = control.forced_response(control.c2d(control.ss(seed000.HINF.to_control()), dt, method), T=np.arange(n) * dt, U=e).outputs
     assert np.abs(u - ref).max() <= 1e-12 * np.abs(ref).max()
 
 
@@ -76,7 +78,7 @@ def test_npid_is_the_pid_of_the_shaped_error():
     u = _drive(Program([npid], standard_signals("x")), {"error.x": e}, n, ["u.x"])[:, 0]
     shaped = np.cosh(6e3 * np.clip(e, -0.3e-3, 0.3e-3)) * e
     from controllers.papers import seed002
-    ref = control.forced_response(control.c2d(control.ss(seed002.pid(1e-4)), dt, "tustin"), T=np.arange(n) * dt,
+    ref = control.forced_response(control.c2d(control.ss(seed002.pid(1e-4).to_control()), dt, "tustin"), T=np.arange(n) * dt,
                                   U=shaped).outputs
     assert np.abs(u - ref).max() <= 1e-9 * np.abs(ref).max()
     # the gain at the clip is the paper's Ke = 3.1075 at KO = 6, e_max = 0.3
@@ -91,7 +93,7 @@ def test_cascade_is_the_two_loop_law():
     ctrl = make_controller("cascade", dt, {"kp_pos": 40.0, "kp_vel": 2.0, "ki_vel": 30.0, "velocity_ref_ff": 1.0})
     u = _drive(Program([ctrl], standard_signals("x")), {"error.x": e, "ref_vel.x": rv, "vel.x": vel}, n, ["u.x"])
     v_err = 40.0 * e + rv - vel
-    pi = control.c2d(control.ss(pid_tf(2.0, 30.0)), dt, "tustin")
+    pi = control.c2d(control.ss(pid_tf(2.0, 30.0).to_control()), dt, "tustin")
     ref = control.forced_response(pi, T=np.arange(n) * dt, U=v_err).outputs
     np.testing.assert_allclose(u[:, 0], ref, rtol=1e-12, atol=1e-12)
 
@@ -99,11 +101,11 @@ def test_cascade_is_the_two_loop_law():
 def test_inverse_model_observer_recovers_an_input_disturbance():
     """Plant P_n = 78.02/(s^2 + 163 s + 193.3) m/V (seed 002 eq. 1) under u + d: d_hat -> d."""
     dt, n = 1e-4, 20000
-    plant = control.tf([78.02], [1.0, 163.0, 193.3])
+    plant = SisoTf([78.02], [1.0, 163.0, 193.3])
     obs = inverse_model_observer(plant, 50.0, 2, dt)
     u = 0.2 * np.sin(np.arange(n) * dt * 2 * np.pi * 1.0)
     d = np.where(np.arange(n) * dt > 0.5, 0.05, 0.0)
-    y = control.forced_response(control.c2d(plant, dt, "zoh"), T=np.arange(n) * dt, U=u + d).outputs
+    y = control.forced_response(control.c2d(plant.to_control(), dt, "zoh"), T=np.arange(n) * dt, U=u + d).outputs
     u_prev = np.concatenate([[0.0], u[:-1]])
     prog = Program([_controller([obs], dt)], standard_signals("x"))
     d_hat = _drive(prog, {"pos.x": y, "u_prev.x": u_prev}, n, ["dob:d_hat.x"])[:, 0]
@@ -115,7 +117,7 @@ def test_observer_add_on_subtracts_the_estimate():
     dt = 1e-3
     base = make_controller("pid", dt, {"kp": 1.0})
     obs = make_observers("inverse_model", {"cutoff_hz": 20.0, "order": 2},
-                         Context(dt, ("x",), plants={"x": control.tf([1.0], [1.0, 1.0])}))
+                         Context(dt, ("x",), plants={"x": SisoTf([1.0], [1.0, 1.0])}))
     ctrl = with_correction(base, obs)
     prog = Program([ctrl], standard_signals("x"))
     out = _drive(prog, {"error.x": [0.3] * 5, "pos.x": [0.1] * 5}, 5, ["u.x", "observer.x:d_hat.x"])
@@ -149,11 +151,15 @@ def test_missing_signal_names_block_and_signal():
         Program([_controller([Sum((1.0,), ("error.x",), "pos.x")])], standard_signals("x"))
 
 
-def test_pid_tf():
-    c = pid_tf(2.0, 3.0, 0.5, 0.01)
-    w = 10.0
-    expected = 2.0 + 3.0 / (1j * w) + 0.5 * 1j * w / (0.01 * 1j * w + 1)
-    assert c(1j * w) == pytest.approx(expected)
+@pytest.mark.parametrize("kp, ki, kd, order", [(2.0, 3.0, 0.5, 2), (2.0, 0.0, 0.5, 1), (2.0, 3.0, 0.0, 1),
+                                                (2.0, 0.0, 0.0, 0), (0.0, 3.0, 0.0, 1)])
+def test_pid_tf(kp, ki, kd, order):
+    """Every gain pattern against the sum of its terms; no state for a zero gain's factor."""
+    c = pid_tf(kp, ki, kd, 0.01)
+    for w in (0.3, 10.0, 3e3):
+        s = 1j * w
+        assert c(s) == pytest.approx(kp + ki / s + kd * s / (0.01 * s + 1), rel=1e-12)
+    assert len(c.den) - 1 == order
     with pytest.raises(ValueError, match="tf_s"):
         pid_tf(1.0, 0.0, 1.0, 0.0)
 

@@ -20,8 +20,8 @@ def test_closed_loop_step_matches_transfer_functions():
     dt = 1e-3
     bm = build("cncmt")
     res = simulate(bm, make_controller("seed000_robust_pi", dt), Step(1.0), 6.0, dt)
-    g = control.c2d(bm.plant[0, 0], dt, "zoh")
-    c = control.c2d(seed000.ROBUST_PI, dt, "tustin")
+    g = control.c2d(bm.plant[0][0].to_control(), dt, "zoh")
+    c = control.c2d(seed000.ROBUST_PI.to_control(), dt, "tustin")
     loop = control.feedback(g * c, 1)
     # the twin samples the state at the start of each tick: y[k] of the loop
     y_ref = control.step_response(loop, T=res.t_s).outputs

@@ -10,7 +10,6 @@ import control
 import numpy as np
 import pytest
 
-from controllers.papers import seed000
 from controllers.design.hinf import central_controller, gamma_iteration, mixed_sensitivity_plant, reduce_balanced, shift_integrators
 from controllers.design.imc import imc_controller
 from controllers.design.kharitonov import (is_hurwitz, kharitonov_polynomials, robustly_stable,
@@ -86,7 +85,7 @@ def test_interval_model_is_exact_over_the_box():
         rand = np.array([r.characteristic_coefficients(ctrl, r.plant_gain(p), p) for p in r.random_samples(300, 2)])
         assert (rand >= lo - 1e-9).all() and (rand <= hi + 1e-9).all()
     # eq. (30) at nominal: s^3 + 9.697 s^2 + 4.848 Kp s + 4.848 Ki
-    c = r.characteristic_coefficients(seed000.ROBUST_PI, r.plant_gain(nominal), nominal)
+    c = r.characteristic_coefficients(r.TABLE2_CONTROLLERS["robust_pi"], r.plant_gain(nominal), nominal)
     assert c == pytest.approx([1.0, 9.697, 4.848 * 38.33, 4.848 * 45.65], rel=1e-3)
 
 
@@ -130,7 +129,7 @@ def test_hinf_gamma_iteration_and_reduction():
         central_controller(P, 9.0)
     assert central_controller(P, 1 / r.PAPER["hinf_theta"]).nstates == 4  # the paper's order
     # balanced truncation of the published eq. (28) to first order gives eq. (29)
-    red = reduce_balanced(seed000.HINF, 1)
+    red = reduce_balanced(r.HINF_EQ28, 1)
     num, den = red.num[0][0], red.den[0][0]
     assert num[-1] / den[0] == pytest.approx(20.97, rel=0.005) and den[1] / den[0] == pytest.approx(5.5, rel=0.01)
 
@@ -159,8 +158,8 @@ def test_table2_nominal_on_transfer_functions():
     assert m["hinf"]["rise_time_0_100_s"] == pytest.approx(1.12, rel=0.05)
     assert m["imc"]["rise_time_10_90_s"] == pytest.approx(3.36, rel=0.05)
     # the 0.1 s delay of eq. (2): the robust PI loop is unstable with it, IMC is not
-    assert r.tf_step(seed000.ROBUST_PI, nominal, delay_s=0.1) is None
-    assert r.tf_step(seed000.IMC, nominal, delay_s=0.1) is not None
+    assert r.tf_step(r.TABLE2_CONTROLLERS["robust_pi"], nominal, delay_s=0.1) is None
+    assert r.tf_step(r.TABLE2_CONTROLLERS["imc"], nominal, delay_s=0.1) is not None
 
 
 def test_twin_matches_transfer_functions_on_table2_nominal():

@@ -15,11 +15,19 @@ Cases:
 (c) ``npid_googol``: seed 002's nonlinear PID (eqs. 6-8) on ``googol_xy`` at 10 kHz;
 (d) ``cutting_circle_linear_motor``: the bundled ``seed004_cutting_circle`` (mechanistic end
     milling every physics step, PID + feedforward at 2 kHz, 0.1 ms physics).
+
+Start-up (``startup``): wall time of ``twin run seed004_cutting_circle --json`` (2.2 s simulated)
+as a new Python process (``python -m twin.cli``, as the ``twin`` script), alternating with the
+same scenario run in this process after a warm-up (built and simulated: what the run itself
+costs); ``overhead_s`` is the median of the per-repeat differences, what a user waits for
+imports, the numba cache and writing the summary.  Also ``twin --help`` as a new process.
 """
 
 from __future__ import annotations
 
 import statistics
+import subprocess
+import sys
 import time
 
 import mujoco
@@ -29,12 +37,14 @@ from controllers.blocks import with_correction
 from controllers.registry import Context, make_observers
 from twin.machines import build
 from twin.references import Step, SumOfSines
-from twin.scenario import load_scenario, prepare
+from twin.scenario import load_scenario, prepare, run_scenario
 from twin.sim.runner import simulate
 
 #: Gains of case (b): P position loop (1/s), PI velocity loop (V s/m, V/m), observer (Hz, order).
 CASCADE = {"kp_pos": 200.0, "kp_vel": 7.0, "ki_vel": 400.0}
 OBSERVER = {"cutoff_hz": 20.0, "order": 2}
+#: Bundled scenario of the start-up measurement.
+STARTUP_SCENARIO = "seed004_cutting_circle"
 
 
 def _cases() -> dict:
@@ -44,7 +54,7 @@ def _cases() -> dict:
     hinf = make_controller("seed000_hinf", 1e-4)
     googol = build("googol_xy", timestep_s=1e-4)
     sine = SumOfSines((0.01,), (0.5,), n_axes=2, axes=(0,))
-    ctx = Context(1e-4, ("x", "y"), plants={a.name: googol.plant[i, i] for i, a in enumerate(googol.axes)})
+    ctx = Context(1e-4, ("x", "y"), plants={a.name: googol.plant[i][i] for i, a in enumerate(googol.axes)})
     cascade_dob = with_correction(make_controller("cascade", 1e-4, CASCADE, axes=ctx.axes),
                                   make_observers("inverse_model", OBSERVER, ctx))
     npid = make_controller("seed002_npid", 1e-4, axes=ctx.axes)
@@ -68,16 +78,41 @@ def _bare_steps_per_s(model, n: int) -> float:
     return n / (time.perf_counter() - t0)
 
 
+def _wall_s(command: list[str]) -> float:
+    t0 = time.perf_counter()
+    subprocess.run(command, check=True, capture_output=True)
+    return time.perf_counter() - t0
+
+
+def startup(repeats: int = 5) -> dict:
+    """Start-up figures of the module docstring (s, medians of ``repeats``)."""
+    twin = [sys.executable, "-m", "twin.cli"]
+    scenario = load_scenario(STARTUP_SCENARIO)
+    run_scenario(scenario, progress=False)  # warm-up: the compiled loop is loaded
+    process, in_process, help_ = [], [], []
+    for _ in range(repeats):
+        process.append(_wall_s([*twin, "run", STARTUP_SCENARIO, "--json"]))
+        t0 = time.perf_counter()
+        run_scenario(scenario, progress=False)
+        in_process.append(time.perf_counter() - t0)
+        help_.append(_wall_s([*twin, "--help"]))
+    return {"scenario": STARTUP_SCENARIO, "run_process_s": statistics.median(process),
+            "run_in_process_s": statistics.median(in_process),
+            "overhead_s": statistics.median(p - i for p, i in zip(process, in_process)),
+            "help_process_s": statistics.median(help_)}
+
+
 def run_bench(seconds: float = 2.0, repeats: int = 5) -> dict:
-    """Measure every case; figures as in the module docstring.
+    """Measure every case and the start-up; figures as in the module docstring.
 
     Returns
     -------
     dict
         ``cases.<name>.{raw_steps_per_s, closed_loop_steps_per_s, ratio, realtime_factor, loop,
-        timestep_s}``, ``simulated_s``, ``repeats``.
+        timestep_s}``, ``startup.{scenario, run_process_s, run_in_process_s, overhead_s,
+        help_process_s}``, ``simulated_s``, ``repeats``.
     """
-    out = {"simulated_s": seconds, "repeats": repeats, "cases": {}}
+    out = {"simulated_s": seconds, "repeats": repeats, "cases": {}, "startup": startup(repeats)}
     for name, (bm, run) in _cases().items():
         dt = bm.model.opt.timestep
         n = int(round(seconds / dt))

@@ -237,7 +237,8 @@ def list_things():
 def bench(as_json: bool = typer.Option(False, "--json", help="Print the figures as JSON"),
           seconds: float = typer.Option(2.0, help="Simulated time per measurement (s)"),
           repeats: int = typer.Option(5, help="Alternating bare/closed-loop repeats; medians are reported")):
-    """Steps per second, bare mj_step vs the closed loop, for four controller kinds (twin/bench.py)."""
+    """Steps per second, bare mj_step vs the closed loop, for four controller kinds, and start-up time
+    (twin/bench.py)."""
     from twin.bench import run_bench
 
     if not (seconds > 0 and seconds <= 600):
@@ -253,6 +254,10 @@ def bench(as_json: bool = typer.Option(False, "--json", help="Print the figures 
     for name, f in figures["cases"].items():
         typer.echo(f"{name:<30} {f['raw_steps_per_s']:>14,.0f} {f['closed_loop_steps_per_s']:>15,.0f} "
                    f"{f['ratio']:>6.3f} {f['realtime_factor']:>11.1f}  {f['loop']}")
+    f = figures["startup"]
+    typer.echo(f"start-up: twin run {f['scenario']} {f['run_process_s']:.2f} s as a new process, "
+               f"{f['run_in_process_s']:.2f} s in process, overhead {f['overhead_s']:.2f} s; "
+               f"twin --help {f['help_process_s']:.2f} s")
 
 
 def _terminate(signum, frame):

@@ -26,12 +26,11 @@ coupled 4-state model of eq. (11) (:func:`twin.machines.linear_motor.cutting_cou
 from __future__ import annotations
 
 import math
-from dataclasses import replace
-
 import control
 import numpy as np
 
 from controllers.blocks import error_feedback, open_loop
+from controllers.lti import SisoTf
 from twin.process.cutting import AverageForce
 from twin.errors import TwinInputError
 from twin.machines import MACHINES, build, get_machine
@@ -50,15 +49,15 @@ CASES = {**{name: (name, None) for name in MACHINES},
          "linear_motor_xy+average_force": ("linear_motor_xy", SEED004_CUTTING)}
 
 
-def _discrete_reference(bm, dt):
-    """ZOH-exact state-space model of the plant at ``dt``, with the drive delay in samples."""
-    g = control.c2d(control.ss(bm.plant), dt, "zoh")
+def _discrete_reference(bm, reference, dt):
+    """ZOH-exact state-space model of the reference at ``dt``, with the drive delay in samples."""
+    g = control.c2d(control.ss(reference), dt, "zoh")
     return g, int(round(bm.delay_s / dt))
 
 
-def _tf_listing(bm) -> dict:
+def _tf_listing(bm, reference) -> dict:
     names = [a.name for a in bm.axes]
-    plant = control.tf(bm.plant)
+    plant = control.tf(reference)
     out = {}
     for i, yi in enumerate(names):
         for j, uj in enumerate(names):
@@ -71,14 +70,15 @@ def _tf_listing(bm) -> dict:
     return out
 
 
-def time_response_nrmse(bm, duration_s: float = 1.0, disturbances=()) -> float:
-    """Check (a): worst normalized RMS error of the open-loop response."""
+def time_response_nrmse(bm, reference, duration_s: float = 1.0, disturbances=()) -> float:
+    """Check (a): worst normalized RMS error of the open-loop response against ``reference``
+    (a python-control model, V to m)."""
     dt = bm.model.opt.timestep
     n_axes = len(bm.axes)
     n = int(round(duration_s / dt))
     t = np.arange(n) * dt
     test = np.where(t < 0.2, 1.0, np.where(t < 0.4, -1.0, 0.0)) + 0.5 * np.sin(2 * math.pi * 3.0 * t)
-    g, delay = _discrete_reference(bm, dt)
+    g, delay = _discrete_reference(bm, reference, dt)
     worst = 0.0
     for k in range(n_axes):
         u = np.zeros((n, n_axes))
@@ -98,16 +98,17 @@ def multisine_bins(period_s: float, f_min_hz: float, f_max_hz: float, n_tones: i
     return np.unique(np.round(np.geomspace(k_min, k_max, n_tones)).astype(int))
 
 
-def frequency_response_errors(bm, period_s: float = 10.0, f_max_hz: float = 50.0,
+def frequency_response_errors(bm, reference, period_s: float = 10.0, f_max_hz: float = 50.0,
                               n_tones: int = 40, crossover_hz: float = 2.0, settle_s: float = 5.0,
                               disturbances=()) -> dict:
-    """Check (b): measured-vs-model frequency response, worst magnitude (dB) and phase (deg)."""
+    """Check (b): measured frequency response against ``reference`` (a python-control model,
+    V to m), worst magnitude (dB) and phase (deg)."""
     dt = bm.model.opt.timestep
     n_axes = len(bm.axes)
     bins = multisine_bins(period_s, 1.0 / period_s, f_max_hz, n_tones)
     freqs = bins / period_s
     # proportional gain per axis: loop gain 1 at crossover_hz on the diagonal channel
-    kp = [1.0 / abs(bm.plant[i, i](2j * math.pi * crossover_hz)) for i in range(n_axes)]
+    kp = [1.0 / abs(reference[i, i](2j * math.pi * crossover_hz)) for i in range(n_axes)]
     n_period = int(round(period_s / dt))
     settle = max(1, math.ceil(settle_s / period_s))  # whole periods discarded as transient
     phases = -math.pi * bins * (bins - 1) / len(bins)  # Schroeder: low crest factor
@@ -116,7 +117,7 @@ def frequency_response_errors(bm, period_s: float = 10.0, f_max_hz: float = 50.0
     for k in range(n_axes):
         amp = 0.2 / kp[k]  # about 0.2 V per tone at high frequency
         ref = SumOfSines((amp,) * len(bins), tuple(freqs), tuple(phases), n_axes=n_axes, axes=(k,))
-        ctrls = [error_feedback(control.tf([kp[i]], [1.0]), dt, (a.name,), name=f"P.{a.name}")
+        ctrls = [error_feedback(SisoTf((kp[i],), (1.0,)), dt, (a.name,), name=f"P.{a.name}")
                  for i, a in enumerate(bm.axes)]
         res = simulate(bm, ctrls, ref, (settle + 1) * period_s, dt, disturbances=disturbances, progress=False,
                        record_every=1)
@@ -125,7 +126,7 @@ def frequency_response_errors(bm, period_s: float = 10.0, f_max_hz: float = 50.0
         Y[:, :, k] = np.fft.rfft(y, axis=0)[bins]
         U[:, :, k] = np.fft.rfft(u, axis=0)[bins]
     G_meas = Y @ np.linalg.inv(U)
-    g, delay = _discrete_reference(bm, dt)
+    g, delay = _discrete_reference(bm, reference, dt)
     z = np.exp(2j * math.pi * freqs * dt)
     G_ref = np.stack([g(zi) * zi ** (-delay) for zi in z]).reshape(len(bins), n_axes, n_axes)
     diag = np.arange(n_axes)
@@ -178,13 +179,14 @@ def fidelity(case: str, overrides: dict | None = None, *, frf_period_s: float = 
     spec = get_machine(machine)
     forced = {s: 0.0 for s in FRICTION_SYMBOLS if s in spec.parameters}
     bm = build(machine, {**overrides, **forced})
-    disturbances = ()
+    reference, disturbances = bm.plant_lti(), ()
     if cutting is not None:
-        bm = replace(bm, plant=cutting_coupled_plant(bm.params, cutting.k_il_N_s_per_m, cutting.k_c_N_s_per_m))
+        reference = control.ss(*cutting_coupled_plant(bm.params, cutting.k_il_N_s_per_m, cutting.k_c_N_s_per_m))
         disturbances = (cutting,)
     out = {"machine": machine, "case": case, "overrides": overrides, "friction_forced_off": sorted(forced),
-           "tf": _tf_listing(bm), "time_nrmse": time_response_nrmse(bm, disturbances=disturbances)}
-    out.update(frequency_response_errors(bm, frf_period_s, n_tones=frf_tones, disturbances=disturbances))
+           "tf": _tf_listing(bm, reference),
+           "time_nrmse": time_response_nrmse(bm, reference, disturbances=disturbances)}
+    out.update(frequency_response_errors(bm, reference, frf_period_s, n_tones=frf_tones, disturbances=disturbances))
     out["coupling_slip_um"] = coupling_slip_um(bm)
     out["targets"] = TARGETS
     out["pass"] = all(out[k] <= v for k, v in TARGETS.items())

@@ -403,7 +403,7 @@ def prepare(scn: Scenario):
     names = [a.name for a in machine.axes]
     substeps = substeps_per_tick(scn.control_period_s, scn.timestep_s)
     delay = machine.delay_s if scn.drive.delay_s is None else scn.drive.delay_s
-    base = Context(scn.control_period_s, tuple(names), plants={a: machine.plant[i, i] for i, a in enumerate(names)},
+    base = Context(scn.control_period_s, tuple(names), plants={a: machine.plant[i][i] for i, a in enumerate(names)},
                    delay_s=delay)
     if (scn.controller is None) == (scn.controllers is None):
         raise TwinInputError("controller", None, "give either [controller] (all axes) or [controllers.<axis>]")

@@ -3,8 +3,9 @@
 Each function returns a :class:`~controllers.blocks.core.Controller` whose blocks read the
 loop's signals (:mod:`controllers.blocks.signals`) and write ``u.<axis>`` (V).  Signals a
 controller uses only inside itself are named ``<controller name>:<signal>`` so that several
-controllers share one bus.  Continuous python-control models are discretized at the control
-period with ``control.c2d`` (Tustin by default, or zero-order hold), as each docstring states.
+controllers share one bus.  Continuous models (:class:`~controllers.lti.SisoTf`, state-space
+tuples or python-control models) are discretized at the control period by
+:func:`controllers.lti.discretize` (Tustin by default, or zero-order hold).
 """
 
 from __future__ import annotations
@@ -12,20 +13,20 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-import control
 import numpy as np
 
 from controllers.blocks.core import Controller, Linear, Sequence, Static, Sum
+from controllers.lti import SisoTf, delay_ticks, discretize, series, state_space, summed_inputs, tf_to_ss
 
 
 def lti_block(sys, dt: float, inputs, outputs, method: str = "tustin", name: str = "linear") -> Linear:
-    """A :class:`Linear` block from a python-control LTI model.
+    """A :class:`Linear` block from an LTI model.
 
     Parameters
     ----------
-    sys : control.LTI
-        Continuous (discretized here with ``method``) or discrete with ``sys.dt == dt``;
-        ``len(inputs)`` inputs and ``len(outputs)`` outputs, proper.
+    sys : SisoTf, tuple (A, B, C, D) or python-control LTI
+        Continuous (discretized here with ``method``), or a discrete python-control model with
+        ``sys.dt == dt``; ``len(inputs)`` inputs and ``len(outputs)`` outputs, proper.
     dt : float
         Control period (s).
     method : {"tustin", "zoh"}
@@ -37,15 +38,15 @@ def lti_block(sys, dt: float, inputs, outputs, method: str = "tustin", name: str
     """
     if method not in ("tustin", "zoh"):
         raise ValueError(f"method = {method!r}: use 'tustin' or 'zoh'")
-    if (sys.ninputs, sys.noutputs) != (len(inputs), len(outputs)):
-        raise ValueError(f"block {name!r}: the model has {sys.ninputs} inputs and {sys.noutputs} outputs, "
+    A, B, C, D, sys_dt = state_space(sys)
+    if (B.shape[1], C.shape[0]) != (len(inputs), len(outputs)):
+        raise ValueError(f"block {name!r}: the model has {B.shape[1]} inputs and {C.shape[0]} outputs, "
                          f"wired to {len(inputs)} and {len(outputs)} signals")
-    ss = control.ss(sys)
-    if ss.isctime():
-        ss = control.c2d(ss, dt, method=method)
-    elif not np.isclose(ss.dt, dt):
-        raise ValueError(f"block {name!r}: discrete model dt = {ss.dt} differs from the control period {dt}")
-    return Linear(ss.A, ss.B, ss.C, ss.D, tuple(inputs), tuple(outputs), name=name)
+    if sys_dt is None:
+        A, B, C, D = discretize(A, B, C, D, dt, method)
+    elif not np.isclose(sys_dt, dt):
+        raise ValueError(f"block {name!r}: discrete model dt = {sys_dt} differs from the control period {dt}")
+    return Linear(A, B, C, D, tuple(inputs), tuple(outputs), name=name)
 
 
 def error_feedback(sys, dt: float, axes=("x",), method: str = "tustin", name: str = "C") -> Controller:
@@ -80,9 +81,9 @@ def cascade(outer, inner, dt: float, axis: str = "x", velocity_ref_ff: float = 0
 
     Parameters
     ----------
-    outer : control.LTI
+    outer : SisoTf or python-control LTI
         Position controller, (m/s) per m, for example ``kp`` (1/s) or ``kp + ki/s``.
-    inner : control.LTI
+    inner : SisoTf or python-control LTI
         Velocity controller, V per (m/s).
     velocity_ref_ff : float
         Share of the reference velocity fed forward into the velocity reference (0..1 usually).
@@ -115,6 +116,11 @@ def inverse_model_observer(plant, cutoff_hz: float, order: int, dt: float, axis:
     ``m = round(delay_s/dt) - 1`` more ticks, so that the position and the input the observer
     compares belong together.  Both parts are discretized with ``method``.
 
+    Parameters
+    ----------
+    plant : SisoTf
+        Nominal plant ``P_n`` (m/V).
+
     Raises
     ------
     ValueError
@@ -122,11 +128,9 @@ def inverse_model_observer(plant, cutoff_hz: float, order: int, dt: float, axis:
     """
     if not (cutoff_hz > 0 and math.isfinite(cutoff_hz)):
         raise ValueError(f"cutoff_hz = {cutoff_hz!r}: must be > 0")
-    p = control.tf(plant)
-    num, den = np.trim_zeros(np.atleast_1d(np.squeeze(p.num[0][0])), "f"), np.atleast_1d(np.squeeze(p.den[0][0]))
-    if int(order) != order or order < len(den) - len(num):
+    if int(order) != order or order < plant.relative_degree:
         raise ValueError(f"order = {order!r}: Q/P_n is improper unless order >= the plant's relative "
-                         f"degree {len(den) - len(num)}")
+                         f"degree {plant.relative_degree}")
     tau = 1.0 / (2.0 * math.pi * cutoff_hz)
     q_den = np.array([1.0])
     for _ in range(int(order)):
@@ -134,10 +138,10 @@ def inverse_model_observer(plant, cutoff_hz: float, order: int, dt: float, axis:
     if not (delay_s >= 0 and math.isfinite(delay_s)):
         raise ValueError(f"delay_s = {delay_s!r}: must be >= 0")
     lag = max(int(round(delay_s / dt)) - 1, 0)
-    from_pos = control.c2d(control.tf(den, np.polymul(num, q_den)), dt, method)
-    from_u = control.c2d(control.tf([-1.0], q_den), dt, method) * control.tf([1.0], [1.0] + [0.0] * lag, dt)
-    observer = control.tf([[from_pos.num[0][0], from_u.num[0][0]]], [[from_pos.den[0][0], from_u.den[0][0]]], dt)
-    return lti_block(observer, dt, [f"pos.{axis}", f"u_prev.{axis}"], [f"{name}:d_hat.{axis}"], method, name)
+    from_pos = discretize(*tf_to_ss(SisoTf(plant.den, np.polymul(plant.num, q_den))), dt, method)
+    from_u = series(delay_ticks(lag), discretize(*tf_to_ss(SisoTf((-1.0,), q_den)), dt, method))
+    return Linear(*summed_inputs(from_pos, from_u), (f"pos.{axis}", f"u_prev.{axis}"), (f"{name}:d_hat.{axis}",),
+                  name=name)
 
 
 def with_correction(ctrl: Controller, observers) -> Controller:

@@ -1,12 +1,13 @@
-"""PID with a first-order filtered derivative, as a python-control transfer function."""
+"""PID with a first-order filtered derivative, as a transfer function."""
 
 from __future__ import annotations
 
-import control
+from controllers.lti import SisoTf
 
 
-def pid_tf(kp: float, ki: float = 0.0, kd: float = 0.0, tf_s: float = 0.0) -> control.TransferFunction:
-    """C(s) = kp + ki/s + kd s/(tf_s s + 1).
+def pid_tf(kp: float, ki: float = 0.0, kd: float = 0.0, tf_s: float = 0.0) -> SisoTf:
+    """C(s) = kp + ki/s + kd s/(tf_s s + 1), over the common denominator without the factors
+    a zero gain leaves out (``s`` without ``ki``, ``tf_s s + 1`` without ``kd``).
 
     Parameters
     ----------
@@ -19,12 +20,13 @@ def pid_tf(kp: float, ki: float = 0.0, kd: float = 0.0, tf_s: float = 0.0) -> co
     tf_s : float
         Derivative filter time constant (s); must be > 0 when ``kd`` is non-zero.
     """
-    s = control.tf("s")
-    c = kp + 0 * s
-    if ki:
-        c = c + ki / s
+    if kd and not tf_s > 0:
+        raise ValueError(f"tf_s = {tf_s!r}: a derivative term needs a filter time constant > 0")
     if kd:
-        if tf_s <= 0:
-            raise ValueError(f"tf_s = {tf_s!r}: a derivative term needs a filter time constant > 0")
-        c = c + kd * s / (tf_s * s + 1)
-    return control.minreal(control.tf(c), verbose=False)
+        # (kp s (tf s + 1) + ki (tf s + 1) + kd s^2) / (s (tf s + 1)), or without ki: / (tf s + 1)
+        if ki:
+            return SisoTf((kp * tf_s + kd, kp + ki * tf_s, ki), (tf_s, 1.0, 0.0))
+        return SisoTf((kp * tf_s + kd, kp), (tf_s, 1.0))
+    if ki:
+        return SisoTf((kp, ki), (1.0, 0.0))
+    return SisoTf((kp,), (1.0,))

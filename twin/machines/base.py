@@ -11,10 +11,10 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import control
 import mujoco
 import numpy as np
 
+from controllers.lti import SisoTf
 from twin.errors import TwinInputError
 
 
@@ -89,8 +89,9 @@ class BuiltMachine:
     params : dict of str to float
         Parameter values in effect (nominal merged with overrides).
     axes : tuple of Axis
-    plant : control.TransferFunction
-        Input (V) to table position (m) model, ``len(axes)`` inputs and outputs, delay excluded.
+    plant : tuple of tuple of SisoTf
+        Input (V) to table position (m) model, delay excluded: ``plant[i][j]`` from axis j's
+        input to axis i's position; :meth:`plant_lti` gives it as a python-control model.
     delay_s : float
         Transport delay (s) of the drive, applied by the runner's drive model.
     couplings : list of (str, str, float)
@@ -106,11 +107,18 @@ class BuiltMachine:
     model: mujoco.MjModel
     params: dict[str, float]
     axes: tuple[Axis, ...]
-    plant: control.TransferFunction
+    plant: tuple[tuple[SisoTf, ...], ...]
     delay_s: float
     couplings: list[tuple[str, str, float]] = field(default_factory=list)
     table_per_screw_m_per_rad: dict[str, float] = field(default_factory=dict)
     sensor_gains: tuple[float, ...] = ()
+
+    def plant_lti(self):
+        """:attr:`plant` as a ``control.TransferFunction`` (imports python-control)."""
+        import control
+
+        return control.tf([[list(g.num) for g in row] for row in self.plant],
+                          [[list(g.den) for g in row] for row in self.plant])
 
     def joint_qpos_index(self, joint: str) -> int:
         """Index of a joint's position in ``MjData.qpos``."""
@@ -238,8 +246,9 @@ class Machine:
         """Write parameter values into the spec (MjSpec edits)."""
         raise NotImplementedError
 
-    def plant(self, params: dict[str, float], model: mujoco.MjModel) -> control.TransferFunction:
-        """Reference transfer-function model, input (V) to table position (m)."""
+    def plant(self, params: dict[str, float], model: mujoco.MjModel) -> tuple[tuple[SisoTf, ...], ...]:
+        """Reference transfer-function model, input (V) to table position (m), as
+        :attr:`BuiltMachine.plant`."""
         raise NotImplementedError
 
     def delay(self, params: dict[str, float]) -> float:
@@ -316,9 +325,7 @@ def check_stacked_masses(params: dict[str, float]) -> None:
                              f"must exceed m_y = {params['m_y']:g} kg (Y rides on X)")
 
 
-def diagonal_plant(channels: list[control.TransferFunction]) -> control.TransferFunction:
-    """Diagonal MIMO transfer function from SISO channels."""
-    n = len(channels)
-    num = [[channels[i].num[0][0] if i == j else [0.0] for j in range(n)] for i in range(n)]
-    den = [[channels[i].den[0][0] if i == j else [1.0] for j in range(n)] for i in range(n)]
-    return control.tf(num, den)
+def diagonal_plant(channels: list[SisoTf]) -> tuple[tuple[SisoTf, ...], ...]:
+    """Diagonal transfer matrix from SISO channels (zeros elsewhere)."""
+    zero = SisoTf((0.0,), (1.0,))
+    return tuple(tuple(g if i == j else zero for j in range(len(channels))) for i, g in enumerate(channels))

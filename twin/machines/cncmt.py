@@ -16,8 +16,8 @@ screw speed; on the motor shaft it would enter as n^2 H2.
 
 from __future__ import annotations
 
-import control
 
+from controllers.lti import SisoTf
 from twin.errors import TwinInputError
 from twin.machines.base import (Axis, Machine, Parameter, coulomb_friction_parameters, diagonal_plant,
                                 set_axial_inertia, set_gear, set_mass)
@@ -44,10 +44,10 @@ def leadscrew_parameters(suffix: str = "", mass_kg: float = 50.0,
     }
 
 
-def leadscrew_tf(K1, K2, m, Im, p, n, H2) -> control.TransferFunction:
+def leadscrew_tf(K1, K2, m, Im, p, n, H2) -> SisoTf:
     """Eq. (1): table position (m) per control input (V)."""
     J = p**2 * m + n**2 * Im
-    return control.tf([K1 * K2 * n * p], [J, K1 * K2 * n * H2, 0.0])
+    return SisoTf((K1 * K2 * n * p,), (J, K1 * K2 * n * H2, 0.0))
 
 
 class _LeadScrewMachine(Machine):

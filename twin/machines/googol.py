@@ -18,8 +18,8 @@ from __future__ import annotations
 
 import math
 
-import control
 
+from controllers.lti import SisoTf
 from twin.errors import TwinInputError
 from twin.machines.base import (Axis, Machine, Parameter, coulomb_friction_parameters, diagonal_plant,
                                 set_axial_inertia, set_gear, set_mass)
@@ -72,7 +72,7 @@ class GoogolXY(Machine):
             act.biasprm[2] = -params["a1"] * p**2 * M
 
     def plant(self, params, model):
-        g = control.tf([params["b0"] * 1e-3], [1.0, params["a1"], params["a0"]])
+        g = SisoTf((params["b0"] * 1e-3,), (1.0, params["a1"], params["a0"]))
         return diagonal_plant([g, g])
 
     def delay(self, params):

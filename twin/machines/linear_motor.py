@@ -10,8 +10,9 @@ quantified in the paper: 0 N by default, set per scenario.
 
 from __future__ import annotations
 
-import control
+import numpy as np
 
+from controllers.lti import SisoTf
 from twin.machines.base import (Axis, Machine, Parameter, check_stacked_masses, coulomb_friction_parameters,
                                 diagonal_plant, set_mass)
 
@@ -49,12 +50,13 @@ class LinearMotorXY(Machine):
             spec.actuator(f"{a}_drive").gainprm[0] = params[f"k_{a}"]
 
     def plant(self, params, model):
-        return diagonal_plant([control.tf([params[f"k_{a}"]], [params[f"m_{a}"], params[f"b_{a}"], 0.0])
+        return diagonal_plant([SisoTf((params[f"k_{a}"],), (params[f"m_{a}"], params[f"b_{a}"], 0.0))
                                for a in ("x", "y")])
 
 
-def cutting_coupled_plant(params: dict[str, float], k_il_N_s_per_m: float, k_c_N_s_per_m: float) -> control.StateSpace:
-    """Seed 004's coupled 4-state model with the average cutting force, eq. (11).
+def cutting_coupled_plant(params: dict[str, float], k_il_N_s_per_m: float, k_c_N_s_per_m: float):
+    """Seed 004's coupled 4-state model with the average cutting force, eq. (11), as continuous
+    state-space matrices ``(A, B, C, D)``.
 
     State ``[y_x, v_x, y_y, v_y]`` (m, m/s), inputs ``u_x, u_y`` (V), outputs the positions (m);
     A is eq. (11)'s (rows 2 and 4: ``(k_il - b_i)/m_i`` and ``-+k_c/m_i``), B takes the
@@ -68,5 +70,5 @@ def cutting_coupled_plant(params: dict[str, float], k_il_N_s_per_m: float, k_c_N
          [0.0, k_c / my, 0.0, (k_il - by) / my]]
     B = [[0.0, 0.0], [params["k_x"] / mx, 0.0], [0.0, 0.0], [0.0, params["k_y"] / my]]
     C = [[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]]
-    return control.ss(A, B, C, [[0.0, 0.0], [0.0, 0.0]])
+    return np.array(A), np.array(B), np.array(C), np.zeros((2, 2))
 

@@ -13,8 +13,8 @@ slide sized so that it gets the eq. (6) cross-acceleration.
 
 from __future__ import annotations
 
-import control
 
+from controllers.lti import SisoTf
 from twin.machines.base import (Axis, Machine, Parameter, check_stacked_masses, coulomb_friction_parameters,
                                 set_mass)
 
@@ -60,6 +60,5 @@ class SabauXY(Machine):
     def plant(self, params, model):
         dx = [1.0, params["a_x"], 0.0]
         dy = [1.0, params["a_y"], 0.0]
-        num = [[[params["K_x"] * 1e-3], [params["H_wx_uy"] * 1e-3]],
-               [[params["H_wy_ux"] * 1e-3], [params["K_y"] * 1e-3]]]
-        return control.tf(num, [[dx, dx], [dy, dy]])
+        return ((SisoTf((params["K_x"] * 1e-3,), dx), SisoTf((params["H_wx_uy"] * 1e-3,), dx)),
+                (SisoTf((params["H_wy_ux"] * 1e-3,), dy), SisoTf((params["K_y"] * 1e-3,), dy)))

@@ -60,7 +60,9 @@ PAPER = {
 
 #: The three controllers of Table 2, as published (Table 2's H-infinity row is the reduced eq. 29:
 #: its nominal 6.3 % overshoot is the reduced controller's; the full eq. 28 gives about 4 %).
-TABLE2_CONTROLLERS = {"robust_pi": seed000.ROBUST_PI, "imc": seed000.IMC, "hinf": seed000.HINF_REDUCED}
+#: The paper's controllers as python-control models: eq. (28) and eq. (29).
+HINF_EQ28, HINF_EQ29 = seed000.HINF.to_control(), seed000.HINF_REDUCED.to_control()
+TABLE2_CONTROLLERS = {"robust_pi": seed000.ROBUST_PI.to_control(), "imc": seed000.IMC.to_control(), "hinf": HINF_EQ29}
 BOX_SYMBOLS = ("K1", "K2", "m", "Im")
 #: Step-response horizon (s) and sample period (s) of Table 2's runs.
 HORIZON_S, DT_S = 12.0, 1e-4
@@ -194,7 +196,7 @@ def hinf_design(eps: float = 1e-6) -> dict:
     at_paper = control.tf(central_controller(P, 1.0 / PAPER["hinf_theta"]))
     reduced_at_paper = reduce_balanced(at_paper, 1)
     reduced_opt = reduce_balanced(opt.controller, 1)
-    reduced_eq28 = reduce_balanced(seed000.HINF, 1)
+    reduced_eq28 = reduce_balanced(HINF_EQ28, 1)
     w = np.logspace(-3, 3, 600)
 
     def sv_gap_db(full, red, w=w):
@@ -208,16 +210,16 @@ def hinf_design(eps: float = 1e-6) -> dict:
         num, den = (np.squeeze(c) for c in control.tfdata(tf))
         return {"num": (num / den[0]).tolist(), "den": (den / den[0]).tolist()}
 
-    gap_db, gap_at_rad_s = sv_gap_db(seed000.HINF, seed000.HINF_REDUCED)
+    gap_db, gap_at_rad_s = sv_gap_db(HINF_EQ28, HINF_EQ29)
     return {"integrator_shift_eps": eps, "gamma_opt": opt.gamma, "theta_opt": opt.theta,
             "iterations": opt.iterations, "paper_theta": PAPER["hinf_theta"],
             "gamma_floor_W3T_at_dc": float(abs(w3(0) * t_dc)),
             "controller_opt": coeffs(control.tf(opt.controller)),
-            "controller_at_paper_gamma": coeffs(at_paper), "paper_eq28": coeffs(seed000.HINF),
+            "controller_at_paper_gamma": coeffs(at_paper), "paper_eq28": coeffs(HINF_EQ28),
             "reduced_opt": coeffs(reduced_opt), "reduced_at_paper_gamma": coeffs(reduced_at_paper),
-            "reduced_eq28": coeffs(reduced_eq28), "paper_eq29": coeffs(seed000.HINF_REDUCED),
+            "reduced_eq28": coeffs(reduced_eq28), "paper_eq29": coeffs(HINF_EQ29),
             "sv_gap_eq28_vs_eq29_db": gap_db, "sv_gap_eq28_vs_eq29_at_rad_s": gap_at_rad_s,
-            "sv_gap_eq28_vs_eq29_above_0p1_db": sv_gap_db(seed000.HINF, seed000.HINF_REDUCED,
+            "sv_gap_eq28_vs_eq29_above_0p1_db": sv_gap_db(HINF_EQ28, HINF_EQ29,
                                                           np.logspace(-1, 3, 400))[0],
             "sv_gap_opt_vs_reduced_db": sv_gap_db(control.tf(opt.controller), reduced_opt)[0]}
 
@@ -226,7 +228,7 @@ def hinf_design(eps: float = 1e-6) -> dict:
 
 def _plant(params: dict[str, float]) -> control.TransferFunction:
     """Eq. (1) without the delay, as the cncmt machine builds it."""
-    return leadscrew_tf(**{k: params[k] for k in ("K1", "K2", "m", "Im", "p", "n", "H2")})
+    return leadscrew_tf(**{k: params[k] for k in ("K1", "K2", "m", "Im", "p", "n", "H2")}).to_control()
 
 
 def _loop(controller, params: dict[str, float], delay_s: float):
