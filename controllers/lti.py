@@ -16,6 +16,18 @@ from dataclasses import dataclass
 import numpy as np
 
 
+#: Largest degree of a transfer function's denominator: a realization of order n is an n x n
+#: matrix run every tick, and canonical forms of higher order lose all precision anyway.
+MAX_ORDER = 100
+
+
+def _listing(coefficients, most: int = 6) -> str:
+    """Coefficients as a short list for messages: ``[1, 163, 193.3]``, ``[1, 2, ... 9 more]``."""
+    values = [f"{float(c):g}" if isinstance(c, (int, float, np.number)) else repr(c) for c in coefficients]
+    shown = values[:most] + ([f"... {len(values) - most} more"] if len(values) > most else [])
+    return "[" + ", ".join(shown) + "]"
+
+
 @dataclass(frozen=True)
 class SisoTf:
     """Continuous-time SISO transfer function ``num(s)/den(s)``.
@@ -29,21 +41,31 @@ class SisoTf:
     Raises
     ------
     ValueError
-        Empty, non-finite or all-zero denominator, or non-finite numerator.
+        Empty or nested lists, an all-zero denominator, a degree above :data:`MAX_ORDER`, or
+        coefficients that are not finite (also after dividing by the leading denominator
+        coefficient).
     """
 
     num: tuple[float, ...]
     den: tuple[float, ...]
 
     def __post_init__(self):
-        num, den = (np.atleast_1d(np.asarray(c, float)) for c in (self.num, self.den))
-        if num.ndim != 1 or den.ndim != 1:
-            raise ValueError(f"transfer function {self.num!r}/{self.den!r}: coefficients must be flat lists")
+        try:
+            num, den = (np.atleast_1d(np.asarray(c, float)) for c in (self.num, self.den))
+        except (TypeError, ValueError):
+            raise ValueError("transfer function coefficients must be numbers") from None
+        if num.ndim != 1 or den.ndim != 1 or num.size == 0:
+            raise ValueError("transfer function coefficients must be non-empty flat lists")
+        name = f"transfer function {_listing(num)}/{_listing(den)}"
         num, den = np.trim_zeros(num, "f"), np.trim_zeros(den, "f")
-        if not (np.isfinite(num).all() and np.isfinite(den).all()):
-            raise ValueError(f"transfer function {self.num!r}/{self.den!r}: non-finite coefficient")
         if den.size == 0:
-            raise ValueError(f"den = {list(self.den)!r}: the denominator is zero")
+            raise ValueError(f"{name}: the denominator is zero")
+        if den.size - 1 > MAX_ORDER:
+            raise ValueError(f"{name}: degree {den.size - 1} above the limit of {MAX_ORDER}")
+        with np.errstate(over="ignore", invalid="ignore"):
+            normalized = np.concatenate([num, den]) / den[0]
+        if not np.isfinite(normalized).all():
+            raise ValueError(f"{name}: coefficients must be finite, also divided by den[0] = {den[0]:g}")
         object.__setattr__(self, "num", tuple(float(c) for c in num) or (0.0,))
         object.__setattr__(self, "den", tuple(float(c) for c in den))
 
@@ -72,7 +94,7 @@ def tf_to_ss(tf: SisoTf) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray
         Improper model (more zeros than poles).
     """
     if tf.relative_degree < 0:
-        raise ValueError(f"transfer function {list(tf.num)}/{list(tf.den)} is improper "
+        raise ValueError(f"transfer function {_listing(tf.num)}/{_listing(tf.den)} is improper "
                          f"(numerator degree above the denominator's)")
     den = np.asarray(tf.den) / tf.den[0]
     n = len(den) - 1
@@ -84,7 +106,8 @@ def tf_to_ss(tf: SisoTf) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray
     B = np.zeros((n, 1))
     if n:
         B[0, 0] = 1.0
-    C = (num[1:] - num[0] * den[1:]).reshape(1, n)
+    with np.errstate(over="ignore", invalid="ignore"):  # non-finite entries: Linear names the block
+        C = (num[1:] - num[0] * den[1:]).reshape(1, n)
     D = np.array([[num[0]]])
     return A, B, C, D
 
@@ -95,12 +118,19 @@ def discretize(A, B, C, D, dt: float, method: str = "tustin"):
     ``method`` is ``"tustin"`` (bilinear) or ``"zoh"`` (zero-order hold, exact for piecewise
     constant inputs; imports scipy.linalg for the matrix exponential).
 
+    Non-finite entries of the result (a model too stiff for ``dt``) are left for the caller
+    (:class:`~controllers.blocks.core.Linear` rejects them, naming the block).
+
     Raises
     ------
     ValueError
         Unknown method, or a Tustin map that is singular (a pole at ``s = 2/dt``).
     """
-    A, B, C, D = (np.atleast_2d(np.asarray(m, float)) for m in (A, B, C, D))
+    with np.errstate(over="ignore", invalid="ignore"):  # non-finite results are the caller's to report
+        return _discretize(*(np.atleast_2d(np.asarray(m, float)) for m in (A, B, C, D)), dt, method)
+
+
+def _discretize(A, B, C, D, dt, method):
     n, m = B.shape
     if method == "tustin":
         if n == 0:

@@ -1,6 +1,7 @@
-"""Tests never write into the checkout: numba's compiled-function cache goes to a folder in the
-system's temporary directory (one per checkout, so later runs reuse it), and subprocesses of
-the CLI tests inherit it; pytest's own cache is off (pyproject.toml)."""
+"""Tests never write into the checkout: numba's compiled-function cache and hypothesis's
+storage go to folders in the system's temporary directory (one per checkout, so later runs
+reuse them), and subprocesses of the CLI tests inherit them; pytest's own cache is off
+(pyproject.toml)."""
 
 import hashlib
 import os
@@ -8,8 +9,10 @@ import tempfile
 from pathlib import Path
 
 _checkout = Path(__file__).resolve().parent.parent
-os.environ.setdefault("NUMBA_CACHE_DIR", os.path.join(
-    tempfile.gettempdir(), "cnc-twin-numba-" + hashlib.sha1(str(_checkout).encode()).hexdigest()[:12]))
+_tag = hashlib.sha1(str(_checkout).encode()).hexdigest()[:12]
+os.environ.setdefault("NUMBA_CACHE_DIR", os.path.join(tempfile.gettempdir(), "cnc-twin-numba-" + _tag))
+# hypothesis's example database and caches (its default: .hypothesis/ in the working folder)
+os.environ.setdefault("HYPOTHESIS_STORAGE_DIRECTORY", os.path.join(tempfile.gettempdir(), "cnc-twin-hypothesis-" + _tag))
 
 from hypothesis import settings  # noqa: E402
 

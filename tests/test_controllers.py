@@ -193,3 +193,22 @@ def test_lure_block_is_nonlinearity_then_linear():
     out = _drive(Program([ctrl], standard_signals("x")), {"error.x": [0.2, 2.0, -2.0]}, 3, ["u.x"])
     np.testing.assert_allclose(out[:, 0], [0.6, 1.5, -1.5], rtol=1e-15)
     assert cascade(control.tf(1, 1), control.tf(1, 1), 1e-3, "y").drives == ["y"]
+
+
+@pytest.mark.parametrize("params, match", [
+    ({"cutoff_hz": 500.0}, "Nyquist frequency 500 Hz"),   # dt = 1 ms
+    ({"cutoff_hz": 1e-7}, "at least 1e-6 Hz"),
+    ({"order": 1}, "relative degree 2"),
+    ({"order": 11}, "to 10"),
+    ({"order": 2.5}, "whole number"),
+    ({"delay_s": 0.1001}, "100 control periods"),
+    ({"delay_s": -1e-3}, "from 0"),
+])
+def test_observer_limits(params, match):
+    """Limits that keep the observer's realization small: each named in its error."""
+    plant = SisoTf([78.02], [1.0, 163.0, 193.3])
+    settings = {"cutoff_hz": 20.0, "order": 2, "delay_s": 0.0, **params}
+    with pytest.raises(ValueError, match=match):
+        inverse_model_observer(plant, settings["cutoff_hz"], settings["order"], 1e-3, delay_s=settings["delay_s"])
+    # the largest delay allowed builds: a shift register of 99 states after the 2 of Q
+    assert inverse_model_observer(plant, 20.0, 2, 1e-3, delay_s=0.1).n_state == 2 + 2 + 99

@@ -3,8 +3,8 @@
 Mutations of the bundled scenarios (fields replaced by values of any type, including nan, inf,
 huge, tiny and negative numbers, strings with control characters, nested tables; fields
 deleted; or the file replaced by arbitrary bytes) go through the CLI's own entry point in
-process.  Whatever the input: the exit code is 0, 2 or 3; on 2 and 3 stderr ends in exactly one
-``error:`` line; nothing raises past the CLI (no traceback); on 0 stdout is valid JSON with
+process.  Whatever the input: the exit code is 0, 2 or 3; no Python warning is issued; on 2 and
+3 stderr ends in exactly one ``error:`` line; nothing raises past the CLI (no traceback); on 0 stdout is valid JSON with
 finite numbers.  Each run is capped at 20 000 physics steps (``--max-steps``) so an example
 takes well under a second.  Profiles (``--hypothesis-profile``): ``default`` 150 examples,
 ``thorough`` 10 000.
@@ -14,6 +14,7 @@ import json
 import math
 import re
 import tomllib
+import warnings
 
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
@@ -103,8 +104,11 @@ def _finite(value) -> bool:
 def test_any_scenario_file_gives_a_result_or_one_error_line(tmp_path, content):
     path = tmp_path / "fuzz.toml"
     path.write_bytes(content)
-    result = CliRunner().invoke(app, ["run", str(path), "--json", "--max-steps", "20000"])
+    with warnings.catch_warnings(record=True) as caught:  # a warning is a second stderr line for a user
+        warnings.simplefilter("always")
+        result = CliRunner().invoke(app, ["run", str(path), "--json", "--max-steps", "20000"])
     event(f"exit {result.exit_code}")
+    assert not caught, [str(w.message) for w in caught]
     assert result.exit_code in (0, 2, 3), (result.exit_code, repr(result.exception), content[:300])
     assert result.exception is None or isinstance(result.exception, SystemExit), repr(result.exception)
     if result.exit_code == 0:

@@ -79,3 +79,9 @@ def test_state_space_takes_python_control_models():
     A, B, C, D, dt = state_space(control.c2d(control.tf([1.0], [1.0, 2.0]), 0.01))
     assert dt == 0.01 and A.shape == (1, 1)
     assert state_space(SisoTf([1.0], [1.0, 2.0]))[4] is None
+
+
+def test_degree_limit_and_short_messages():
+    with pytest.raises(ValueError, match=r"\[1, 1, 1, 1, 1, 1, \.\.\. 96 more\]: degree 101 above the limit of 100"):
+        SisoTf([1.0], np.ones(102))
+    assert SisoTf([1.0], np.ones(101)).relative_degree == 100

@@ -79,24 +79,26 @@ class SinesRef(_Strict):
 
 #: Smallest path size (mm) and feed (mm/min) a 2-D path may have: 1 um and 1 um/min.
 MIN_PATH_MM, MIN_FEED_MM_PER_MIN = 1e-3, 1e-3
+#: Largest: 10 m (the runaway limit) and 1e6 mm/min (16.7 m/s, beyond any machine tool).
+MAX_PATH_MM, MAX_FEED_MM_PER_MIN = 1e4, 1e6
 
 
 class CircleRef(_Strict):
     type: Literal["circle"]
-    radius_mm: float = Field(ge=MIN_PATH_MM)
-    feed_mm_per_min: float = Field(ge=MIN_FEED_MM_PER_MIN)
+    radius_mm: float = Field(ge=MIN_PATH_MM, le=MAX_PATH_MM)
+    feed_mm_per_min: float = Field(ge=MIN_FEED_MM_PER_MIN, le=MAX_FEED_MM_PER_MIN)
 
 
 class SquareRef(_Strict):
     type: Literal["square"]
-    side_mm: float = Field(ge=MIN_PATH_MM)
-    feed_mm_per_min: float = Field(ge=MIN_FEED_MM_PER_MIN)
+    side_mm: float = Field(ge=MIN_PATH_MM, le=MAX_PATH_MM)
+    feed_mm_per_min: float = Field(ge=MIN_FEED_MM_PER_MIN, le=MAX_FEED_MM_PER_MIN)
 
 
 class PolylineRef(_Strict):
     type: Literal["polyline"]
     points_mm: list[tuple[float, float]]
-    feed_mm_per_min: float = Field(ge=MIN_FEED_MM_PER_MIN)
+    feed_mm_per_min: float = Field(ge=MIN_FEED_MM_PER_MIN, le=MAX_FEED_MM_PER_MIN)
 
 
 ReferenceSpec = Annotated[Union[StepRef, RampRef, SinesRef, CircleRef, SquareRef, PolylineRef],

@@ -105,6 +105,12 @@ def lure(sys, nonlinearity: str, settings, dt: float, axis: str = "x", method: s
     return Controller(blocks, dt, name)
 
 
+#: Most control periods an observer delays ``u_prev`` by (a shift register of that many states).
+MAX_OBSERVER_DELAY_TICKS = 100
+#: Most first-order factors in an observer's filter Q.
+MAX_OBSERVER_ORDER = 10
+
+
 def inverse_model_observer(plant, cutoff_hz: float, order: int, dt: float, axis: str = "x",
                            method: str = "tustin", name: str = "dob", delay_s: float = 0.0) -> Linear:
     """Inverse-model disturbance observer: ``d_hat = Q P_n^-1 pos - Q z^-m u_prev`` (V).
@@ -124,19 +130,24 @@ def inverse_model_observer(plant, cutoff_hz: float, order: int, dt: float, axis:
     Raises
     ------
     ValueError
-        Non-positive cutoff, ``order`` below the plant's relative degree, or a negative delay.
+        A cutoff outside [1e-6 Hz, the Nyquist frequency 1/(2 dt)), ``order`` not a whole number
+        from the plant's relative degree to :data:`MAX_OBSERVER_ORDER`, or a delay that is
+        negative or longer than :data:`MAX_OBSERVER_DELAY_TICKS` control periods.
     """
-    if not (cutoff_hz > 0 and math.isfinite(cutoff_hz)):
-        raise ValueError(f"cutoff_hz = {cutoff_hz!r}: must be > 0")
-    if int(order) != order or order < plant.relative_degree:
-        raise ValueError(f"order = {order!r}: Q/P_n is improper unless order >= the plant's relative "
-                         f"degree {plant.relative_degree}")
+    nyquist_hz = 0.5 / dt
+    if not 1e-6 <= cutoff_hz < nyquist_hz:
+        raise ValueError(f"cutoff_hz = {cutoff_hz!r}: must be at least 1e-6 Hz and below the Nyquist "
+                         f"frequency {nyquist_hz:g} Hz")
+    if not (plant.relative_degree <= order <= MAX_OBSERVER_ORDER and int(order) == order):
+        raise ValueError(f"order = {order!r}: must be a whole number from the plant's relative degree "
+                         f"{plant.relative_degree} (else Q/P_n is improper) to {MAX_OBSERVER_ORDER}")
     tau = 1.0 / (2.0 * math.pi * cutoff_hz)
     q_den = np.array([1.0])
     for _ in range(int(order)):
         q_den = np.polymul(q_den, [tau, 1.0])
-    if not (delay_s >= 0 and math.isfinite(delay_s)):
-        raise ValueError(f"delay_s = {delay_s!r}: must be >= 0")
+    if not 0 <= delay_s <= MAX_OBSERVER_DELAY_TICKS * dt:
+        raise ValueError(f"delay_s = {delay_s!r}: must be from 0 to {MAX_OBSERVER_DELAY_TICKS} control periods "
+                         f"({MAX_OBSERVER_DELAY_TICKS * dt:g} s)")
     lag = max(int(round(delay_s / dt)) - 1, 0)
     from_pos = discretize(*tf_to_ss(SisoTf(plant.den, np.polymul(plant.num, q_den))), dt, method)
     from_u = series(delay_ticks(lag), discretize(*tf_to_ss(SisoTf((-1.0,), q_den)), dt, method))

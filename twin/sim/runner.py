@@ -276,9 +276,17 @@ def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controll
                 k1 = min(n, k0 + size)
                 t = np.arange(k0, k1 + preview) * control_period_s
                 u_dist = np.zeros((k1 - k0, n_axes))
-                for dist in input_disturbances:
-                    u_dist += dist.input_V(t[:k1 - k0])
-                chunk = (np.ascontiguousarray(reference.sample(t)), draw_noise(k1 - k0), u_dist)
+                with np.errstate(all="ignore"):  # overflow shows as non-finite values, reported below
+                    for dist in input_disturbances:
+                        u_dist += dist.input_V(t[:k1 - k0])
+                    ref = np.ascontiguousarray(reference.sample(t))
+                bad = ~np.isfinite(ref).all(axis=(1, 2))
+                if bad.any():  # the ticks before this chunk are kept
+                    exc = SimulationDiverged((k0 + int(np.argmax(bad))) * control_period_s, "the reference "
+                                             "(position, velocity or acceleration) is not finite here: it overflows")
+                    exc.result = result(k0, k0)
+                    raise exc
+                chunk = (ref, draw_noise(k1 - k0), u_dist)
                 status, k, s = run_chunk(k0, k1, chunk)
                 try:
                     _check(status, k, s, data, sensor[0], u_applied, control_period_s, dt, warnings0, messages)
