@@ -52,7 +52,7 @@ def test_run_json_and_recording(tmp_path):
     assert r.returncode == 0, r.stderr
     out = json.loads(r.stdout)
     assert out["machine"] == "cncmt" and out["max_tracking_error_um"]["x"] == pytest.approx(10000.0, rel=1e-6)
-    assert read_back(tmp_path / "ok.rrd")["/machine/x/table/position"] == 500
+    assert read_back(tmp_path / "ok.rrd")["/actual/x"] == 500 + 1  # ticks + the legend entry
 
 
 def test_divergence_exit_code(tmp_path):
@@ -68,6 +68,18 @@ def test_demo_writes_recording(tmp_path):
     assert r.returncode == 0, r.stderr
     assert json.loads(r.stdout)["machine"] == "cncmt_xy"
     assert read_back(tmp_path / "demo.rrd")["/contour/actual"] == 1
+
+
+def test_run_writes_report_plots(tmp_path):
+    r = _twin("run", "seed004_air_cut_circle", "--set", "duration_s=0.2", "--plots", str(tmp_path / "plots"))
+    assert r.returncode == 0, r.stderr
+    pngs = sorted(p.name for p in (tmp_path / "plots").glob("*.png"))
+    assert pngs == [f"seed004_air_cut_circle_{k}.png" for k in ("contour", "control", "forces", "tracking_error")]
+    assert all((tmp_path / "plots" / p).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" for p in pngs)
+    (tmp_path / "file").write_text("")
+    r = _twin("run", "seed004_air_cut_circle", "--plots", str(tmp_path / "file"))
+    assert r.returncode == 2 and r.stderr.strip().splitlines() == [
+        f"error: --plots = {str(tmp_path / 'file')!r}: exists and is not a folder"]
 
 
 def test_fidelity_json_keys():
@@ -113,7 +125,7 @@ def test_reproduce_seed000_small_counts(tmp_path):
     assert res["table2"]["hinf"]["tf_monte_carlo"]["overshoot_pct"][0] > 0
     assert len(list((tmp_path / "plots").glob("*.png"))) == 4
     counts = read_back(rrd)
-    assert counts["/hinf/machine/x/table/position"] == 20_000  # 12 s at 10 kHz, decimated
+    assert counts["/hinf/actual/x"] == 20_000 + 1  # 12 s at 10 kHz, decimated; + the legend entry
 
 
 def test_reproduce_seed000_text_report():
@@ -137,7 +149,7 @@ def test_run_cutting_scenario_with_settings_and_recording(tmp_path):
     # 1 mm deep slot at 0.1 mm/tooth: the mean feed-normal force is ~56 N, peaks above it
     assert 56.0 < out["max_cutting_force_N"]["y"] < 200.0
     counts = read_back(rrd)
-    assert counts["/cutting/force/x"] == counts["/cutting/force/y"] == 600  # 0.3 s at 2 kHz
+    assert counts["/force/cutting/x"] == counts["/force/cutting/y"] == 600 + 1  # 0.3 s at 2 kHz
 
 
 @pytest.mark.parametrize("setting, message", [
@@ -188,7 +200,7 @@ def test_divergence_keeps_the_partial_run(tmp_path):
     assert r.returncode == 3 and r.stderr.strip().splitlines()[-1].startswith("error: simulation diverged at t = 0.17")
     out = json.loads(r.stdout)
     assert out["status"] == "diverged" and out["completed_ticks"] == 170 and out["sim_time_s"] == pytest.approx(0.17)
-    assert read_back(tmp_path / "div.rrd")["/machine/x/table/position"] == 170
+    assert read_back(tmp_path / "div.rrd")["/actual/x"] == 170 + 1
 
 
 def test_interrupt_keeps_the_partial_run(tmp_path):

@@ -51,6 +51,12 @@ def _check_output(option: str, path: Path | None, suffix: str | None = None) -> 
         raise TwinInputError(option, str(path), "is a folder")
 
 
+def _check_plots_folder(plots: Path | None) -> None:
+    """Refuse a ``--plots`` path that exists and is not a folder (a missing one is created)."""
+    if plots is not None and plots.exists() and not plots.is_dir():
+        raise TwinInputError("--plots", str(plots), "exists and is not a folder")
+
+
 def _print_summary(name: str, summary: dict) -> None:
     typer.echo(f"{name}")
     for key, value in summary.items():
@@ -62,13 +68,14 @@ def _print_summary(name: str, summary: dict) -> None:
 
 
 def _run(scenario: str, rrd: Path | None, as_json: bool, settings: list[str] | None = None,
-         max_steps: int | None = None) -> None:
-    """Run a scenario and report it; a run that diverges or is interrupted still reports and
-    records what it computed before the error line."""
+         max_steps: int | None = None, plots: Path | None = None) -> None:
+    """Run a scenario and report it; a run that diverges or is interrupted still reports,
+    records and plots what it computed before the error line."""
     from twin.scenario import load_scenario, run_scenario
     from twin.sim.runner import MAX_PHYSICS_STEPS
 
     _check_output("--rrd", rrd, ".rrd")
+    _check_plots_folder(plots)
     scn = load_scenario(scenario, settings)
     if rrd is not None and scn.record_every_ticks == 0:
         raise TwinInputError("record_every_ticks", 0, "the run keeps metrics only: nothing to write to --rrd")
@@ -77,13 +84,13 @@ def _run(scenario: str, rrd: Path | None, as_json: bool, settings: list[str] | N
     except (SimulationDiverged, RunInterrupted) as exc:
         status = "diverged" if isinstance(exc, SimulationDiverged) else "interrupted"
         if exc.result is not None:
-            _report(scn, exc.result, rrd, as_json, {"status": status, "sim_time_s": exc.sim_time_s})
+            _report(scn, exc.result, rrd, as_json, {"status": status, "sim_time_s": exc.sim_time_s}, plots)
         raise
-    _report(scn, result, rrd, as_json, {"status": "ok"})
+    _report(scn, result, rrd, as_json, {"status": "ok"}, plots)
 
 
-def _report(scn, result, rrd: Path | None, as_json: bool, status: dict) -> None:
-    """Print the run's summary (text or JSON) and write its recording."""
+def _report(scn, result, rrd: Path | None, as_json: bool, status: dict, plots: Path | None) -> None:
+    """Print the run's summary (text or JSON), write its recording and its plots."""
     from twin.metrics import tracking_summary
 
     done = result.info["completed_ticks"]
@@ -98,6 +105,11 @@ def _report(scn, result, rrd: Path | None, as_json: bool, status: dict) -> None:
 
         record(result, rrd)
         typer.echo(f"recording written to {rrd} (view with: rerun {rrd})", err=as_json)
+    if plots is not None and len(result.t_s):
+        from twin.plots import write_plots  # matplotlib is imported only when plots are asked for
+
+        for path in write_plots(result, plots, scn.name):
+            typer.echo(f"plot written to {path}", err=as_json)
 
 
 @app.command()
@@ -108,17 +120,20 @@ def run(scenario: str = typer.Argument(..., help="Scenario TOML file, or a bundl
         sets: list[str] = typer.Option(None, "--set", help="Change a field: PATH=VALUE, e.g. "
                                                            "disturbances.0.spindle_rpm=2500"),
         max_steps: int = typer.Option(None, "--max-steps", min=1, help="Physics steps a run may take (default "
-                                                                      "100 000 000, about 5 minutes)")):
+                                                                      "100 000 000, about 5 minutes)"),
+        plots: Path = typer.Option(None, "--plots", help="Write PNG plots (errors, inputs, forces, contour) "
+                                                         "to this folder")):
     """Run a closed-loop scenario and print its tracking metrics."""
-    _run(scenario, rrd, as_json, sets, max_steps)
+    _run(scenario, rrd, as_json, sets, max_steps, plots)
 
 
 @app.command()
 @_guard
 def demo(rrd: Path = typer.Option(Path("demo.rrd"), "--rrd", help="Rerun recording to write"),
-         as_json: bool = typer.Option(False, "--json", help="Print metrics as JSON")):
+         as_json: bool = typer.Option(False, "--json", help="Print metrics as JSON"),
+         plots: Path = typer.Option(None, "--plots", help="Write PNG plots to this folder")):
     """The main job: an XY circle on two lead-screw axes under seed 000's robust PI."""
-    _run("demo_circle_cncmt_xy", rrd, as_json)
+    _run("demo_circle_cncmt_xy", rrd, as_json, plots=plots)
 
 
 def _parse_sets(sets: list[str]) -> dict[str, float]:
@@ -191,8 +206,7 @@ def reproduce(source: str = typer.Argument(..., help="Which paper, e.g. seed000 
         raise TwinInputError("--samples" if samples < 1 else "--twin-samples",
                              samples if samples < 1 else twin_samples, "must be >= 1 (--samples) / >= 0")
     _check_output("--rrd", rrd, ".rrd")
-    if plots is not None and plots.exists() and not plots.is_dir():
-        raise TwinInputError("--plots", str(plots), "exists and is not a folder")
+    _check_plots_folder(plots)
     paper = reproduction(source)
     res = paper.run(samples, twin_samples, seed, progress=not as_json)
     typer.echo(json.dumps(res, indent=1, default=float) if as_json else paper.format_report(res))

@@ -120,6 +120,15 @@ class BuiltMachine:
         return control.tf([[list(g.num) for g in row] for row in self.plant],
                           [[list(g.den) for g in row] for row in self.plant])
 
+    def drive_quantity(self, axis: Axis) -> tuple[str, str]:
+        """(``"torque"``, ``"N m"``) for an axis driven on a hinge (a motor shaft), else
+        (``"force"``, ``"N"``: a linear motor, or a tendon over slides)."""
+        act = self.model.actuator(axis.actuator).id
+        if (self.model.actuator_trntype[act] == mujoco.mjtTrn.mjTRN_JOINT
+                and self.model.jnt_type[self.model.actuator_trnid[act, 0]] == mujoco.mjtJoint.mjJNT_HINGE):
+            return "torque", "N m"
+        return "force", "N"
+
     def joint_qpos_index(self, joint: str) -> int:
         """Index of a joint's position in ``MjData.qpos``."""
         return int(self.model.jnt_qposadr[self.model.joint(joint).id])

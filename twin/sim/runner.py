@@ -113,6 +113,11 @@ class RunResult:
     def axis_names(self) -> list[str]:
         return [a.name for a in self.machine.axes]
 
+    @property
+    def has_workpiece_force(self) -> bool:
+        """Whether a force model acted on the workpiece during the recorded ticks."""
+        return bool(np.any(self.workpiece_force_N))
+
     def table_position_m(self) -> np.ndarray:
         """Table positions (m), shape (n, n_axes)."""
         return self.qpos[:, self.machine.table_qpos_indices()]
