@@ -146,3 +146,13 @@ def test_every_bundled_machine_draws_every_geom():
         model = build(name).model
         assert all(geom_shape(model, g) is not None for g in range(model.ngeom)), name
         assert mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, "tool_tip") >= 0, name
+
+
+def test_short_ranges_are_widened_to_labelled_grid_lines():
+    """Data spanning under three power-of-ten steps gets whole steps plus a 6 % margin; wider
+    data keeps Rerun's own range."""
+    from twin.recording.layout import readable_y_axis
+
+    assert readable_y_axis([-70.0, 70.0]).range.as_arrow_array().to_pylist() == [[-112.0, 112.0]]
+    assert readable_y_axis([0.02, 0.166]).range.as_arrow_array().to_pylist() == [pytest.approx([-0.012, 0.212])]
+    assert readable_y_axis([-400.0, 9000.0]) is None and readable_y_axis([5.0, 5.0]) is None

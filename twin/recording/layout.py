@@ -1,7 +1,9 @@
-"""The blueprint: named time-series panels on the left; the machine in 3-D and, for two axes,
-the contour seen from above on the right."""
+"""The blueprint: named time-series panels on the left (two columns); the machine in 3-D and,
+for two axes, the contour seen from above on the right."""
 
 from __future__ import annotations
+
+import math
 
 import mujoco
 import numpy as np
@@ -36,22 +38,56 @@ def _contour_view(result, prefix: str, gain: int) -> rrb.Spatial3DView:
                                        eye_up=[0.0, 1.0, 0.0]))
 
 
+def readable_y_axis(values) -> rrb.ScalarAxis | None:
+    """A y range for a panel whose data spans less than three of its power-of-ten grid steps.
+
+    Rerun's plots label grid lines at powers of ten only, so data spanning, say, -70 to 70 in
+    a short panel shows a single label (0): its size cannot be read.  The range is then widened
+    to whole steps (here -100 to 100), which puts at least two labelled lines in view.  None
+    (Rerun's own range) otherwise.
+    """
+    values = np.asarray(values, float)
+    lo, hi = float(values.min()), float(values.max())
+    if not hi > lo:
+        return None
+    step = 10.0 ** math.floor(math.log10(hi - lo))
+    if (hi - lo) / step >= 3:
+        return None
+    lo, hi = math.floor(lo / step) * step, math.ceil(hi / step) * step
+    margin = 0.06 * (hi - lo)  # so that the labels of the outer lines are not cut at the edges
+    return rrb.ScalarAxis(range=(lo - margin, hi + margin))
+
+
 def series_views(result, prefix: str = "") -> list:
-    """The time-series panels of one run (positions with the joint states behind tabs)."""
+    """The time-series panels of one run, for a two-column grid: the joint states get their own
+    cell where it would stay empty, else they sit in tabs behind the positions."""
     machine = result.machine
     quantity, unit = machine.drive_quantity(machine.axes[0])
-    joints = [rrb.TimeSeriesView(name="joint angles (rad)", origin=f"{prefix}joints",
-                                 contents=[f"{prefix}joints/*/motor/angle", f"{prefix}joints/*/screw/angle"]),
-              rrb.TimeSeriesView(name="joint speeds (rad/s), table velocity (mm/s)", origin=f"{prefix}joints")]
-    views = [rrb.Tabs(rrb.TimeSeriesView(name="position (mm): reference and actual",
-                                         contents=[f"{prefix}reference/**", f"{prefix}actual/**"]),
-                      *joints, active_tab=0),
-             rrb.TimeSeriesView(name="tracking error = reference - actual (µm)", origin=f"{prefix}error"),
-             rrb.TimeSeriesView(name="control input (V)", origin=f"{prefix}control"),
-             rrb.TimeSeriesView(name=f"drive {quantity} ({unit})", origin=f"{prefix}{quantity}/drive")]
+    drive = result.actuator_force[:, [machine.model.actuator(a.actuator).id for a in machine.axes]]
+    parts = [(a.name, part) for a in machine.axes for part, joint in (("motor", a.motor_joint), ("screw", a.screw_joint))
+             if joint]
+    tables = [f"{prefix}joints/{a.name}/table/velocity" for a in machine.axes]
+    joints = [rrb.TimeSeriesView(name="joint angles (rad)",
+                                 contents=[f"{prefix}joints/{a}/{part}/angle" for a, part in parts]),
+              rrb.TimeSeriesView(name="joint speeds (rad/s), table velocity (mm/s)",
+                                 contents=[f"{prefix}joints/{a}/{part}/velocity" for a, part in parts] + tables)]
+    if not parts:  # linear motors: no rotating joints
+        joints = [rrb.TimeSeriesView(name="table velocity (mm/s)", contents=tables)]
+    position_mm = np.concatenate([result.ref[:, :, 0], result.table_position_m()]) * 1e3
+    views = [rrb.TimeSeriesView(name="position (mm): reference and actual",
+                                contents=[f"{prefix}reference/**", f"{prefix}actual/**"],
+                                axis_y=readable_y_axis(position_mm)),
+             rrb.TimeSeriesView(name="tracking error = reference - actual (µm)", origin=f"{prefix}error",
+                                axis_y=readable_y_axis(result.error_m() * 1e6)),
+             rrb.TimeSeriesView(name="control input (V)", origin=f"{prefix}control", axis_y=readable_y_axis(result.u_V)),
+             rrb.TimeSeriesView(name=f"drive {quantity} ({unit})", origin=f"{prefix}{quantity}/drive",
+                                axis_y=readable_y_axis(drive))]
     if result.has_workpiece_force:
-        views.append(rrb.TimeSeriesView(name="cutting force on the workpiece (N)", origin=f"{prefix}force/cutting"))
-    return views
+        views.append(rrb.TimeSeriesView(name="cutting force on the workpiece (N)", origin=f"{prefix}force/cutting",
+                                        axis_y=readable_y_axis(result.workpiece_force_N[:, :len(machine.axes)])))
+    if len(views) % 2:
+        return views + [rrb.Tabs(*joints)]
+    return [rrb.Tabs(views[0], *joints, active_tab=0), *views[1:]]
 
 
 def run_layout(result, prefix: str, gain: int | None, n_per_mm: float | None,
@@ -60,9 +96,8 @@ def run_layout(result, prefix: str, gain: int | None, n_per_mm: float | None,
     right = [_machine_view(result.machine.model, prefix, n_per_mm)]
     if gain is not None:
         right.append(_contour_view(result, prefix, gain))
-    views = series_views(result, prefix)
-    shares = [1.2, 1.6] + [1.0] * (len(views) - 2)  # the error panel tall enough for its tick labels
-    return rrb.Horizontal(rrb.Vertical(*views, row_shares=shares), rrb.Vertical(*right),
+    # two columns of series: panels tall enough for Rerun to label their grid lines
+    return rrb.Horizontal(rrb.Grid(*series_views(result, prefix), grid_columns=2), rrb.Vertical(*right),
                           column_shares=[0.45, 0.55], name=name)
 
 
