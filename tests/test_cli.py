@@ -137,7 +137,16 @@ def test_reproduce_seed000_text_report():
 def test_reproduce_unknown_source_exits_2():
     r = _twin("reproduce", "seed999")
     assert r.returncode == 2 and r.stderr.strip().splitlines() == [
-        "error: source = 'seed999': no reproduction of that paper yet (known: seed000)"]
+        "error: source = 'seed999': no reproduction of that paper yet (known: seed000, seed002)"]
+
+
+def test_reproduce_seed002_transfer_functions_only(tmp_path):
+    r = _twin("reproduce", "seed002", "--json", "--twin-samples", "0", "--plots", str(tmp_path / "p"))
+    assert r.returncode == 0, r.stderr
+    res = json.loads(r.stdout)
+    assert len(res["tables"]) == 16 and "twin" not in res["tables"][0]["seed002_pid"]
+    assert res["tables"][0]["seed002_pid"]["tf_loop"]["max_mm"] == pytest.approx(0.0639, rel=0.01)  # paper's PID
+    assert len(list((tmp_path / "p").glob("seed002_*.png"))) == 3
 
 
 def test_run_cutting_scenario_with_settings_and_recording(tmp_path):

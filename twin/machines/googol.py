@@ -54,6 +54,14 @@ class GoogolXY(Machine):
         """Table travel per screw radian (m/rad)."""
         return params["lead_mm"] * 1e-3 / (2.0 * math.pi)
 
+    @classmethod
+    def equivalent_mass_kg(cls, params, model, axis: str) -> float:
+        """Mass an axis's drive moves (kg): the table's subtree plus the rotor and screw
+        inertias over the lead squared.  1 V accelerates it by b0 (m/s^2), so a force F on the
+        table acts as F / (M b0) V at the drive's input."""
+        mass = float(model.body_subtreemass[model.body(f"{axis}_table").id])
+        return mass + (params["Jm"] + params["Js"]) / cls.lead_m_per_rad(params) ** 2
+
     def configure(self, spec, params):
         p = self.lead_m_per_rad(params)
         set_mass(spec, "workpiece", params["m_workpiece"])
@@ -64,8 +72,7 @@ class GoogolXY(Machine):
             set_gear(spec, f"{a}_nut", 1.0 / p)
         model = spec.compile()  # masses carried by each axis, to size the drive
         for a in ("x", "y"):
-            mass = float(model.body_subtreemass[model.body(f"{a}_table").id])
-            M = mass + (params["Jm"] + params["Js"]) / p**2
+            M = self.equivalent_mass_kg(params, model, a)
             act = spec.actuator(f"{a}_drive")
             act.gainprm[0] = params["b0"] * 1e-3 * p * M
             act.biasprm[1] = -params["a0"] * p**2 * M

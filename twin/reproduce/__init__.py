@@ -10,7 +10,7 @@ from __future__ import annotations
 import importlib
 
 #: Seed name -> package of its reproduction.
-REPRODUCTIONS = {"seed000": "twin.reproduce.seed000"}
+REPRODUCTIONS = {"seed000": "twin.reproduce.seed000", "seed002": "twin.reproduce.seed002"}
 
 
 def reproduction(seed: str):
