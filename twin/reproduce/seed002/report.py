@@ -135,10 +135,11 @@ def write_plots(directory: Path) -> list[Path]:
         e = res.error_m()[:, 0] * 1e3
         axes[0].plot(res.t_s, e, linewidth=0.8, label=name)
         steady = e[int(r.STEADY_FROM_S / r.DT_S):]
-        spectrum = np.abs(np.fft.rfft(steady)) * 2 / len(steady)
+        window = np.hanning(len(steady))
+        spectrum = np.abs(np.fft.rfft(steady * window)) * 2 / window.sum()  # amplitude of each sine
         axes[1].loglog(np.fft.rfftfreq(len(steady), r.DT_S)[1:], spectrum[1:], linewidth=0.8, label=name)
     axes[0].set(xlabel="time (s)", ylabel="tracking error (mm)", title="Fig. 10: 0.4 Hz, 10 mm, 1500 rpm (twin)")
-    axes[1].set(xlabel="frequency (Hz)", ylabel="error amplitude (mm)", title="error spectrum, t >= 2.5 s")
+    axes[1].set(xlabel="frequency (Hz)", ylabel="error amplitude (mm)", title="error spectrum, t >= 2.5 s (Hann window)")
     for ax in axes:
         ax.grid(True, alpha=0.3)
         ax.legend()
