@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from controllers import make_controller
-from controllers.design.cascade import backward_difference, closed_loop, gain_for_phase_margin, pi_for_margins, pi_loop
 from controllers.blocks import inverse_model_observer, with_correction
+from controllers.design.cascade import backward_difference, closed_loop, gain_for_phase_margin, pi_for_margins, pi_loop
 from controllers.design.dob import delay_and_gain_error, q_cutoff, q_response, worst_q_delta
 from controllers.design.loop_analysis import loop_margins, popov_crossing
 from twin.reproduce.seed002 import procedure as r
