@@ -10,11 +10,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from controllers.blocks import (NONLINEARITIES, Controller, Linear, cascade, error_feedback, inverse_model_observer,
-                                lti_block, lure, sum_of, with_feedforward)
+from controllers.blocks import (NONLINEARITIES, Controller, Linear, Sum, cascade, error_feedback, harmonic_observer,
+                                inverse_model_observer, lti_block, lure, sum_of, with_feedforward)
 from controllers.design.pid import pid_tf
 from controllers.lti import SisoTf
-from controllers.papers import seed000, seed002
+from controllers.papers import seed000, seed002, seed003
 
 
 @dataclass
@@ -63,6 +63,15 @@ def _cascade(p, ctx, a):
     outer = pid_tf(p.get("kp_pos", 0.0), p.get("ki_pos", 0.0))
     inner = pid_tf(p.get("kp_vel", 0.0), p.get("ki_vel", 0.0))
     return cascade(outer, inner, ctx.dt, a, p.get("velocity_ref_ff", 0.0), ctx.method, f"cascade.{a}")
+
+
+def _seed003_cascade(p, ctx, a):
+    """Seed 003's cascade, designed here for the thesis's margins on the machine's model."""
+    if a not in ctx.plants:
+        raise ValueError(f"no model of axis {a!r} to design the cascade on")
+    gains = seed003.design_cascade(ctx.plants[a], ctx.delay_s, ctx.dt)
+    return cascade(pid_tf(gains["kp_pos"]), pid_tf(gains["kp_vel"], gains["ki_vel"]), ctx.dt, a, 0.0, ctx.method,
+                   f"cascade.{a}")
 
 
 def _generic_lure(p, ctx, a):
@@ -136,6 +145,9 @@ CONTROLLERS = {
     "lure": ("Lur'e: u = num/den (V/m) of f(error), f = nonlinearity: saturation (limit, m), dead_zone "
              "(width, m) or cosh_gain (k 1/m, e_max m)",
              _each_axis(_generic_lure), ("num", "den", "nonlinearity", "limit", "width", "k", "e_max")),
+    "seed003_cascade": ("seed 003's cascade: velocity PI for GM 9.37 dB and PM 56.4 deg, position P for PM "
+                        "67.1 deg (thesis Figs. 4.3, 4.7), designed on the machine's model with its delay and "
+                        "the encoder's backward-difference velocity", _each_axis(_seed003_cascade), ()),
     "sum": ("u = the sum of the parts' u: parts = [{ type = ... }, ...], each any kind", _sum, ()),
     "linear": ("any state space A, B, C, D (domain discrete or continuous) from named inputs (default "
                "['error']) to outputs (default ['u']); names without '.axis' are per axis",
@@ -148,6 +160,13 @@ OBSERVERS = {
                       "tau = 1/(2 pi cutoff_hz); P_n the machine's model unless num/den (m/V) are given; u_prev "
                       "delayed to match delay_s (s, default the machine's drive delay)",
                       ("cutoff_hz", "order", "num", "den", "delay_s")),
+    "harmonic": ("harmonic disturbance force observer: the input disturbance's sinusoids at frequencies_hz (list), "
+                 "estimated from the inverse-model signal (cutoff_hz, order) with an internal model of bandwidth_hz "
+                 "(default 5) and predicted over the drive delay", ("frequencies_hz", "bandwidth_hz", "cutoff_hz",
+                                                                    "order", "num", "den", "delay_s")),
+    "inverse_model_harmonic": ("inverse-model observer plus the harmonic observer on what it leaves: u = u_c - d_imbdo "
+                               "- d_harmonic; parameters of both", ("frequencies_hz", "bandwidth_hz", "cutoff_hz",
+                                                                     "order", "num", "den", "delay_s")),
 }
 
 
@@ -175,20 +194,34 @@ def make_observers(name: str, params: dict, ctx: Context) -> list:
         plant = SisoTf(params["num"], params["den"]) if "num" in params else ctx.plants.get(a)
         if plant is None:
             raise ValueError(f"no nominal model for axis {a!r}: give num and den")
-        out.append(inverse_model_observer(plant, params.get("cutoff_hz", 100.0), params.get("order", 2),
-                                          ctx.dt, a, ctx.method, name=f"observer.{a}",
-                                          delay_s=params.get("delay_s", ctx.delay_s)))
+        cutoff, order = params.get("cutoff_hz", 100.0), params.get("order", 2)
+        delay = params.get("delay_s", ctx.delay_s)
+        if name in ("inverse_model", "inverse_model_harmonic"):
+            out.append(inverse_model_observer(plant, cutoff, order, ctx.dt, a, ctx.method, name=f"observer.{a}",
+                                              delay_s=delay))
+        if name == "harmonic":
+            out.append(harmonic_observer(plant, params.get("frequencies_hz", ()), params.get("bandwidth_hz", 5.0),
+                                         ctx.dt, a, ctx.method, f"harmonic.{a}", delay, cutoff, order))
+        if name == "inverse_model_harmonic":
+            # the harmonic observer compares the plant with u_prev + the inverse-model estimate of the
+            # tick before (already in u_prev), so it estimates what that observer left
+            previous, residual = f"harmonic.{a}:imbdo_prev.{a}", f"harmonic.{a}:u_residual.{a}"
+            out += [Linear([[0.0]], [[1.0]], [[1.0]], [[0.0]], (f"observer.{a}:d_hat.{a}",), (previous,),
+                           name=f"imbdo_prev.{a}"),
+                    Sum((1.0, 1.0), (f"u_prev.{a}", previous), residual, name=f"residual.{a}"),
+                    harmonic_observer(plant, params.get("frequencies_hz", ()), params.get("bandwidth_hz", 5.0), ctx.dt,
+                                      a, ctx.method, f"harmonic.{a}", delay, cutoff, order, u_signal=residual)]
     return out
 
 
 def make_controller(name: str, dt: float, params: dict | None = None, method: str = "tustin",
                     velocity_ff=0.0, acceleration_ff=0.0, axes=("x",), plants: dict | None = None,
-                    parts=()) -> Controller:
+                    parts=(), delay_s: float = 0.0) -> Controller:
     """Build a named controller for ``axes`` at period ``dt`` (s).
 
     ``velocity_ff``, ``acceleration_ff`` (V/(m/s), V/(m/s^2)) add reference feedforward to u;
-    ``plants`` are the machine's per-axis models (m/V); ``parts`` are the built controllers a
-    ``sum`` adds up.  An observer is added with ``with_correction(ctrl, make_observers(...))``.
+    ``plants`` are the machine's per-axis models (m/V) and ``delay_s`` its drive delay (s), for
+    model-based designs; ``parts`` are the built controllers a ``sum`` adds up.  An observer is added with ``with_correction(ctrl, make_observers(...))``.
 
     Raises
     ------
@@ -202,7 +235,7 @@ def make_controller(name: str, dt: float, params: dict | None = None, method: st
     _, builder, allowed = CONTROLLERS[name]
     params = dict(params or {})
     _check_params(name, params, allowed)
-    ctx = Context(dt, tuple(axes), method, dict(plants or {}), list(parts))
+    ctx = Context(dt, tuple(axes), method, dict(plants or {}), list(parts), delay_s)
     ctrl = builder(params, ctx)
     ctrl.name = name
     return with_feedforward(ctrl, velocity_ff, acceleration_ff)

@@ -137,7 +137,7 @@ def test_reproduce_seed000_text_report():
 def test_reproduce_unknown_source_exits_2():
     r = _twin("reproduce", "seed999")
     assert r.returncode == 2 and r.stderr.strip().splitlines() == [
-        "error: source = 'seed999': no reproduction of that paper yet (known: seed000, seed002)"]
+        "error: source = 'seed999': no reproduction of that paper yet (known: seed000, seed002, seed003)"]
 
 
 def test_reproduce_seed002_transfer_functions_only(tmp_path):
@@ -147,6 +147,15 @@ def test_reproduce_seed002_transfer_functions_only(tmp_path):
     assert len(res["tables"]) == 16 and "twin" not in res["tables"][0]["seed002_pid"]
     assert res["tables"][0]["seed002_pid"]["tf_loop"]["max_mm"] == pytest.approx(0.0639, rel=0.01)  # paper's PID
     assert len(list((tmp_path / "p").glob("seed002_*.png"))) == 3
+
+
+def test_reproduce_seed003_transfer_functions_only():
+    r = _twin("reproduce", "seed003", "--json", "--twin-samples", "0")
+    assert r.returncode == 0, r.stderr
+    res = json.loads(r.stdout)
+    assert res["design"]["velocity"]["gm_db"] == pytest.approx(9.37, abs=0.01)  # the thesis's margins, met
+    assert res["design"]["velocity"]["pm_deg"] == pytest.approx(56.4, abs=0.01)
+    assert res["design"]["q_cutoff_hz"] == 100.0 and len(res["cases"]) == 6
 
 
 def test_run_cutting_scenario_with_settings_and_recording(tmp_path):

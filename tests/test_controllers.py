@@ -178,7 +178,9 @@ def test_registry_rejects_unknown_parameters_and_builds_every_kind():
               "linear": {"D": [[1.0]]}, "sum": {}}
     for name in CONTROLLERS:
         parts = [make_controller("pid", 1e-3, {"kp": 1.0}, axes=("x", "y"))] if name == "sum" else ()
-        ctrl = make_controller(name, 1e-3, params.get(name, {}), axes=("x", "y"), parts=parts)
+        googol = SisoTf([78.02], [1.0, 163.0, 193.3])  # seed 002 eq. (1) in m/V, for model-based kinds
+        ctrl = make_controller(name, 1e-3, params.get(name, {}), axes=("x", "y"), parts=parts,
+                               plants={"x": googol, "y": googol}, delay_s=1.2e-3)
         assert sorted(ctrl.drives) == ["x", "y"], name
         Program([ctrl], standard_signals("xy"))  # every signal it reads exists
 

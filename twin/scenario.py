@@ -351,7 +351,7 @@ def _controller(spec: ControllerSpec, field: str, base: Context):
     ctx = replace(base, method=spec.discretization)
     try:
         ctrl = make_controller(spec.type, ctx.dt, spec.params, ctx.method, spec.velocity_ff,
-                               spec.acceleration_ff, ctx.axes, ctx.plants, parts)
+                               spec.acceleration_ff, ctx.axes, ctx.plants, parts, ctx.delay_s)
     except (ValueError, KeyError, TypeError) as exc:
         raise TwinInputError(f"{field}.params", spec.params, str(exc)) from None
     if spec.observer is None:

@@ -156,21 +156,73 @@ def inverse_model_observer(plant, cutoff_hz: float, order: int, dt: float, axis:
 
 
 def with_correction(ctrl: Controller, observers) -> Controller:
-    """Observer add-on: ``u = u_ctrl - d_hat`` on each axis an observer estimates.
+    """Observer add-on: ``u = u_ctrl - (sum of the estimates)`` on each axis observers estimate.
 
-    ``observers`` are blocks each writing ``<name>:d_hat.<axis>`` (V), such as
-    :func:`inverse_model_observer`; they run after the controller.
+    ``observers`` are blocks; those writing ``<name>:d_hat.<axis>`` (V), such as
+    :func:`inverse_model_observer` or :func:`harmonic_observer`, are estimates, the others
+    (delays, sums between observers) internal signals.  They run after the controller.
     """
-    blocks, sums, renames = [], [], {}
+    estimates = {}
     for obs in observers:
-        for out in obs.outputs:
-            axis = out.rsplit(".", 1)[1]
-            u_c = f"{ctrl.name}:u_ctrl.{axis}"
-            renames[f"u.{axis}"] = u_c
-            sums.append(Sum((1.0, -1.0), (u_c, out), f"u.{axis}", f"correction.{axis}"))
-        blocks.append(obs)
+        for out in getattr(obs, "outputs", None) or (obs.output,):
+            if ":d_hat." in out:
+                estimates.setdefault(out.rsplit(".", 1)[1], []).append(out)
+    renames = {f"u.{a}": f"{ctrl.name}:u_ctrl.{a}" for a in estimates}
+    sums = [Sum((1.0,) + (-1.0,) * len(outs), (renames[f"u.{a}"], *outs), f"u.{a}", f"correction.{a}")
+            for a, outs in estimates.items()]
     inner = rename(ctrl, renames)
-    return Controller(inner.blocks + blocks + sums, ctrl.dt, ctrl.name)
+    return Controller(inner.blocks + list(observers) + sums, ctrl.dt, ctrl.name)
+
+
+def harmonic_estimator(frequencies_hz, bandwidth_hz: float, targets) -> SisoTf:
+    """H(s) = N(s)/(s + w_o)^(2h), w_o = 2 pi bandwidth_hz, with ``H(j w_i) = targets[i]`` at each
+    of the h frequencies: the internal model of the sinusoids (for targets of 1,
+    ``H = 1 - prod(s^2 + w_i^2)/D``: the estimate follows each harmonic without error).
+    N (degree 2h - 1, real) solves the 2h real interpolation conditions."""
+    w = 2 * math.pi * np.asarray(frequencies_hz, float)
+    h = len(w)
+    den = np.poly(np.full(2 * h, -2 * math.pi * bandwidth_hz))
+    powers = (1j * w[:, None]) ** np.arange(2 * h - 1, -1, -1)  # rows: (jw)^(2h-1) .. 1
+    rhs = np.asarray(targets, complex) * np.polyval(den, 1j * w)
+    num = np.linalg.solve(np.vstack([powers.real, powers.imag]), np.concatenate([rhs.real, rhs.imag]))
+    return SisoTf(num, den)
+
+
+def harmonic_observer(plant, frequencies_hz, bandwidth_hz: float, dt: float, axis: str = "x",
+                      method: str = "tustin", name: str = "dfo", delay_s: float = 0.0, cutoff_hz: float = 100.0,
+                      order: int = 2, u_signal: str | None = None) -> Linear:
+    """Harmonic disturbance force observer: the sinusoids of known frequencies in the input
+    disturbance, estimated from the inverse-model signal and predicted to when the
+    correction acts.
+
+    The inverse-model part (:func:`inverse_model_observer` with ``cutoff_hz``, ``order``)
+    gives ``r = Q e^(-sT) d`` for a disturbance d at the drive input (or at the plant, a
+    force); the harmonic estimator :func:`harmonic_estimator` then takes
+    ``H(j w_i) = e^(j w_i T) / Q(j w_i)`` at each frequency, so the estimate equals the
+    disturbance's harmonics when the correction reaches the plant, with the observer's
+    dynamics set by ``bandwidth_hz`` (below the raw cutoff).  ``u_signal`` replaces
+    ``u_prev.<axis>`` as the input the model compares with (to estimate what another
+    observer left).
+
+    Raises
+    ------
+    ValueError
+        No frequency, a frequency not positive or at/above the bandwidth, or the raw part's
+        limits (:func:`inverse_model_observer`).
+    """
+    freqs = np.asarray(frequencies_hz, float).ravel()
+    if not (len(freqs) and (freqs > 0).all() and (freqs < bandwidth_hz).all() and bandwidth_hz < cutoff_hz):
+        raise ValueError(f"frequencies_hz = {list(freqs)}: one or more, each > 0 and below bandwidth_hz = "
+                         f"{bandwidth_hz!r}, which must be below cutoff_hz = {cutoff_hz!r}")
+    raw = inverse_model_observer(plant, cutoff_hz, order, dt, axis, method, f"{name}:raw", delay_s)
+    if u_signal is not None:
+        raw = replace(raw, inputs=(f"pos.{axis}", u_signal))
+    lead = round(delay_s / dt) * dt
+    w = 2 * math.pi * freqs
+    q = 1.0 / (1j * w / (2 * math.pi * cutoff_hz) + 1.0) ** int(order)
+    estimator = harmonic_estimator(freqs, bandwidth_hz, np.exp(1j * w * lead) / q)
+    A, B, C, D = series((raw.A, raw.B, raw.C, raw.D), discretize(*tf_to_ss(estimator), dt, method))
+    return Linear(A, B, C, D, raw.inputs, (f"{name}:d_hat.{axis}",), name=name)
 
 
 def sum_of(parts, name: str = "sum") -> Controller:

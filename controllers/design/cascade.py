@@ -8,6 +8,8 @@ in mm/V the velocity PI is in V/(mm/s) and V/mm, the position gain in 1/s.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 from scipy.optimize import brentq, fsolve
 
@@ -33,7 +35,9 @@ def pi_for_margins(plant, gm_db: float, pm_deg: float, guess: tuple[float, float
         m = loop_margins(pi_loop(*np.exp(x), plant), n=20_000)
         return [m.gm_db - gm_db, m.pm_deg - pm_deg]
 
-    x = fsolve(residual, np.log(guess))
+    with warnings.catch_warnings():  # a poor convergence is reported below, as an error
+        warnings.simplefilter("ignore", RuntimeWarning)
+        x = fsolve(residual, np.log(guess))
     kp, ki = (float(v) for v in np.exp(x))
     m = loop_margins(pi_loop(kp, ki, plant))
     if not (abs(m.gm_db - gm_db) < 0.01 and abs(m.pm_deg - pm_deg) < 0.01):

@@ -10,7 +10,8 @@ from __future__ import annotations
 import importlib
 
 #: Seed name -> package of its reproduction.
-REPRODUCTIONS = {"seed000": "twin.reproduce.seed000", "seed002": "twin.reproduce.seed002"}
+REPRODUCTIONS = {"seed000": "twin.reproduce.seed000", "seed002": "twin.reproduce.seed002",
+                 "seed003": "twin.reproduce.seed003"}
 
 
 def reproduction(seed: str):

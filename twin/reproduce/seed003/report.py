@@ -1,0 +1,108 @@
+"""Tables and plots of ``twin reproduce seed003`` (see :mod:`twin.reproduce.seed003.procedure`)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from twin.reproduce.seed003 import procedure as r
+
+
+def run_all(twin: bool = True, progress: bool = True) -> dict:
+    """Every part of the reproduction, as one JSON-ready dict."""
+    n = len(r.REFERENCES) * 3 * len(r.CONFIGURATIONS)
+    with tqdm(total=n, desc="seed003 cases", unit="case", disable=not progress, leave=False) as bar:
+        rows = r.cases(twin, progress=bar.update)
+    return {"design": r.design(), "cases": rows, "twin_vs_tf_mismatches": r.mismatches(rows), "thesis": r.THESIS,
+            "settings": {"dt_s": r.DT_S, "duration_s": r.DURATION_S, "steady_from_s": r.STEADY_FROM_S,
+                         "disturbance_V": r.DISTURBANCE_V, "dfo_bandwidth_hz": r.BANDWIDTH_HZ, "twin": twin}}
+
+
+def format_report(res: dict) -> str:
+    """Plain-text tables: thesis | ours."""
+    d = res["design"]
+    out = ["Seed 003 (Maharof 2021) reproduced on googol_xy: thesis | ours", "",
+           "Cascade P/PI by loop shaping (velocity measured by backward difference at 10 kHz, 1.2 ms delay):",
+           f"  velocity PI kp {d['kp_vel']:.4g} V s/m, ki {d['ki_vel']:.4g} V/m; position P {d['kp_pos']:.4g} 1/s"]
+    for loop in ("velocity", "position"):
+        t, o = d[f"thesis_{loop}"], d[loop]
+        out.append(f"  {loop:<8} GM {t['gm_db']} dB at {t['gm_hz']} Hz | {o['gm_db']:.2f} dB at {o['gm_hz']:.1f} Hz;"
+                   f"  PM {t['pm_deg']} deg at {t['pm_hz']} Hz | {o['pm_deg']:.2f} deg at {o['pm_hz']:.1f} Hz")
+    out += [f"IMBDO Q-filter: order {d['q_order']}, cutoff {d['q_cutoff_hz']:g} Hz, sup|Q Delta| = {d['sup_q_delta']:.3f} "
+            f"(delay unmodelled, gain +-{d['gain_error']:.0%}; < 1: robustly stable)", ""]
+    sides = ["tf_loop", "twin"] if res["settings"]["twin"] else ["tf_loop"]
+    out.append("Numerical cases (t >= 2 s; errors in um; 'dist' = the disturbance's own share of the error):")
+    for row in res["cases"]:
+        out.append(f"  reference {row['amplitude_mm']} mm at {row['f_hz']} Hz, harmonics {row['harmonics_hz']} Hz:")
+        for config in r.CONFIGURATIONS:
+            line = f"    {config:<10}"
+            for side in sides:
+                m = row[config][side]
+                line += (f" | {side}: MTE {m['mte_um']:8.3f} RMSE {m['rmse_um']:8.3f} dist MTE "
+                         f"{m['disturbance']['mte_um']:.3g} FFT " + " ".join(f"{v:.3g}" for v in m["disturbance"]["fft_um"]))
+            out.append(line)
+        h = len(row["harmonics_hz"]) - 1
+        for config, red in row[f"reduction_pct_{sides[-1]}"].items():
+            thesis = (f" (thesis {r.THESIS['mte_pct'][h]}, {r.THESIS['rmse_pct'][h]}, "
+                      f"{', '.join(map(str, r.THESIS['fft_pct'][h]))})" if config == "imbdo_dfo" else "")
+            out.append(f"    {config} vs cascade ({sides[-1]}): MTE {red['mte']:.2f} %, RMSE {red['rmse']:.2f} %; "
+                       f"disturbance MTE {red['disturbance_mte']:.2f} %, FFT "
+                       + ", ".join(f"{v:.2f}" for v in red["disturbance_fft"]) + f" %{thesis}")
+    mism = res["twin_vs_tf_mismatches"]
+    out += ["", f"Twin vs transfer-function loop (MTE, RMSE; tolerance {r.TWIN_TOL_REL:.0%}): "
+                + ("all within" if not mism else f"{len(mism)} outside:")] + [f"  {m}" for m in mism]
+    return "\n".join(out)
+
+
+def write_plots(directory: Path) -> list[Path]:
+    """Disturbance sensitivity of the four configurations (Figs. 4.21-4.37) and the twin's
+    tracking-error spectra for three harmonics (Fig. 5.9)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    directory.mkdir(parents=True, exist_ok=True)
+    written = []
+    w = 2 * math.pi * np.logspace(-2, 3, 3000)
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for name, mag in r.disturbance_sensitivity(w, (0.2, 0.5, 0.8)).items():
+        ax.loglog(w / (2 * math.pi), mag * 1e6, label=name)
+    for f in (0.2, 0.5, 0.8):
+        ax.axvline(f, color="k", linestyle=":", linewidth=0.7)
+    ax.set(xlabel="frequency (Hz)", ylabel="|position / input disturbance| (um/V)",
+           title="Input-disturbance sensitivity, three harmonics (TF model)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    written.append(directory / "seed003_disturbance_sensitivity.png")
+    fig.savefig(written[-1], dpi=120, bbox_inches="tight")
+    plt.close(fig)
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for config, res in config_runs().items():
+        e = res.error_m()[int(r.STEADY_FROM_S / r.DT_S):, 0]
+        window = np.hanning(len(e))
+        ax.loglog(np.fft.rfftfreq(len(e), r.DT_S)[1:], (np.abs(np.fft.rfft(e * window)) * 2 / window.sum())[1:] * 1e6,
+                  linewidth=0.8, label=config)
+    ax.set(xlim=(0.05, 50), xlabel="frequency (Hz)", ylabel="tracking error amplitude (um)",
+           title="Twin: 10 mm at 0.5 Hz, harmonics 0.2/0.5/0.8 Hz, t >= 2 s (Hann)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    written.append(directory / "seed003_error_spectra.png")
+    fig.savefig(written[-1], dpi=120, bbox_inches="tight")
+    plt.close(fig)
+    return written
+
+
+def config_runs() -> dict:
+    """Twin runs of the four configurations: 10 mm at 0.5 Hz, three harmonics."""
+    from twin.references import SumOfSines
+    from twin.sim.runner import simulate
+
+    harmonics = (0.2, 0.5, 0.8)
+    return {config: simulate(r.machine(), r.controller(config, harmonics, ("x", "y")),
+                             SumOfSines((0.01,), (0.5,), n_axes=2, axes=(0,)), r.DURATION_S, r.DT_S,
+                             disturbances=(r._disturbance(harmonics),), progress=False)
+            for config in r.CONFIGURATIONS}
