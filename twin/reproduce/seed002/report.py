@@ -162,3 +162,21 @@ def fig10_runs() -> dict:
     return {name: simulate(bm, make_controller(name, r.DT_S, axes=("x", "y")),
                            SumOfSines((0.01,), (0.4,), n_axes=2, axes=(0,)), r.DURATION_S, r.DT_S,
                            disturbances=cut, progress=False) for name in ("seed002_pid", "seed002_npid")}
+
+
+def run(samples: int, twin_samples: int, seed: int, progress: bool) -> dict:
+    """The registry's entry point: :func:`run_all`; ``samples`` and ``seed`` do not apply
+    (nothing is random), ``twin_samples = 0`` leaves the twin out."""
+    return run_all(twin=twin_samples > 0, progress=progress)
+
+
+def record(path: Path) -> None:
+    """Rerun recording of Fig. 10's twin runs (0.4 Hz, 10 mm, 1500 rpm; PID and NPID)."""
+    from twin.recording import record_runs
+
+    record_runs(fig10_runs(), path)
+
+
+def failed(results: dict) -> bool:
+    """Whether a twin table number departs from its transfer-function number by more than 2 %."""
+    return bool(results["twin_vs_tf_mismatches"])

@@ -122,3 +122,21 @@ def config_runs() -> dict:
                              SumOfSines((0.01,), (0.5,), n_axes=2, axes=(0,)), r.DURATION_S, r.DT_S,
                              disturbances=(r._disturbance(harmonics),), progress=False)
             for config in r.CONFIGURATIONS}
+
+
+def run(samples: int, twin_samples: int, seed: int, progress: bool) -> dict:
+    """The registry's entry point: :func:`run_all`; ``samples`` and ``seed`` do not apply
+    (nothing is random), ``twin_samples = 0`` leaves the twin out."""
+    return run_all(twin=twin_samples > 0, progress=progress)
+
+
+def record(path: Path) -> None:
+    """Rerun recording of the four configurations' twin runs (10 mm at 0.5 Hz, three harmonics)."""
+    from twin.recording import record_runs
+
+    record_runs(config_runs(), path)
+
+
+def failed(results: dict) -> bool:
+    """Whether a twin MTE or RMSE departs from its transfer-function number by more than 2 %."""
+    return bool(results["twin_vs_tf_mismatches"])
