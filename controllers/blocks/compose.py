@@ -109,6 +109,8 @@ def lure(sys, nonlinearity: str, settings, dt: float, axis: str = "x", method: s
 MAX_OBSERVER_DELAY_TICKS = 100
 #: Most first-order factors in an observer's filter Q.
 MAX_OBSERVER_ORDER = 10
+#: Most sinusoids a harmonic observer models.
+MAX_HARMONICS = 10
 
 
 def inverse_model_observer(plant, cutoff_hz: float, order: int, dt: float, axis: str = "x",
@@ -207,12 +209,15 @@ def harmonic_observer(plant, frequencies_hz, bandwidth_hz: float, dt: float, axi
     Raises
     ------
     ValueError
-        No frequency, a frequency not positive or at/above the bandwidth, or the raw part's
-        limits (:func:`inverse_model_observer`).
+        No frequency, more than :data:`MAX_HARMONICS`, two alike, one not positive or at/above
+        the bandwidth, or the raw part's limits (:func:`inverse_model_observer`).
     """
     freqs = np.asarray(frequencies_hz, float).ravel()
-    if not (len(freqs) and (freqs > 0).all() and (freqs < bandwidth_hz).all() and bandwidth_hz < cutoff_hz):
-        raise ValueError(f"frequencies_hz = {list(freqs)}: one or more, each > 0 and below bandwidth_hz = "
+    listing = [float(f) for f in freqs]
+    if not (1 <= len(freqs) <= MAX_HARMONICS and len(set(listing)) == len(listing) and (freqs > 0).all()
+            and (freqs < bandwidth_hz).all() and bandwidth_hz < cutoff_hz):
+        raise ValueError(f"frequencies_hz = {listing[:MAX_HARMONICS]}{' ...' if len(listing) > MAX_HARMONICS else ''}: "
+                         f"1 to {MAX_HARMONICS} different frequencies, each > 0 and below bandwidth_hz = "
                          f"{bandwidth_hz!r}, which must be below cutoff_hz = {cutoff_hz!r}")
     raw = inverse_model_observer(plant, cutoff_hz, order, dt, axis, method, f"{name}:raw", delay_s)
     if u_signal is not None:
