@@ -12,6 +12,7 @@ from controllers.blocks import harmonic_estimator, inverse_model_observer, with_
 from controllers.design.cascade import backward_difference, closed_loop, gain_for_phase_margin, pi_for_margins, pi_loop
 from controllers.design.dob import delay_and_gain_error, q_cutoff, q_response, worst_q_delta
 from controllers.design.loop_analysis import loop_margins, popov_crossing
+from twin.references import SumOfSines
 from twin.reproduce.seed002 import procedure as r
 from twin.sim.tf_loop import tf_loop
 
@@ -208,3 +209,19 @@ def test_dfo_takes_down_the_tooth_line_of_the_milling_force():
     assert base["twin"]["disturbance"]["fft_um"][0] > 1.0  # a line of micrometres to take down
     for case in (base, dfo):
         assert case["twin"]["mte_um"] == pytest.approx(case["tf_loop"]["mte_um"], rel=s3.TWIN_TOL_REL)
+
+
+def test_observers_leave_the_reference_loop_unchanged():
+    """No disturbance: the four configurations track the sine alike (the estimates do not depend
+    on the command), as the reference-loop plot states; only the start differs a little, where
+    the observers' Tustin inverse model and the ZOH plant part (0.4 um on 180 um)."""
+    from twin.reproduce.seed003 import procedure as s3
+
+    n = int(3.0 / s3.DT_S)
+    ref = np.asarray(SumOfSines((0.01,), (0.5,), n_axes=1).sample(np.arange(n) * s3.DT_S)).reshape(n, -1, 3)[:, 0]
+    errors = {c: ref[:, 0] - tf_loop(s3.machine().plant[0][0], s3.controller(c, (0.2, 0.5, 0.8)), ref, s3.DT_S,
+                                     s3.machine().delay_s)[0] for c in s3.CONFIGURATIONS}
+    settled = slice(int(1.0 / s3.DT_S), None)
+    for c in ("imbdo", "dfo", "imbdo_dfo"):
+        assert np.abs(errors[c] - errors["cascade"]).max() < 5e-3 * np.abs(errors["cascade"]).max()
+        assert np.abs(errors[c] - errors["cascade"])[settled].max() < 2e-5 * np.abs(errors["cascade"]).max()

@@ -240,6 +240,23 @@ def disturbance_sensitivity(w: np.ndarray, harmonics) -> dict:
             "imbdo_dfo": base * np.abs((1 - q) * (1 - H * q))}
 
 
+def reference_loops(w: np.ndarray) -> dict:
+    """|S|, |T| of the position loop and |S| of the velocity loop (reference to error and to
+    position), the same with and without the observers: with the model matched, an observer's
+    estimate does not depend on the command, so it leaves the reference loops unchanged."""
+    from controllers.design.cascade import backward_difference
+
+    bm = machine()
+    g, T = bm.plant[0][0], bm.delay_s
+    d = seed003.design_cascade(g, T, DT_S)
+    s = 1j * w
+    m = backward_difference(DT_S)(w)
+    velocity = (d["kp_vel"] + d["ki_vel"] / s) * s * g(s) * np.exp(-s * T) * m
+    position = d["kp_pos"] * velocity / (1 + velocity) / m / s
+    return {"position |S|": np.abs(1 / (1 + position)), "position |T|": np.abs(position / (1 + position)),
+            "velocity |S|": np.abs(1 / (1 + velocity))}
+
+
 def mismatches(rows: list[dict]) -> list[str]:
     """Tracking-error MTE and RMSE of the twin more than 2 % from the TF loop's (the harmonic
     cases; in the milling cases the TF loop replays the twin's force, so they are reported,
