@@ -189,6 +189,9 @@ def make_observers(name: str, params: dict, ctx: Context) -> list:
     if name not in OBSERVERS:
         raise KeyError(name)
     _check_params(name, params, OBSERVERS[name][1])
+    for key in ("cutoff_hz", "order", "bandwidth_hz", "delay_s"):
+        if key in params and not isinstance(params[key], (int, float)):
+            raise ValueError(f"{key} = {params[key]!r}: must be a number")
     out = []
     for a in ctx.axes:
         plant = SisoTf(params["num"], params["den"]) if "num" in params else ctx.plants.get(a)
