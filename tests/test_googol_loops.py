@@ -12,7 +12,6 @@ from controllers.blocks import harmonic_estimator, inverse_model_observer, with_
 from controllers.design.cascade import backward_difference, closed_loop, gain_for_phase_margin, pi_for_margins, pi_loop
 from controllers.design.dob import delay_and_gain_error, q_cutoff, q_response, worst_q_delta
 from controllers.design.loop_analysis import loop_margins, popov_crossing
-from twin.references import SumOfSines
 from twin.reproduce.seed002 import procedure as r
 from twin.sim.tf_loop import tf_loop
 
@@ -218,7 +217,7 @@ def test_observers_leave_the_reference_loop_unchanged():
     from twin.reproduce.seed003 import procedure as s3
 
     n = int(3.0 / s3.DT_S)
-    ref = np.asarray(SumOfSines((0.01,), (0.5,), n_axes=1).sample(np.arange(n) * s3.DT_S)).reshape(n, -1, 3)[:, 0]
+    ref = s3.sine_reference(0.5, 10.0, n)
     errors = {c: ref[:, 0] - tf_loop(s3.machine().plant[0][0], s3.controller(c, (0.2, 0.5, 0.8)), ref, s3.DT_S,
                                      s3.machine().delay_s)[0] for c in s3.CONFIGURATIONS}
     settled = slice(int(1.0 / s3.DT_S), None)

@@ -26,6 +26,7 @@ coupled 4-state model of eq. (11) (:func:`twin.machines.linear_motor.cutting_cou
 from __future__ import annotations
 
 import math
+
 import control
 import numpy as np
 

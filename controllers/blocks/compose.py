@@ -16,6 +16,7 @@ from dataclasses import replace
 import numpy as np
 
 from controllers.blocks.core import Controller, Linear, Sequence, Static, Sum
+from controllers.design.dob import q_response
 from controllers.lti import SisoTf, delay_ticks, discretize, series, state_space, summed_inputs, tf_to_ss
 
 
@@ -224,8 +225,7 @@ def harmonic_observer(plant, frequencies_hz, bandwidth_hz: float, dt: float, axi
         raw = replace(raw, inputs=(f"pos.{axis}", u_signal))
     lead = round(delay_s / dt) * dt
     w = 2 * math.pi * freqs
-    q = 1.0 / (1j * w / (2 * math.pi * cutoff_hz) + 1.0) ** int(order)
-    estimator = harmonic_estimator(freqs, bandwidth_hz, np.exp(1j * w * lead) / q)
+    estimator = harmonic_estimator(freqs, bandwidth_hz, np.exp(1j * w * lead) / q_response(cutoff_hz, int(order), w))
     A, B, C, D = series((raw.A, raw.B, raw.C, raw.D), discretize(*tf_to_ss(estimator), dt, method))
     return Linear(A, B, C, D, raw.inputs, (f"{name}:d_hat.{axis}",), name=name)
 

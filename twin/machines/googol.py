@@ -62,6 +62,11 @@ class GoogolXY(Machine):
         mass = float(model.body_subtreemass[model.body(f"{axis}_table").id])
         return mass + (params["Jm"] + params["Js"]) / cls.lead_m_per_rad(params) ** 2
 
+    @classmethod
+    def volts_per_newton(cls, params, model, axis: str) -> float:
+        """Drive input (V) equivalent to a force of 1 N on the table: 1 / (M b0), b0 in m/(V s^2)."""
+        return 1.0 / (cls.equivalent_mass_kg(params, model, axis) * params["b0"] * 1e-3)
+
     def configure(self, spec, params):
         p = self.lead_m_per_rad(params)
         set_mass(spec, "workpiece", params["m_workpiece"])

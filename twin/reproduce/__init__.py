@@ -14,6 +14,13 @@ REPRODUCTIONS = {"seed000": "twin.reproduce.seed000", "seed002": "twin.reproduce
                  "seed003": "twin.reproduce.seed003"}
 
 
+def twin_vs_tf(label: str, twin: dict, tf: dict, keys, tol_rel: float) -> list[str]:
+    """The ``keys`` whose twin value departs from the transfer-function value by more than
+    ``tol_rel`` of it, one line each, prefixed by ``label``."""
+    return [f"{label}: {key} twin {twin[key]:.4g} vs TF {tf[key]:.4g}" for key in keys
+            if abs(twin[key] - tf[key]) > tol_rel * abs(tf[key])]
+
+
 def reproduction(seed: str):
     """The reproduction package of ``seed`` (imported on demand)."""
     return importlib.import_module(REPRODUCTIONS[seed])

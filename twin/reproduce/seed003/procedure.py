@@ -21,6 +21,7 @@ thesis's numerical cases on the transfer-function loop and the twin.
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import numpy as np
 
@@ -29,32 +30,30 @@ from controllers.blocks import with_correction
 from controllers.design.dob import delay_and_gain_error, q_cutoff, q_response
 from controllers.papers import seed003
 from controllers.registry import Context, make_observers
-from twin.machines import build
+from twin.machines.googol import GoogolXY
+from twin.process.cutting import EndMilling
 from twin.process.disturbances import HarmonicInput
 from twin.references import SumOfSines
+from twin.reproduce import twin_vs_tf
+from twin.reproduce.seed002.procedure import CUT, DT_S, TWIN_TOL_REL, machine, sine_reference
 from twin.sim.runner import simulate
 from twin.sim.tf_loop import tf_loop
 
-DT_S, DURATION_S, STEADY_FROM_S = 1e-4, 10.0, 2.0
+# the machine, its control period, the cut and the 2 % check are seed 002's (the same table)
+DURATION_S, STEADY_FROM_S = 10.0, 2.0
 REFERENCES = ((10.0, 0.5), (0.5, 1.0))  # mm, Hz
 DISTURBANCE_V, BANDWIDTH_HZ, GAIN_ERROR = 0.01, 5.0, 0.2
 CONFIGURATIONS = {"cascade": None, "imbdo": "inverse_model", "dfo": "harmonic", "imbdo_dfo": "inverse_model_harmonic"}
 #: The thesis's headline reductions of IMBDO plus DFO against the cascade alone (%).
 THESIS = {"mte_pct": (97.52, 98.70, 99.13), "rmse_pct": (98.80, 97.75, 97.97),
           "fft_pct": ((99.78,), (99.67, 99.53), (99.86, 99.81, 99.91))}
-TWIN_TOL_REL = 0.02
-
-
-def machine():
-    """The ``googol_xy`` twin at the control period."""
-    return build("googol_xy", timestep_s=DT_S)
 
 
 def design() -> dict:
     """The cascade's gains and margins beside the thesis's, and the IMBDO's Q-filter."""
     bm = machine()
     d = seed003.design_cascade(bm.plant[0][0], bm.delay_s, DT_S)
-    cutoff, worst = q_cutoff(2, delay_and_gain_error(bm.delay_s, GAIN_ERROR))
+    cutoff, worst = q_filter()
 
     def loop(m):
         return {"gm_db": m.gm_db, "gm_hz": m.w_gm / (2 * math.pi), "pm_deg": m.pm_deg, "pm_hz": m.w_pm / (2 * math.pi)}
@@ -71,23 +70,24 @@ def design() -> dict:
 def controller(config: str, harmonics, axes=("x",), bandwidth_hz: float = BANDWIDTH_HZ,
                cutoff_hz: float | None = None):
     """The cascade for ``axes``, with the configuration's observer (DFO at ``harmonics`` with
-    ``bandwidth_hz``; the inverse-model cutoff :func:`design_cutoff` unless ``cutoff_hz``)."""
+    ``bandwidth_hz``; the inverse-model cutoff of :func:`q_filter` unless ``cutoff_hz``)."""
     bm = machine()
     plants = {a.name: bm.plant[i][i] for i, a in enumerate(bm.axes)}
     ctrl = make_controller("seed003_cascade", DT_S, axes=axes, plants=plants, delay_s=bm.delay_s)
     kind = CONFIGURATIONS[config]
     if kind is None:
         return ctrl
-    params = {"cutoff_hz": cutoff_hz or design_cutoff(), "order": 2}
+    params = {"cutoff_hz": cutoff_hz or q_filter()[0], "order": 2}
     if kind != "inverse_model":
         params |= {"frequencies_hz": list(harmonics), "bandwidth_hz": bandwidth_hz}
     ctx = Context(DT_S, tuple(axes), plants=plants, delay_s=bm.delay_s)
     return with_correction(ctrl, make_observers(kind, params, ctx))
 
 
-def design_cutoff() -> float:
-    """The IMBDO's Q cutoff (Hz) of :func:`design`."""
-    return q_cutoff(2, delay_and_gain_error(machine().delay_s, GAIN_ERROR))[0]
+@lru_cache(maxsize=1)
+def q_filter() -> tuple[float, float]:
+    """The IMBDO's Q cutoff (Hz) and its sup |Q Delta| (:func:`design`), computed once."""
+    return q_cutoff(2, delay_and_gain_error(machine().delay_s, GAIN_ERROR))
 
 
 def _disturbance(harmonics, seed: int = 0) -> HarmonicInput:
@@ -113,8 +113,7 @@ def run_case(amplitude_mm: float, f_hz: float, harmonics, config: str, twin: boo
     bm = machine()
     n = int(round(duration_s / DT_S))
     t = np.arange(n) * DT_S
-    sines = SumOfSines((amplitude_mm * 1e-3,), (f_hz,), n_axes=1)
-    ref = np.asarray(sines.sample(t)).reshape(n, -1, 3)[:, 0]
+    ref = sine_reference(f_hz, amplitude_mm, n)
     dist = _disturbance(harmonics)
     d = dist.input_V(t)[:, 0]
     out = {}
@@ -164,22 +163,17 @@ def cases(twin: bool = True, duration_s: float = DURATION_S, progress=None) -> l
 #: inverse-model signal at 500 Hz (with the delay matched, a +-20 % gain error keeps
 #: |Q Delta| <= 0.2 at any cutoff).
 SPINDLES_RPM = (1500.0, 2500.0, 3000.0)
-CUT = {"n_flutes": 2, "diameter_mm": 10.0, "axial_depth_mm": 1.0, "radial_depth_mm": 10.0}
 MILLING_CUTOFF_HZ = 500.0
 
 
 def milling_case(rpm: float, config: str, duration_s: float = DURATION_S) -> dict:
     """Twin and TF loop under the mechanistic milling force (10 mm at 0.5 Hz): the TF loop takes
     the twin's force of the same configuration as an equivalent voltage at the plant."""
-    from twin.machines.googol import GoogolXY
-    from twin.process.cutting import EndMilling
-
     bm = machine()
     tooth_hz = rpm / 60.0 * CUT["n_flutes"]
     harmonics = (tooth_hz, 2 * tooth_hz)
     n = int(round(duration_s / DT_S))
-    t = np.arange(n) * DT_S
-    ref = np.asarray(SumOfSines((0.01,), (0.5,), n_axes=1).sample(t)).reshape(n, -1, 3)[:, 0]
+    ref = sine_reference(0.5, 10.0, n)
     reference = SumOfSines((0.01,), (0.5,), n_axes=2, axes=(0,))
 
     def build(axes):
@@ -189,8 +183,7 @@ def milling_case(rpm: float, config: str, duration_s: float = DURATION_S) -> dic
     for label, dist in (("with", (EndMilling(spindle_rpm=rpm, **CUT),)), ("without", ())):
         res = simulate(bm, build(("x", "y")), reference, duration_s, DT_S, disturbances=dist, progress=False)
         twin[label] = res.error_m()[:, 0]
-        force_V = res.workpiece_force_N[:, 0] / (GoogolXY.equivalent_mass_kg(bm.params, bm.model, "x")
-                                                 * bm.params["b0"] * 1e-3)
+        force_V = res.workpiece_force_N[:, 0] * GoogolXY.volts_per_newton(bm.params, bm.model, "x")
         pos, _ = tf_loop(bm.plant[0][0], build(("x",)), ref, DT_S, bm.delay_s, plant_dist_V=force_V)
         tf[label] = ref[:, 0] - pos
     # the feed reverses with the 0.5 Hz sine, so the tooth force sits at f +- 0.5 Hz, not at f
@@ -231,7 +224,7 @@ def disturbance_sensitivity(w: np.ndarray, harmonics) -> dict:
     P = g(s) * np.exp(-s * T)
     cv = d["kp_vel"] + d["ki_vel"] / s
     base = np.abs(P / (1 + cv * (d["kp_pos"] + backward_difference(DT_S)(w) * s) * P))
-    cutoff = design_cutoff()
+    cutoff = q_filter()[0]
     q = q_response(cutoff, 2, w) * np.exp(-s * T)
     lead = round(T / DT_S) * DT_S
     wh = 2 * math.pi * np.asarray(harmonics)
@@ -261,14 +254,6 @@ def mismatches(rows: list[dict]) -> list[str]:
     """Tracking-error MTE and RMSE of the twin more than 2 % from the TF loop's (the harmonic
     cases; in the milling cases the TF loop replays the twin's force, so they are reported,
     not checked)."""
-    bad = []
-    for row in rows:
-        for config in CONFIGURATIONS:
-            if "twin" not in row[config]:
-                continue
-            for key in ("mte_um", "rmse_um"):
-                tw, tf = row[config]["twin"][key], row[config]["tf_loop"][key]
-                if abs(tw - tf) > TWIN_TOL_REL * abs(tf):
-                    bad.append(f"{config} {row['amplitude_mm']} mm {row['f_hz']} Hz {row['harmonics_hz']}: {key} "
-                               f"twin {tw:.4g} vs TF {tf:.4g}")
-    return bad
+    return [line for row in rows for config in CONFIGURATIONS if "twin" in row[config]
+            for line in twin_vs_tf(f"{config} {row['amplitude_mm']} mm {row['f_hz']} Hz {row['harmonics_hz']}",
+                                   row[config]["twin"], row[config]["tf_loop"], ("mte_um", "rmse_um"), TWIN_TOL_REL)]
