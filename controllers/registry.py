@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import math
+
 import numpy as np
 
 from controllers.blocks import (NONLINEARITIES, Controller, Linear, Sum, cascade, error_feedback, harmonic_observer,
@@ -92,6 +94,40 @@ def _npid(p, ctx, a):
     return lure(seed002.pid(p.get("tf_s", 1e-4)), "cosh_gain", settings, ctx.dt, a, ctx.method, f"npid.{a}")
 
 
+def _seed004(kind):
+    """Seed 004's MIMO loop-shaping controller or its PID pair on axes x and y, with ZPETC
+    feedforward on the reference preview (``zpetc``, default true); designed in
+    :mod:`controllers.papers.seed004` (python-control, cached)."""
+    def build(p, ctx):
+        import control
+
+        from controllers.papers import seed004
+        if ctx.axes != ("x", "y"):
+            raise ValueError(f"axes = {list(ctx.axes)}: seed 004's controllers serve axes x and y together "
+                             "([controller], not [controllers.<axis>])")
+        if not math.isclose(ctx.dt, seed004.DT_S):
+            raise ValueError(f"control_period_s = {ctx.dt:g}: seed 004's controllers are designed for {seed004.DT_S:g} s")
+        zpetc_on, order = p.get("zpetc", True), p.get("order", "reduced")
+        if not isinstance(zpetc_on, bool):
+            raise ValueError(f"zpetc = {zpetc_on!r}: must be true or false")
+        if kind == "pid" and order != "reduced" or order not in ("reduced", "full"):
+            raise ValueError(f"order = {order!r}: use 'reduced'" + (" or 'full'" if kind == "mimo" else ""))
+        errors = [f"error.{a}" for a in ctx.axes]
+        blocks = []
+        if zpetc_on:
+            errors = [f"zpetc:error.{a}" for a in ctx.axes]
+            for a, (filt, _) in zip(ctx.axes, seed004.zpetc_filters(kind, order)):
+                taps = max(len(filt.num), len(filt.den))
+                num, den = (np.pad(c, (0, taps - len(c))) for c in (filt.num, filt.den))
+                blocks += [lti_block(control.tf(num, den, ctx.dt), ctx.dt, [f"preview.{a}.{filt.preview}"],
+                                     [f"zpetc:ref.{a}"], name=f"zpetc.{a}"),
+                           Sum((1.0, -1.0), (f"zpetc:ref.{a}", f"pos.{a}"), f"zpetc:error.{a}", name=f"zpetc_error.{a}")]
+        blocks.append(lti_block(seed004.controller_si(kind, order), ctx.dt, errors, [f"u.{a}" for a in ctx.axes],
+                                ctx.method, name=f"seed004_{kind}"))
+        return Controller(blocks, ctx.dt, f"seed004_{kind}")
+    return build
+
+
 def _sum(p, ctx):
     if not ctx.parts:
         raise ValueError("a sum needs at least one part")
@@ -148,6 +184,12 @@ CONTROLLERS = {
     "seed003_cascade": ("seed 003's cascade: velocity PI for GM 9.37 dB and PM 56.4 deg, position P for PM "
                         "67.1 deg (thesis Figs. 4.3, 4.7), designed on the machine's model with its delay and "
                         "the encoder's backward-difference velocity", _each_axis(_seed003_cascade), ()),
+    "seed004_mimo": ("seed 004's MIMO H-infinity loop-shaping controller (Glover-McFarlane, Ws = diag(990, 660) "
+                     "(s+110)/(s+1500), positions in mm), balanced-truncated to order 4 (order = 'full': 8), on "
+                     "axes x and y together, with ZPETC feedforward (zpetc, default true); designed on first use",
+                     _seed004("mimo"), ("zpetc", "order")),
+    "seed004_pid": ("seed 004's SISO comparison: a PID per axis with the MIMO loop's crossover and phase margin, "
+                    "with ZPETC feedforward (zpetc, default true)", _seed004("pid"), ("zpetc", "order")),
     "sum": ("u = the sum of the parts' u: parts = [{ type = ... }, ...], each any kind", _sum, ()),
     "linear": ("any state space A, B, C, D (domain discrete or continuous) from named inputs (default "
                "['error']) to outputs (default ['u']); names without '.axis' are per axis",

@@ -66,8 +66,13 @@ def test_divergence_exit_code(tmp_path):
 def test_demo_writes_recording(tmp_path):
     r = _twin("demo", "--json", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
-    assert json.loads(r.stdout)["machine"] == "cncmt_xy"
-    assert read_back(tmp_path / "demo.rrd")["/contour/actual"] == 1
+    out = json.loads(r.stdout)
+    assert out["machine"] == "linear_motor_xy" and out["scenario"] == "seed004_mimo_cutting"
+    # seed 004's MIMO controller while cutting: tens of um per axis (paper: about 36 and 41 um)
+    assert 10.0 < max(out["max_tracking_error_um"].values()) < 100.0
+    entities = read_back(tmp_path / "demo.rrd")
+    assert entities["/contour/actual"] == 1
+    assert any("force" in e for e in entities), sorted(entities)
 
 
 def test_run_writes_report_plots(tmp_path):
@@ -137,7 +142,7 @@ def test_reproduce_seed000_text_report():
 def test_reproduce_unknown_source_exits_2():
     r = _twin("reproduce", "seed999")
     assert r.returncode == 2 and r.stderr.strip().splitlines() == [
-        "error: source = 'seed999': no reproduction of that paper yet (known: seed000, seed002, seed003)"]
+        "error: source = 'seed999': no reproduction of that paper yet (known: seed000, seed002, seed003, seed004)"]
 
 
 def test_reproduce_seed002_transfer_functions_only(tmp_path):

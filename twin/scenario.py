@@ -47,7 +47,7 @@ class ControllerSpec(_Strict):
     feedforward, an optional observer add-on and, for ``type = "sum"``, its parts."""
 
     type: str
-    params: dict[str, float | str | list[float] | list[list[float]] | list[str]] = {}
+    params: dict[str, bool | float | str | list[float] | list[list[float]] | list[str]] = {}
     discretization: Literal["tustin", "zoh"] = "tustin"
     velocity_ff: float = Field(0.0, description="V per m/s of reference velocity")
     acceleration_ff: float = Field(0.0, description="V per m/s^2 of reference acceleration")

@@ -45,8 +45,11 @@ def mixed_sensitivity_plant(plant, w1, w2, w3) -> control.StateSpace:
     return control.ss(control.augw(plant, w1, w2, w3))
 
 
-def central_controller(P: control.StateSpace, gamma: float) -> control.StateSpace:
+def central_controller(P: control.StateSpace, gamma: float, ncon: int = 1, nmeas: int = 1) -> control.StateSpace:
     """The central H-infinity controller achieving ||M||_inf < gamma (SB10AD, suboptimal).
+
+    ``ncon`` and ``nmeas`` are the numbers of control inputs and measurements, the last
+    inputs and outputs of ``P``.
 
     Raises
     ------
@@ -56,7 +59,7 @@ def central_controller(P: control.StateSpace, gamma: float) -> control.StateSpac
     """
     n, m, p = P.nstates, P.ninputs, P.noutputs
     try:
-        out = slycot.sb10ad(n, m, p, 1, 1, gamma, P.A, P.B, P.C, P.D, job=4)
+        out = slycot.sb10ad(n, m, p, ncon, nmeas, gamma, P.A, P.B, P.C, P.D, job=4)
     except (ValueError, ArithmeticError, slycot.exceptions.SlycotError) as exc:
         raise ValueError(f"gamma = {gamma:g}: no admissible controller ({exc})") from None
     _, Ak, Bk, Ck, Dk, Ac = out[:6]
@@ -90,8 +93,9 @@ class GammaIteration:
 
 
 def gamma_iteration(P: control.StateSpace, gamma_max: float = 1e4, gamma_min: float = 1e-3,
-                    tol: float = 1e-3) -> GammaIteration:
-    """Bisect (geometrically) on gamma for the smallest admissible one.
+                    tol: float = 1e-3, ncon: int = 1, nmeas: int = 1) -> GammaIteration:
+    """Bisect (geometrically) on gamma for the smallest admissible one (``ncon`` control
+    inputs and ``nmeas`` measurements, as for :func:`central_controller`).
 
     Raises
     ------
@@ -99,13 +103,13 @@ def gamma_iteration(P: control.StateSpace, gamma_max: float = 1e4, gamma_min: fl
         If ``gamma_max`` is not admissible.
     """
     hi = gamma_max
-    best = central_controller(P, hi)
+    best = central_controller(P, hi, ncon, nmeas)
     lo, iterations = gamma_min, 0
     while hi / lo > 1.0 + tol:
         mid = np.sqrt(lo * hi)
         iterations += 1
         try:
-            best, hi = central_controller(P, mid), mid
+            best, hi = central_controller(P, mid, ncon, nmeas), mid
         except ValueError:
             lo = mid
     return GammaIteration(gamma=hi, controller=best, iterations=iterations)

@@ -83,7 +83,7 @@ def loop_margins(L, w_min: float = W_MIN, w_max: float = W_MAX, n: int = N_GRID)
     else:
         w_pm = _refine(lambda x: abs(_at(L, x)) - 1.0, w, i)
         angle = np.angle(_at(L, w_pm))
-        pm = math.degrees(angle + 2 * np.pi * np.round((phase[i] - angle) / (2 * np.pi)) + np.pi)
+        pm = (math.degrees(angle) + 360.0) % 360.0 - 180.0  # in [-180, 180)
     S_db = -20 * np.log10(np.abs(1 + Lw))
     k = int(np.argmax(S_db))
     i = _bracket(S_db + 3.0)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from controllers.lti import SisoTf
 
 
@@ -30,3 +32,39 @@ def pid_tf(kp: float, ki: float = 0.0, kd: float = 0.0, tf_s: float = 0.0) -> Si
     if ki:
         return SisoTf((kp, ki), (1.0, 0.0))
     return SisoTf((kp,), (1.0,))
+
+
+def pid_for_crossover(plant, w_c: float, pm_deg: float, integral_ratio: float = 0.1,
+                      filter_ratio: float = 10.0) -> tuple[float, float, float, float]:
+    """PID whose loop ``C P`` crosses over at ``w_c`` with phase margin ``pm_deg``: the
+    conventional loop-shaping rule (integral corner ``integral_ratio * w_c``, derivative filter
+    corner ``filter_ratio * w_c``), solved for ``kp`` and ``kd`` from ``C(j w_c) P(j w_c) =
+    exp(j (pm - 180 deg))``.
+
+    Parameters
+    ----------
+    plant : callable
+        ``plant(w)``: the plant's frequency response at angular frequencies ``w`` (rad/s).
+    w_c : float
+        Gain crossover (rad/s).
+    pm_deg : float
+        Phase margin at ``w_c`` (deg).
+
+    Returns
+    -------
+    kp, ki, kd, tf_s : float
+        Gains in the plant's units (for a plant in m/V: V/m, V/(m s), V s/m) and the filter
+        time constant (s), as :func:`pid_tf` takes them.
+
+    Raises
+    ------
+    ValueError
+        If the phase needed at ``w_c`` cannot be reached with positive ``kp`` and ``kd``.
+    """
+    w_i, tf_s = integral_ratio * w_c, 1.0 / (filter_ratio * w_c)
+    target = np.exp(1j * np.radians(pm_deg - 180.0)) / complex(np.asarray(plant(np.array([w_c])))[0])
+    p_part, d_part = 1.0 + w_i / (1j * w_c), 1j * w_c / (1.0 + 1j * w_c * tf_s)
+    kp, kd = np.linalg.solve([[p_part.real, d_part.real], [p_part.imag, d_part.imag]], [target.real, target.imag])
+    if not (kp > 0 and kd >= 0):
+        raise ValueError(f"no PID with kp, kd > 0 gives {pm_deg:g} deg at {w_c:g} rad/s (kp {kp:.3g}, kd {kd:.3g})")
+    return float(kp), float(kp * w_i), float(kd), tf_s

@@ -11,7 +11,7 @@ import importlib
 
 #: Seed name -> package of its reproduction.
 REPRODUCTIONS = {"seed000": "twin.reproduce.seed000", "seed002": "twin.reproduce.seed002",
-                 "seed003": "twin.reproduce.seed003"}
+                 "seed003": "twin.reproduce.seed003", "seed004": "twin.reproduce.seed004"}
 
 
 def twin_vs_tf(label: str, twin: dict, tf: dict, keys, tol_rel: float) -> list[str]:

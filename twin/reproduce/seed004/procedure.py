@@ -1,0 +1,263 @@
+"""Seed 004 (Choi, Hong, Kim, Kim 1999): the MIMO loop-shaping design, its reduction, the PID
+comparison, the mu analysis beside sampled plants, ZPETC, and the circle tests.
+
+Designs: :mod:`controllers.papers.seed004` (positions in mm in the design, SI in the loops).
+Transfer-function loops: :func:`twin.sim.tf_loop.tf_loop` on eq. (11)'s plant, the twin's
+timing.  Twin runs: the bundled ``seed004_{mimo,pid}_{air_cut,cutting}`` scenarios and
+variants of them (average-force model; no friction and ideal encoders for the twin-vs-TF
+comparison, where both models are the same linear loop).
+"""
+
+from __future__ import annotations
+
+import copy
+import itertools
+import math
+import tomllib
+
+import control
+import numpy as np
+
+from controllers import make_controller
+from controllers.design.hinf import gamma_iteration
+from controllers.design.mimo import frequency_response
+from controllers.design.mu import destabilizing_scale, is_stable, mu_upper_bound, perturbed_closed_loop_matrix
+from controllers.design.ncf import ncf_generalized_plant, ncf_robustness_norm
+from controllers.papers import seed004 as s4
+from twin.metrics import contour_error
+from twin.references import Circle
+from twin.reproduce import twin_vs_tf
+
+KINDS = ("mimo", "pid")
+OMEGA = np.logspace(-1, 4, 121)  # rad/s, the mu plots' grid (Figs. 6-7)
+SETTLED_S = 0.1  # the circle starts with a velocity step: errors also reported after it
+TWIN_TOL_REL = 0.02
+#: average-force gains for the circle cuts: the paper's estimate |k| = 1800 N s/m, up milling
+AVERAGE_FORCE = {"type": "average_force", "k_il_N_s_per_m": -1800.0, "k_c_N_s_per_m": 1800.0,
+                 "harmonic_fraction": 0.2, "spindle_rpm": 10000.0, "n_flutes": 2}
+
+
+def _controller_mm(kind: str):
+    """The controller with the design's units (V/mm), continuous."""
+    return control.ss(s4.controller_si(kind)) * (1.0 / s4.POSITION_UNIT_PER_M)
+
+
+def design() -> dict:
+    """Part 1 and 2: gamma_min two ways, the controller orders, the reduction and its effect."""
+    d = s4.mimo_design()
+    lsd = d["design"]
+    A, B, C = lsd.shaped.A, lsd.shaped.B, lsd.shaped.C
+    independent = gamma_iteration(ncf_generalized_plant(A, B, C), 100.0, 1.0 + 1e-6, 1e-7, 2, 2).gamma
+    full, reduced = d["full"], d["reduced"]
+    w = np.logspace(0, 4, 200)
+    F, R = frequency_response(full, w), frequency_response(reduced, w)
+    rel = max(np.linalg.norm(f - r, 2) / np.linalg.norm(f, 2) for f, r in zip(F, R))
+    loops = {}
+    for name, k in (("full", full), ("reduced", reduced)):
+        cl = s4.closed_loop_discrete(k, s4.TABLE1["k_il"][0], s4.TABLE1["k_c"][0])
+        sens = control.feedback(np.eye(2), control.c2d(control.ss(s4.design_plant() * 1e-3), s4.DT_S, "zoh")
+                                * control.c2d(control.ss(k), s4.DT_S, "tustin"))
+        theta = w * s4.DT_S
+        peak = max(np.linalg.norm(sens(np.exp(1j * t)), 2) for t in theta[theta < math.pi])
+        loops[name] = {"max_pole_abs": float(np.max(np.abs(cl.poles()))), "sensitivity_peak": float(peak),
+                       "order": int(control.ss(k).nstates)}
+    margins = s4.loop_margins_at_inputs(reduced)
+    return {"gamma_min": lsd.gamma_min, "gamma_min_sb10ad": independent,
+            "gamma_min_rel_diff": abs(independent - lsd.gamma_min) / lsd.gamma_min,
+            "gamma": lsd.gamma, "gamma_factor": s4.GAMMA_FACTOR, "margin": lsd.margin,
+            "achieved_norm": ncf_robustness_norm(A, B, C, lsd.K_inf, np.logspace(-1, 5, 600)),
+            "shaped_order": int(lsd.shaped.nstates), "k_inf_order": int(lsd.K_inf.nstates),
+            "order": loops["full"]["order"], "reduced_order": loops["reduced"]["order"],
+            "hankel_V_per_mm": d["hankel"].tolist(), "dropped_V_per_mm": d["dropped"].tolist(),
+            "truncation_bound_V_per_mm": float(2 * d["dropped"].sum()),
+            "reduction_rel_error_1_to_1e4_rad_s": float(rel), "loops": loops,
+            "loop_at_input": [{"pm_deg": m.pm_deg, "w_pm": m.w_pm, "gm_db": m.gm_db} for m in margins]}
+
+
+def pid() -> dict:
+    """Part 3: the PID pair, its targets and its own margins."""
+    p = s4.pid_design()
+    return {"gains": [dict(zip(("kp", "ki", "kd", "tf_s"), g)) for g in p["gains"]],
+            "targets": [{"pm_deg": m.pm_deg, "w_pm": m.w_pm} for m in p["targets"]],
+            "margins": [{"pm_deg": m.pm_deg, "w_pm": m.w_pm, "gm_db": m.gm_db} for m in p["margins"]]}
+
+
+def _peak(values: np.ndarray, mask=None) -> dict:
+    v = values if mask is None else np.where(mask, values, -np.inf)
+    i = int(np.argmax(v))
+    return {"value": float(values[i]), "w_rad_s": float(OMEGA[i])}
+
+
+def _performance_norm(N_rp, delta, omega) -> float:
+    """max over omega of sigma_max(Wp S) of the loop with the real perturbation ``delta``
+    (the first 10 channels closed by constant ``delta``, the performance channel left)."""
+    A, B, C, D = (np.asarray(m, float) for m in (N_rp.A, N_rp.B, N_rp.C, N_rp.D))
+    n = len(delta)
+    dl = np.diag(delta)
+    closing = np.linalg.solve(np.eye(n) - D[:n, :n] @ dl, np.eye(n))
+    sys = control.ss(A + B[:, :n] @ dl @ closing @ C[:n], B[:, n:] + B[:, :n] @ dl @ closing @ D[:n, n:],
+                     C[n:] + D[n:, :n] @ dl @ closing @ C[:n], D[n:, n:] + D[n:, :n] @ dl @ closing @ D[:n, n:])
+    return float(max(np.linalg.norm(m, 2) for m in frequency_response(sys, omega)))
+
+
+def mu_analysis(samples: int, seed: int) -> dict:
+    """Part 4: mu upper bounds (RS, RP) over OMEGA, and sampled plants in the same box."""
+    rng = np.random.default_rng(seed)
+    corners = np.array(list(itertools.product((-1.0, 1.0), repeat=10)))
+    randoms = rng.uniform(-1.0, 1.0, (samples, 10))
+    coarse = np.logspace(-1, 4, 60)
+    out = {}
+    for kind in KINDS:
+        K = _controller_mm(kind)
+        N_rs = s4.uncertain_plant(False).lft(K, nu=2, ny=2)
+        N_rp = s4.uncertain_plant(True).lft(K, nu=2, ny=2)
+        rs = mu_upper_bound(N_rs, OMEGA, *s4.robust_stability_structure())
+        rp = mu_upper_bound(N_rp, OMEGA, *s4.robust_performance_structure())
+        stable_corners = [is_stable(N_rs, c) for c in corners]
+        stable_random = [is_stable(N_rs, d) for d in randoms]
+        points = np.vstack([corners, randoms])
+        stable = np.array(stable_corners + stable_random)
+        worst_wps = max((_performance_norm(N_rp, d, coarse) for d in points[stable]), default=math.nan)
+        directions = np.vstack([corners, randoms / np.max(np.abs(randoms), axis=1, keepdims=True)])
+        scales = [destabilizing_scale(N_rs, d, 3.0) for d in directions]
+        k_min = float(min(scales))
+        nominal_wps = _performance_norm(N_rp, np.zeros(10), coarse)
+        out[kind] = {"rs": rs.tolist(), "rp": rp.tolist(), "rs_peak": _peak(rs),
+                     "rs_peak_below_80": _peak(rs, OMEGA <= s4.PAPER["robust_frequency_rad_s"]),
+                     "rp_peak": _peak(rp), "rp_peak_below_5": _peak(rp, OMEGA <= s4.PAPER["performance_frequency_rad_s"]),
+                     "corners": len(corners), "corners_stable": int(sum(stable_corners)),
+                     "unstable_corners": [c.tolist() for c, ok in zip(corners, stable_corners) if not ok][:5],
+                     "random": samples, "random_stable": int(sum(stable_random)),
+                     "worst_wps_sampled": worst_wps, "nominal_wps": nominal_wps,
+                     "min_destabilizing_scale": k_min, "mu_lower_from_samples": 1.0 / k_min if k_min > 0 else math.inf}
+    out["omega_rad_s"] = OMEGA.tolist()
+    out["claim"] = s4.stable_range_claim()
+    out["claim_grid"] = _claim_grid()
+    return out
+
+
+def _claim_grid(n: int = 11) -> dict:
+    """The paper's range claim on an n x n grid of (k_il, k_c) with every corner of m and b,
+    nominal amplifier: stable everywhere? (reduced MIMO and PID, the TF models)."""
+    box = s4.stable_range_claim()["table1_box"]
+    out = {}
+    for kind in KINDS:
+        K = s4.controller_si(kind)
+        unstable = []
+        for k_il, k_c in itertools.product(np.linspace(*box["k_il"], n), np.linspace(*box["k_c"], n)):
+            for signs in itertools.product((-1.0, 1.0), repeat=4):
+                p = s4.nominal_params()
+                for key, sg in zip(("m_x", "m_y", "b_x", "b_y"), signs):
+                    p[key] *= 1.0 + sg * s4.TABLE1[key][1]
+                G = s4.design_plant(k_il, k_c, p) * 1e-3
+                cl = control.feedback(control.ss(G) * control.ss(K), np.eye(2))
+                if np.max(cl.poles().real) >= 0:
+                    unstable.append((float(k_il), float(k_c), signs))
+        out[kind] = {"points": n * n * 16, "unstable": len(unstable), "first_unstable": unstable[:3]}
+    return out
+
+
+def circle_reference(radius_mm: float, feed_mm_per_min: float, duration_s: float, preview: int) -> np.ndarray:
+    """The circle sampled at the control period, ``preview`` rows beyond the run."""
+    n = int(round(duration_s / s4.DT_S))
+    return Circle(radius_mm, feed_mm_per_min).sample(np.arange(n + preview) * s4.DT_S)
+
+
+def _errors(t_s, ref_xy, pos_xy, u_V) -> dict:
+    """Max tracking error per axis (all, and after SETTLED_S), contour errors to the path and to
+    the reference point of the same instant, max |u| per axis (um, V)."""
+    err = np.abs(ref_xy - pos_xy)
+    late = t_s >= SETTLED_S
+    path = contour_error(pos_xy, ref_xy)
+    point = np.linalg.norm(ref_xy - pos_xy, axis=1)
+    return {"max_tracking_um": (err.max(axis=0) * 1e6).tolist(),
+            "max_tracking_settled_um": (err[late].max(axis=0) * 1e6).tolist(),
+            "max_contour_path_um": float(path[late].max() * 1e6),
+            "max_contour_point_um": float(point[late].max() * 1e6), "max_u_V": np.abs(u_V).max(axis=0).tolist()}
+
+
+def tf_circle(kind: str, zpetc: bool, radius_mm: float, feed: float, duration_s: float,
+              k_il: float = 0.0, k_c: float = 0.0) -> dict:
+    """The circle on the transfer functions (eq. 11 with the cutting gains), saturation 10 V."""
+    ctrl = make_controller(f"seed004_{kind}", s4.DT_S, {"zpetc": zpetc}, axes=("x", "y"))
+    preview = max((f.preview for f, _ in s4.zpetc_filters(kind)), default=0) if zpetc else 0
+    ref = circle_reference(radius_mm, feed, duration_s, preview)
+    from twin.machines.linear_motor import cutting_coupled_plant
+    pos, u = tf_loop_xy(cutting_coupled_plant(s4.nominal_params(), k_il, k_c), ctrl, ref)
+    n = len(pos)
+    return _errors(np.arange(n) * s4.DT_S, ref[:n, :, 0], pos, u)
+
+
+def tf_loop_xy(plant, ctrl, ref):
+    """:func:`twin.sim.tf_loop.tf_loop` on axes x, y with the drive's 10 V saturation."""
+    from twin.sim.tf_loop import tf_loop
+    return tf_loop(plant, ctrl, ref, s4.DT_S, saturation_V=10.0, axes=("x", "y"))
+
+
+def zpetc_part() -> dict:
+    """Part 5: each ZPETC, and the air-cut tracking error on the TF loop with and without it."""
+    out = {}
+    for kind in KINDS:
+        filters = s4.zpetc_filters(kind)
+        out[kind] = {"preview_ticks": [f.preview for f, _ in filters], "delay_ticks": [f.delay for f, _ in filters],
+                     "unacceptable_zeros": [[[z.real, z.imag] for z in f.unacceptable] for f, _ in filters],
+                     "with": tf_circle(kind, True, 20.0, 2400.0, 3.2), "without": tf_circle(kind, False, 20.0, 2400.0, 3.2)}
+    return out
+
+
+def scenario_data(name: str) -> dict:
+    """A bundled scenario as a dict (to vary)."""
+    from twin.scenario import bundled_scenarios
+    return tomllib.loads(bundled_scenarios()[name].read_text())
+
+
+def run_twin(data: dict):
+    from twin.scenario import run_scenario, scenario_from_dict
+    return run_scenario(scenario_from_dict(data), progress=False)
+
+
+def twin_errors(res) -> dict:
+    return _errors(res.t_s, res.ref[:, :, 0], res.table_position_m(), res.u_V)
+
+
+def circle_cases() -> dict:
+    """Part 6: the paper's circle tests in the twin (friction, encoders, 982 N), and the
+    twin-vs-TF checks on the linear runs (no friction, ideal encoders)."""
+    out = {}
+    for kind in KINDS:
+        air = scenario_data(f"seed004_{kind}_air_cut")
+        cut = scenario_data(f"seed004_{kind}_cutting")
+        average = copy.deepcopy(cut)
+        average["disturbances"] = [dict(AVERAGE_FORCE)]
+        out[kind] = {"air_cut": twin_errors(run_twin(air)), "cutting_mechanistic": twin_errors(run_twin(cut)),
+                     "cutting_average_force": twin_errors(run_twin(average)),
+                     "cutting_radius_mm": cut["reference"]["radius_mm"]}
+        # the same loop on both models: no friction, ideal encoders, no tooth harmonic
+        linear = []
+        for data, k_il, k_c in ((air, 0.0, 0.0), (average, AVERAGE_FORCE["k_il_N_s_per_m"], AVERAGE_FORCE["k_c_N_s_per_m"])):
+            data = copy.deepcopy(data)
+            data.pop("overrides", None)
+            data.pop("sensors", None)
+            for d in data.get("disturbances", []):
+                d["harmonic_fraction"] = 0.0
+            twin = twin_errors(run_twin(data))
+            ref = data["reference"]
+            tf = tf_circle(kind, True, ref["radius_mm"], ref["feed_mm_per_min"], data["duration_s"], k_il, k_c)
+            linear.append({"case": "air cut" if k_il == 0 else "average force", "twin": twin, "tf": tf})
+        out[kind]["linear"] = linear
+    return out
+
+
+def mismatches(circles: dict) -> list[str]:
+    """Twin-vs-TF departures above 2 % on the linear runs (max tracking error per axis after
+    the start, max contour error)."""
+    lines = []
+    for kind in KINDS:
+        for case in circles[kind]["linear"]:
+            flat = {}
+            for side in ("twin", "tf"):
+                m = case[side]
+                flat[side] = {"x_um": m["max_tracking_settled_um"][0], "y_um": m["max_tracking_settled_um"][1],
+                              "contour_um": m["max_contour_path_um"]}
+            lines += twin_vs_tf(f"{kind} {case['case']}", flat["twin"], flat["tf"], flat["twin"].keys(), TWIN_TOL_REL)
+    return lines

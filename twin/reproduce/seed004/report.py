@@ -1,0 +1,201 @@
+"""Tables and plots of ``twin reproduce seed004`` (see :mod:`twin.reproduce.seed004.procedure`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from controllers.papers import seed004 as s4
+from twin.reproduce.seed004 import procedure as r
+
+CONTOUR_GAIN = 300  # Fig. 12(c)'s magnification
+
+
+def run(samples: int, twin_samples: int, seed: int, progress: bool) -> dict:
+    """Every part as one JSON-ready dict: ``samples`` random plants per controller in the mu
+    check, ``twin_samples = 0`` leaves the twin out."""
+    steps = ["design", "pid", "zpetc", "mu"] + (["circles"] if twin_samples > 0 else [])
+    out = {"paper": s4.PAPER, "settings": {"dt_s": s4.DT_S, "samples": samples, "seed": seed, "twin": twin_samples > 0,
+                                            "position_unit_per_m": s4.POSITION_UNIT_PER_M}}
+    for step in tqdm(steps, desc="seed004", unit="part", disable=not progress, leave=False):
+        if step == "design":
+            out["design"] = r.design()
+        elif step == "pid":
+            out["pid"] = r.pid()
+        elif step == "zpetc":
+            out["zpetc"] = r.zpetc_part()
+        elif step == "mu":
+            out["mu"] = r.mu_analysis(samples, seed)
+        else:
+            out["circles"] = r.circle_cases()
+    out["twin_vs_tf_mismatches"] = r.mismatches(out["circles"]) if "circles" in out else []
+    return out
+
+
+def _pair(values, fmt="{:.2f}") -> str:
+    return " / ".join(fmt.format(v) for v in values)
+
+
+def format_report(res: dict) -> str:
+    """Plain-text tables: paper | TF loop | twin."""
+    d, p, z, m = res["design"], res["pid"], res["zpetc"], res["mu"]
+    paper = res["paper"]
+    out = ["Seed 004 (Choi et al. 1999) reproduced on linear_motor_xy (design positions in mm, see "
+           "controllers/papers/seed004.py)", "",
+           "1. Glover-McFarlane loop shaping, Ws = diag(990, 660)(s+110)/(s+1500), up milling k_il -2500, k_c 2500:",
+           f"  gamma_min {d['gamma_min']:.5f} (Riccati) | {d['gamma_min_sb10ad']:.5f} (SB10AD gamma-iteration on the "
+           f"NCF generalized plant), difference {d['gamma_min_rel_diff']:.1e}",
+           f"  gamma used {d['gamma']:.4f} = {d['gamma_factor']} gamma_min; robustness margin 1/gamma {d['margin']:.4f}; "
+           f"achieved ||[K;I](I-GK)^-1 M^-1|| {d['achieved_norm']:.4f}",
+           f"  orders: shaped plant {d['shaped_order']}, K_inf {d['k_inf_order']}, K = Ws K_inf {d['order']} "
+           f"(paper {paper['controller_order']})",
+           "  loop broken at each input: PM " + _pair([q["pm_deg"] for q in d["loop_at_input"]], "{:.1f}")
+           + " deg at " + _pair([q["w_pm"] for q in d["loop_at_input"]], "{:.0f}") + " rad/s, GM "
+           + _pair([q["gm_db"] for q in d["loop_at_input"]], "{:.1f}") + " dB (x / y)", "",
+           f"2. Balanced truncation (AB09AD, square-root Schur) {d['order']} -> {d['reduced_order']} "
+           f"(paper {paper['controller_order']} -> {paper['reduced_order']}), Tustin at {res['settings']['dt_s'] * 1e3:g} ms:",
+           "  Hankel singular values (V/mm): " + ", ".join(f"{h:.4g}" for h in d["hankel_V_per_mm"]),
+           f"  dropped: {', '.join(f'{h:.3g}' for h in d['dropped_V_per_mm'])}; bound 2 sum = "
+           f"{d['truncation_bound_V_per_mm']:.3g} V/mm; largest relative difference 1-1e4 rad/s "
+           f"{d['reduction_rel_error_1_to_1e4_rad_s']:.3f}",
+           "  sampled closed loop (nominal, 2 kHz): " + "; ".join(
+               f"{k} max |pole| {v['max_pole_abs']:.4f}, peak sigma(S) {v['sensitivity_peak']:.3f}"
+               for k, v in d["loops"].items()), "",
+           "3. PID per axis (diagonal plant, k_c = 0), at the MIMO loop's crossover and phase margin:"]
+    for a, g, t, q in zip("xy", p["gains"], p["targets"], p["margins"]):
+        out.append(f"  {a}: kp {g['kp']:.4g} V/m, ki {g['ki']:.4g} V/(m s), kd {g['kd']:.4g} V s/m, tf {g['tf_s'] * 1e6:.0f} us;"
+                   f" PM {q['pm_deg']:.1f} deg at {q['w_pm']:.0f} rad/s (target {t['pm_deg']:.1f} at {t['w_pm']:.0f})")
+    out += ["", "4. mu analysis (AB13MD upper bound, k_il and k_c as separate real scalars per axis: conservative):",
+            "  controller | RS peak (rad/s) | RS max w<=80 | RP peak (rad/s) | RP max w<=5 | corners stable | random "
+            "stable | 1/min destabilizing scale | worst ||Wp S|| sampled (nominal)"]
+    for kind in r.KINDS:
+        q = m[kind]
+        out.append(f"  {kind:<4} | {q['rs_peak']['value']:.3f} ({q['rs_peak']['w_rad_s']:.0f}) | "
+                   f"{q['rs_peak_below_80']['value']:.3f} | {q['rp_peak']['value']:.3f} ({q['rp_peak']['w_rad_s']:.0f}) | "
+                   f"{q['rp_peak_below_5']['value']:.3f} | {q['corners_stable']}/{q['corners']} | "
+                   f"{q['random_stable']}/{q['random']} | {q['mu_lower_from_samples']:.3f} | "
+                   f"{q['worst_wps_sampled']:.2f} ({q['nominal_wps']:.2f})")
+    claim = m["claim"]
+    out.append(f"  paper: stable for k_il in {list(claim['paper']['k_il'])}, k_c in {list(claim['paper']['k_c'])} "
+               f"(= Table 1's box: {claim['agree']}); grid 11 x 11 x m,b corners: " + ", ".join(
+                   f"{k} {v['unstable']} unstable of {v['points']}" for k, v in m["claim_grid"].items()))
+    out += ["", "5. ZPETC per axis (air cut R 20 mm, 2400 mm/min, TF loop, max tracking error after 0.1 s, um x / y):"]
+    for kind in r.KINDS:
+        q = z[kind]
+        out.append(f"  {kind:<4} preview {q['preview_ticks']} ticks, not inverted zeros "
+                   + str([[round(c[0], 4) for c in zs] for zs in q["unacceptable_zeros"]])
+                   + f": without {_pair(q['without']['max_tracking_settled_um'], '{:.3f}')}"
+                   f" | with {_pair(q['with']['max_tracking_settled_um'], '{:.3f}')}")
+    if "circles" in res:
+        c = res["circles"]
+        out += ["", "6. Circle tests in the twin (friction, 1/2 um encoders, 10 V = 982 N); after 0.1 s; um; "
+                "contour to the path | to the reference point of the same instant:",
+                f"  paper MIMO: air cut max tracking below {_pair(paper['air_cut_max_tracking_um'], '{:g}')}; "
+                f"cutting max contour {_pair(paper['cutting_max_contour_um'], '{:g}')} (x / y axes)"]
+        for kind in r.KINDS:
+            for case in ("air_cut", "cutting_mechanistic", "cutting_average_force"):
+                q = c[kind][case]
+                radius = 20.0 if case == "air_cut" else c[kind]["cutting_radius_mm"]
+                out.append(f"  {kind:<4} {case:<22} R {radius:g}: tracking {_pair(q['max_tracking_settled_um'])}, "
+                           f"contour {q['max_contour_path_um']:.2f} | {q['max_contour_point_um']:.2f}, max |u| "
+                           f"{_pair(q['max_u_V'])} V (whole run: tracking {_pair(q['max_tracking_um'])})")
+        out.append("  twin vs TF loop (no friction, ideal encoders), tracking x / y and contour after 0.1 s:")
+        for kind in r.KINDS:
+            for case in c[kind]["linear"]:
+                tw, tf = case["twin"], case["tf"]
+                out.append(f"    {kind:<4} {case['case']:<13} twin {_pair(tw['max_tracking_settled_um'], '{:.3f}')}, "
+                           f"{tw['max_contour_path_um']:.3f} | TF {_pair(tf['max_tracking_settled_um'], '{:.3f}')}, "
+                           f"{tf['max_contour_path_um']:.3f}")
+        out.append("  departures above 2 %: " + ("; ".join(res["twin_vs_tf_mismatches"]) or "none"))
+    return "\n".join(out)
+
+
+def write_plots(folder) -> list[Path]:
+    """Fig. 2 (singular values), Figs. 6-7 (mu), Fig. 12 (contour x300) and Fig. 13 (inputs)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from controllers.design.mimo import frequency_response
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    written = []
+
+    def save(fig, name):
+        written.append(folder / name)
+        fig.savefig(written[-1], dpi=120, bbox_inches="tight")
+        plt.close(fig)
+
+    d = s4.mimo_design()
+    w = np.logspace(-1, 5, 400)
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    G = frequency_response(s4.design_plant(), w)
+    target = frequency_response(d["design"].shaped, w)
+    loop = G @ frequency_response(d["reduced"] * 1e-3, w)
+    for resp, label, style in ((G, "plant G", ":"), (target, "target loop G Ws", "--"), (loop, "open loop G K (order 4)", "-")):
+        sv = np.linalg.svd(resp, compute_uv=False)
+        ax.loglog(w, sv[:, 0], style, color="C0" if style == "-" else "C1" if style == "--" else "C2", label=label)
+        ax.loglog(w, sv[:, 1], style, color="C0" if style == "-" else "C1" if style == "--" else "C2")
+    ax.axhline(1.0, color="k", linewidth=0.5)
+    ax.set(xlabel="frequency (rad/s)", ylabel="singular values (mm/V, mm/mm)", title="Seed 004 Fig. 2: open and target loop")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    save(fig, "seed004_loop_shape.png")
+
+    res_mu = r.mu_analysis(0, 0)
+    for key, title, name in (("rs", "Fig. 6: mu, robust stability", "seed004_mu_rs.png"),
+                             ("rp", "Fig. 7: mu, robust performance", "seed004_mu_rp.png")):
+        fig, ax = plt.subplots(figsize=(7, 4.5))
+        for kind in r.KINDS:
+            ax.semilogx(res_mu["omega_rad_s"], res_mu[kind][key], label=f"{kind} (upper bound)")
+        ax.axhline(1.0, color="k", linewidth=0.5)
+        ax.set(xlabel="frequency (rad/s)", ylabel="mu", title=f"Seed 004 {title}")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend()
+        save(fig, name)
+
+    runs = cutting_runs()
+    fig, ax = plt.subplots(figsize=(6.5, 6.5))
+    for kind, res in runs.items():
+        ref, pos = res.ref[:, :, 0], res.table_position_m()
+        centre = np.array([-np.ptp(ref[:, 0]) / 2, 0.0])
+        rel = ref - centre
+        radius = np.linalg.norm(rel, axis=1, keepdims=True)
+        radial_error = np.linalg.norm(pos - centre, axis=1, keepdims=True) - radius
+        shown = rel / radius * (radius + CONTOUR_GAIN * radial_error)
+        ax.plot(*(rel * 1e3).T, color="0.6", linewidth=0.8)
+        ax.plot(*(shown * 1e3).T, linewidth=0.8, label=f"{kind}: radial error x{CONTOUR_GAIN}")
+    ax.set(aspect="equal", xlabel="x (mm)", ylabel="y (mm)", title="Seed 004 Fig. 12(c): cutting circles, error x300")
+    ax.legend()
+    save(fig, "seed004_contour_x300.png")
+
+    fig, axes = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    for kind, res in runs.items():
+        for i, a in enumerate("xy"):
+            axes[i].plot(res.t_s, res.u_V[:, i], linewidth=0.6, label=kind)
+            axes[i].set(ylabel=f"u_{a} (V)")
+    axes[0].set_title("Seed 004 Fig. 13: control inputs while cutting")
+    axes[1].set(xlabel="time (s)")
+    axes[0].legend()
+    save(fig, "seed004_control_inputs.png")
+    return written
+
+
+def cutting_runs() -> dict:
+    """The twin's two cutting circles (MIMO R 28, PID R 30), mechanistic force."""
+    return {kind: r.run_twin(r.scenario_data(f"seed004_{kind}_cutting")) for kind in r.KINDS}
+
+
+def record(path: Path) -> None:
+    """Rerun recording of the two cutting circles."""
+    from twin.recording import record_runs
+
+    record_runs(cutting_runs(), path)
+
+
+def failed(results: dict) -> bool:
+    """Whether a twin number departs from its transfer-function number by more than 2 %."""
+    return bool(results["twin_vs_tf_mismatches"])
