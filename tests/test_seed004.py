@@ -11,7 +11,7 @@ import pytest
 
 from controllers.design.hinf import gamma_iteration
 from controllers.design.mimo import frequency_response
-from controllers.design.mu import destabilizing_scale, mu_upper_bound
+from controllers.design.mu import constant_upper_lft, destabilizing_scale, mu_upper_bound
 from controllers.design.ncf import central_controller, gamma_min, ncf_generalized_plant, ncf_riccati, ncf_robustness_norm
 from controllers.design.pid import pid_for_crossover, pid_tf
 from controllers.design.zpetc import zpetc
@@ -64,7 +64,7 @@ def test_reduced_controller_stable_on_every_corner_of_table1():
         p = s4.nominal_params()
         for key, sg in zip(("m_x", "m_y", "b_x", "b_y"), signs):
             p[key] *= 1.0 + sg * s4.TABLE1[key][1]
-        cl = control.feedback(control.ss(s4.design_plant(k_il, k_c, p) * 1e-3) * control.ss(K), np.eye(2))
+        cl = control.feedback(s4.plant_si(k_il, k_c, p) * control.ss(K), np.eye(2))
         assert np.max(cl.poles().real) < 0, f"unstable at k_il {k_il}, k_c {k_c}, m/b signs {signs}"
 
 
@@ -72,12 +72,7 @@ def test_uncertain_plant_is_the_perturbed_plant():
     """Closing the real channels with a constant delta gives eq. (11) with the perturbed values."""
     P = s4.uncertain_plant(False)
     delta = np.array([0.5, 0.0, -0.3, 0.2, 0.0, 1.0, -0.3, 0.2, 0.4, 0.0])
-    n = 10
-    A, B, C, D = P.A, P.B, P.C, P.D
-    dl = np.diag(delta)
-    closing = np.linalg.inv(np.eye(n) - D[:n, :n] @ dl)
-    Pu = control.ss(A + B[:, :n] @ dl @ closing @ C[:n], B[:, n:] + B[:, :n] @ dl @ closing @ D[:n, n:],
-                    C[n:] + D[n:, :n] @ dl @ closing @ C[:n], D[n:, n:] + D[n:, :n] @ dl @ closing @ D[:n, n:])
+    Pu = control.ss(*constant_upper_lft(P, delta))
     p = s4.nominal_params()
     p["m_x"] *= 1 + 0.3 * 0.5
     p["b_y"] *= 1 + 0.2
@@ -88,8 +83,7 @@ def test_uncertain_plant_is_the_perturbed_plant():
 
 
 def test_mu_upper_bound_bounds_the_sampled_destabilizing_perturbations():
-    K = control.ss(s4.controller_si("mimo")) * 1e-3
-    N = s4.uncertain_plant(False).lft(K, nu=2, ny=2)
+    N, _ = r.perturbation_loops("mimo")
     bound = mu_upper_bound(N, np.logspace(-1, 4, 121), *s4.robust_stability_structure()).max()
     directions = [np.array(c) for c in itertools.product((-1.0, 1.0), repeat=10)][::16]
     k_min = min(destabilizing_scale(N, d, 3.0) for d in directions)

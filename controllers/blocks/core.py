@@ -182,6 +182,11 @@ class Controller:
             raise ValueError(f"controller {self.name!r}: dt = {self.dt!r} must be > 0")
 
     @property
+    def inputs(self) -> list[str]:
+        """Every signal its blocks read, in order (repeats included)."""
+        return [s for b in self.blocks for s in b.inputs]
+
+    @property
     def outputs(self) -> list[str]:
         """Every signal its blocks write, in order."""
         return [s for b in self.blocks for s in b.outputs]

@@ -34,22 +34,26 @@ def mu_upper_bound(N, omega, nblock, itype) -> np.ndarray:
     return np.array([slycot.ab13md(M, nblock, itype)[0] for M in responses])
 
 
-def perturbed_closed_loop_matrix(N, delta) -> np.ndarray | None:
-    """State matrix of the upper LFT of ``N`` with the constant diagonal ``delta``, or None
-    where the loop is ill-posed (``I - D delta`` singular)."""
+def constant_upper_lft(N, delta) -> tuple[np.ndarray, ...] | None:
+    """``(A, B, C, D)`` of the upper LFT of ``N`` with the constant diagonal ``delta`` closing
+    its first ``len(delta)`` inputs and outputs (``w = delta z``), or None where the loop is
+    ill-posed (``I - D11 delta`` singular).  The rest of ``N``'s channels stay open."""
     A, B, C, D = (np.asarray(m, float) for m in (N.A, N.B, N.C, N.D))
+    n = len(delta)
     delta = np.diag(np.asarray(delta, float))
-    closing = np.eye(D.shape[0]) - D @ delta
+    closing = np.eye(n) - D[:n, :n] @ delta
     if abs(np.linalg.det(closing)) < 1e-12:
         return None
-    return A + B @ delta @ np.linalg.solve(closing, C)
+    gain = delta @ np.linalg.solve(closing, np.eye(n))  # delta (I - D11 delta)^-1
+    return (A + B[:, :n] @ gain @ C[:n], B[:, n:] + B[:, :n] @ gain @ D[:n, n:],
+            C[n:] + D[n:, :n] @ gain @ C[:n], D[n:, n:] + D[n:, :n] @ gain @ D[:n, n:])
 
 
 def is_stable(N, delta) -> bool:
     """Whether the upper LFT of ``N`` with the constant diagonal ``delta`` is well posed and
     has all poles in the open left half plane."""
-    A = perturbed_closed_loop_matrix(N, delta)
-    return A is not None and bool(np.max(np.linalg.eigvals(A).real) < 0.0)
+    closed = constant_upper_lft(N, delta)
+    return closed is not None and bool(np.max(np.linalg.eigvals(closed[0]).real) < 0.0)
 
 
 def destabilizing_scale(N, direction, k_max: float = 10.0, tol: float = 1e-3) -> float:

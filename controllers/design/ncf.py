@@ -36,10 +36,13 @@ def ncf_riccati(A, B, C) -> tuple[np.ndarray, np.ndarray]:
     return X, Z
 
 
+def _gamma_min(X, Z) -> float:
+    return float(np.sqrt(1.0 + np.max(np.linalg.eigvals(X @ Z).real)))
+
+
 def gamma_min(A, B, C) -> float:
     """Optimal NCF robust-stabilization level ``sqrt(1 + rho(XZ))`` (dimensionless)."""
-    X, Z = ncf_riccati(A, B, C)
-    return float(np.sqrt(1.0 + np.max(np.linalg.eigvals(X @ Z).real)))
+    return _gamma_min(*ncf_riccati(A, B, C))
 
 
 def central_controller(A, B, C, gamma: float) -> control.StateSpace:
@@ -52,7 +55,7 @@ def central_controller(A, B, C, gamma: float) -> control.StateSpace:
     """
     A, B, C = (np.asarray(m, float) for m in (A, B, C))
     X, Z = ncf_riccati(A, B, C)
-    g_min = float(np.sqrt(1.0 + np.max(np.linalg.eigvals(X @ Z).real)))
+    g_min = _gamma_min(X, Z)
     if not gamma > g_min:
         raise ValueError(f"gamma = {gamma:g}: must exceed gamma_min = {g_min:g}")
     L = (1.0 - gamma ** 2) * np.eye(A.shape[0]) + X @ Z

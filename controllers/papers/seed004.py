@@ -63,6 +63,11 @@ def design_plant(k_il: float = TABLE1["k_il"][0], k_c: float = TABLE1["k_c"][0],
     return control.ss(A, B, C * POSITION_UNIT_PER_M, D)
 
 
+def plant_si(k_il: float = TABLE1["k_il"][0], k_c: float = TABLE1["k_c"][0], params: dict | None = None):
+    """Eq. (11)'s plant, inputs V, outputs m: :func:`design_plant` scaled back to SI."""
+    return design_plant(k_il, k_c, params) * (1.0 / POSITION_UNIT_PER_M)
+
+
 def shaping_weight():
     """``Ws = diag(990, 660) (s + 110)/(s + 1500)``."""
     import control
@@ -96,7 +101,7 @@ def loop_margins_at_inputs(controller_si, k_il: float = TABLE1["k_il"][0], k_c: 
     :class:`~controllers.design.loop_analysis.LoopMargins` per axis."""
     from controllers.design.loop_analysis import loop_margins
     from controllers.design.mimo import frequency_response, loop_at_input
-    plant = design_plant(k_il, k_c) * (1.0 / POSITION_UNIT_PER_M)
+    plant = plant_si(k_il, k_c)
 
     def broken(axis):
         return lambda w: loop_at_input(frequency_response(controller_si, w) @ frequency_response(plant, w), axis)
@@ -234,7 +239,7 @@ def closed_loop_discrete(controller, k_il: float = 0.0, k_c: float = 0.0, dt: fl
     """Reference (m) to position (m) of the sampled loop: eq. (11)'s plant (cutting gains
     ``k_il``, ``k_c``; 0 for an air cut) held by a ZOH, the controller by Tustin, at ``dt``."""
     import control
-    plant = design_plant(k_il, k_c) * (1.0 / POSITION_UNIT_PER_M)
+    plant = plant_si(k_il, k_c)
     loop = control.c2d(control.ss(plant), dt, "zoh") * control.c2d(control.ss(controller), dt, "tustin")
     return control.feedback(loop, np.eye(2))
 

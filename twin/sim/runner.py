@@ -140,7 +140,7 @@ def _program(machine: BuiltMachine, controllers: Sequence[Controller], control_p
         raise TwinInputError("controller", [c.name for c in controllers],
                              f"drive axes {driven}; machine '{machine.name}' needs each of {names} once")
     try:
-        preview = preview_ticks_needed(s for c in controllers for b in c.blocks for s in b.inputs)
+        preview = preview_ticks_needed(s for c in controllers for s in c.inputs)
         return Program(controllers, standard_signals(names, preview)), preview
     except SignalError as exc:
         raise TwinInputError(f"controller block {exc.block}", exc.signal, exc.reason) from None

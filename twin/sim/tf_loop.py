@@ -97,7 +97,7 @@ def tf_loop(plant, controller, ref: np.ndarray, dt: float, delay_s: float = 0.0,
     Ad, Bd, Cd = (np.ascontiguousarray(m) for m in discretize(A, B, C, D, dt, "zoh")[:3])
     if Bd.shape[1] != len(axes) or Cd.shape[0] != len(axes):
         raise ValueError(f"the plant has {Bd.shape[1]} inputs and {Cd.shape[0]} outputs for axes {list(axes)}")
-    preview = preview_ticks_needed(s for b in controller.blocks for s in b.inputs)
+    preview = preview_ticks_needed(controller.inputs)
     program = Program([controller], standard_signals(axes, preview))
     if not program.compiled:
         raise ValueError(f"controller {controller.name!r} has Python blocks: the transfer-function loop runs "

@@ -14,6 +14,7 @@ import copy
 import itertools
 import math
 import tomllib
+from functools import lru_cache
 
 import control
 import numpy as np
@@ -21,9 +22,11 @@ import numpy as np
 from controllers import make_controller
 from controllers.design.hinf import gamma_iteration
 from controllers.design.mimo import frequency_response
-from controllers.design.mu import destabilizing_scale, is_stable, mu_upper_bound, perturbed_closed_loop_matrix
+from controllers.blocks import preview_ticks_needed
+from controllers.design.mu import constant_upper_lft, destabilizing_scale, is_stable, mu_upper_bound
 from controllers.design.ncf import ncf_generalized_plant, ncf_robustness_norm
 from controllers.papers import seed004 as s4
+from twin.machines.linear_motor import cutting_coupled_plant
 from twin.metrics import contour_error
 from twin.references import Circle
 from twin.reproduce import twin_vs_tf
@@ -53,12 +56,11 @@ def design() -> dict:
     F, R = frequency_response(full, w), frequency_response(reduced, w)
     rel = max(np.linalg.norm(f - r, 2) / np.linalg.norm(f, 2) for f, r in zip(F, R))
     loops = {}
+    theta = w * s4.DT_S
     for name, k in (("full", full), ("reduced", reduced)):
         cl = s4.closed_loop_discrete(k, s4.TABLE1["k_il"][0], s4.TABLE1["k_c"][0])
-        sens = control.feedback(np.eye(2), control.c2d(control.ss(s4.design_plant() * 1e-3), s4.DT_S, "zoh")
-                                * control.c2d(control.ss(k), s4.DT_S, "tustin"))
-        theta = w * s4.DT_S
-        peak = max(np.linalg.norm(sens(np.exp(1j * t)), 2) for t in theta[theta < math.pi])
+        # S = I - T for the unit feedback of the sampled loop
+        peak = max(np.linalg.norm(np.eye(2) - cl(np.exp(1j * t)), 2) for t in theta[theta < math.pi])
         loops[name] = {"max_pole_abs": float(np.max(np.abs(cl.poles()))), "sensitivity_peak": float(peak),
                        "order": int(control.ss(k).nstates)}
     margins = s4.loop_margins_at_inputs(reduced)
@@ -91,13 +93,23 @@ def _peak(values: np.ndarray, mask=None) -> dict:
 def _performance_norm(N_rp, delta, omega) -> float:
     """max over omega of sigma_max(Wp S) of the loop with the real perturbation ``delta``
     (the first 10 channels closed by constant ``delta``, the performance channel left)."""
-    A, B, C, D = (np.asarray(m, float) for m in (N_rp.A, N_rp.B, N_rp.C, N_rp.D))
-    n = len(delta)
-    dl = np.diag(delta)
-    closing = np.linalg.solve(np.eye(n) - D[:n, :n] @ dl, np.eye(n))
-    sys = control.ss(A + B[:, :n] @ dl @ closing @ C[:n], B[:, n:] + B[:, :n] @ dl @ closing @ D[:n, n:],
-                     C[n:] + D[n:, :n] @ dl @ closing @ C[:n], D[n:, n:] + D[n:, :n] @ dl @ closing @ D[:n, n:])
+    sys = control.ss(*constant_upper_lft(N_rp, delta))
     return float(max(np.linalg.norm(m, 2) for m in frequency_response(sys, omega)))
+
+
+def perturbation_loops(kind: str):
+    """The loops the perturbations see with controller ``kind``: robust stability and robust
+    performance (the uncertain plant closed by the controller, mm units)."""
+    K = _controller_mm(kind)
+    return (s4.uncertain_plant(False).lft(K, nu=2, ny=2), s4.uncertain_plant(True).lft(K, nu=2, ny=2))
+
+
+@lru_cache(maxsize=2)
+def mu_curves(kind: str) -> tuple[np.ndarray, np.ndarray]:
+    """AB13MD upper bounds over :data:`OMEGA` for robust stability and robust performance."""
+    N_rs, N_rp = perturbation_loops(kind)
+    return (mu_upper_bound(N_rs, OMEGA, *s4.robust_stability_structure()),
+            mu_upper_bound(N_rp, OMEGA, *s4.robust_performance_structure()))
 
 
 def mu_analysis(samples: int, seed: int) -> dict:
@@ -108,11 +120,8 @@ def mu_analysis(samples: int, seed: int) -> dict:
     coarse = np.logspace(-1, 4, 60)
     out = {}
     for kind in KINDS:
-        K = _controller_mm(kind)
-        N_rs = s4.uncertain_plant(False).lft(K, nu=2, ny=2)
-        N_rp = s4.uncertain_plant(True).lft(K, nu=2, ny=2)
-        rs = mu_upper_bound(N_rs, OMEGA, *s4.robust_stability_structure())
-        rp = mu_upper_bound(N_rp, OMEGA, *s4.robust_performance_structure())
+        N_rs, N_rp = perturbation_loops(kind)
+        rs, rp = mu_curves(kind)
         stable_corners = [is_stable(N_rs, c) for c in corners]
         stable_random = [is_stable(N_rs, d) for d in randoms]
         points = np.vstack([corners, randoms])
@@ -149,8 +158,7 @@ def _claim_grid(n: int = 11) -> dict:
                 p = s4.nominal_params()
                 for key, sg in zip(("m_x", "m_y", "b_x", "b_y"), signs):
                     p[key] *= 1.0 + sg * s4.TABLE1[key][1]
-                G = s4.design_plant(k_il, k_c, p) * 1e-3
-                cl = control.feedback(control.ss(G) * control.ss(K), np.eye(2))
+                cl = control.feedback(s4.plant_si(k_il, k_c, p) * control.ss(K), np.eye(2))
                 if np.max(cl.poles().real) >= 0:
                     unstable.append((float(k_il), float(k_c), signs))
         out[kind] = {"points": n * n * 16, "unstable": len(unstable), "first_unstable": unstable[:3]}
@@ -180,9 +188,7 @@ def tf_circle(kind: str, zpetc: bool, radius_mm: float, feed: float, duration_s:
               k_il: float = 0.0, k_c: float = 0.0) -> dict:
     """The circle on the transfer functions (eq. 11 with the cutting gains), saturation 10 V."""
     ctrl = make_controller(f"seed004_{kind}", s4.DT_S, {"zpetc": zpetc}, axes=("x", "y"))
-    preview = max((f.preview for f, _ in s4.zpetc_filters(kind)), default=0) if zpetc else 0
-    ref = circle_reference(radius_mm, feed, duration_s, preview)
-    from twin.machines.linear_motor import cutting_coupled_plant
+    ref = circle_reference(radius_mm, feed, duration_s, preview_ticks_needed(ctrl.inputs))
     pos, u = tf_loop_xy(cutting_coupled_plant(s4.nominal_params(), k_il, k_c), ctrl, ref)
     n = len(pos)
     return _errors(np.arange(n) * s4.DT_S, ref[:n, :, 0], pos, u)
@@ -216,6 +222,13 @@ def run_twin(data: dict):
     return run_scenario(scenario_from_dict(data), progress=False)
 
 
+@lru_cache(maxsize=2)
+def cutting_run(kind: str):
+    """The twin's cutting circle of ``kind`` (bundled scenario, mechanistic force): shared by
+    the tables, the plots and the recording, run once."""
+    return run_twin(scenario_data(f"seed004_{kind}_cutting"))
+
+
 def twin_errors(res) -> dict:
     return _errors(res.t_s, res.ref[:, :, 0], res.table_position_m(), res.u_V)
 
@@ -229,7 +242,7 @@ def circle_cases() -> dict:
         cut = scenario_data(f"seed004_{kind}_cutting")
         average = copy.deepcopy(cut)
         average["disturbances"] = [dict(AVERAGE_FORCE)]
-        out[kind] = {"air_cut": twin_errors(run_twin(air)), "cutting_mechanistic": twin_errors(run_twin(cut)),
+        out[kind] = {"air_cut": twin_errors(run_twin(air)), "cutting_mechanistic": twin_errors(cutting_run(kind)),
                      "cutting_average_force": twin_errors(run_twin(average)),
                      "cutting_radius_mm": cut["reference"]["radius_mm"]}
         # the same loop on both models: no friction, ideal encoders, no tooth harmonic

@@ -134,7 +134,7 @@ def write_plots(folder) -> list[Path]:
     fig, ax = plt.subplots(figsize=(7, 4.5))
     G = frequency_response(s4.design_plant(), w)
     target = frequency_response(d["design"].shaped, w)
-    loop = G @ frequency_response(d["reduced"] * 1e-3, w)
+    loop = G @ frequency_response(d["reduced"] * (1.0 / s4.POSITION_UNIT_PER_M), w)
     for resp, label, style in ((G, "plant G", ":"), (target, "target loop G Ws", "--"), (loop, "open loop G K (order 4)", "-")):
         sv = np.linalg.svd(resp, compute_uv=False)
         ax.loglog(w, sv[:, 0], style, color="C0" if style == "-" else "C1" if style == "--" else "C2", label=label)
@@ -145,12 +145,11 @@ def write_plots(folder) -> list[Path]:
     ax.legend()
     save(fig, "seed004_loop_shape.png")
 
-    res_mu = r.mu_analysis(0, 0)
-    for key, title, name in (("rs", "Fig. 6: mu, robust stability", "seed004_mu_rs.png"),
-                             ("rp", "Fig. 7: mu, robust performance", "seed004_mu_rp.png")):
+    for index, title, name in ((0, "Fig. 6: mu, robust stability", "seed004_mu_rs.png"),
+                               (1, "Fig. 7: mu, robust performance", "seed004_mu_rp.png")):
         fig, ax = plt.subplots(figsize=(7, 4.5))
         for kind in r.KINDS:
-            ax.semilogx(res_mu["omega_rad_s"], res_mu[kind][key], label=f"{kind} (upper bound)")
+            ax.semilogx(r.OMEGA, r.mu_curves(kind)[index], label=f"{kind} (upper bound)")
         ax.axhline(1.0, color="k", linewidth=0.5)
         ax.set(xlabel="frequency (rad/s)", ylabel="mu", title=f"Seed 004 {title}")
         ax.grid(True, which="both", alpha=0.3)
@@ -186,7 +185,7 @@ def write_plots(folder) -> list[Path]:
 
 def cutting_runs() -> dict:
     """The twin's two cutting circles (MIMO R 28, PID R 30), mechanistic force."""
-    return {kind: r.run_twin(r.scenario_data(f"seed004_{kind}_cutting")) for kind in r.KINDS}
+    return {kind: r.cutting_run(kind) for kind in r.KINDS}
 
 
 def record(path: Path) -> None:
