@@ -22,7 +22,9 @@ outputs to it.  Block kinds:
     Elementwise static nonlinearity ``y_i = f(v_i)`` (``par``: code, then its parameters):
     :data:`NL_SATURATION` (limit L: ``clip(v, -L, L)``), :data:`NL_DEAD_ZONE` (width w:
     ``0`` for ``|v| <= w``, else ``v - w sign(v)``), :data:`NL_COSH_GAIN` (k, e_max:
-    ``cosh(k clip(v, -e_max, e_max)) v``, seed 002's eqs. 7-8).
+    ``cosh(k clip(v, -e_max, e_max)) v``, seed 002's eqs. 7-8), :data:`NL_RELAY` (amplitude d:
+    ``d`` for ``v >= 0``, else ``-d``; with ``u_prev`` fed back into ``v`` it is a relay with
+    hysteresis, see :func:`controllers.blocks.compose.relay_feedback`).
 :data:`SEQUENCE`
     Plays a stored sequence: output row ``tick`` (the block's one input), zero after its end.
 :data:`PYTHON`
@@ -36,7 +38,7 @@ import math
 from numba import njit
 
 LINEAR, SUM, STATIC, SEQUENCE, PYTHON = 0, 1, 2, 3, 4
-NL_SATURATION, NL_DEAD_ZONE, NL_COSH_GAIN = 0, 1, 2
+NL_SATURATION, NL_DEAD_ZONE, NL_COSH_GAIN, NL_RELAY = 0, 1, 2, 3
 #: Columns of ``ops``.
 KIND, IN_START, N_IN, OUT_START, N_OUT, PAR_START, STATE_START, N_STATE = range(8)
 
@@ -89,6 +91,8 @@ def run_blocks(b0, b1, ops, io, par, state, scratch, bus):  # pragma: no cover -
                     y = min(max(v, -p1), p1)
                 elif code == NL_DEAD_ZONE:
                     y = 0.0 if abs(v) <= p1 else (v - p1 if v > 0 else v + p1)
+                elif code == NL_RELAY:
+                    y = p1 if v >= 0.0 else -p1
                 else:  # NL_COSH_GAIN: p1 = k, p2 = e_max
                     y = math.cosh(p1 * min(max(v, -p2), p2)) * v
                 bus[io[o0 + j]] = y

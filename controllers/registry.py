@@ -16,7 +16,7 @@ from controllers.blocks import (NONLINEARITIES, Controller, Linear, Sum, cascade
                                 inverse_model_observer, lti_block, lure, sum_of, with_feedforward)
 from controllers.design.pid import pid_tf
 from controllers.lti import SisoTf
-from controllers.papers import seed000, seed002, seed003
+from controllers.papers import seed000, seed001, seed002, seed003
 
 
 @dataclass
@@ -128,6 +128,53 @@ def _seed004(kind):
     return build
 
 
+def _seed001(p, ctx):
+    """Seed 001's designs (controllers/papers/seed001.py) on each served axis, mm units in the
+    design, SI on the bus."""
+    design = p.get("design", "pi_p_pole_placement")
+    if design not in seed001.DESIGNS:
+        raise ValueError(f"design = {design!r}: use one of {', '.join(seed001.DESIGNS)}")
+    feedforward = p.get("feedforward", True)
+    if not isinstance(feedforward, bool):
+        raise ValueError(f"feedforward = {feedforward!r}: must be true or false")
+    ku, pu = p.get("ku_V_per_mm"), p.get("pu_s")
+    for key, v in (("ku_V_per_mm", ku), ("pu_s", pu)):
+        if v is not None and not (isinstance(v, (int, float)) and v > 0 and math.isfinite(v)):
+            raise ValueError(f"{key} = {v!r}: must be a number > 0")
+    if (ku is None) != (pu is None):
+        raise ValueError("ku_V_per_mm and pu_s go together")
+    if not math.isclose(ctx.dt, seed001.DT_S):
+        raise ValueError(f"control_period_s = {ctx.dt:g}: seed 001's designs are made for {seed001.DT_S:g} s")
+    mm = seed001.MM_PER_M
+    if design == "state_feedback_mimo":
+        if ctx.axes != ("x", "y"):
+            raise ValueError(f"axes = {list(ctx.axes)}: the MIMO state feedback serves axes x and y together "
+                             "([controller], not [controllers.<axis>])")
+        K, N = seed001.mimo_pole_placement()
+        D = mm * np.hstack([N, -K[:, [1, 3]], -K[:, [0, 2]]])
+        inputs = ("ref.x", "ref.y", "pos.x", "pos.y", "vel.x", "vel.y")
+        return Controller([Linear(np.zeros((0, 0)), np.zeros((0, 6)), np.zeros((2, 0)), D, inputs, ("u.x", "u.y"),
+                                  name="state_feedback_mimo")], ctx.dt, "seed001")
+    parts = []
+    for a in ctx.axes:
+        if a not in seed001.AXES:
+            raise ValueError(f"axis {a!r}: seed 001 models axes x and y")
+        g = seed001.design_gains(a, design, ku, pu)
+        if g["form"] == "pid":
+            tf_s = g["kd"] / g["kp"] / seed001.DERIVATIVE_FILTER_N if g["kd"] else 0.0
+            parts.append(error_feedback(pid_tf(mm * g["kp"], mm * g["ki"], mm * g["kd"], tf_s), ctx.dt, (a,),
+                                        ctx.method, name=f"seed001.{a}"))
+        elif g["form"] == "fo_pi":
+            A, B, C, D = seed001.fractional_pi_state_space(a)
+            parts.append(error_feedback((A, B, mm * C, mm * D), ctx.dt, (a,), ctx.method, name=f"seed001.{a}"))
+        else:
+            tf_s = g["kd"] / g["kp"] / seed001.DERIVATIVE_FILTER_N if g["kd"] else 0.0
+            ff = g["position_ref_ff"] if feedforward else 0.0
+            parts.append(cascade(pid_tf(g["kp"], g["ki"], g["kd"], tf_s), pid_tf(mm * g["kv"]), ctx.dt, a, 0.0,
+                                 ctx.method, f"seed001.{a}", position_ref_ff=ff))
+    return Controller([b for c in parts for b in c.blocks], ctx.dt, "seed001")
+
+
 def _sum(p, ctx):
     if not ctx.parts:
         raise ValueError("a sum needs at least one part")
@@ -190,6 +237,10 @@ CONTROLLERS = {
                      _seed004("mimo"), ("zpetc", "order")),
     "seed004_pid": ("seed 004's SISO comparison: a PID per axis with the MIMO loop's crossover and phase margin, "
                     "with ZPETC feedforward (zpetc, default true)", _seed004("pid"), ("zpetc", "order")),
+    "seed001": ("seed 001's designs on the sabau_xy axes (design = " + ", ".join(seed001.DESIGNS)
+                + "; default pi_p_pole_placement); feedforward = false drops the PI-P reference feedforward; "
+                "ku_V_per_mm, pu_s set the ZN designs' ultimate point (default: the 10 ms-delay model's); "
+                "control_period_s = 1e-3", _seed001, ("design", "feedforward", "ku_V_per_mm", "pu_s")),
     "sum": ("u = the sum of the parts' u: parts = [{ type = ... }, ...], each any kind", _sum, ()),
     "linear": ("any state space A, B, C, D (domain discrete or continuous) from named inputs (default "
                "['error']) to outputs (default ['u']); names without '.axis' are per axis",

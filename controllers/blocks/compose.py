@@ -74,10 +74,10 @@ def with_feedforward(ctrl: Controller, velocity_ff, acceleration_ff) -> Controll
 
 
 def cascade(outer, inner, dt: float, axis: str = "x", velocity_ref_ff: float = 0.0,
-            method: str = "tustin", name: str = "cascade") -> Controller:
+            method: str = "tustin", name: str = "cascade", position_ref_ff: float = 0.0) -> Controller:
     """Position loop around a velocity loop on one axis.
 
-    ``v_ref = C_pos(z) error + velocity_ref_ff * ref_vel`` (m/s), then
+    ``v_ref = C_pos(z) error + velocity_ref_ff * ref_vel + position_ref_ff * ref`` (m/s), then
     ``u = C_vel(z) (v_ref - vel)`` (V).
 
     Parameters
@@ -88,10 +88,17 @@ def cascade(outer, inner, dt: float, axis: str = "x", velocity_ref_ff: float = 0
         Velocity controller, V per (m/s).
     velocity_ref_ff : float
         Share of the reference velocity fed forward into the velocity reference (0..1 usually).
+    position_ref_ff : float
+        Gain (1/s) from the reference position into the velocity reference; with a P velocity
+        loop ``kv`` it adds ``kv position_ref_ff ref`` to u (the feedforward that turns a PI-P
+        cascade into its integral state feedback, seed 001).
     """
     v_ref, v_err = f"{name}:v_ref.{axis}", f"{name}:v_error.{axis}"
+    weights, signals = (1.0, velocity_ref_ff, -1.0), (v_ref, f"ref_vel.{axis}", f"vel.{axis}")
+    if position_ref_ff:
+        weights, signals = weights + (position_ref_ff,), signals + (f"ref.{axis}",)
     blocks = [lti_block(outer, dt, [f"error.{axis}"], [v_ref], method, "position"),
-              Sum((1.0, velocity_ref_ff, -1.0), (v_ref, f"ref_vel.{axis}", f"vel.{axis}"), v_err, "velocity_error"),
+              Sum(weights, signals, v_err, "velocity_error"),
               lti_block(inner, dt, [v_err], [f"u.{axis}"], method, "velocity")]
     return Controller(blocks, dt, name)
 
@@ -103,6 +110,30 @@ def lure(sys, nonlinearity: str, settings, dt: float, axis: str = "x", method: s
     shaped = f"{name}:f_error.{axis}"
     blocks = [Static(nonlinearity, tuple(settings), (f"error.{axis}",), (shaped,), "nonlinearity"),
               lti_block(sys, dt, [shaped], [f"u.{axis}"], method, "linear")]
+    return Controller(blocks, dt, name)
+
+
+def relay_feedback(amplitude_V: float, hysteresis_m: float, dt: float, axis: str = "x",
+                   name: str = "relay") -> Controller:
+    """Relay with hysteresis on the error, for the relay (Astrom-Hagglund) tuning experiment.
+
+    ``u = d`` while ``error + (eps/d) u_prev >= 0``, else ``-d``: the output switches to ``+d``
+    when the error rises above ``eps`` and to ``-d`` when it falls below ``-eps`` (the previous
+    command fed back through the bus makes the memory; the first tick, with ``u_prev = 0`` and
+    zero error, starts at ``+d``).
+
+    Parameters
+    ----------
+    amplitude_V : float
+        Relay amplitude d (V), > 0.
+    hysteresis_m : float
+        Half-width eps of the hysteresis band (m), >= 0.
+    """
+    if not (amplitude_V > 0 and math.isfinite(amplitude_V)) or not (hysteresis_m >= 0 and math.isfinite(hysteresis_m)):
+        raise ValueError(f"relay: amplitude_V = {amplitude_V!r} must be > 0 and hysteresis_m = {hysteresis_m!r} >= 0")
+    switching = f"{name}:switching.{axis}"
+    blocks = [Sum((1.0, hysteresis_m / amplitude_V), (f"error.{axis}", f"u_prev.{axis}"), switching, "hysteresis"),
+              Static("relay", (amplitude_V,), (switching,), (f"u.{axis}",), "relay")]
     return Controller(blocks, dt, name)
 
 

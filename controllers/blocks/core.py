@@ -21,6 +21,7 @@ NONLINEARITIES = {
     "saturation": (kernels.NL_SATURATION, ("limit",)),
     "dead_zone": (kernels.NL_DEAD_ZONE, ("width",)),
     "cosh_gain": (kernels.NL_COSH_GAIN, ("k", "e_max")),
+    "relay": (kernels.NL_RELAY, ("amplitude",)),
 }
 
 
