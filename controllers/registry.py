@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from controllers.blocks import (NONLINEARITIES, Controller, Linear, Sum, cascade, error_feedback, harmonic_observer,
-                                inverse_model_observer, lti_block, lure, sum_of, with_feedforward)
+                                inverse_model_observer, lti_block, lure, relay_feedback, sum_of, with_feedforward)
 from controllers.design.pid import pid_tf
 from controllers.lti import SisoTf
 from controllers.papers import seed000, seed001, seed002, seed003
@@ -134,9 +134,10 @@ def _seed001(p, ctx):
     design = p.get("design", "pi_p_pole_placement")
     if design not in seed001.DESIGNS:
         raise ValueError(f"design = {design!r}: use one of {', '.join(seed001.DESIGNS)}")
-    feedforward = p.get("feedforward", True)
-    if not isinstance(feedforward, bool):
-        raise ValueError(f"feedforward = {feedforward!r}: must be true or false")
+    feedforward, velocity_ff = p.get("feedforward", True), p.get("velocity_ff", False)
+    for key, v in (("feedforward", feedforward), ("velocity_ff", velocity_ff)):
+        if not isinstance(v, bool):
+            raise ValueError(f"{key} = {v!r}: must be true or false")
     ku, pu = p.get("ku_V_per_mm"), p.get("pu_s")
     for key, v in (("ku_V_per_mm", ku), ("pu_s", pu)):
         if v is not None and not (isinstance(v, (int, float)) and v > 0 and math.isfinite(v)):
@@ -172,7 +173,10 @@ def _seed001(p, ctx):
             ff = g["position_ref_ff"] if feedforward else 0.0
             parts.append(cascade(pid_tf(g["kp"], g["ki"], g["kd"], tf_s), pid_tf(mm * g["kv"]), ctx.dt, a, 0.0,
                                  ctx.method, f"seed001.{a}", position_ref_ff=ff))
-    return Controller([b for c in parts for b in c.blocks], ctx.dt, "seed001")
+    ctrl = Controller([b for c in parts for b in c.blocks], ctx.dt, "seed001")
+    if velocity_ff:  # the drive's VFF_GAIN: u += ref_vel / K_M, K_M = K/a (V per mm/s -> V per m/s)
+        ctrl = with_feedforward(ctrl, [mm * seed001.MODEL[a][1] / seed001.MODEL[a][0] for a in ctx.axes], 0.0)
+    return ctrl
 
 
 def _sum(p, ctx):
@@ -228,6 +232,10 @@ CONTROLLERS = {
     "lure": ("Lur'e: u = num/den (V/m) of f(error), f = nonlinearity: saturation (limit, m), dead_zone "
              "(width, m) or cosh_gain (k 1/m, e_max m)",
              _each_axis(_generic_lure), ("num", "den", "nonlinearity", "limit", "width", "k", "e_max")),
+    "relay": ("relay with hysteresis on the error for the relay tuning test: u = +-amplitude_V (default 1 V), "
+              "switching when the error leaves +-hysteresis_m (default 0 m)",
+              _each_axis(lambda p, ctx, a: relay_feedback(p.get("amplitude_V", 1.0), p.get("hysteresis_m", 0.0), ctx.dt,
+                                                          a, f"relay.{a}")), ("amplitude_V", "hysteresis_m")),
     "seed003_cascade": ("seed 003's cascade: velocity PI for GM 9.37 dB and PM 56.4 deg, position P for PM "
                         "67.1 deg (thesis Figs. 4.3, 4.7), designed on the machine's model with its delay and "
                         "the encoder's backward-difference velocity", _each_axis(_seed003_cascade), ()),
@@ -240,7 +248,7 @@ CONTROLLERS = {
     "seed001": ("seed 001's designs on the sabau_xy axes (design = " + ", ".join(seed001.DESIGNS)
                 + "; default pi_p_pole_placement); feedforward = false drops the PI-P reference feedforward; "
                 "ku_V_per_mm, pu_s set the ZN designs' ultimate point (default: the 10 ms-delay model's); "
-                "control_period_s = 1e-3", _seed001, ("design", "feedforward", "ku_V_per_mm", "pu_s")),
+                "control_period_s = 1e-3", _seed001, ("design", "feedforward", "velocity_ff", "ku_V_per_mm", "pu_s")),
     "sum": ("u = the sum of the parts' u: parts = [{ type = ... }, ...], each any kind", _sum, ()),
     "linear": ("any state space A, B, C, D (domain discrete or continuous) from named inputs (default "
                "['error']) to outputs (default ['u']); names without '.axis' are per axis",

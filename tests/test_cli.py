@@ -143,7 +143,7 @@ def test_reproduce_seed000_text_report():
 def test_reproduce_unknown_source_exits_2():
     r = _twin("reproduce", "seed999")
     assert r.returncode == 2 and r.stderr.strip().splitlines() == [
-        "error: source = 'seed999': no reproduction of that paper yet (known: seed000, seed002, seed003, seed004)"]
+        "error: source = 'seed999': no reproduction of that paper yet (known: seed000, seed001, seed002, seed003, seed004)"]
 
 
 def test_reproduce_seed002_transfer_functions_only(tmp_path):
@@ -162,6 +162,17 @@ def test_reproduce_seed003_transfer_functions_only():
     assert res["design"]["velocity"]["gm_db"] == pytest.approx(9.37, abs=0.01)  # the thesis's margins, met
     assert res["design"]["velocity"]["pm_deg"] == pytest.approx(56.4, abs=0.01)
     assert res["design"]["q_cutoff_hz"] == 100.0 and len(res["cases"]) == 6
+
+
+def test_reproduce_seed001_transfer_functions_only(tmp_path):
+    r = _twin("reproduce", "seed001", "--json", "--twin-samples", "0", "--samples", "2", "--plots", str(tmp_path / "p"))
+    assert r.returncode == 0, r.stderr
+    res = json.loads(r.stdout)
+    assert res["relay"]["used"] == "tf" and "twin" not in res["table1"]["p"]
+    # ZN P from the 10 ms relay test: Table 1's 20 % / 8 % overshoot within a few points
+    assert [m["overshoot_pct"] for m in res["table1"]["p"]["tf"]] == pytest.approx([20.0, 8.0], abs=2.0)
+    assert all(res["lmi"][d]["in_region"] == [True, True] for d in ("lmi", "pi_p_lmi"))
+    assert len(list((tmp_path / "p").glob("seed001_*.png"))) == 7   # the trajectories need the twin
 
 
 def test_run_cutting_scenario_with_settings_and_recording(tmp_path):

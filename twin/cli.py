@@ -212,7 +212,7 @@ def reproduce(source: str = typer.Argument(..., help="Which paper, e.g. seed000 
     res = paper.run(samples, twin_samples, seed, progress=not as_json)
     typer.echo(json.dumps(res, indent=1, default=float) if as_json else paper.format_report(res))
     if plots is not None:
-        for path in paper.write_plots(plots):
+        for path in paper.write_plots(plots, res):
             typer.echo(f"plot written to {path}", err=as_json)
     if rrd is not None:
         paper.record(rrd)

@@ -68,6 +68,19 @@ def step_metrics(t_s: np.ndarray, y: np.ndarray, final: float | None = None,
     }
 
 
+def fit_index(y: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """Fitting index (%) per column: ``100 (1 - ||y - r|| / ||r - mean(r)||)``, the NRMSE fit of
+    MATLAB's ``compare`` (100 is a perfect fit, 0 no better than the mean of the reference).
+
+    Parameters
+    ----------
+    y, r : ndarray, shape (n,) or (n, m)
+        Response and reference, same unit.
+    """
+    y, r = np.asarray(y, float), np.asarray(r, float)
+    return 100.0 * (1.0 - np.linalg.norm(y - r, axis=0) / np.linalg.norm(r - r.mean(axis=0), axis=0))
+
+
 def contour_error(actual_xy: np.ndarray, path_xy: np.ndarray) -> np.ndarray:
     """Distance (same unit) from each actual point to the reference path near it, in O(n).
 

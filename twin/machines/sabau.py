@@ -21,19 +21,24 @@ from twin.machines.base import (Axis, Machine, Parameter, check_stacked_masses, 
 SEED = "seed 001 (Sabau 2022)"
 
 
+def _boxed(value: float, unit: str, description: str, positive: bool = True) -> Parameter:
+    """A model parameter with section 5.3's +-10 % uncertainty box."""
+    return Parameter(value, unit, f"{description}; box +-10 %, section 5.3", (0.9 * value, 1.1 * value), positive)
+
+
 class SabauXY(Machine):
     name = "sabau_xy"
     xml = "sabau_xy/sabau_xy.xml"
     summary = "seed 001 identified X/Y axes 1054/(s+40.85), 2188/(s+87.81) with eq. (6) coupling"
     parameters = {
-        "K_x": Parameter(1054.0, "mm/(V s^2)", f"K_Mx/T_Mx, eq. (1), {SEED}"),
-        "a_x": Parameter(40.85, "1/s", f"1/T_Mx, eq. (1), {SEED}"),
-        "K_y": Parameter(2188.0, "mm/(V s^2)", f"K_My/T_My, eq. (3), {SEED}"),
-        "a_y": Parameter(87.81, "1/s", f"1/T_My, eq. (3), {SEED}"),
-        "H_wx_uy": Parameter(15.0, "mm/(V s^2)", f"u_y to X acceleration, eq. (6), {SEED}",
-                             positive=False),
-        "H_wy_ux": Parameter(24.5, "mm/(V s^2)", f"u_x to Y acceleration, eq. (6), {SEED}",
-                             positive=False),
+        "K_x": _boxed(1054.0, "mm/(V s^2)", f"K_Mx/T_Mx, eq. (1), {SEED}"),
+        "a_x": _boxed(40.85, "1/s", f"1/T_Mx, eq. (1), {SEED}"),
+        "K_y": _boxed(2188.0, "mm/(V s^2)", f"K_My/T_My, eq. (3), {SEED}"),
+        "a_y": _boxed(87.81, "1/s", f"1/T_My, eq. (3), {SEED}"),
+        "H_wx_uy": _boxed(15.0, "mm/(V s^2)", f"u_y to X acceleration, eq. (6), {SEED}",
+                          positive=False),
+        "H_wy_ux": _boxed(24.5, "mm/(V s^2)", f"u_x to Y acceleration, eq. (6), {SEED}",
+                          positive=False),
         "m_x": Parameter(25.0, "kg", "mass moved by X, Y carriage included (assumed)"),
         "m_y": Parameter(10.0, "kg", "mass moved by Y, workpiece included (assumed)"),
         "m_workpiece": Parameter(2.0, "kg", "workpiece mass (assumed)"),

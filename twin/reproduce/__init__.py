@@ -1,7 +1,8 @@
 """Each paper's reproduction, one package per seed, behind one registry.
 
 A reproduction package offers ``run(samples, twin_samples, seed, progress) -> dict``,
-``format_report(results) -> str``, ``write_plots(folder) -> list of Path``, ``record(path)`` and
+``format_report(results) -> str``, ``write_plots(folder, results) -> list of Path`` (``results``: what
+``run`` returned, for the plots that need it), ``record(path)`` and
 ``failed(results) -> bool``; ``twin reproduce SEED`` dispatches through :data:`REPRODUCTIONS`.
 """
 
@@ -10,7 +11,8 @@ from __future__ import annotations
 import importlib
 
 #: Seed name -> package of its reproduction.
-REPRODUCTIONS = {"seed000": "twin.reproduce.seed000", "seed002": "twin.reproduce.seed002",
+REPRODUCTIONS = {"seed000": "twin.reproduce.seed000", "seed001": "twin.reproduce.seed001",
+                 "seed002": "twin.reproduce.seed002",
                  "seed003": "twin.reproduce.seed003", "seed004": "twin.reproduce.seed004"}
 
 

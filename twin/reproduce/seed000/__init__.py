@@ -23,7 +23,7 @@ def format_report(results: dict) -> str:
     return report.format_report(results)
 
 
-def write_plots(folder: Path) -> list[Path]:
+def write_plots(folder: Path, results: dict | None = None) -> list[Path]:
     """PNG step responses as the paper's Figs. 7-10."""
     from twin.reproduce.seed000.report import write_plots as plots
 

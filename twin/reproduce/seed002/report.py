@@ -87,7 +87,7 @@ def format_report(res: dict) -> str:
     return "\n".join(out)
 
 
-def write_plots(directory: Path) -> list[Path]:
+def write_plots(directory: Path, results: dict | None = None) -> list[Path]:
     """Popov plot, Bode magnitude/phase of L with |S|, and the twin's tracking error and its
     spectrum for Fig. 10's case (0.4 Hz, 10 mm, 1500 rpm), PID against NPID."""
     import matplotlib

@@ -73,7 +73,7 @@ def format_report(res: dict) -> str:
     return "\n".join(out)
 
 
-def write_plots(directory: Path) -> list[Path]:
+def write_plots(directory: Path, results: dict | None = None) -> list[Path]:
     """Disturbance sensitivity of the four configurations and the reference loops (Figs.
     4.19-4.37), and the twin's tracking-error spectra for three harmonics (Fig. 5.9)."""
     import matplotlib

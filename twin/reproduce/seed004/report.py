@@ -112,7 +112,7 @@ def format_report(res: dict) -> str:
     return "\n".join(out)
 
 
-def write_plots(folder) -> list[Path]:
+def write_plots(folder, results: dict | None = None) -> list[Path]:
     """Fig. 2 (singular values), Figs. 6-7 (mu), Fig. 12 (contour x300) and Fig. 13 (inputs)."""
     import matplotlib
     matplotlib.use("Agg")
