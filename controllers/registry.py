@@ -140,7 +140,7 @@ def _seed001(p, ctx):
             raise ValueError(f"{key} = {v!r}: must be true or false")
     ku, pu = p.get("ku_V_per_mm"), p.get("pu_s")
     for key, v in (("ku_V_per_mm", ku), ("pu_s", pu)):
-        if v is not None and not (isinstance(v, (int, float)) and v > 0 and math.isfinite(v)):
+        if v is not None and not (isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0 and math.isfinite(v)):
             raise ValueError(f"{key} = {v!r}: must be a number > 0")
     if (ku is None) != (pu is None):
         raise ValueError("ku_V_per_mm and pu_s go together")
@@ -247,6 +247,7 @@ CONTROLLERS = {
                     "with ZPETC feedforward (zpetc, default true)", _seed004("pid"), ("zpetc", "order")),
     "seed001": ("seed 001's designs on the sabau_xy axes (design = " + ", ".join(seed001.DESIGNS)
                 + "; default pi_p_pole_placement); feedforward = false drops the PI-P reference feedforward; "
+                "velocity_ff = true adds the drive's velocity feedforward ref_vel/K_M (the MC206X's VFF_GAIN); "
                 "ku_V_per_mm, pu_s set the ZN designs' ultimate point (default: the 10 ms-delay model's); "
                 "control_period_s = 1e-3", _seed001, ("design", "feedforward", "velocity_ff", "ku_V_per_mm", "pu_s")),
     "sum": ("u = the sum of the parts' u: parts = [{ type = ... }, ...], each any kind", _sum, ()),

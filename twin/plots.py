@@ -8,6 +8,25 @@ from pathlib import Path
 from twin.scales import contour_gain
 
 
+def plot_folder(folder):
+    """``(plt, save, written)`` for a report's PNGs: matplotlib's pyplot on the Agg backend, and
+    ``save(fig, name)`` that writes ``folder/name`` (folder created) at 120 dpi, closes the
+    figure and appends the path to the list ``written``."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    written = []
+
+    def save(fig, name):
+        written.append(folder / name)
+        fig.savefig(written[-1], dpi=120, bbox_inches="tight")
+        plt.close(fig)
+    return plt, save, written
+
+
 def _axes_plot(plt, t, series: dict, ylabel: str, title: str, path: Path) -> Path:
     """One panel: a curve per name."""
     fig, ax = plt.subplots(figsize=(8, 3.5))

@@ -129,8 +129,10 @@ def relay_feedback(amplitude_V: float, hysteresis_m: float, dt: float, axis: str
     hysteresis_m : float
         Half-width eps of the hysteresis band (m), >= 0.
     """
-    if not (amplitude_V > 0 and math.isfinite(amplitude_V)) or not (hysteresis_m >= 0 and math.isfinite(hysteresis_m)):
-        raise ValueError(f"relay: amplitude_V = {amplitude_V!r} must be > 0 and hysteresis_m = {hysteresis_m!r} >= 0")
+    for key, value, least in (("amplitude_V", amplitude_V, "> 0"), ("hysteresis_m", hysteresis_m, ">= 0")):
+        number = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+        if not number or not (value > 0 if least == "> 0" else value >= 0):
+            raise ValueError(f"{key} = {value!r}: must be a finite number {least}")
     switching = f"{name}:switching.{axis}"
     blocks = [Sum((1.0, hysteresis_m / amplitude_V), (f"error.{axis}", f"u_prev.{axis}"), switching, "hysteresis"),
               Static("relay", (amplitude_V,), (switching,), (f"u.{axis}",), "relay")]

@@ -204,18 +204,9 @@ def format_report(res: dict) -> str:
 def write_plots(folder, results: dict) -> list[Path]:
     """Step responses (Table 1, Fig. 6, Fig. 7, Figs. 10-11, Fig. 12-13, Figs. 16-17), the bee
     colony's settling time by iteration (Fig. 14) and the trajectories (Table 2)."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from twin.plots import plot_folder
 
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    written = []
-
-    def save(fig, name):
-        written.append(folder / name)
-        fig.savefig(written[-1], dpi=110, bbox_inches="tight")
-        plt.close(fig)
+    plt, save, written = plot_folder(folder)
 
     def steps(groups, title, name, horizon=2.0, disturbance=False):
         fig, axes = plt.subplots(1, 2, figsize=(11, 4), sharey=True)

@@ -114,20 +114,10 @@ def format_report(res: dict) -> str:
 
 def write_plots(folder, results: dict | None = None) -> list[Path]:
     """Fig. 2 (singular values), Figs. 6-7 (mu), Fig. 12 (contour x300) and Fig. 13 (inputs)."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from controllers.design.mimo import frequency_response
+    from twin.plots import plot_folder
 
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    written = []
-
-    def save(fig, name):
-        written.append(folder / name)
-        fig.savefig(written[-1], dpi=120, bbox_inches="tight")
-        plt.close(fig)
+    plt, save, written = plot_folder(folder)
 
     d = s4.mimo_design()
     w = np.logspace(-1, 5, 400)
