@@ -1,4 +1,4 @@
-"""Command line: ``twin run | demo | fidelity | reproduce | list | bench``.
+"""Command line: ``twin run | demo | fidelity | reproduce | sweep | list | bench``.
 
 Bad input (unknown machine, controller or field, invalid values, malformed TOML) prints one
 line ``error: <field> = <value>: <reason>`` on stderr and exits with code 2; a diverging
@@ -219,6 +219,68 @@ def reproduce(source: str = typer.Argument(..., help="Which paper, e.g. seed000 
         typer.echo(f"recording written to {rrd} (view with: rerun {rrd})", err=as_json)
     if paper.failed(res):
         raise typer.Exit(1)
+
+
+@app.command()
+@_guard
+def sweep(target: str = typer.Argument(..., help="Scenario (bundled name or TOML file), or a sweep TOML file "
+                                                 "(with a [vary] table)"),
+          vary: list[str] = typer.Option(None, "--vary", help="PATH=SPEC: box, corners, uniform(a,b), normal(mu,s), "
+                                                             "choice(v,...), grid(a,b,n), line(n)"),
+          sets: list[str] = typer.Option(None, "--set", help="Change a scenario field: PATH=VALUE"),
+          samples: int = typer.Option(None, "--samples", help="Random draws (per grid/corner combination); "
+                                                              "default 100"),
+          seed: int = typer.Option(None, "--seed", help="Sweep seed: every sample's draws and scenario seed"),
+          lhs: bool = typer.Option(None, "--lhs/--no-lhs", help="Latin hypercube for the random specs"),
+          out: Path = typer.Option(None, "--out", help="Parquet dataset folder (default <scenario>_sweep.parquet)"),
+          workers: int = typer.Option(None, "--workers", help="Local cluster processes (default: one per core)"),
+          scheduler: str = typer.Option(None, "--scheduler", help="Run on a Dask scheduler, e.g. tcp://host:8786"),
+          batch: int = typer.Option(None, "--batch", help="Samples per Dask task (default 10)"),
+          resume: bool = typer.Option(False, "--resume", help="Complete an interrupted sweep in --out"),
+          plots: Path = typer.Option(None, "--plots", help="Write histogram and parameter PNGs to this folder"),
+          as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON")):
+    """Run a scenario over sampled parameters on Dask: one Parquet row per sample, a summary of
+    bands and the worst case, robustness certificates where one covers the box."""
+    from twin.sweeps import SweepFile, is_sweep_file, load_sweep_file, prepare_sweep
+    from twin.sweeps.run import make_client, read_sweep, run_sweep
+    from twin.sweeps.summary import certificates, format_summary, summarize, write_sweep_plots
+
+    spec = load_sweep_file(Path(target)) if is_sweep_file(target) else SweepFile(scenario=target, vary={})
+    variations = [f"{k}={v}" for k, v in spec.vary.items()] + list(vary or [])
+    if workers is not None and not 1 <= workers <= 256:
+        raise TwinInputError("--workers", workers, "must be from 1 to 256")
+    if workers is not None and scheduler:
+        raise TwinInputError("--workers", workers, "give --workers or --scheduler, not both")
+    _check_plots_folder(plots)
+    sw = prepare_sweep(spec.scenario, spec.set + list(sets or []), variations,
+                       spec.samples if samples is None else samples, spec.seed if seed is None else seed,
+                       spec.latin_hypercube if lhs is None else lhs)
+    out = out or Path(spec.out or f"{sw.name}_sweep.parquet")
+    if not out.parent.is_dir():
+        raise TwinInputError("--out", str(out), f"folder {str(out.parent)!r} does not exist")
+    client = make_client(workers, scheduler)
+    try:
+        done = run_sweep(sw.scenario, sw.plan, sw.axes, out, client, spec.batch_size if batch is None else batch,
+                         resume, progress=not as_json)
+    finally:
+        client.close()
+    table = read_sweep(out)
+    summary = summarize(table, sw.plan, sw.axes)
+    certs = certificates(sw.machine, sw.controller, sw.plan)
+    summary.update(scenario=sw.name, out=str(out), wall_s=done.wall_s, ran=done.ran, skipped=done.skipped,
+                   certificates=certs)
+    if as_json:
+        typer.echo(json.dumps(summary, indent=1))
+    else:
+        typer.echo(format_summary(summary, certs, sw.axes))
+        typer.echo(f"  {done.ran} samples run in {done.wall_s:.1f} s ({done.skipped} already in {out})")
+    if plots is not None:
+        for path in write_sweep_plots(table, sw.plan, sw.axes, plots):
+            typer.echo(f"plot written to {path}", err=as_json)
+    if done.interrupted:
+        typer.echo(f"error: sweep interrupted after {table.num_rows} of {len(sw.plan)} samples; "
+                   f"twin sweep ... --out {out} --resume completes it", err=True)
+        raise typer.Exit(130)
 
 
 @app.command("list")

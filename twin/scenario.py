@@ -257,15 +257,13 @@ def apply_settings(data: dict, settings: list[str]) -> dict:
     return out
 
 
-def load_scenario(source: str | Path, settings: list[str] | None = None) -> Scenario:
-    """Read and validate a scenario from a file path or a bundled scenario name.
-
-    ``settings`` (``PATH=VALUE``) change fields before validation; see :func:`apply_settings`.
+def read_scenario_data(source: str | Path) -> dict:
+    """A scenario file or bundled scenario as the dict its TOML holds (not yet validated).
 
     Raises
     ------
     TwinInputError
-        Missing file, malformed TOML, or an invalid field (named in the message).
+        Missing file, malformed TOML, or a file that is not UTF-8 text.
     """
     path = Path(source)
     if not path.exists():
@@ -277,14 +275,26 @@ def load_scenario(source: str | Path, settings: list[str] | None = None) -> Scen
     if not path.is_file():
         raise TwinInputError("scenario", str(source), "not a file")
     try:
-        data = tomllib.loads(path.read_bytes().decode("utf-8"))
+        return tomllib.loads(path.read_bytes().decode("utf-8"))
     except UnicodeDecodeError as exc:
         raise TwinInputError("scenario file", str(path), f"not UTF-8 text (byte {exc.start})") from None
     except tomllib.TOMLDecodeError as exc:
         raise TwinInputError("scenario file", str(path), f"malformed TOML: {exc}") from None
     except OSError as exc:
         raise TwinInputError("scenario file", str(path), f"cannot be read ({exc.strerror})") from None
-    return scenario_from_dict(apply_settings(data, settings or []))
+
+
+def load_scenario(source: str | Path, settings: list[str] | None = None) -> Scenario:
+    """Read and validate a scenario from a file path or a bundled scenario name.
+
+    ``settings`` (``PATH=VALUE``) change fields before validation; see :func:`apply_settings`.
+
+    Raises
+    ------
+    TwinInputError
+        Missing file, malformed TOML, or an invalid field (named in the message).
+    """
+    return scenario_from_dict(apply_settings(read_scenario_data(source), settings or []))
 
 
 def scenario_from_dict(data: dict) -> Scenario:

@@ -1,0 +1,98 @@
+"""Monte Carlo and parameter sweeps of a scenario on Dask (:mod:`.plan` draws the samples,
+:mod:`.run` runs them and streams Parquet, :mod:`.summary` reports them) and sweep files."""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from twin.errors import TwinInputError
+from twin.sweeps.plan import Plan, parse_variation
+
+
+class SweepFile(BaseModel):
+    """A sweep file (TOML): the scenario, what to vary and how many samples."""
+
+    model_config = ConfigDict(extra="forbid")
+    scenario: str = Field(description="bundled scenario name or scenario TOML file (relative to the sweep file)")
+    vary: dict[str, str] = Field(description="PATH = SPEC, e.g. 'overrides.m_x' = 'box'")
+    set: list[str] = Field([], description="PATH=VALUE settings of the scenario, as twin run --set")
+    samples: int = 100
+    seed: int = 0
+    latin_hypercube: bool = False
+    batch_size: int = 10
+    out: str | None = None
+
+
+def is_sweep_file(target: str) -> bool:
+    """Whether ``target`` is a TOML file with a ``vary`` table (a sweep, not a scenario)."""
+    path = Path(target)
+    if path.suffix != ".toml" or not path.is_file():
+        return False
+    try:
+        return "vary" in tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError):
+        return False
+
+
+def load_sweep_file(path: Path) -> SweepFile:
+    """Read and validate a sweep file; its ``scenario`` path is made relative to it.
+
+    Raises
+    ------
+    TwinInputError
+        Malformed TOML or an invalid field (named).
+    """
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        spec = SweepFile(**data)
+    except tomllib.TOMLDecodeError as exc:
+        raise TwinInputError("sweep file", str(path), f"not valid TOML: {exc}") from None
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        raise TwinInputError(".".join(str(p) for p in err["loc"]), err.get("input"), err["msg"]) from None
+    candidate = path.parent / spec.scenario
+    if candidate.suffix == ".toml" and candidate.is_file():
+        spec.scenario = str(candidate)
+    return spec
+
+
+@dataclass
+class Sweep:
+    """Everything a sweep needs: the scenario as a dict, its name, machine and controller type,
+    the machine's axes and the :class:`Plan`."""
+
+    scenario: dict
+    name: str
+    machine: str
+    controller: str | None
+    axes: tuple[str, ...]
+    plan: Plan
+
+
+def prepare_sweep(scenario: str, settings: list[str], vary: list[str], samples: int, seed: int,
+                  latin_hypercube: bool) -> Sweep:
+    """Load and check the scenario (once, before any sample runs) and build the plan.
+
+    Raises
+    ------
+    TwinInputError
+        An invalid scenario, setting or variation, or a varied path that does not lead into
+        the scenario.  Varied values the scenario rejects are not errors here: those samples
+        become ``error`` rows.
+    """
+    from twin.machines import get_machine
+    from twin.scenario import apply_settings, prepare, read_scenario_data, scenario_from_dict
+    from twin.sweeps.run import toml_value
+
+    data = apply_settings(read_scenario_data(scenario), settings)
+    scn = scenario_from_dict(data)
+    plan = Plan([parse_variation(v, get_machine(scn.machine).parameters) for v in vary], samples, seed, latin_hypercube)
+    checked = prepare(scn)
+    # the varied paths lead into the scenario (a value the scenario rejects is that sample's error row)
+    apply_settings(data, [f"{p}={toml_value(v)}" for p, v in plan.values(0).items()])
+    controller = scn.controller.type if scn.controller is not None else None
+    return Sweep(data, scn.name, scn.machine, controller, tuple(a.name for a in checked["machine"].axes), plan)

@@ -1,0 +1,125 @@
+"""What a sweep found: bands of every metric, the worst case and its parameters, plots, and
+the robustness certificates that cover the same box, printed beside the sampled evidence."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from twin.sweeps.plan import Plan
+from twin.sweeps.run import metric_columns
+
+#: The metric the worst case is chosen by: the largest max tracking error over the axes.
+WORST_BY = "max_tracking_error_um"
+
+
+def summarize(table, plan: Plan, axes) -> dict:
+    """Counts by status, bands (min, 5 %, median, 95 %, max) of each metric over the ``ok``
+    rows, and the worst sample by :data:`WORST_BY` (over the axes) with its values."""
+    status = np.array(table.column("status").to_pylist())
+    out = {"samples": len(status), "planned": len(plan), "status": {s: int((status == s).sum()) for s in set(status)},
+           "bands": {}, "worst": None}
+    ok = status == "ok"
+    for c in metric_columns(axes):
+        v = np.asarray(table.column(c).to_numpy(zero_copy_only=False), float)[ok]
+        if v.size and np.isfinite(v).any():
+            q = np.nanpercentile(v, [0, 5, 50, 95, 100])
+            out["bands"][c] = dict(zip(("min", "p5", "median", "p95", "max"), q.tolist()))
+    if ok.any():
+        worst = np.max([np.asarray(table.column(f"{WORST_BY}_{a}").to_numpy(zero_copy_only=False), float)
+                        for a in axes], axis=0)
+        worst = np.where(ok, worst, -np.inf)
+        i = int(np.argmax(worst))
+        out["worst"] = {"by": WORST_BY, "value": float(worst[i]), "index": int(table.column("index")[i].as_py()),
+                        "seed": int(table.column("seed")[i].as_py()),
+                        "values": {v.path: table.column(v.path)[i].as_py() for v in plan.variations}}
+    bad = [(table.column("index")[i].as_py(), status[i], table.column("error")[i].as_py())
+           for i in np.flatnonzero(~ok)[:5]]
+    out["first_failures"] = [{"index": int(i), "status": s, "error": e} for i, s, e in bad]
+    return out
+
+
+def certificates(machine: str, controller: str | None, plan: Plan) -> list[dict]:
+    """The robustness certificates of ``controller`` on ``machine`` over a box containing the
+    sweep's, if the project has one: seed 000's Kharitonov verdict and stability margin
+    (cncmt, Table 1's box of K1, K2, m, Im), seed 004's mu upper bounds (linear_motor_xy,
+    Table 1's box with the amplifier weight).  Empty when none applies."""
+    symbols = {v.path.removeprefix("overrides.") for v in plan.variations if v.path.startswith("overrides.")}
+    others = [v.path for v in plan.variations if not v.path.startswith("overrides.")]
+    seed000 = {"seed000_robust_pi": "robust_pi", "seed000_imc": "imc", "seed000_hinf_reduced": "hinf"}
+    if machine == "cncmt" and controller in seed000 and symbols <= {"K1", "K2", "m", "Im"} and not others:
+        from twin.reproduce.seed000.procedure import interval_table
+
+        row = next(r for r in interval_table() if r["controller"] == seed000[controller])
+        return [{"source": "seed 000, Kharitonov over Table 1's box (K1, K2, m, Im)",
+                 "kharitonov_robustly_stable": bool(row["kharitonov_stable"]), "stability_margin": float(row["sm"]),
+                 "family_stable": bool(row["family_stable"]),
+                 "note": "SM < 0: Kharitonov cannot prove stability; family_stable: every member checked"}]
+    if machine == "linear_motor_xy" and controller in ("seed004_mimo", "seed004_pid"):
+        from twin.reproduce.seed004.procedure import OMEGA, mu_curves
+
+        rs, rp = mu_curves(controller.removeprefix("seed004_"))
+        return [{"source": "seed 004, mu (AB13MD upper bound) over Table 1's box of m, b, k_il, k_c with the "
+                           "amplifier weight; robustly stable where the peak is below 1",
+                 "rs_peak": float(rs.max()), "rs_peak_rad_s": float(OMEGA[int(np.argmax(rs))]),
+                 "rp_peak": float(rp.max()), "robustly_stable": bool(rs.max() < 1.0),
+                 "note": "covers the sweep only where its draws lie inside that box"}]
+    return []
+
+
+def format_summary(summary: dict, certs: list[dict], axes) -> str:
+    """The printed summary: counts, bands, worst case, certificates."""
+    counts = ", ".join(f"{k} {v}" for k, v in sorted(summary["status"].items()))
+    out = [f"sweep: {summary['samples']} of {summary['planned']} samples ({counts})", "",
+           f"  {'metric':<28} {'min':>10} {'5 %':>10} {'median':>10} {'95 %':>10} {'max':>10}"]
+    for c, b in summary["bands"].items():
+        out.append(f"  {c:<28} " + " ".join(f"{b[k]:10.3f}" for k in ("min", "p5", "median", "p95", "max")))
+    w = summary["worst"]
+    if w:
+        out += ["", f"  worst case ({w['by']}, largest axis): {w['value']:.3f} at sample {w['index']} "
+                f"(seed {w['seed']}): " + ", ".join(f"{k} = {v:.6g}" if isinstance(v, float) else f"{k} = {v}"
+                                                   for k, v in w["values"].items())]
+    for f in summary["first_failures"]:
+        out.append(f"  sample {f['index']} {f['status']}: {f['error']}")
+    if certs:
+        out.append("")
+        for c in certs:
+            out.append(f"  certificate ({c['source']}):")
+            out.append("    " + ", ".join(f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}"
+                                          for k, v in c.items() if k not in ("source", "note")))
+            out.append(f"    ({c['note']})")
+    else:
+        out += ["", "  no robustness certificate covers this machine, controller and box"]
+    return "\n".join(out)
+
+
+def write_sweep_plots(table, plan: Plan, axes, folder) -> list:
+    """Histograms of each metric and the worst-axis max tracking error against each varied
+    parameter (``ok`` samples)."""
+    from twin.plots import plot_folder
+
+    plt, save, written = plot_folder(folder)
+    ok = np.array(table.column("status").to_pylist()) == "ok"
+    columns = [c for c in metric_columns(axes) if np.isfinite(np.asarray(
+        table.column(c).to_numpy(zero_copy_only=False), float)[ok]).any()]
+    n = len(columns)
+    fig, grid = plt.subplots(math.ceil(n / len(axes)), len(axes), figsize=(5 * len(axes), 3 * math.ceil(n / len(axes))),
+                             squeeze=False)
+    for ax, c in zip(grid.ravel(), columns):
+        ax.hist(np.asarray(table.column(c).to_numpy(zero_copy_only=False), float)[ok], bins=40)
+        ax.set(xlabel=c.replace("_um", " (um)").replace("_N", " (N)"), ylabel="samples")
+        ax.grid(alpha=0.3)
+    fig.suptitle(f"sweep: {int(ok.sum())} ok samples")
+    save(fig, "sweep_histograms.png")
+    worst = np.max([np.asarray(table.column(f"{WORST_BY}_{a}").to_numpy(zero_copy_only=False), float)
+                    for a in axes], axis=0)[ok]
+    numeric = [v for v in plan.variations if table.schema.field(v.path).type != "string"]
+    if numeric:
+        fig, grid = plt.subplots(1, len(numeric), figsize=(5 * len(numeric), 4), squeeze=False)
+        for ax, v in zip(grid.ravel(), numeric):
+            ax.scatter(np.asarray(table.column(v.path).to_numpy(zero_copy_only=False), float)[ok], worst, s=6)
+            ax.set(xlabel=v.path, ylabel="max tracking error, worst axis (um)")
+            ax.grid(alpha=0.3)
+        save(fig, "sweep_metric_vs_parameters.png")
+    return written
