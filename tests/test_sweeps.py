@@ -182,3 +182,67 @@ def test_seed000_certificate_is_the_reproductions():
     assert cert["stability_margin"] == pytest.approx(row["sm"]) and cert["kharitonov_robustly_stable"] is False
     assert certificates("cncmt", "pid", plan) == []
     assert certificates("linear_motor_xy", "pid", _plan("overrides.m_x=box")) == []
+
+
+def _cli(*args, **kw):
+    import subprocess
+    import sys
+    return subprocess.run([sys.executable, "-m", "twin.cli", "sweep", *args], capture_output=True, text=True,
+                          timeout=300, **kw)
+
+
+def test_cli_sweep_file_writes_parquet_summary_and_plots(tmp_path):
+    import json
+    from pathlib import Path
+
+    import twin
+    example = Path(twin.__file__).parent / "sweeps" / "examples" / "seed004_cutting_circle.toml"
+    out = tmp_path / "s.parquet"
+    r = _cli(str(example), "--samples", "4", "--workers", "1", "--set", "duration_s=0.05", "--out", str(out),
+             "--plots", str(tmp_path / "p"), "--json")
+    assert r.returncode == 0, r.stderr
+    summary = json.loads(r.stdout)
+    assert summary["status"] == {"ok": 4} and summary["ran"] == 4 and summary["certificates"] == []
+    assert read_sweep(out).num_rows == 4
+    assert sorted(p.name for p in (tmp_path / "p").iterdir()) == ["sweep_histograms.png",
+                                                                   "sweep_metric_vs_parameters.png"]
+    bad = _cli(str(example), "--vary", "overrides.m_x=uniform(1)", "--out", str(tmp_path / "b.parquet"))
+    assert bad.returncode == 2 and bad.stderr.strip().splitlines() == [
+        "error: --vary overrides.m_x = 'uniform(1)': uniform takes 2 argument(s)"]
+
+
+def test_cli_interrupted_sweep_keeps_its_parts_and_resume_completes_it(tmp_path):
+    import subprocess
+    import sys
+
+    out = tmp_path / "i.parquet"
+    args = ["seed004_cutting_circle", "--vary", "overrides.m_x=box", "--samples", "300", "--batch", "5",
+            "--workers", "1", "--set", "duration_s=0.05", "--out", str(out)]
+    proc = subprocess.Popen([sys.executable, "-m", "twin.cli", "sweep", *args], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 120
+    while not any(out.glob("part-*.parquet")) and time.time() < deadline:
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGINT)
+    stdout, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 130, stderr
+    kept = read_sweep(out).num_rows
+    assert 0 < kept < 300 and "--resume completes it" in stderr.strip().splitlines()[-1]
+    r = _cli(*args, "--resume", "--json")
+    assert r.returncode == 0, r.stderr
+    table = read_sweep(out)
+    assert table.column("index").to_pylist() == list(range(300))
+
+
+def test_a_sweep_runs_on_a_scheduler_by_address(tmp_path):
+    from distributed import LocalCluster
+
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
+        client = make_client(scheduler=cluster.scheduler_address)
+        try:
+            _, table = _sweep(tmp_path, "addr.parquet", None, samples=4, client=client)
+        finally:
+            client.close()
+    assert table.num_rows == 4 and set(table.column("status").to_pylist()) == {"ok"}
+    with pytest.raises(TwinInputError, match="no Dask scheduler"):
+        make_client(scheduler="not-an-address")

@@ -313,15 +313,22 @@ def list_things():
 @_guard
 def bench(as_json: bool = typer.Option(False, "--json", help="Print the figures as JSON"),
           seconds: float = typer.Option(2.0, help="Simulated time per measurement (s)"),
-          repeats: int = typer.Option(5, help="Alternating bare/closed-loop repeats; medians are reported")):
+          repeats: int = typer.Option(5, help="Alternating repeats; medians are reported (--sweep: default 1)"),
+          sweep: bool = typer.Option(False, "--sweep", help="Benchmark twin sweep instead (twin/sweeps/bench.py)"),
+          samples: int = typer.Option(1000, "--samples", help="--sweep: samples of 2 s of the cutting circle"),
+          memory_samples: int = typer.Option(10_000, "--memory-samples", help="--sweep: one-tick samples for the "
+                                                                              "client memory check")):
     """Steps per second, bare mj_step vs the closed loop, for four controller kinds, and start-up time
-    (twin/bench.py)."""
+    (twin/bench.py); with --sweep, twin sweep's wall time, samples/s, parallel efficiency and memory."""
     from twin.bench import run_bench
 
     if not (seconds > 0 and seconds <= 600):
         raise TwinInputError("--seconds", seconds, "must be in (0, 600]")
     if not 1 <= repeats <= 100:
         raise TwinInputError("--repeats", repeats, "must be in 1..100")
+    if sweep:
+        _bench_sweep(as_json, samples, memory_samples, repeats if "--repeats" in sys.argv else 1)
+        return
     figures = run_bench(seconds, repeats)
     if as_json:
         typer.echo(json.dumps(figures, indent=2))
@@ -335,6 +342,27 @@ def bench(as_json: bool = typer.Option(False, "--json", help="Print the figures 
     typer.echo(f"start-up: twin run {f['scenario']} {f['run_process_s']:.2f} s as a new process, "
                f"{f['run_in_process_s']:.2f} s in process, overhead {f['overhead_s']:.2f} s; "
                f"twin --help {f['help_process_s']:.2f} s")
+
+
+def _bench_sweep(as_json: bool, samples: int, memory_samples: int, repeats: int) -> None:
+    from twin.sweeps.bench import run_sweep_bench
+
+    for option, value in (("--samples", samples), ("--memory-samples", memory_samples)):
+        if not 1 <= value <= 100_000:
+            raise TwinInputError(option, value, "must be in 1..100000")
+    f = run_sweep_bench(samples, repeats, memory_samples, progress=not as_json)
+    if as_json:
+        typer.echo(json.dumps({"sweep": f}, indent=2))
+        return
+    typer.echo(f"twin sweep {f['scenario']} ({', '.join(f['settings'])}) --vary {' --vary '.join(f['vary'])}, "
+               f"{f['samples']} samples, median of {f['repeats']}:")
+    typer.echo(f"  1 worker {f['wall_s_1_worker']:.1f} s, 2 workers {f['wall_s_2_workers']:.1f} s "
+               f"(target <= {f['target_wall_s']:g} s), {f['samples_per_s_2_workers']:.1f} samples/s; parallel "
+               f"efficiency {f['parallel_efficiency']:.3f} (target >= {f['target_efficiency']:g})")
+    typer.echo(f"  client memory grew {f['client_memory_growth_MB']:.1f} MB over {f['memory_samples']} one-tick samples")
+    typer.echo(f"  a plain loop over twin run processes: {f['twin_run_loop_s_per_sample']:.2f} s per sample "
+               f"({f['twin_run_loop_samples']} timed), {f['twin_run_loop_extrapolated_s']:.0f} s for "
+               f"{f['samples']} samples")
 
 
 def _terminate(signum, frame):

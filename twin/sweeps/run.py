@@ -145,6 +145,7 @@ def make_client(workers: int | None = None, scheduler: str | None = None):
         except (OSError, ValueError, TypeError) as exc:
             raise TwinInputError("--scheduler", scheduler, f"no Dask scheduler answers there ({exc})") from None
     n = workers or os.cpu_count() or 1
+    logging.getLogger("distributed").setLevel(logging.ERROR)  # its INFO lines would bury the progress bar
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
                            silence_logs=logging.ERROR)
     return Client(cluster)

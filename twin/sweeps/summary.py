@@ -120,6 +120,7 @@ def write_sweep_plots(table, plan: Plan, axes, folder) -> list:
         for ax, v in zip(grid.ravel(), numeric):
             ax.scatter(np.asarray(table.column(v.path).to_numpy(zero_copy_only=False), float)[ok], worst, s=6)
             ax.set(xlabel=v.path, ylabel="max tracking error, worst axis (um)")
+            ax.tick_params(axis="x", labelrotation=30)
             ax.grid(alpha=0.3)
         save(fig, "sweep_metric_vs_parameters.png")
     return written

@@ -277,24 +277,33 @@ def twin_step(controller, params: dict[str, float]) -> dict:
     return step_metrics(res.t_s, res.table_position_m()[:, 0], final=1.0)
 
 
+def _box_plan(spec: str, samples: int, seed: int = 0):
+    """A :class:`twin.sweeps.plan.Plan` varying K1, K2, m and Im of cncmt by ``spec``."""
+    from twin.sweeps.plan import Plan, parse_variation
+
+    params = get_machine("cncmt").parameters
+    return Plan([parse_variation(f"overrides.{s}={spec}", params) for s in BOX_SYMBOLS], samples, seed)
+
+
+def _plan_points(plan) -> list[dict[str, float]]:
+    p = nominal_params()
+    return [{**p, **{k.removeprefix("overrides."): v for k, v in plan.values(i).items()}} for i in range(len(plan))]
+
+
 def paper_samples(n: int = 10) -> list[dict[str, float]]:
     """The paper's "10 uncertain samples between the lower and upper limit via nominal".
 
     Read as: all four parameters move together from their lower to their upper limit in n
-    equal steps (nominal lies on that segment).  The paper does not say more.
+    equal steps (nominal lies on that segment); the sweep machinery's ``line(n)`` spec.  The
+    paper does not say more.
     """
-    p = nominal_params()
-    boxes = get_machine("cncmt").parameters
-    return [{**p, **{s: boxes[s].box[0] + t * (boxes[s].box[1] - boxes[s].box[0]) for s in BOX_SYMBOLS}}
-            for t in np.linspace(0.0, 1.0, n)]
+    return _plan_points(_box_plan(f"line({n})", 1))
 
 
 def random_samples(n: int, seed: int) -> list[dict[str, float]]:
-    """n uniform samples of the box, seeded."""
-    p = nominal_params()
-    boxes = get_machine("cncmt").parameters
-    rng = np.random.default_rng(seed)
-    return [{**p, **{s: rng.uniform(*boxes[s].box) for s in BOX_SYMBOLS}} for _ in range(n)]
+    """n uniform samples of the box, seeded: the sweep machinery's ``box`` spec (each sample
+    drawn from the seed and its index); none for n = 0."""
+    return _plan_points(_box_plan("box", n, seed)) if n else []
 
 
 KEYS = ("overshoot_pct", "settling_time_s", "rise_time_10_90_s", "rise_time_0_100_s")
