@@ -4,7 +4,8 @@
 Both run ticks ``k0 <= k < k1`` of one closed-loop run and call the same kernels for every
 piece of arithmetic: :func:`start_tick` (metrics, state recording),
 :func:`twin.sim.drive.sense` (encoder, velocity, signals onto the bus),
-:func:`controllers.kernels.run_blocks` (the blocks), :func:`twin.sim.drive.drive_command`
+:func:`controllers.kernels.run_blocks` (the blocks, every kind, relay included),
+:func:`twin.sim.drive.drive_command`
 (disturbance, saturation, delay line), :func:`twin.sim.drive.actuator_input`,
 :func:`twin.process.cutting.workpiece_forces` (into ``xfrc_applied`` before each physics step)
 and :func:`end_tick` (recording, force maxima).  They differ only in how they step MuJoCo (ctypes ``mj_step`` on the

@@ -9,6 +9,10 @@ table enters as an equivalent voltage at the plant input, after the delay.  The 
 any compiled :class:`~controllers.blocks.core.Controller` on the loop's bus (signals ``ref``,
 ``ref_vel``, ``ref_acc``, ``pos``, ``vel`` as the encoder's backward difference, ``error``,
 ``u_prev``, ``tick``), run by the same kernel as the twin's loop.
+
+numba caches this loop with :func:`controllers.kernels.run_blocks` inlined, keyed on this file
+alone: a change of block kinds (the relay, for seed 001) must touch this file and
+``twin/sim/loop.py`` too, or a checkout's old cache keeps running the old kernel.
 """
 
 from __future__ import annotations
