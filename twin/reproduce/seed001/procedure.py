@@ -422,8 +422,24 @@ def abc_part(seed: int, twin: bool) -> dict:
                "settling_by_iteration_s": [h["settling_time_s"] for h in history],
                "overshoot_by_iteration_pct": [h["overshoot_pct"] for h in history],
                "log10_q_by_iteration": [x.tolist() for x in res.best_x]}
+        ctrl = _abc_controller(best)
+        row["step"] = {"tf": step_table(*tf_run(ctrl, 2.0)[:2])}
+        if twin:
+            res = twin_run(ctrl, 2.0)
+            row["step"]["twin"] = step_table(res.t_s, res.table_position_m())
         out[name] = row
     return out
+
+
+def _abc_controller(metrics: dict) -> Controller:
+    """The bee colony's LQR on X run as the P-P cascade (Y: the pole placement), for the loops."""
+    from controllers.blocks import cascade
+    from controllers.design.pid import pid_tf
+
+    kp, kv = metrics["k_theta"] / metrics["k_omega"], metrics["k_omega"] * s1.MM_PER_M
+    x = cascade(pid_tf(kp), pid_tf(kv), DT, "x", name="abc.x")
+    y = controller("pole_placement", ("y",))
+    return Controller(x.blocks + y.blocks, DT, "abc")
 
 
 # ---------------------------------------------------------------- part 8: LMI regions
@@ -518,6 +534,7 @@ def _step_pairs(res: dict) -> list[tuple[str, dict]]:
     pairs += [(f"state feedback {k}", v["step"]) for k, v in res["state_feedback"].items()]
     pairs += [(f"lmi {k}", res["lmi"][k]["step"]) for k in ("lmi", "pi_p_lmi")]
     pairs += [(f"mimo {k}", res["mimo"][k]) for k in ("pole_placement", "state_feedback_mimo")]
+    pairs += [(f"abc {k}", res["abc"][k]["step"]) for k in ("minimize", "required")]
     for design in ("fo_pi", "mu_cascade"):
         pairs += [(f"{design} {'nominal' if i == 0 else f'corner {i}'}", {"twin": a, "tf": b})
                   for i, (a, b) in enumerate(zip(res["fractional"][design]["twin"], res["fractional"][design]["tf"]))]

@@ -173,6 +173,7 @@ def format_report(res: dict) -> str:
                    f"{q['metrics']['k_theta'] / q['metrics']['k_omega']:.2f}; settling {q['metrics']['settling_time_s']:.4f} s,"
                    f" overshoot {q['metrics']['overshoot_pct']:.3f} %; cost {q['cost']:.4f} after {q['evaluations']} evaluations;"
                    " settling by iteration " + ", ".join(f"{v:.3f}" for v in q["settling_by_iteration_s"][::5]))
+        out.append(f"           as P-P in the 1 ms loop, x: {_steps(q['step'], 0)}")
     lm = res["lmi"]
     reg = lm["region"]
     out += ["", f"8. LMI regions: Re s < -{reg['alpha']:g}, damping >= {reg['damping']:g}, |s| < {reg['radius']:g}:"]
