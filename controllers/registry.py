@@ -132,7 +132,7 @@ def _seed001(p, ctx):
     """Seed 001's designs (controllers/papers/seed001.py) on each served axis, mm units in the
     design, SI on the bus."""
     design = p.get("design", "pi_p_pole_placement")
-    if design not in seed001.DESIGNS:
+    if not isinstance(design, str) or design not in seed001.DESIGNS:
         raise ValueError(f"design = {design!r}: use one of {', '.join(seed001.DESIGNS)}")
     feedforward, velocity_ff = p.get("feedforward", True), p.get("velocity_ff", False)
     for key, v in (("feedforward", feedforward), ("velocity_ff", velocity_ff)):
