@@ -84,7 +84,7 @@ def test_compiled_and_python_loops_give_identical_series():
     """googol_xy: delay split inside a tick, quantization, noise, saturation, feedforward."""
     bm = build("googol_xy")
     dt, period = bm.model.opt.timestep, 5e-4
-    runs, programs = [], []
+    runs = []
     for compiled in (True, False):
         ctrl = make_controller("seed002_pid", period, velocity_ff=0.5, axes=("x", "y"))
         drive = Drive(2, int(round(period / dt)), dt, bm.delay_s, saturation_V=0.1)

@@ -132,8 +132,8 @@ def format_report(res: dict) -> str:
     ew = res["energy_weights"]
     out.append("  energy weights (eqs. 7-9): J = T_M/K_M " + _pair([w["J"] for w in ew], "{:.3e}")
                + " V s^2/mm, k = J omega_n^2 " + _pair([w["k"] for w in ew]) + " V/mm")
-    out.append("  text: SISO state feedback up to 20 % better than PID / cascade; pole placement's settling time "
-               "against (TF loop, x / y): " + "; ".join(f"{k} {_pair(v, '{:+.0f}')} %" for k, v in res["improvement_pct"].items()))
+    out.append(f"  text: SISO state feedback up to {s1.STATE_FEEDBACK_GAIN_PCT:g} % better than PID / cascade; pole "
+               "placement's settling time against (TF loop, x / y): " + "; ".join(f"{k} {_pair(v, '{:+.0f}')} %" for k, v in res["improvement_pct"].items()))
     m = res["mimo"]
     out.append("  coupled machine, both axes step: SISO pole placement x " + _steps(m["pole_placement"], 0) + ", y "
                + _steps(m["pole_placement"], 1) + "; MIMO (eq. 6) x " + _steps(m["state_feedback_mimo"], 0) + ", y "
@@ -142,8 +142,9 @@ def format_report(res: dict) -> str:
     out += ["", f"6. Fractional PI eq. (14): Oustaloup {s1.OUSTALOUP_BAND[0]:g}..{s1.OUSTALOUP_BAND[1]:g} rad/s, order "
             f"{s1.OUSTALOUP_ORDER}: max error 0.1..100 rad/s "
             + "; ".join(f"{a} {q['mag_db']:.3f} dB {q['phase_deg']:.2f} deg" for a, q in zip("xy", fr["oustaloup"]["axes"])),
-            "  exact responses (Bromwich integral), overshoot / 2 % settling / 10-90 rise; text: x rise 0.248 s settling "
-            "0.558 s, y 0.211 / 0.405, no overshoot:"]
+            "  exact responses (Bromwich integral), overshoot / 2 % settling / 10-90 rise; text: " + ", ".join(
+                f"{a} rise {s1.EQ14_RISE_S[a][0]:g} s settling {s1.EQ14_SETTLING_S[a][0]:g} s" for a in s1.AXES)
+            + ", no overshoot:"]
     for name, ms in fr["arrangements"].items():
         out.append(f"  {name:<46} " + " | ".join(
             f"{a} {q['overshoot_pct']:.1f} % {q['settling_time_s']:.3f} s {q['rise_time_10_90_s']:.3f} s" for a, q in zip("xy", ms)))
@@ -158,7 +159,8 @@ def format_report(res: dict) -> str:
                            f"{b['rise_time_10_90_s'][1]:.3f} s" for a, b in zip("xy", bands)))
     for design in ("fo_pi", "mu_cascade"):
         rows = fr[design]
-        label = "eq. (14), Oustaloup" if design == "fo_pi" else "eqs. (15)-(16) cascade"
+        label = "eq. (14), Oustaloup" if design == "fo_pi" else (
+            f"eqs. (15)-(16) cascade (text: eq. (14) settles {s1.FRACTIONAL_FASTER_S:g} s faster than this)")
         out.append(f"  {label}: nominal x {_steps({k: v[0] for k, v in rows.items()}, 0)}, y "
                    f"{_steps({k: v[0] for k, v in rows.items()}, 1)}; corners settling (TF) x "
                    + _pair([c[0]['settling_time_s'] if c[0]["stable"] else math.nan for c in rows['tf'][1:]]) + ", y "
