@@ -102,7 +102,8 @@ def format_report(res: dict) -> str:
                    f"kd {_pair([x['kd'] for x in g])}")
         for i, a in enumerate("xy"):
             out.append(f"      {a}: paper {paper[a][1]:4.0f} % {paper[a][0]:.2f} s | {_steps(row, i)}")
-    out += ["", "2. Cascades with a P speed loop (speed pole 5 a, critically damped P, PI corner kp/10): "
+    out += ["", f"2. Cascades with a P speed loop (speed pole {s1.SPEED_LOOP_FACTOR:g} a, critically damped P, PI "
+            "corner kp/10): "
             "overshoot, settling; 1 V speed disturbance at 1 s: peak / final deviation (um); coupling: X's "
             "excursion while Y steps (um)"]
     for d, row in res["cascades"].items():
@@ -117,7 +118,8 @@ def format_report(res: dict) -> str:
         out.append("      coupling, X while Y steps 1 mm: " + " | ".join(
             f"{cpl[s]['x_peak_um']:.2f} / {cpl[s]['x_final_um']:.2f}" for s in ("tf", "twin") if s in cpl))
     sf = res["state_feedback"]
-    out += ["", "3-5. State feedback (poles -50, -70; PI-P adds -25) as the cascade the drive runs:"]
+    out += ["", f"3-5. State feedback (poles {', '.join(f'{p:g}' for p in s1.POLES)}; PI-P adds {s1.INTEGRAL_POLE:g}) "
+            "as the cascade the drive runs:"]
     for d in ("pole_placement", "lqr_classical", "lqr_energy", "pi_p_pole_placement", "pi_p_lqr"):
         row = sf[d]
         g = row["gains"]
