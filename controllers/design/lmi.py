@@ -42,7 +42,7 @@ class PoleRegion:
 def region_state_feedback(A: np.ndarray, B: np.ndarray, region: PoleRegion, margin: float = 1e-3) -> np.ndarray:
     """A gain ``K`` with every eigenvalue of ``A - B K`` in ``region``.
 
-    Minimizes ``||Y||_F + 3e-3 trace(P)`` under the region's LMIs (strict inequalities as
+    Minimizes ``||Y||_F + 0.1 trace(P)`` under the region's LMIs (strict inequalities as
     ``<= -margin I``) with ``P >= I`` fixing the scale, so ``||K|| <= ||Y||``: small gains that
     reach the region rather than the fastest poles (the trace term keeps the optimum off the
     region's edge, where Clarabel reported inaccurate solutions); solved by Clarabel.
@@ -64,7 +64,7 @@ def region_state_feedback(A: np.ndarray, B: np.ndarray, region: PoleRegion, marg
             M + M.T + 2 * region.alpha * P << -margin * eye,
             cp.bmat([[s * (M + M.T), c * (M - M.T)], [c * (M.T - M), s * (M + M.T)]]) << -margin * eye2,
             cp.bmat([[-region.radius * P, M], [M.T, -region.radius * P]]) << -margin * eye2]
-    problem = cp.Problem(cp.Minimize(cp.norm(Y, "fro") + 1e-1 * cp.trace(P)), cons)
+    problem = cp.Problem(cp.Minimize(cp.norm(Y, "fro") + 0.1 * cp.trace(P)), cons)
     problem.solve(solver=cp.CLARABEL)
     if problem.status not in ("optimal", "optimal_inaccurate"):
         raise ValueError(f"pole region {region}: the LMIs are {problem.status}")
