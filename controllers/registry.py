@@ -162,16 +162,14 @@ def _seed001(p, ctx):
             raise ValueError(f"axis {a!r}: seed 001 models axes x and y")
         g = seed001.design_gains(a, design, ku, pu)
         if g["form"] == "pid":
-            tf_s = g["kd"] / g["kp"] / seed001.DERIVATIVE_FILTER_N if g["kd"] else 0.0
-            parts.append(error_feedback(pid_tf(mm * g["kp"], mm * g["ki"], mm * g["kd"], tf_s), ctx.dt, (a,),
+            parts.append(error_feedback(pid_tf(mm * g["kp"], mm * g["ki"], mm * g["kd"], g["tf_s"]), ctx.dt, (a,),
                                         ctx.method, name=f"seed001.{a}"))
         elif g["form"] == "fo_pi":
             A, B, C, D = seed001.fractional_pi_state_space(a)
             parts.append(error_feedback((A, B, mm * C, mm * D), ctx.dt, (a,), ctx.method, name=f"seed001.{a}"))
         else:
-            tf_s = g["kd"] / g["kp"] / seed001.DERIVATIVE_FILTER_N if g["kd"] else 0.0
             ff = g["position_ref_ff"] if feedforward else 0.0
-            parts.append(cascade(pid_tf(g["kp"], g["ki"], g["kd"], tf_s), pid_tf(mm * g["kv"]), ctx.dt, a, 0.0,
+            parts.append(cascade(pid_tf(g["kp"], g["ki"], g["kd"], g["tf_s"]), pid_tf(mm * g["kv"]), ctx.dt, a, 0.0,
                                  ctx.method, f"seed001.{a}", position_ref_ff=ff))
     ctrl = Controller([b for c in parts for b in c.blocks], ctx.dt, "seed001")
     if velocity_ff:  # the drive's VFF_GAIN: u += ref_vel / K_M, K_M = K/a (V per mm/s -> V per m/s)

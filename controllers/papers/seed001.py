@@ -25,6 +25,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from controllers.design.pid import pid_tf
 from controllers.design.statefeedback import (CascadeGains, axis_model, energy_weights, integral_augmented, lqr,
                                               mimo_model, p_p_cascade, pi_p_cascade, place)
 from controllers.design.tuning import detune, ziegler_nichols
@@ -80,18 +81,17 @@ LMI_SETTLING_S, LMI_DAMPING, LMI_RADIUS = 0.2, 0.9, 300.0
 OUSTALOUP_BAND, OUSTALOUP_ORDER = (1e-3, 1e4), 5
 
 
-def model(axis: str, scale_gain: float = 1.0, scale_pole: float = 1.0):
-    """Eq. (5) of ``axis`` as ``(A, B, C)`` (mm, V), the gain and pole optionally scaled."""
-    K, a = MODEL[axis]
-    return axis_model(K * scale_gain, a * scale_pole)
+def model(axis: str):
+    """Eq. (5) of ``axis`` as ``(A, B, C)`` (mm, V)."""
+    return axis_model(*MODEL[axis])
 
 
-def plant_tf(axis: str, scale_gain: float = 1.0, scale_pole: float = 1.0):
+def plant_tf(axis: str):
     """``K/(s (s + a))`` in mm/V as a python-control transfer function."""
     import control
 
     K, a = MODEL[axis]
-    return control.tf([K * scale_gain], [1.0, a * scale_pole, 0.0])
+    return control.tf([K], [1.0, a, 0.0])
 
 
 def implied_delay(axis: str) -> dict:
@@ -132,15 +132,9 @@ def ultimate_point(axis: str, delay_s: float = RELAY_DELAY_S, dt: float = DT_S) 
     return float(1.0 / abs(loop(wu))), float(2 * math.pi / wu)
 
 
-def pid_tf_mm(kp: float, ki: float, kd: float):
-    """``kp + ki/s + kd s/(Td/N s + 1)`` (V/mm) as a python-control transfer function."""
-    import control
-
-    s = control.tf("s")
-    c = control.tf([kp], [1.0]) + (ki / s if ki else 0)
-    if kd:
-        c = c + kd * s / (kd / kp / DERIVATIVE_FILTER_N * s + 1)
-    return c
+def derivative_filter_s(kp: float, kd: float) -> float:
+    """The derivative filter's time constant Td/N (s), ``Td = kd/kp``; 0 without a derivative."""
+    return kd / kp / DERIVATIVE_FILTER_N if kd else 0.0
 
 
 def continuous_step(closed_loop, horizon_s: float = 3.0, n: int = 6001) -> tuple[np.ndarray, np.ndarray]:
@@ -179,7 +173,8 @@ def ziegler_nichols_gains(axis: str, ku: float, pu_s: float) -> dict:
             c = detune(lambda f: overshoot_pct(control.feedback(f * kp * G, 1)), max(target, 0.05))
             out[f"modified {kind}"] = (c * kp, 0.0, 0.0)
         else:
-            c = detune(lambda f: overshoot_pct(control.feedback(pid_tf_mm(kp, f * ki, kd) * G, 1), 6.0), target)
+            c = detune(lambda f: overshoot_pct(control.feedback(
+                pid_tf(kp, f * ki, kd, derivative_filter_s(kp, kd)).to_control() * G, 1), 6.0), target)
             out[f"modified {kind}"] = (kp, c * ki, kd)
     return out
 
@@ -308,7 +303,8 @@ def design_gains(axis: str, design: str, ku: float | None = None, pu_s: float | 
     dict
         ``form``: ``"pid"`` with ``kp, ki, kd`` (V/mm, V/(mm s), V s/mm) on the error;
         ``"cascade"`` with ``kp, ki, kd`` of the position controller (1/s, 1/s^2, -), ``kv``
-        (V/(mm/s)) and ``position_ref_ff`` (1/s); ``"fo_pi"`` (eq. 14, see
+        (V/(mm/s)) and ``position_ref_ff`` (1/s); both with ``tf_s``, the derivative filter
+        (:func:`derivative_filter_s`); ``"fo_pi"`` (eq. 14, see
         :func:`fractional_pi_state_space`).  ``ku``, ``pu_s`` (V/mm, s) feed the ZN designs;
         default :func:`ultimate_point`.
     """
@@ -317,16 +313,18 @@ def design_gains(axis: str, design: str, ku: float | None = None, pu_s: float | 
             ku, pu_s = ultimate_point(axis)
         kind = ("modified " if design.startswith("modified_") else "") + design.split("_")[-1].upper()
         kp, ki, kd = ziegler_nichols_gains(axis, ku, pu_s)[kind]
-        return {"form": "pid", "kp": kp, "ki": ki, "kd": kd}
+        return {"form": "pid", "kp": kp, "ki": ki, "kd": kd, "tf_s": derivative_filter_s(kp, kd)}
     if design in ("p_p", "pi_p", "p_pid"):
         kp, ki, kd, kv = cascade_rules(axis)[design.upper().replace("_", "-")]
-        return {"form": "cascade", "kp": kp, "ki": ki, "kd": kd, "kv": kv, "position_ref_ff": 0.0}
+        return {"form": "cascade", "kp": kp, "ki": ki, "kd": kd, "kv": kv, "position_ref_ff": 0.0,
+                "tf_s": derivative_filter_s(kp, kd)}
     if design == "mu_cascade":
         kp, ki, kv = EQ15_16[axis]
-        return {"form": "cascade", "kp": kp, "ki": ki, "kd": 0.0, "kv": kv, "position_ref_ff": 0.0}
+        return {"form": "cascade", "kp": kp, "ki": ki, "kd": 0.0, "kv": kv, "position_ref_ff": 0.0, "tf_s": 0.0}
     if design == "fo_pi":
         return {"form": "fo_pi"}
     if design in DESIGNS and design != "state_feedback_mimo":
         g = state_feedback(axis, design)
-        return {"form": "cascade", "kp": g.kp, "ki": g.ki, "kd": 0.0, "kv": g.kv, "position_ref_ff": g.kr / g.kv}
+        return {"form": "cascade", "kp": g.kp, "ki": g.ki, "kd": 0.0, "kv": g.kv, "position_ref_ff": g.kr / g.kv,
+                "tf_s": 0.0}
     raise ValueError(f"design = {design!r}: use one of {', '.join(DESIGNS)}")
