@@ -43,6 +43,9 @@ DT_S = 1e-3
 TABLE1 = {"P": {"x": (0.18, 20.0), "y": (0.1, 8.0)}, "modified P": {"x": (0.25, 1.0), "y": (0.18, 0.0)},
           "PI": {"x": (0.3, 28.0), "y": (0.12, 36.0)}, "modified PI": {"x": (0.6, 20.0), "y": (0.5, 19.0)},
           "PID": {"x": (0.22, 28.0), "y": (0.17, 25.0)}, "modified PID": {"x": (0.81, 20.0), "y": (0.6, 21.0)}}
+#: Table 1's rows by the registry's design name.
+TABLE1_ROWS = {"p": "P", "modified_p": "modified P", "pi": "PI", "modified_pi": "modified PI", "pid": "PID",
+               "modified_pid": "modified PID"}
 #: Eq. (14): kp + ki s^-lambda per axis.
 EQ14 = {"x": (0.2229, 5.9392, 0.7792), "y": (0.3949, 10.0, 0.9733)}
 #: The text's eq. (14) step responses: (nominal, lowest, highest) over the +-10 % box (s).
@@ -308,11 +311,10 @@ def design_gains(axis: str, design: str, ku: float | None = None, pu_s: float | 
         :func:`fractional_pi_state_space`).  ``ku``, ``pu_s`` (V/mm, s) feed the ZN designs;
         default :func:`ultimate_point`.
     """
-    if design in ("p", "pi", "pid", "modified_p", "modified_pi", "modified_pid"):
+    if design in TABLE1_ROWS:
         if ku is None or pu_s is None:
             ku, pu_s = ultimate_point(axis)
-        kind = ("modified " if design.startswith("modified_") else "") + design.split("_")[-1].upper()
-        kp, ki, kd = ziegler_nichols_gains(axis, ku, pu_s)[kind]
+        kp, ki, kd = ziegler_nichols_gains(axis, ku, pu_s)[TABLE1_ROWS[design]]
         return {"form": "pid", "kp": kp, "ki": ki, "kd": kd, "tf_s": derivative_filter_s(kp, kd)}
     if design in ("p_p", "pi_p", "p_pid"):
         kp, ki, kd, kv = cascade_rules(axis)[design.upper().replace("_", "-")]

@@ -111,13 +111,25 @@ def step_table(t_s, pos) -> list[dict]:
     return out
 
 
-def _step_pair(ctrl_design: str, duration_s: float, twin: bool, **params) -> dict:
-    ctrl = controller(ctrl_design, **params)
-    out = {"tf": step_table(*tf_run(ctrl, duration_s)[:2])}
+def responses(ctrl: Controller, duration_s: float, twin: bool, coupled: bool = False, disturbance: bool = False,
+              scale: dict | None = None, axes=(0, 1)) -> dict:
+    """``side -> (t_s, pos m (n, 2))`` of 1 mm steps on ``axes``: the TF loop (``"tf"``) and,
+    with ``twin``, the twin (``"twin"``), the same loop on both."""
+    n = int(round(duration_s / ctrl.dt))
+    out = {"tf": tf_run(ctrl, duration_s, coupled, disturbance, scale, _step_ref(n, axes))[:2]}
     if twin:
-        res = twin_run(ctrl, duration_s)
-        out["twin"] = step_table(res.t_s, res.table_position_m())
+        res = twin_run(ctrl, duration_s, coupled, disturbance, scale, Step(STEP_M, n_axes=2, axes=tuple(axes)))
+        out["twin"] = (res.t_s, res.table_position_m())
     return out
+
+
+def steps(ctrl: Controller, duration_s: float, twin: bool, **kw) -> dict:
+    """``side -> step_table`` of :func:`responses`."""
+    return {side: step_table(*run) for side, run in responses(ctrl, duration_s, twin, **kw).items()}
+
+
+def _step_pair(ctrl_design: str, duration_s: float, twin: bool, **params) -> dict:
+    return steps(controller(ctrl_design, **params), duration_s, twin)
 
 
 # ---------------------------------------------------------------- part 1: relay and ZN
@@ -158,20 +170,19 @@ def relay_test(delay_s: float, twin: bool) -> dict:
     return out
 
 
+def zn_controller(kind: str, ku_pu: list[tuple[float, float]]) -> Controller:
+    """The ZN design ``kind`` on both axes, each from its own (Ku V/mm, Pu s)."""
+    parts = [controller(kind, (a,), ku_V_per_mm=ku, pu_s=pu) for a, (ku, pu) in zip(s1.AXES, ku_pu)]
+    return Controller([b for c in parts for b in c.blocks], DT, kind)
+
+
 def table1(ku_pu: list[tuple[float, float]], twin: bool) -> dict:
     """ZN and modified P/PI/PID from the relay's (Ku, Pu) per axis; steps on the delay-free loop."""
-    kinds = ("p", "modified_p", "pi", "modified_pi", "pid", "modified_pid")
     out = {}
-    for kind in kinds:
+    for kind in s1.TABLE1_ROWS:
         gains = [s1.design_gains(a, kind, *ku_pu[i]) for i, a in enumerate(s1.AXES)]
-        parts = [controller(kind, (a,), ku_V_per_mm=ku_pu[i][0], pu_s=ku_pu[i][1]) for i, a in enumerate(s1.AXES)]
-        ctrl = Controller([b for c in parts for b in c.blocks], DT, kind)
-        row = {"gains": [{k: g[k] for k in ("kp", "ki", "kd")} for g in gains],
-               "tf": step_table(*tf_run(ctrl, 3.0)[:2])}
-        if twin:
-            res = twin_run(ctrl, 3.0)
-            row["twin"] = step_table(res.t_s, res.table_position_m())
-        out[kind] = row
+        out[kind] = {"gains": [{k: g[k] for k in ("kp", "ki", "kd")} for g in gains],
+                     **steps(zn_controller(kind, ku_pu), 3.0, twin)}
     return out
 
 
@@ -182,13 +193,8 @@ def disturbance_response(design: str, twin: bool) -> dict:
     """1 mm steps, then a 1 V input step at 1 s (a step on the speed equation: the coupling
     from the other axis enters the same way): the largest deviation after it and the offset
     left at 2 s (um), per axis."""
-    ctrl = controller(design)
-    runs = {"tf": tf_run(ctrl, 2.0, disturbance=True)[:2]}
-    if twin:
-        res = twin_run(ctrl, 2.0, disturbance=True)
-        runs["twin"] = (res.t_s, res.table_position_m())
     out = {}
-    for side, (t, pos) in runs.items():
+    for side, (t, pos) in responses(controller(design), 2.0, twin, disturbance=True).items():
         after = t >= DISTURBANCE_AT_S
         base = pos[np.argmax(after) - 1]
         dev = pos[after] - STEP_M
@@ -200,12 +206,7 @@ def disturbance_response(design: str, twin: bool) -> dict:
 def coupling_response(design: str, twin: bool) -> dict:
     """The coupled machine: Y steps 1 mm while X holds 0: X's largest excursion and final
     offset (um), the coupling of eq. (6) as X's disturbance."""
-    ctrl = controller(design)
-    n = int(round(2.0 / DT))
-    runs = {"tf": tf_run(ctrl, 2.0, coupled=True, ref=_step_ref(n, (1,)))[:2]}
-    if twin:
-        res = twin_run(ctrl, 2.0, coupled=True, reference=Step(STEP_M, n_axes=2, axes=(1,)))
-        runs["twin"] = (res.t_s, res.table_position_m())
+    runs = responses(controller(design), 2.0, twin, coupled=True, axes=(1,))
     return {side: {"x_peak_um": float(np.abs(pos[:, 0]).max() * 1e6), "x_final_um": float(pos[-1, 0] * 1e6)}
             for side, (t, pos) in runs.items()}
 
@@ -243,11 +244,7 @@ def mimo_part(twin: bool) -> dict:
     K, N = s1.mimo_pole_placement()
     out = {"K": K.tolist(), "N": N.tolist()}
     for d in ("pole_placement", "state_feedback_mimo"):
-        ctrl = controller(d)
-        out[d] = {"tf": step_table(*tf_run(ctrl, 2.0, coupled=True)[:2])}
-        if twin:
-            res = twin_run(ctrl, 2.0, coupled=True)
-            out[d]["twin"] = step_table(res.t_s, res.table_position_m())
+        out[d] = steps(controller(d), 2.0, twin, coupled=True)
     return out
 
 
@@ -367,11 +364,8 @@ def fractional_part(samples: int, seed: int, twin: bool) -> dict:
     out["exact_random"] = {"samples": samples, "bands": [_bands([m[i] for m in sampled + exact_box]) for i in range(2)]}
     for design, horizon in (("fo_pi", 4.0), ("mu_cascade", 20.0)):
         ctrl = controller(design)
-        rows = {"tf": [step_table(*tf_run(ctrl, horizon, scale=c)[:2]) for c in [None] + box_corners()]}
-        if twin:
-            rows["twin"] = [step_table(r.t_s, r.table_position_m())
-                            for r in (twin_run(ctrl, horizon, scale=c) for c in [None] + box_corners())]
-        out[design] = rows
+        points = [steps(ctrl, horizon, twin, scale=c) for c in [None] + box_corners()]
+        out[design] = {side: [p[side] for p in points] for side in points[0]}   # side -> nominal, corners
     return out
 
 
@@ -422,11 +416,7 @@ def abc_part(seed: int, twin: bool) -> dict:
                "settling_by_iteration_s": [h["settling_time_s"] for h in history],
                "overshoot_by_iteration_pct": [h["overshoot_pct"] for h in history],
                "log10_q_by_iteration": [x.tolist() for x in res.best_x]}
-        ctrl = _abc_controller(best)
-        row["step"] = {"tf": step_table(*tf_run(ctrl, 2.0)[:2])}
-        if twin:
-            res = twin_run(ctrl, 2.0)
-            row["step"]["twin"] = step_table(res.t_s, res.table_position_m())
+        row["step"] = steps(_abc_controller(best), 2.0, twin)
         out[name] = row
     return out
 

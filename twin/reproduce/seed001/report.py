@@ -68,6 +68,13 @@ def _steps(row: dict, axis: int) -> str:
     return " | ".join(cells)
 
 
+def _disturbance(row: dict, axis: int) -> str:
+    """``peak / final`` (um) of the 1 V disturbance, TF | twin, for one axis."""
+    dist = row["disturbance"]
+    return " | ".join(f"{dist[s]['peak_um'][axis]:.1f} / {dist[s]['final_um'][axis]:.1f}" for s in ("tf", "twin")
+                      if s in dist)
+
+
 def format_report(res: dict) -> str:
     """Plain-text tables: paper | TF loop | twin."""
     twin = res["settings"]["twin"]
@@ -93,8 +100,7 @@ def format_report(res: dict) -> str:
                    f"Pu {_pair([m['pu_s'] for m in test['exact']], '{:.4f}')}")
     out += ["", f"   Table 1 from the {rl['used']} relay's (Ku, Pu), delay-free loop: settling 2 % / overshoot, "
             f"paper | {head}"]
-    names = {"p": "P", "modified_p": "modified P", "pi": "PI", "modified_pi": "modified PI", "pid": "PID",
-             "modified_pid": "modified PID"}
+    names = s1.TABLE1_ROWS
     for kind, row in res["table1"].items():
         paper = res["paper"]["table1"][names[kind]]
         g = row["gains"]
@@ -111,9 +117,7 @@ def format_report(res: dict) -> str:
         out.append(f"  {d:<6} kp {_pair([x['kp'] for x in g])} 1/s, ki {_pair([x['ki'] for x in g])} 1/s^2, kd "
                    f"{_pair([x['kd'] for x in g])}, kv {_pair([x['kv'] for x in g], '{:.4f}')} V/(mm/s)")
         for i, a in enumerate("xy"):
-            dist = row["disturbance"]
-            cells = " | ".join(f"{dist[s]['peak_um'][i]:.1f} / {dist[s]['final_um'][i]:.1f}" for s in ("tf", "twin") if s in dist)
-            out.append(f"      {a}: {_steps(row['step'], i)}; disturbance {cells}")
+            out.append(f"      {a}: {_steps(row['step'], i)}; disturbance {_disturbance(row, i)}")
         cpl = row["coupling"]
         out.append("      coupling, X while Y steps 1 mm: " + " | ".join(
             f"{cpl[s]['x_peak_um']:.2f} / {cpl[s]['x_final_um']:.2f}" for s in ("tf", "twin") if s in cpl))
@@ -127,10 +131,8 @@ def format_report(res: dict) -> str:
                    f"{_pair([x['kv'] for x in g], '{:.4f}')} kr {_pair([x['kr'] for x in g])}; poles x "
                    + ", ".join(f"{p[0]:.1f}{p[1]:+.1f}j" for p in row["poles"][0]))
         for i, a in enumerate("xy"):
-            dist = row["disturbance"]
-            cells = " | ".join(f"{dist[s]['peak_um'][i]:.1f} / {dist[s]['final_um'][i]:.1f}" for s in ("tf", "twin") if s in dist)
             extra = f"; without feedforward {_steps(row['step_without_ff'], i)}" if "step_without_ff" in row else ""
-            out.append(f"      {a}: {_steps(row['step'], i)}; disturbance {cells}{extra}")
+            out.append(f"      {a}: {_steps(row['step'], i)}; disturbance {_disturbance(row, i)}{extra}")
     ew = res["energy_weights"]
     out.append("  energy weights (eqs. 7-9): J = T_M/K_M " + _pair([w["J"] for w in ew], "{:.3e}")
                + " V s^2/mm, k = J omega_n^2 " + _pair([w["k"] for w in ew]) + " V/mm")
@@ -185,9 +187,7 @@ def format_report(res: dict) -> str:
         row = lm[d]
         out.append(f"  {d:<9} in region {row['in_region']}; poles x " + ", ".join(f"{p[0]:.1f}{p[1]:+.1f}j" for p in row["poles"][0]))
         for i, a in enumerate("xy"):
-            dist = row["disturbance"]
-            cells = " | ".join(f"{dist[s]['peak_um'][i]:.1f} / {dist[s]['final_um'][i]:.1f}" for s in ("tf", "twin") if s in dist)
-            out.append(f"      {a}: {_steps(row['step'], i)}; disturbance {cells}")
+            out.append(f"      {a}: {_steps(row['step'], i)}; disturbance {_disturbance(row, i)}")
     out += ["", f"9. Table 2, fitting index 100 (1 - |y - r| / |r - mean r|) per axis (%), {r.FEED_MM_PER_MIN:g} mm/min; "
             "experiments: 1 modified P, 2 pole placement as P-P, 3 PI-P (part 5) + velocity feedforward; paper | " + head]
     for path, rows in res["trajectories"].items():
@@ -213,10 +213,10 @@ def write_plots(folder, results: dict) -> list[Path]:
 
     plt, save, written = plot_folder(folder)
 
-    def steps(groups, title, name, horizon=2.0, disturbance=False):
+    def step_plot(groups, title, name, horizon=2.0, disturbance=False):
         fig, axes = plt.subplots(1, 2, figsize=(11, 4), sharey=True)
         for label, ctrl in groups:
-            t, pos, _ = r.tf_run(ctrl, horizon, disturbance=disturbance)
+            t, pos = r.responses(ctrl, horizon, False, disturbance=disturbance)["tf"]
             for i, ax in enumerate(axes):
                 ax.plot(t, pos[:, i] * 1e3, label=label, linewidth=1)
         for i, ax in enumerate(axes):
@@ -228,21 +228,18 @@ def write_plots(folder, results: dict) -> list[Path]:
         save(fig, name)
 
     ku_pu = results["relay"]["ku_pu"]
-    zn = [("modified " if k.startswith("modified") else "") + k.split("_")[-1].upper()
-          for k in results["table1"]]
-    steps([(label, r.Controller([b for i, a in enumerate(s1.AXES) for b in r.controller(
-        k, (a,), ku_V_per_mm=ku_pu[i][0], pu_s=ku_pu[i][1]).blocks], r.DT))
-        for label, k in zip(zn, results["table1"])], "Table 1: Ziegler-Nichols from the relay test", "seed001_table1.png")
-    steps([(d, r.controller(d)) for d in ("p_p", "pi_p", "p_pid")], "Fig. 6: cascades, 1 V speed disturbance at 1 s",
+    step_plot([(row, r.zn_controller(k, ku_pu)) for k, row in s1.TABLE1_ROWS.items()],
+          "Table 1: Ziegler-Nichols from the relay test", "seed001_table1.png")
+    step_plot([(d, r.controller(d)) for d in ("p_p", "pi_p", "p_pid")], "Fig. 6: cascades, 1 V speed disturbance at 1 s",
           "seed001_cascades.png", disturbance=True)
-    steps([(d, r.controller(d)) for d in ("pole_placement", "lqr_classical", "lqr_energy")],
+    step_plot([(d, r.controller(d)) for d in ("pole_placement", "lqr_classical", "lqr_energy")],
           "Fig. 7: state feedback as P-P", "seed001_state_feedback.png")
-    steps([(f"{d}{' ' if ff else ' without '}feedforward", r.controller(d, feedforward=ff))
+    step_plot([(f"{d}{' ' if ff else ' without '}feedforward", r.controller(d, feedforward=ff))
            for d in ("pi_p_pole_placement", "pi_p_lqr") for ff in (True, False)],
           "Figs. 10-11: PI-P from integral state feedback", "seed001_pi_p.png")
-    steps([(d, r.controller(d)) for d in ("lmi", "pi_p_lmi")], "Figs. 16-17: LMI regions, 1 V disturbance at 1 s",
+    step_plot([(d, r.controller(d)) for d in ("lmi", "pi_p_lmi")], "Figs. 16-17: LMI regions, 1 V disturbance at 1 s",
           "seed001_lmi.png", disturbance=True)
-    steps([("eq. (14) Oustaloup, unity loop", r.controller("fo_pi")), ("eqs. (15)-(16)", r.controller("mu_cascade"))],
+    step_plot([("eq. (14) Oustaloup, unity loop", r.controller("fo_pi")), ("eqs. (15)-(16)", r.controller("mu_cascade"))],
           "Figs. 12-13: fractional PI and structured-mu cascade", "seed001_fractional.png", horizon=5.0)
 
     fig, ax = plt.subplots(figsize=(7, 4))
