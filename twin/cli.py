@@ -241,11 +241,11 @@ def sweep(target: str = typer.Argument(..., help="Scenario (bundled name or TOML
           as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON")):
     """Run a scenario over sampled parameters on Dask: one Parquet row per sample, a summary of
     bands and the worst case, robustness certificates where one covers the box."""
-    from twin.sweeps import SweepFile, is_sweep_file, load_sweep_file, prepare_sweep
+    from twin.sweeps import prepare_sweep, sweep_spec
     from twin.sweeps.run import make_client, read_sweep, run_sweep
     from twin.sweeps.summary import certificates, format_summary, summarize, write_sweep_plots
 
-    spec = load_sweep_file(Path(target)) if is_sweep_file(target) else SweepFile(scenario=target, vary={})
+    spec = sweep_spec(target)
     variations = [f"{k}={v}" for k, v in spec.vary.items()] + list(vary or [])
     if workers is not None and not 1 <= workers <= 256:
         raise TwinInputError("--workers", workers, "must be from 1 to 256")
@@ -313,7 +313,7 @@ def list_things():
 @_guard
 def bench(as_json: bool = typer.Option(False, "--json", help="Print the figures as JSON"),
           seconds: float = typer.Option(2.0, help="Simulated time per measurement (s)"),
-          repeats: int = typer.Option(5, help="Alternating repeats; medians are reported (--sweep: default 1)"),
+          repeats: int = typer.Option(None, help="Alternating repeats; medians are reported (default 5; --sweep: 1)"),
           sweep: bool = typer.Option(False, "--sweep", help="Benchmark twin sweep instead (twin/sweeps/bench.py)"),
           samples: int = typer.Option(1000, "--samples", help="--sweep: samples of 2 s of the cutting circle"),
           memory_samples: int = typer.Option(10_000, "--memory-samples", help="--sweep: one-tick samples for the "
@@ -324,10 +324,11 @@ def bench(as_json: bool = typer.Option(False, "--json", help="Print the figures 
 
     if not (seconds > 0 and seconds <= 600):
         raise TwinInputError("--seconds", seconds, "must be in (0, 600]")
+    repeats = repeats if repeats is not None else 1 if sweep else 5
     if not 1 <= repeats <= 100:
         raise TwinInputError("--repeats", repeats, "must be in 1..100")
     if sweep:
-        _bench_sweep(as_json, samples, memory_samples, repeats if "--repeats" in sys.argv else 1)
+        _bench_sweep(as_json, samples, memory_samples, repeats)
         return
     figures = run_bench(seconds, repeats)
     if as_json:

@@ -27,30 +27,27 @@ class SweepFile(BaseModel):
     out: str | None = None
 
 
-def is_sweep_file(target: str) -> bool:
-    """Whether ``target`` is a TOML file with a ``vary`` table (a sweep, not a scenario)."""
-    path = Path(target)
-    if path.suffix != ".toml" or not path.is_file():
-        return False
-    try:
-        return "vary" in tomllib.loads(path.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError):
-        return False
-
-
-def load_sweep_file(path: Path) -> SweepFile:
-    """Read and validate a sweep file; its ``scenario`` path is made relative to it.
+def sweep_spec(target: str) -> SweepFile:
+    """The sweep ``target`` names: a sweep file (a TOML file with a ``vary`` table) read and
+    validated, its ``scenario`` path made relative to it; anything else is a scenario (bundled
+    name or file) with nothing varied yet.
 
     Raises
     ------
     TwinInputError
-        Malformed TOML or an invalid field (named).
+        A sweep file with an invalid field (named).
     """
+    path = Path(target)
+    if path.suffix != ".toml" or not path.is_file():
+        return SweepFile(scenario=target, vary={})
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError):
+        return SweepFile(scenario=target, vary={})   # the scenario loader reports what is wrong with it
+    if "vary" not in data:
+        return SweepFile(scenario=target, vary={})
+    try:
         spec = SweepFile(**data)
-    except tomllib.TOMLDecodeError as exc:
-        raise TwinInputError("sweep file", str(path), f"not valid TOML: {exc}") from None
     except ValidationError as exc:
         err = exc.errors()[0]
         raise TwinInputError(".".join(str(p) for p in err["loc"]), err.get("input"), err["msg"]) from None

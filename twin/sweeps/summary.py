@@ -14,6 +14,16 @@ from twin.sweeps.run import metric_columns
 WORST_BY = "max_tracking_error_um"
 
 
+def _column(table, name: str) -> np.ndarray:
+    """A numeric column of the sweep table as floats (NaN where missing)."""
+    return np.asarray(table.column(name).to_numpy(zero_copy_only=False), float)
+
+
+def _worst_axis(table, axes) -> np.ndarray:
+    """Per sample, the largest :data:`WORST_BY` over the axes."""
+    return np.max([_column(table, f"{WORST_BY}_{a}") for a in axes], axis=0)
+
+
 def summarize(table, plan: Plan, axes) -> dict:
     """Counts by status, bands (min, 5 %, median, 95 %, max) of each metric over the ``ok``
     rows, and the worst sample by :data:`WORST_BY` (over the axes) with its values."""
@@ -22,14 +32,12 @@ def summarize(table, plan: Plan, axes) -> dict:
            "bands": {}, "worst": None}
     ok = status == "ok"
     for c in metric_columns(axes):
-        v = np.asarray(table.column(c).to_numpy(zero_copy_only=False), float)[ok]
+        v = _column(table, c)[ok]
         if v.size and np.isfinite(v).any():
             q = np.nanpercentile(v, [0, 5, 50, 95, 100])
             out["bands"][c] = dict(zip(("min", "p5", "median", "p95", "max"), q.tolist()))
     if ok.any():
-        worst = np.max([np.asarray(table.column(f"{WORST_BY}_{a}").to_numpy(zero_copy_only=False), float)
-                        for a in axes], axis=0)
-        worst = np.where(ok, worst, -np.inf)
+        worst = np.where(ok, _worst_axis(table, axes), -np.inf)
         i = int(np.argmax(worst))
         out["worst"] = {"by": WORST_BY, "value": float(worst[i]), "index": int(table.column("index")[i].as_py()),
                         "seed": int(table.column("seed")[i].as_py()),
@@ -101,24 +109,22 @@ def write_sweep_plots(table, plan: Plan, axes, folder) -> list:
 
     plt, save, written = plot_folder(folder)
     ok = np.array(table.column("status").to_pylist()) == "ok"
-    columns = [c for c in metric_columns(axes) if np.isfinite(np.asarray(
-        table.column(c).to_numpy(zero_copy_only=False), float)[ok]).any()]
+    columns = [c for c in metric_columns(axes) if np.isfinite(_column(table, c)[ok]).any()]
     n = len(columns)
     fig, grid = plt.subplots(math.ceil(n / len(axes)), len(axes), figsize=(5 * len(axes), 3 * math.ceil(n / len(axes))),
                              squeeze=False)
     for ax, c in zip(grid.ravel(), columns):
-        ax.hist(np.asarray(table.column(c).to_numpy(zero_copy_only=False), float)[ok], bins=40)
+        ax.hist(_column(table, c)[ok], bins=40)
         ax.set(xlabel=c.replace("_um", " (um)").replace("_N", " (N)"), ylabel="samples")
         ax.grid(alpha=0.3)
     fig.suptitle(f"sweep: {int(ok.sum())} ok samples")
     save(fig, "sweep_histograms.png")
-    worst = np.max([np.asarray(table.column(f"{WORST_BY}_{a}").to_numpy(zero_copy_only=False), float)
-                    for a in axes], axis=0)[ok]
+    worst = _worst_axis(table, axes)[ok]
     numeric = [v for v in plan.variations if table.schema.field(v.path).type != "string"]
     if numeric:
         fig, grid = plt.subplots(1, len(numeric), figsize=(5 * len(numeric), 4), squeeze=False)
         for ax, v in zip(grid.ravel(), numeric):
-            ax.scatter(np.asarray(table.column(v.path).to_numpy(zero_copy_only=False), float)[ok], worst, s=6)
+            ax.scatter(_column(table, v.path)[ok], worst, s=6)
             ax.set(xlabel=v.path, ylabel="max tracking error, worst axis (um)")
             ax.tick_params(axis="x", labelrotation=30)
             ax.grid(alpha=0.3)
