@@ -166,7 +166,8 @@ class Plan:
         self.random = [v for v in self.variations if v.random]
         self.line = [v for v in self.variations if v.kind == "line"]
         self.axes = [v for v in self.variations if v.kind in ("grid", "corners")]
-        counts = [len(v.levels()) for v in self.axes] + ([int(self.line[0].args[0])] if self.line else [])
+        self.levels = [v.levels() for v in self.axes]
+        counts = [len(lv) for lv in self.levels] + ([int(self.line[0].args[0])] if self.line else [])
         if len({int(v.args[0]) for v in self.line}) > 1:
             raise TwinInputError("--vary", [v.path for v in self.line], "line(n) symbols move together: give one n")
         self.structured = math.prod(counts) if counts else 1
@@ -195,8 +196,8 @@ class Plan:
         out = {}
         if self.counts:
             position = np.unravel_index(combo, self.counts)
-            for v, k in zip(self.axes, position):
-                out[v.path] = v.levels()[k]
+            for v, levels, k in zip(self.axes, self.levels, position):
+                out[v.path] = levels[k]
             if self.line:
                 t = position[-1] / (self.counts[-1] - 1)
                 for v in self.line:
