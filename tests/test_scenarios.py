@@ -2,6 +2,7 @@
 works from a scenario file; the seed-004 air cut keeps its accuracy."""
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -108,3 +109,41 @@ def test_inverse_model_observer_removes_a_step_input_disturbance_on_the_twin():
     assert plain.error_m()[-1, 0] == pytest.approx(-offset, rel=1e-3)
     assert abs(observed.error_m()[-1, 0]) < 1e-3 * offset
     assert observed.error_max_m[0] < 0.8 * plain.error_max_m[0]
+
+
+@pytest.mark.parametrize("setting, field, words", [
+    ("disturbances.0.n_flutes=2147483648", "disturbances.0.end_milling.n_flutes", "less than or equal to 100"),
+    ("disturbances.0.spindle_rpm=0.5", "disturbances.0.end_milling.spindle_rpm", "greater than or equal to 1"),
+    ("timestep_s=1e308", "timestep_s", "less than or equal to 0.01"),
+])
+def test_counts_and_rates_the_loops_run_over_are_bounded(setting, field, words):
+    """Each count a force model loops over, and the timestep, has a bound named in its error."""
+    with pytest.raises(TwinInputError) as err:
+        load_scenario("seed004_cutting_circle", [setting])
+    assert err.value.field == field and words in err.value.reason
+
+
+def test_harmonic_and_sine_counts_are_bounded():
+    many = "[" + ", ".join(["0.001"] * 101) + "]"
+    with pytest.raises(TwinInputError) as err:
+        load_scenario("seed003_cascade", [f"disturbances.0.amplitudes_V={many}"])
+    assert err.value.field == "disturbances.0.harmonic_input.amplitudes_V" and "at most 100" in err.value.reason
+    with pytest.raises(TwinInputError) as err:
+        load_scenario("seed003_cascade", [f"reference.amplitudes_m={many}"])
+    assert err.value.field == "reference.sines.amplitudes_m" and "at most 100" in err.value.reason
+
+
+def test_a_design_that_fails_numerically_is_one_error_and_no_warning():
+    """Seed 003's cascade designed for a physics step of 5e-324 s (beyond the schema's bound, so
+    set past validation) overflows inside numpy; the build reports it as the controller's error
+    instead of printing numpy's RuntimeWarnings first."""
+    scn = load_scenario("seed003_cascade")
+    scn = scn.model_copy(update={"timestep_s": 5e-324, "control_period_s": 5e-324})
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with pytest.raises(TwinInputError) as err:
+            prepare(scn)
+    assert not caught, [str(w.message) for w in caught]
+    assert err.value.field == "controller.params"
+    assert "failed numerically" in err.value.reason or "no loop with finite margins" in err.value.reason
+    assert "nan" not in err.value.reason

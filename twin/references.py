@@ -55,9 +55,13 @@ class Ramp:
         return _per_axis(s, self.n_axes, self.axes)
 
 
+#: Most sines a sum-of-sines reference may hold (each is evaluated at every tick).
+MAX_SINES = 100
+
+
 @dataclass
 class SumOfSines:
-    """Sum of sines: x(t) = sum_i A_i sin(2 pi f_i t + phi_i)."""
+    """Sum of sines: x(t) = sum_i A_i sin(2 pi f_i t + phi_i), at most :data:`MAX_SINES` terms."""
 
     amplitudes_m: tuple[float, ...]
     frequencies_hz: tuple[float, ...]

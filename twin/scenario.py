@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import copy
 import tomllib
+import warnings
+from contextlib import contextmanager
 from dataclasses import replace
 from importlib import resources
 from pathlib import Path
@@ -20,12 +22,12 @@ from pydantic import BaseModel, ConfigDict, Field, PositiveFloat, ValidationErro
 from controllers import CONTROLLERS, OBSERVERS, make_controller
 from controllers.blocks import with_correction
 from controllers.registry import Context, make_observers
-from twin.process.cutting import MATERIALS, AverageForce, EndMilling
-from twin.process.disturbances import HarmonicInput, VoltageStep
+from twin.process.cutting import MATERIALS, MAX_FLUTES, MIN_SPINDLE_RPM, AverageForce, EndMilling
+from twin.process.disturbances import MAX_INPUT_HARMONICS, HarmonicInput, VoltageStep
 from twin.sim.drive import Drive, Encoder, substeps_per_tick
 from twin.errors import TwinInputError
 from twin.machines import build
-from twin.references import Circle, Polyline, Ramp, Step, SumOfSines, square
+from twin.references import MAX_SINES, Circle, Polyline, Ramp, Step, SumOfSines, square
 from twin.sim.runner import MAX_PHYSICS_STEPS, RunResult, simulate
 
 
@@ -71,9 +73,9 @@ class RampRef(_Strict):
 
 class SinesRef(_Strict):
     type: Literal["sines"]
-    amplitudes_m: list[float]
-    frequencies_hz: list[PositiveFloat]
-    phases_rad: list[float] | None = None
+    amplitudes_m: list[float] = Field(max_length=MAX_SINES)
+    frequencies_hz: list[PositiveFloat] = Field(max_length=MAX_SINES)
+    phases_rad: list[float] | None = Field(None, max_length=MAX_SINES)
     axes: list[str] | None = None
 
 
@@ -95,9 +97,13 @@ class SquareRef(_Strict):
     feed_mm_per_min: float = Field(ge=MIN_FEED_MM_PER_MIN, le=MAX_FEED_MM_PER_MIN)
 
 
+#: A coordinate of a path point (mm): within the 10 m runaway limit either side of the origin.
+PathCoordinateMm = Annotated[float, Field(ge=-MAX_PATH_MM, le=MAX_PATH_MM)]
+
+
 class PolylineRef(_Strict):
     type: Literal["polyline"]
-    points_mm: list[tuple[float, float]]
+    points_mm: list[tuple[PathCoordinateMm, PathCoordinateMm]]
     feed_mm_per_min: float = Field(ge=MIN_FEED_MM_PER_MIN, le=MAX_FEED_MM_PER_MIN)
 
 
@@ -131,8 +137,8 @@ class EndMillingSpec(_Strict):
     """Mechanistic end-milling force on the workpiece (:class:`twin.process.cutting.EndMilling`)."""
 
     type: Literal["end_milling"]
-    spindle_rpm: float = Field(ge=1.0, description="rev/min; at least 1 (a tooth period of at most 60 s)")
-    n_flutes: int = Field(ge=1)
+    spindle_rpm: float = Field(ge=MIN_SPINDLE_RPM, description="rev/min; at least 1 (a tooth period of at most 60 s)")
+    n_flutes: int = Field(ge=1, le=MAX_FLUTES)
     diameter_mm: PositiveFloat
     axial_depth_mm: PositiveFloat
     radial_depth_mm: PositiveFloat
@@ -152,8 +158,8 @@ class AverageForceSpec(_Strict):
     k_il_N_s_per_m: float = -2500.0
     k_c_N_s_per_m: float = 2500.0
     harmonic_fraction: float = Field(0.0, ge=0, le=0.2)
-    spindle_rpm: float = Field(10000.0, ge=1.0)
-    n_flutes: int = Field(2, ge=1)
+    spindle_rpm: float = Field(10000.0, ge=MIN_SPINDLE_RPM)
+    n_flutes: int = Field(2, ge=1, le=MAX_FLUTES)
     start_s: float = Field(0.0, ge=0)
     stop_s: PositiveFloat | None = None
     harmonic_phase_rad: float | None = None
@@ -164,9 +170,10 @@ class HarmonicInputSpec(_Strict):
     """Sum of sines on the drive input, V (:class:`twin.disturbances.HarmonicInput`)."""
 
     type: Literal["harmonic_input"]
-    amplitudes_V: list[float]
-    frequencies_hz: list[PositiveFloat]
-    phases_rad: list[float] | None = Field(None, description="None: drawn from the seed")
+    amplitudes_V: list[float] = Field(max_length=MAX_INPUT_HARMONICS)
+    frequencies_hz: list[PositiveFloat] = Field(max_length=MAX_INPUT_HARMONICS)
+    phases_rad: list[float] | None = Field(None, max_length=MAX_INPUT_HARMONICS,
+                                           description="None: drawn from the seed")
     axes: list[str] | None = None
     start_s: float = Field(0.0, ge=0)
     seed: int | None = Field(None, ge=0)
@@ -185,6 +192,14 @@ DisturbanceSpec = Annotated[Union[EndMillingSpec, AverageForceSpec, HarmonicInpu
                             Field(discriminator="type")]
 
 
+#: Shortest physics step (s): 0.1 us, a thousand times finer than any mode of these drives needs.
+MIN_TIMESTEP_S = 1e-7
+#: Longest physics step (s): 10 ms, the order of the fastest mechanical time constants here.
+MAX_TIMESTEP_S = 1e-2
+#: Longest control period (s).
+MAX_CONTROL_PERIOD_S = 1.0
+
+
 class Scenario(_Strict):
     """A closed-loop run; every field in SI unless its name says otherwise."""
 
@@ -193,8 +208,8 @@ class Scenario(_Strict):
     machine: str
     overrides: dict[str, float] = {}
     duration_s: PositiveFloat
-    timestep_s: PositiveFloat = 1e-4
-    control_period_s: PositiveFloat = 1e-3
+    timestep_s: float = Field(1e-4, ge=MIN_TIMESTEP_S, le=MAX_TIMESTEP_S)
+    control_period_s: float = Field(1e-3, ge=MIN_TIMESTEP_S, le=MAX_CONTROL_PERIOD_S)
     seed: int = Field(0, ge=0)
     record_every_ticks: int | None = Field(None, ge=0, description="record every Nth tick; 0: metrics only; "
                                                                     "default every tick up to 100 000 ticks")
@@ -349,6 +364,23 @@ def _reference(spec, axis_names: list[str]):
         raise TwinInputError("reference.points_mm", spec.points_mm, str(exc)) from None
 
 
+@contextmanager
+def _design_warnings_as_errors():
+    """Run a design procedure with its numerical warnings (numpy's overflow or invalid value,
+    scipy's poor convergence) raised as errors: for a user a design that warns has failed, and a
+    warning printed before the error line would be a second line."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        yield
+
+
+def _design_failure(exc: Exception) -> str:
+    """The reason a controller or observer design failed, for its error line."""
+    if isinstance(exc, RuntimeWarning):
+        return f"the design failed numerically ({exc})"
+    return str(exc)
+
+
 def _controller(spec: ControllerSpec, field: str, base: Context):
     """Build one controller entry for the axes of ``base`` (period, plants, delay); errors name
     ``<field>.<what>``."""
@@ -360,19 +392,21 @@ def _controller(spec: ControllerSpec, field: str, base: Context):
     parts = [_controller(p, f"{field}.parts.{i}", base) for i, p in enumerate(spec.parts or [])]
     ctx = replace(base, method=spec.discretization)
     try:
-        ctrl = make_controller(spec.type, ctx.dt, spec.params, ctx.method, spec.velocity_ff,
-                               spec.acceleration_ff, ctx.axes, ctx.plants, parts, ctx.delay_s)
-    except (ValueError, KeyError, TypeError) as exc:
-        raise TwinInputError(f"{field}.params", spec.params, str(exc)) from None
+        with _design_warnings_as_errors():
+            ctrl = make_controller(spec.type, ctx.dt, spec.params, ctx.method, spec.velocity_ff,
+                                   spec.acceleration_ff, ctx.axes, ctx.plants, parts, ctx.delay_s)
+    except (ValueError, KeyError, TypeError, RuntimeWarning) as exc:
+        raise TwinInputError(f"{field}.params", spec.params, _design_failure(exc)) from None
     if spec.observer is None:
         return ctrl
     if spec.observer.type not in OBSERVERS:
         raise TwinInputError(f"{field}.observer.type", spec.observer.type,
                              f"unknown observer (known: {', '.join(OBSERVERS)})")
     try:
-        observers = make_observers(spec.observer.type, spec.observer.params, ctx)
-    except (ValueError, KeyError, TypeError) as exc:
-        raise TwinInputError(f"{field}.observer.params", spec.observer.params, str(exc)) from None
+        with _design_warnings_as_errors():
+            observers = make_observers(spec.observer.type, spec.observer.params, ctx)
+    except (ValueError, KeyError, TypeError, RuntimeWarning) as exc:
+        raise TwinInputError(f"{field}.observer.params", spec.observer.params, _design_failure(exc)) from None
     return with_correction(ctrl, observers)
 
 

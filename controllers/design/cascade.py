@@ -41,7 +41,9 @@ def pi_for_margins(plant, gm_db: float, pm_deg: float, guess: tuple[float, float
     kp, ki = (float(v) for v in np.exp(x))
     m = loop_margins(pi_loop(kp, ki, plant))
     if not (abs(m.gm_db - gm_db) < 0.01 and abs(m.pm_deg - pm_deg) < 0.01):
-        raise ValueError(f"no PI gives GM {gm_db} dB and PM {pm_deg} deg (closest: {m.gm_db:.3g} dB, {m.pm_deg:.3g} deg)")
+        closest = (f"closest: {m.gm_db:.3g} dB, {m.pm_deg:.3g} deg" if np.isfinite([m.gm_db, m.pm_deg]).all()
+                   else "the search found no loop with finite margins")
+        raise ValueError(f"no PI gives GM {gm_db} dB and PM {pm_deg} deg ({closest})")
     return kp, ki, m
 
 

@@ -159,12 +159,20 @@ def _window(start_s: float, stop_s: float | None, timestep_s: float = 0.0) -> tu
     return start_s - 0.5 * timestep_s, math.inf if stop_s is None else stop_s - 0.5 * timestep_s
 
 
+#: Slowest spindle (rev/min): one revolution a minute, a tooth period of at most 60 s.
+MIN_SPINDLE_RPM = 1.0
+#: Most flutes (or inserts) a cutter may have: the kernel loops over them every physics step;
+#: large face mills carry a few dozen inserts, no milling cutter carries more than 100.
+MAX_FLUTES = 100
+
+
 def _check_cutter(spindle_rpm: float, n_flutes: int) -> None:
-    """Spindle speed (rev/min) > 0 and a whole number of flutes >= 1."""
-    if not spindle_rpm > 0:
-        raise TwinInputError("spindle_rpm", spindle_rpm, "must be > 0")
-    if int(n_flutes) != n_flutes or n_flutes < 1:
-        raise TwinInputError("n_flutes", n_flutes, "must be a whole number >= 1")
+    """Spindle speed of at least :data:`MIN_SPINDLE_RPM` and a whole number of flutes from 1 to
+    :data:`MAX_FLUTES`."""
+    if not MIN_SPINDLE_RPM <= spindle_rpm < math.inf:
+        raise TwinInputError("spindle_rpm", spindle_rpm, f"must be at least {MIN_SPINDLE_RPM:g} rev/min and finite")
+    if int(n_flutes) != n_flutes or not 1 <= n_flutes <= MAX_FLUTES:
+        raise TwinInputError("n_flutes", n_flutes, f"must be a whole number from 1 to {MAX_FLUTES}")
 
 
 def _tooth_frequency_hz(spindle_rpm: float, n_flutes: int) -> float:

@@ -58,6 +58,10 @@ class VoltageStep:
         return on[:, None] * _axis_mask(self.axes, self.n_axes)
 
 
+#: Most sines a harmonic input disturbance may sum: every chunk of ticks holds one column per sine.
+MAX_INPUT_HARMONICS = 100
+
+
 @dataclass(frozen=True)
 class HarmonicInput:
     """Sum of sines added to the drive input (V): seed 003's harmonic input disturbances.
@@ -90,6 +94,9 @@ class HarmonicInput:
         if len(self.amplitudes_V) != len(self.frequencies_hz) or not self.amplitudes_V:
             raise TwinInputError("disturbance.frequencies_hz", list(self.frequencies_hz),
                                  "needs one entry per amplitude (at least one)")
+        if len(self.amplitudes_V) > MAX_INPUT_HARMONICS:
+            raise TwinInputError("disturbance.amplitudes_V", list(self.amplitudes_V),
+                                 f"at most {MAX_INPUT_HARMONICS} harmonics")
         if not all(math.isfinite(a) for a in self.amplitudes_V):
             raise TwinInputError("disturbance.amplitudes_V", list(self.amplitudes_V), "must be finite")
         if not all(f > 0 and math.isfinite(f) for f in self.frequencies_hz):

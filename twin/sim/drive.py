@@ -51,7 +51,7 @@ class Drive:
 
     def __post_init__(self):
         steps = self.delay_s / self.timestep_s
-        if not 0 <= self.delay_s <= 10.0 or abs(steps - round(steps)) * self.timestep_s > 1e-9:
+        if not (0 <= self.delay_s <= 10.0 and math.isfinite(steps)) or abs(steps - round(steps)) * self.timestep_s > 1e-9:
             raise TwinInputError("drive.delay_s", self.delay_s,
                                  f"must be in [0, 10] s and a whole multiple of the timestep {self.timestep_s:g} s")
         if self.saturation_V is not None and self.saturation_V <= 0:
