@@ -108,21 +108,27 @@ def _seed004(kind):
         if not math.isclose(ctx.dt, seed004.DT_S):
             raise ValueError(f"control_period_s = {ctx.dt:g}: seed 004's controllers are designed for {seed004.DT_S:g} s")
         zpetc_on, order = p.get("zpetc", True), p.get("order", "reduced")
+        tuning, ki_scale = p.get("tuning", "loop_at_input"), p.get("ki_scale", 1.0)
         if not isinstance(zpetc_on, bool):
             raise ValueError(f"zpetc = {zpetc_on!r}: must be true or false")
         if kind == "pid" and order != "reduced" or order not in ("reduced", "full"):
             raise ValueError(f"order = {order!r}: use 'reduced'" + (" or 'full'" if kind == "mimo" else ""))
+        if kind == "mimo" and ("tuning" in p or "ki_scale" in p):
+            raise ValueError("tuning and ki_scale are parameters of seed004_pid, not of the MIMO controller")
+        seed004.check_pid_tuning(tuning, ki_scale)
+        ki_scale = float(ki_scale)
         errors = [f"error.{a}" for a in ctx.axes]
         blocks = []
         if zpetc_on:
             errors = [f"zpetc:error.{a}" for a in ctx.axes]
-            for a, (filt, _) in zip(ctx.axes, seed004.zpetc_filters(kind, order)):
+            for a, (filt, _) in zip(ctx.axes, seed004.zpetc_filters(kind, order, tuning, ki_scale)):
                 taps = max(len(filt.num), len(filt.den))
                 num, den = (np.pad(c, (0, taps - len(c))) for c in (filt.num, filt.den))
                 blocks += [lti_block(control.tf(num, den, ctx.dt), ctx.dt, [f"preview.{a}.{filt.preview}"],
                                      [f"zpetc:ref.{a}"], name=f"zpetc.{a}"),
                            Sum((1.0, -1.0), (f"zpetc:ref.{a}", f"pos.{a}"), f"zpetc:error.{a}", name=f"zpetc_error.{a}")]
-        blocks.append(lti_block(seed004.controller_si(kind, order), ctx.dt, errors, [f"u.{a}" for a in ctx.axes],
+        blocks.append(lti_block(seed004.controller_si(kind, order, tuning, ki_scale), ctx.dt, errors,
+                                [f"u.{a}" for a in ctx.axes],
                                 ctx.method, name=f"seed004_{kind}"))
         return Controller(blocks, ctx.dt, f"seed004_{kind}")
     return build
@@ -241,8 +247,11 @@ CONTROLLERS = {
                      "(s+110)/(s+1500), positions in mm), balanced-truncated to order 4 (order = 'full': 8), on "
                      "axes x and y together, with ZPETC feedforward (zpetc, default true); designed on first use",
                      _seed004("mimo"), ("zpetc", "order")),
-    "seed004_pid": ("seed 004's SISO comparison: a PID per axis with the MIMO loop's crossover and phase margin, "
-                    "with ZPETC feedforward (zpetc, default true)", _seed004("pid"), ("zpetc", "order")),
+    "seed004_pid": ("a PID per axis for seed 004's SISO comparison, designed here (the paper gives no gains): "
+                    "tuning = 'loop_at_input' (default: the crossover and phase margin of the MIMO loop broken at "
+                    "that input, integral corner a decade below) or 'mimo_diagonal' (the MIMO diagonal loop's "
+                    "crossover, kp = the MIMO controller's static gain); ki_scale multiplies the integral gain; "
+                    "ZPETC feedforward (zpetc, default true)", _seed004("pid"), ("zpetc", "order", "tuning", "ki_scale")),
     "seed001": ("seed 001's designs on the sabau_xy axes (design = " + ", ".join(seed001.DESIGNS)
                 + "; default pi_p_pole_placement); feedforward = false drops the PI-P reference feedforward; "
                 "velocity_ff = true adds the drive's velocity feedforward ref_vel/K_M (the MC206X's VFF_GAIN); "

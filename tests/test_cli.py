@@ -153,6 +153,17 @@ def test_reproduce_seed002_transfer_functions_only(tmp_path):
     assert len(res["tables"]) == 16 and "twin" not in res["tables"][0]["seed002_pid"]
     assert res["tables"][0]["seed002_pid"]["tf_loop"]["max_mm"] == pytest.approx(0.0639, rel=0.01)  # paper's PID
     assert len(list((tmp_path / "p").glob("seed002_*.png"))) == 3
+    cut = [row for row in res["tables"] if row["rpm"] is not None]
+    assert len(cut) == 12
+    for row in cut:
+        # Table 3's metric is the reduction of the maximum error: the paper's own Table 3 is its
+        # Table 2 so reduced (to its two decimals), and ours is computed the same way
+        key = f"{row['f_hz']} {row['a_mm']} {row['rpm']:.0f}"
+        paper_pid, paper_npid = res["paper"]["table2"][key]
+        assert row["paper_max_reduction_pct"] == pytest.approx((paper_pid - paper_npid) / paper_pid * 100, abs=0.01)
+        pid, npid = row["seed002_pid"]["tf_loop"], row["seed002_npid"]["tf_loop"]
+        assert row["max_reduction_pct_tf_loop"] == pytest.approx((pid["max_mm"] - npid["max_mm"]) / pid["max_mm"] * 100)
+        assert row["rmse_reduction_pct_tf_loop"] == pytest.approx((pid["rmse_mm"] - npid["rmse_mm"]) / pid["rmse_mm"] * 100)
 
 
 def test_reproduce_seed003_transfer_functions_only():

@@ -13,8 +13,8 @@ from controllers.design.hinf import gamma_iteration
 from controllers.design.mimo import frequency_response
 from controllers.design.mu import constant_upper_lft, destabilizing_scale, mu_upper_bound
 from controllers.design.ncf import central_controller, gamma_min, ncf_generalized_plant, ncf_riccati, ncf_robustness_norm
-from controllers.design.pid import pid_for_crossover, pid_tf
-from controllers.design.zpetc import zpetc
+from controllers.design.pid import pid_for_crossover, pid_for_crossover_with_kp, pid_tf
+from controllers.design.zpetc import damping_ratio, zpetc
 from controllers.papers import seed004 as s4
 from twin.reproduce.seed004 import procedure as r
 
@@ -114,6 +114,22 @@ def test_zpetc_gives_zero_phase_and_unit_dc_gain():
     assert abs(f.response(num, den, [0.0])[0] - 1.0) < 1e-12
 
 
+def test_zpetc_inverts_a_well_damped_zero_near_one_and_not_one_near_minus_one():
+    """Zeros at z = 0.9996 (a PI's slow zero, damping ratio 1) and z = -0.999 (a Tustin zero):
+    the first is inverted, the second left out.  Left out, the zero near +1 would divide the
+    filter by B_u(1)^2 = 1.6e-7 (the twin's PID loop with ki/100 ran away that way)."""
+    zeros, poles = (0.9996, -0.999), (0.5, 0.3, 0.2)
+    num = np.concatenate([[0.0], np.real(np.poly(zeros))])  # z^-1 (1 - 0.9996 z^-1)(1 + 0.999 z^-1)
+    den = np.real(np.poly(poles))
+    f = zpetc(num, den)
+    assert np.allclose(f.unacceptable, [-0.999]) and f.preview == 2
+    assert abs(f.response(num, den, [0.0])[0] - 1.0) < 1e-9
+    filter_poles = np.roots(f.den)  # ascending in z^-1: roots are the poles in z
+    assert np.allclose(filter_poles, [0.9996])
+    assert max(abs(c) for c in f.num) < 1e4  # 1 / (B_u(1)^2 (1 - 0.9996)) would be ~1e10
+    assert damping_ratio(0.9996) == pytest.approx(1.0) and damping_ratio(-0.999) < 1e-3
+
+
 def test_zpetc_reduces_the_air_cut_tracking_error():
     kw = dict(radius_mm=20.0, feed=2400.0, duration_s=0.6)
     with_ff = r.tf_circle("mimo", True, **kw)["max_tracking_settled_um"]
@@ -142,3 +158,39 @@ def test_seed004_controllers_need_both_axes_and_the_design_period():
         make_controller("seed004_pid", 1e-3, axes=("x", "y"))
     with pytest.raises(ValueError, match="zpetc"):
         make_controller("seed004_mimo", s4.DT_S, {"zpetc": 3.0}, axes=("x", "y"))
+
+
+def test_pid_for_crossover_with_kp_crosses_over_with_the_given_kp():
+    def plant(w):
+        s = 1j * np.asarray(w, float)
+        return 98.2 / (s * (52.3 * s + 2693.5))
+    kp, ki, kd, tf_s = pid_for_crossover_with_kp(plant, 700.0, 4.0e4)
+    assert kp == 4.0e4 and ki == pytest.approx(4.0e4 * 70.0) and kd > 0
+    assert abs(pid_tf(kp, ki, kd, tf_s)(700j) * plant(np.array([700.0]))[0]) == pytest.approx(1.0, abs=1e-9)
+    with pytest.raises(ValueError, match="no kd >= 0"):
+        pid_for_crossover_with_kp(plant, 700.0, 1e7)
+
+
+def test_mimo_static_gain_and_the_pid_matched_to_it():
+    """K(0) = D - C A^-1 B of the state-space controller, computed here with numpy; the
+    'mimo_diagonal' PID takes its diagonal as kp (V/m)."""
+    for order in ("full", "reduced"):
+        K = control.ss(s4.mimo_design()[order])
+        expected = K.D - K.C @ np.linalg.solve(K.A, K.B)
+        np.testing.assert_allclose(s4.mimo_static_gain_V_per_m(order), expected, rtol=1e-9)
+    kps = [g[0] for g in s4.pid_design("mimo_diagonal")["gains"]]
+    np.testing.assert_allclose(kps, np.diag(s4.mimo_static_gain_V_per_m("reduced")), rtol=1e-12)
+
+
+def test_static_gain_sets_the_cutting_error():
+    """A PD with the MIMO controller's K(0) as kp and its diagonal crossover cuts the R 28 circle
+    within 10 % of the MIMO controller's tracking errors; any integral action takes them far below."""
+    runs = {}
+    for name, params in (("mimo", None), ("pd", {"tuning": "mimo_diagonal", "ki_scale": 0.0}),
+                         ("pid", {"tuning": "mimo_diagonal"})):
+        data = r.scenario_data("seed004_mimo_cutting")
+        if params is not None:
+            data["controller"] = {"type": "seed004_pid", "params": params}
+        runs[name] = np.array(r.twin_errors(r.run_twin(data))["max_tracking_settled_um"])
+    np.testing.assert_allclose(runs["pd"], runs["mimo"], rtol=0.1)
+    assert (runs["pid"] < 0.25 * runs["mimo"]).all()

@@ -68,3 +68,41 @@ def pid_for_crossover(plant, w_c: float, pm_deg: float, integral_ratio: float = 
     if not (kp > 0 and kd >= 0):
         raise ValueError(f"no PID with kp, kd > 0 gives {pm_deg:g} deg at {w_c:g} rad/s (kp {kp:.3g}, kd {kd:.3g})")
     return float(kp), float(kp * w_i), float(kd), tf_s
+
+
+def pid_for_crossover_with_kp(plant, w_c: float, kp: float, integral_ratio: float = 0.1,
+                              filter_ratio: float = 10.0) -> tuple[float, float, float, float]:
+    """PID with a given proportional gain ``kp`` whose loop ``C P`` crosses over at ``w_c``:
+    integral corner ``integral_ratio * w_c``, derivative filter corner ``filter_ratio * w_c``,
+    and the ``kd >= 0`` that makes ``|C(j w_c) P(j w_c)| = 1`` (the phase margin follows).
+
+    Parameters
+    ----------
+    plant : callable
+        ``plant(w)``: the plant's frequency response at angular frequencies ``w`` (rad/s).
+    w_c : float
+        Gain crossover (rad/s).
+    kp : float
+        Proportional gain, in the plant's inverse units (V/m for a plant in m/V).
+
+    Returns
+    -------
+    kp, ki, kd, tf_s : float
+        As :func:`pid_for_crossover` returns them.
+
+    Raises
+    ------
+    ValueError
+        If ``kp`` with its integral term alone already exceeds unit loop gain at ``w_c`` (no
+        ``kd >= 0`` brings the crossover there).
+    """
+    w_i, tf_s = integral_ratio * w_c, 1.0 / (filter_ratio * w_c)
+    need = 1.0 / abs(complex(np.asarray(plant(np.array([w_c])))[0]))  # |C(j w_c)| for crossover
+    a, b = kp * (1.0 + w_i / (1j * w_c)), 1j * w_c / (1.0 + 1j * w_c * tf_s)
+    # |a + kd b|^2 = need^2: |b|^2 kd^2 + 2 Re(a conj b) kd + |a|^2 - need^2 = 0
+    qa, qb, qc = abs(b) ** 2, 2.0 * (a * b.conjugate()).real, abs(a) ** 2 - need**2
+    if qc > 0:
+        raise ValueError(f"kp = {kp:.4g} alone gives a loop gain of {abs(a) / need:.3g} at {w_c:g} rad/s: "
+                         "no kd >= 0 puts the crossover there")
+    kd = (-qb + np.sqrt(qb * qb - 4.0 * qa * qc)) / (2.0 * qa)
+    return float(kp), float(kp * w_i), float(kd), tf_s

@@ -49,7 +49,14 @@ class Zpetc:
         return poly(zi, loop_num) / poly(zi, loop_den) * filt
 
 
-def zpetc(loop_num, loop_den, radius: float = 0.95) -> Zpetc:
+def damping_ratio(z: complex) -> float:
+    """Damping ratio of the continuous root ``s = ln z`` that a discrete root ``z`` samples:
+    ``-ln|z| / |ln z|`` (1 on the positive real axis, 0 on the unit circle)."""
+    s = np.log(complex(z))
+    return float(-s.real / abs(s)) if abs(s) > 0 else 1.0
+
+
+def zpetc(loop_num, loop_den, radius: float = 0.95, min_damping: float = 0.5) -> Zpetc:
     """ZPETC of the discrete SISO closed loop ``loop_num(z^-1) / loop_den(z^-1)``.
 
     Parameters
@@ -57,9 +64,12 @@ def zpetc(loop_num, loop_den, radius: float = 0.95) -> Zpetc:
     loop_num, loop_den : array_like
         Coefficients in ascending powers of ``z^-1``; leading zeros of ``loop_num`` are the
         delay ``d``.
-    radius : float
-        Zeros with ``|z| >= radius`` (on or outside the circle, or close to it: lightly damped
-        inverses ring) are unacceptable and not inverted.
+    radius, min_damping : float
+        Zeros on or outside the unit circle, and zeros with ``|z| >= radius`` whose damping ratio
+        (:func:`damping_ratio`) is below ``min_damping`` (close to the circle and lightly damped,
+        such as those near z = -1: their inverses ring), are unacceptable and not inverted.  A
+        well-damped zero near z = +1 (a PI's slow zero) is inverted: keeping it would divide
+        the filter by ``B_u(1)^2``, nearly zero.
 
     Raises
     ------
@@ -73,8 +83,9 @@ def zpetc(loop_num, loop_den, radius: float = 0.95) -> Zpetc:
     d = int(np.argmax(num != 0))
     b = num[d:]
     zeros = np.roots(b)  # b(z^-1) = b0 prod(1 - z_i z^-1): roots of b0 z^m + b1 z^(m-1) + ...
-    bad = zeros[np.abs(zeros) >= radius]
-    good = zeros[np.abs(zeros) < radius]
+    unacceptable = np.array([abs(z) >= 1.0 or (abs(z) >= radius and damping_ratio(z) < min_damping) for z in zeros],
+                            bool)
+    bad, good = zeros[unacceptable], zeros[~unacceptable]
     b_a = b[0] * np.atleast_1d(np.real(np.poly(good)))  # ascending powers of z^-1: poly gives [1, -sum, ...]
     b_u = np.atleast_1d(np.real(np.poly(bad)))  # B_u(z^-1) = prod(1 - z_i z^-1), ascending in z^-1
     b_u_reversed = b_u[::-1]  # B_u*(z^-1): B_u(z) = z^s B_u*(z^-1)

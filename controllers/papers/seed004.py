@@ -12,9 +12,11 @@ PID it is compared with, and the uncertain model of its mu analysis, designed he
 - MIMO: :func:`controllers.design.ncf.loop_shaping` with ``gamma = 1.1 gamma_min``, order 8,
   balanced truncation (SLICOT AB09AD, square-root Schur method, through
   ``control.balred``) to 4, Tustin at 2 kHz.
-- PID per axis: on the diagonal plant without the cross coupling (``k_c = 0``), the crossover
-  and phase margin of the MIMO loop broken at that axis' input
-  (:func:`controllers.design.pid.pid_for_crossover`): "similar loop shape" by construction.
+- PID per axis (ours: the paper gives no PID gains): on the diagonal plant without the cross
+  coupling (``k_c = 0``), by default the crossover and phase margin of the MIMO loop broken at
+  that axis' input (:func:`controllers.design.pid.pid_for_crossover`, integral corner a decade
+  below); or (``tuning = "mimo_diagonal"``) the crossover of the MIMO's diagonal loop with the
+  MIMO controller's static gain as ``kp`` (:func:`controllers.design.pid.pid_for_crossover_with_kp`).
 - Uncertainty (eqs. 10-12, Table 1): real ``delta`` on m_x, b_x, m_y, b_y, k_il (x and y
   equations) and k_c (x and y), the amplifier as input-multiplicative ``(s+600)/(s+2000)``,
   performance ``Wp = 2 (s + 100)/(s + 5)`` on the output sensitivity.  k_il and k_c enter
@@ -108,39 +110,95 @@ def loop_margins_at_inputs(controller_si, k_il: float = TABLE1["k_il"][0], k_c: 
     return [loop_margins(broken(i), 1e-1, 1e5, 30_000) for i in range(2)]
 
 
-@lru_cache(maxsize=1)
-def pid_design() -> dict:
-    """Seed 004's SISO comparison: one PID per axis on the diagonal plant (k_c = 0), crossing
-    over where the reduced MIMO loop broken at that axis does, with its phase margin.
+#: The PID tunings (ours; the paper gives no PID gains): ``loop_at_input``, the crossover and
+#: phase margin of the reduced MIMO loop broken at that axis' input; ``mimo_diagonal``, the
+#: crossover of the MIMO controller's diagonal loop ``K_ii G_ii`` with ``kp = K_ii(0)``, the
+#: MIMO controller's static gain (the paper's likely intent: a PID of "similar loop shape").
+PID_TUNINGS = ("loop_at_input", "mimo_diagonal")
+
+
+def _diagonal_plant(axis: str):
+    """``G_ii(w)`` without the cross coupling (k_c = 0): k/(s (m s + b - k_il)), m/V."""
+    p, k_il = nominal_params(), TABLE1["k_il"][0]
+
+    def plant(w):
+        s = 1j * np.asarray(w, float)
+        return p[f"k_{axis}"] / (s * (p[f"m_{axis}"] * s + p[f"b_{axis}"] - k_il))
+    return plant
+
+
+def mimo_static_gain_V_per_m(order: str = "reduced") -> np.ndarray:
+    """K(0) of the MIMO controller (2 x 2, V/m): finite, since Ws has no integrator."""
+    import control
+    return np.asarray(control.dcgain(mimo_design()[order]), float)
+
+
+def mimo_diagonal_margins(order: str = "reduced") -> list:
+    """Margins of each diagonal loop ``K_ii G_ii`` of the MIMO controller on the diagonal plant."""
+    from controllers.design.loop_analysis import loop_margins
+    from controllers.design.mimo import frequency_response
+    K = mimo_design()[order]
+    out = []
+    for i, a in enumerate("xy"):
+        plant = _diagonal_plant(a)
+        out.append(loop_margins(lambda w, i=i, plant=plant: frequency_response(K, np.asarray(w, float))[:, i, i]
+                                * plant(w), 1e-1, 1e5, 30_000))
+    return out
+
+
+def check_pid_tuning(tuning, ki_scale) -> None:
+    """Raise ``ValueError`` unless ``tuning`` is one of :data:`PID_TUNINGS` and ``ki_scale`` a
+    number from 0 to 1000."""
+    if not (isinstance(tuning, str) and tuning in PID_TUNINGS):
+        raise ValueError(f"tuning = {tuning!r}: use one of {', '.join(PID_TUNINGS)}")
+    if not (isinstance(ki_scale, (int, float)) and not isinstance(ki_scale, bool) and 0 <= ki_scale <= 1e3):
+        raise ValueError(f"ki_scale = {ki_scale!r}: must be a number from 0 to 1000")
+
+
+@lru_cache(maxsize=4)
+def pid_design(tuning: str = "loop_at_input", ki_scale: float = 1.0) -> dict:
+    """Seed 004's SISO comparison, designed here: one PID per axis on the diagonal plant (k_c = 0).
+
+    Parameters
+    ----------
+    tuning : str
+        One of :data:`PID_TUNINGS`.
+    ki_scale : float
+        Factor on the designed integral gain (1: as designed).
 
     Returns
     -------
     dict
         ``gains``: per axis ``(kp V/m, ki V/(m s), kd V s/m, tf_s s)``; ``targets``: the MIMO
-        loop's margins per axis; ``margins``: the PID loops' own.
+        loop margins the tuning takes its crossover from; ``margins``: the PID loops' own.
     """
     from controllers.design.loop_analysis import loop_margins
-    from controllers.design.pid import pid_for_crossover, pid_tf
-    targets = loop_margins_at_inputs(mimo_design()["reduced"])
-    p, k_il = nominal_params(), TABLE1["k_il"][0]
+    from controllers.design.pid import pid_for_crossover, pid_for_crossover_with_kp, pid_tf
+    check_pid_tuning(tuning, ki_scale)
+    if tuning == "loop_at_input":
+        targets = loop_margins_at_inputs(mimo_design()["reduced"])
+    else:
+        targets = mimo_diagonal_margins()
+        static = np.diag(mimo_static_gain_V_per_m())
     gains, margins = [], []
     for i, a in enumerate("xy"):
-        def plant(w, a=a):
-            s = 1j * np.asarray(w, float)
-            return p[f"k_{a}"] / (s * (p[f"m_{a}"] * s + p[f"b_{a}"] - k_il))
-        g = pid_for_crossover(plant, targets[i].w_pm, targets[i].pm_deg)
-        gains.append(g)
-        C = pid_tf(*g)
+        plant = _diagonal_plant(a)
+        if tuning == "loop_at_input":
+            kp, ki, kd, tf_s = pid_for_crossover(plant, targets[i].w_pm, targets[i].pm_deg)
+        else:
+            kp, ki, kd, tf_s = pid_for_crossover_with_kp(plant, targets[i].w_pm, float(static[i]))
+        gains.append((kp, ki * ki_scale, kd, tf_s))
+        C = pid_tf(*gains[-1])
         margins.append(loop_margins(lambda w, C=C, plant=plant: C(1j * np.asarray(w)) * plant(w), 1e-1, 1e5, 30_000))
     return {"gains": gains, "targets": targets, "margins": margins}
 
 
-def pid_controller_si():
+def pid_controller_si(tuning: str = "loop_at_input", ki_scale: float = 1.0):
     """The two PIDs as one diagonal python-control model (V/m)."""
     import control
 
     from controllers.design.pid import pid_tf
-    return control.append(*(pid_tf(*g).to_control() for g in pid_design()["gains"]))
+    return control.append(*(pid_tf(*g).to_control() for g in pid_design(tuning, ki_scale)["gains"]))
 
 
 def _first_order(coefficients) -> tuple[float, float, float, float]:
@@ -225,13 +283,14 @@ def stable_range_claim() -> dict:
             "agree": all(math.isclose(a, b) for key in box for a, b in zip(box[key], PAPER[f"{key}_range"]))}
 
 
-def controller_si(kind: str, order: str = "reduced"):
+def controller_si(kind: str, order: str = "reduced", tuning: str = "loop_at_input", ki_scale: float = 1.0):
     """The feedback controller ``kind`` (``"mimo"`` or ``"pid"``), continuous, V/m; the MIMO
-    one ``order`` ``"reduced"`` (4 states) or ``"full"`` (8)."""
+    one ``order`` ``"reduced"`` (4 states) or ``"full"`` (8); the PID pair of ``tuning`` with
+    ``ki_scale`` on its integral gains (:func:`pid_design`)."""
     if kind == "mimo":
         return mimo_design()[order]
     if kind == "pid":
-        return pid_controller_si()
+        return pid_controller_si(tuning, ki_scale)
     raise ValueError(f"controller kind = {kind!r}: use 'mimo' or 'pid'")
 
 
@@ -244,8 +303,8 @@ def closed_loop_discrete(controller, k_il: float = 0.0, k_c: float = 0.0, dt: fl
     return control.feedback(loop, np.eye(2))
 
 
-@lru_cache(maxsize=4)
-def zpetc_filters(kind: str, order: str = "reduced") -> tuple:
+@lru_cache(maxsize=8)
+def zpetc_filters(kind: str, order: str = "reduced", tuning: str = "loop_at_input", ki_scale: float = 1.0) -> tuple:
     """The ZPETC of each axis' diagonal closed loop ``T_ii`` (air cut, k_il = k_c = 0): the
     reference is a motion command, the cutting force a disturbance the feedback rejects.
 
@@ -257,7 +316,7 @@ def zpetc_filters(kind: str, order: str = "reduced") -> tuple:
     import control
 
     from controllers.design.zpetc import zpetc
-    T = closed_loop_discrete(controller_si(kind, order))
+    T = closed_loop_discrete(controller_si(kind, order, tuning, ki_scale))
     out = []
     for i in range(2):
         tf = control.ss2tf(control.minreal(T[i, i], verbose=False))

@@ -34,6 +34,17 @@ from twin.reproduce import twin_vs_tf
 KINDS = ("mimo", "pid")
 OMEGA = np.logspace(-1, 4, 121)  # rad/s, the mu plots' grid (Figs. 6-7)
 SETTLED_S = 0.1  # the circle starts with a velocity step: errors also reported after it
+REVERSAL_WINDOW_S = 0.05  # an axis' reversal error: the largest within 50 ms of its velocity's sign change
+#: The controllers compared on the same circles: name -> (kind, registry parameters).  Every PID
+#: is ours (the paper gives no gains): "loop at input" is the bundled seed004_pid.
+CONTROLLER_VARIANTS = {
+    "MIMO, order 4 (reduced)": ("mimo", {}),
+    "MIMO, order 8 (full)": ("mimo", {"order": "full"}),
+    "PID, loop at input": ("pid", {}),
+    "PID, loop at input, ki / 100": ("pid", {"ki_scale": 0.01}),
+    "PID, MIMO diagonal, kp = K(0)": ("pid", {"tuning": "mimo_diagonal"}),
+    "PD, MIMO diagonal, kp = K(0)": ("pid", {"tuning": "mimo_diagonal", "ki_scale": 0.0}),
+}
 TWIN_TOL_REL = 0.02
 #: average-force gains for the circle cuts: the paper's estimate |k| = 1800 N s/m, up milling
 AVERAGE_FORCE = {"type": "average_force", "k_il_N_s_per_m": -1800.0, "k_c_N_s_per_m": 1800.0,
@@ -171,17 +182,32 @@ def circle_reference(radius_mm: float, feed_mm_per_min: float, duration_s: float
     return Circle(radius_mm, feed_mm_per_min).sample(np.arange(n + preview) * s4.DT_S)
 
 
-def _errors(t_s, ref_xy, pos_xy, u_V) -> dict:
+def _errors(t_s, ref_xy, pos_xy, u_V, ref_vel_xy=None) -> dict:
     """Max tracking error per axis (all, and after SETTLED_S), contour errors to the path and to
-    the reference point of the same instant, max |u| per axis (um, V)."""
+    the reference point of the same instant, max |u| per axis (um, V); with the reference
+    velocity, also the largest tracking error per axis within :data:`REVERSAL_WINDOW_S` of that
+    axis' reversals after SETTLED_S (the quadrant glitch; um, nan without a reversal)."""
     err = np.abs(ref_xy - pos_xy)
     late = t_s >= SETTLED_S
     path = contour_error(pos_xy, ref_xy)
     point = np.linalg.norm(ref_xy - pos_xy, axis=1)
-    return {"max_tracking_um": (err.max(axis=0) * 1e6).tolist(),
-            "max_tracking_settled_um": (err[late].max(axis=0) * 1e6).tolist(),
-            "max_contour_path_um": float(path[late].max() * 1e6),
-            "max_contour_point_um": float(point[late].max() * 1e6), "max_u_V": np.abs(u_V).max(axis=0).tolist()}
+    out = {"max_tracking_um": (err.max(axis=0) * 1e6).tolist(),
+           "max_tracking_settled_um": (err[late].max(axis=0) * 1e6).tolist(),
+           "max_contour_path_um": float(path[late].max() * 1e6),
+           "max_contour_point_um": float(point[late].max() * 1e6), "max_u_V": np.abs(u_V).max(axis=0).tolist()}
+    if ref_vel_xy is not None:
+        out["max_at_reversal_um"] = [_max_near_reversals(t_s, ref_vel_xy[:, i], err[:, i]) * 1e6 for i in range(2)]
+    return out
+
+
+def _max_near_reversals(t_s, velocity, error) -> float:
+    """Largest ``error`` within :data:`REVERSAL_WINDOW_S` of a sign change of ``velocity``
+    after SETTLED_S (nan if the axis does not reverse there)."""
+    flips = t_s[1:][(np.sign(velocity[1:]) != np.sign(velocity[:-1])) & (t_s[1:] >= SETTLED_S)]
+    if flips.size == 0:
+        return math.nan
+    near = (np.abs(t_s[:, None] - flips[None, :]) <= REVERSAL_WINDOW_S).any(axis=1) & (t_s >= SETTLED_S)
+    return float(error[near].max())
 
 
 def tf_circle(kind: str, zpetc: bool, radius_mm: float, feed: float, duration_s: float,
@@ -230,7 +256,38 @@ def cutting_run(kind: str):
 
 
 def twin_errors(res) -> dict:
-    return _errors(res.t_s, res.ref[:, :, 0], res.table_position_m(), res.u_V)
+    return _errors(res.t_s, res.ref[:, :, 0], res.table_position_m(), res.u_V, res.ref[:, :, 1])
+
+
+def static_gains() -> dict:
+    """What sets the steady cutting deflection: K(0) of the full and reduced MIMO controllers
+    (2 x 2) and each PID's proportional gain per axis, V/mm."""
+    mm = s4.POSITION_UNIT_PER_M
+    out = {f"mimo_{order}_K0_V_per_mm": (s4.mimo_static_gain_V_per_m(order) / mm).tolist() for order in ("full", "reduced")}
+    for name, (kind, params) in CONTROLLER_VARIANTS.items():
+        if kind == "pid":
+            design = s4.pid_design(params.get("tuning", "loop_at_input"), params.get("ki_scale", 1.0))
+            out[name] = {"kp_V_per_mm": [g[0] / mm for g in design["gains"]],
+                         "ki_V_per_mm_s": [g[1] / mm for g in design["gains"]],
+                         "kd_V_s_per_mm": [g[2] / mm for g in design["gains"]],
+                         "pm_deg": [m.pm_deg for m in design["margins"]],
+                         "crossover_rad_s": [m.w_pm for m in design["margins"]]}
+    out["mimo_diagonal_crossover_rad_s"] = [m.w_pm for m in s4.mimo_diagonal_margins()]
+    return out
+
+
+def controller_comparison() -> dict:
+    """Part 4's question, what beats what and why: every :data:`CONTROLLER_VARIANTS` entry in the
+    twin on the same two circles (the MIMO's bundled air cut, R 20, and mechanistic cutting
+    circle, R 28; the paper cut R 30 with its PID), with the static gains beside them."""
+    runs = {}
+    for name, (kind, params) in CONTROLLER_VARIANTS.items():
+        runs[name] = {}
+        for case in ("air_cut", "cutting"):
+            data = scenario_data(f"seed004_mimo_{case}")
+            data["controller"] = {"type": f"seed004_{kind}", "params": {"zpetc": True, **params}}
+            runs[name][case] = twin_errors(run_twin(data))
+    return {"static_gains": static_gains(), "runs": runs}
 
 
 def circle_cases() -> dict:
