@@ -92,9 +92,10 @@ def robustly_stable(lower, upper) -> bool:
 def stability_margin_third_order(lower, upper) -> float:
     """Eq. (5): SM = alpha1 alpha2 - beta0 beta3 of a third-order interval polynomial.
 
-    Positive SM means robustly stable (Hote et al., the paper's ref. [14]); this is the Routh
-    condition of the worst Kharitonov polynomial, a0 s^3 + a1 s^2 + a2 s + a3 with the lower
-    a1, a2 and the upper a0, a3.
+    With every coefficient positive, positive SM means robustly stable (Hote et al., the
+    paper's ref. [14]); this is the Routh condition of the worst Kharitonov polynomial,
+    a0 s^3 + a1 s^2 + a2 s + a3 with the lower a1, a2 and the upper a0, a3.  A negative lower
+    bound makes the family unstable whatever the SM says.
 
     Raises
     ------

@@ -20,10 +20,10 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass
+from functools import lru_cache
 
 import control
 import numpy as np
-from scipy.signal import lfilter
 from tqdm import tqdm
 
 from controllers.blocks import error_feedback
@@ -127,15 +127,16 @@ def family_stable(controller, params=None, n: int = 2001) -> bool:
 def interval_table() -> list[dict]:
     """Parts 1-2: alpha/beta of eqs. (31), (33), (35) from the box, SM, Kharitonov verdict."""
     rows = []
-    for name, ctrl in TABLE2_CONTROLLERS.items():
+    for name, ctrl in {**TABLE2_CONTROLLERS, **our_controllers()}.items():
         lo, hi = coefficient_interval(ctrl)
         row = {"controller": name, "lower": lo.tolist(), "upper": hi.tolist(),
                "kharitonov_stable": robustly_stable(lo, hi), "family_stable": family_stable(ctrl),
                "kharitonov": {k: v.tolist() for k, v in kharitonov_polynomials(lo, hi).items()}}
         if len(lo) == 4:
             row.update(alpha1=lo[1], alpha2=lo[2], beta3=hi[3], sm=stability_margin_third_order(lo, hi))
-        paper = PAPER[f"{'pi' if name == 'robust_pi' else name}_interval"]
-        row["paper"] = paper
+        published = OURS_BESIDE.get(name, name)
+        row["source"] = "ours" if name in OURS_BESIDE else "paper"
+        row["paper"] = PAPER[f"{'pi' if published == 'robust_pi' else published}_interval"]
         rows.append(row)
     return rows
 
@@ -185,17 +186,13 @@ def imc_design() -> dict:
 
 def hinf_design(eps: float = 1e-6) -> dict:
     """Part 5: mixsyn with W1 = 20/(s+0.01), W2 = 1, W3 = 1/(s+0.1) on eq. (2), integrator shifted."""
-    s = control.tf("s")
-    shifted = shift_integrators(_plant(nominal_params()), eps)
-    w3 = 1 / (s + 0.1)
-    P = mixed_sensitivity_plant(shifted, 20 / (s + 0.01), control.tf(1, 1), w3)
-    opt = gamma_iteration(P)
+    shifted, w3, opt, at_paper = _hinf_problem(eps)
+    ours = our_controllers()
     # gamma cannot go below |W3 T| at s = 0, where the loop's T is 1 (integral action)
     loop_dc = shifted(0) * control.tf(opt.controller)(0)
     t_dc = loop_dc / (1 + loop_dc)
-    at_paper = control.tf(central_controller(P, 1.0 / PAPER["hinf_theta"]))
-    reduced_at_paper = reduce_balanced(at_paper, 1)
-    reduced_opt = reduce_balanced(opt.controller, 1)
+    reduced_at_paper = ours["hinf_ours_paper_gamma_reduced"]
+    reduced_opt = ours["hinf_ours_optimal_reduced"]
     reduced_eq28 = reduce_balanced(HINF_EQ28, 1)
     w = np.logspace(-3, 3, 600)
 
@@ -212,7 +209,8 @@ def hinf_design(eps: float = 1e-6) -> dict:
 
     gap_db, gap_at_rad_s = sv_gap_db(HINF_EQ28, HINF_EQ29)
     return {"integrator_shift_eps": eps, "gamma_opt": opt.gamma, "theta_opt": opt.theta,
-            "iterations": opt.iterations, "paper_theta": PAPER["hinf_theta"],
+            "iterations": opt.iterations, "gamma_bracket": [GAMMA_LO, GAMMA_HI], "gamma_rel_tol": GAMMA_TOL,
+            "paper_theta": PAPER["hinf_theta"],
             "gamma_floor_W3T_at_dc": float(abs(w3(0) * t_dc)),
             "controller_opt": coeffs(control.tf(opt.controller)),
             "controller_at_paper_gamma": coeffs(at_paper), "paper_eq28": coeffs(HINF_EQ28),
@@ -224,6 +222,46 @@ def hinf_design(eps: float = 1e-6) -> dict:
             "sv_gap_opt_vs_reduced_db": sv_gap_db(control.tf(opt.controller), reduced_opt)[0]}
 
 
+# ---------------------------------------------------------------- our designs as controllers
+
+#: The gamma iteration's bracket and relative tolerance: the bisection count follows from them
+#: (ceil(log2(ln(GAMMA_HI / GAMMA_LO) / ln(1 + GAMMA_TOL))) = 14), not from the paper's text.
+GAMMA_HI, GAMMA_LO, GAMMA_TOL = 1e4, 1e-3, 1e-3
+#: Which published controller each of ours stands beside in Table 2.
+OURS_BESIDE = {"robust_pi_ours": "robust_pi", "imc_ours": "imc", "hinf_ours_paper_gamma": "hinf",
+               "hinf_ours_paper_gamma_reduced": "hinf", "hinf_ours_optimal": "hinf",
+               "hinf_ours_optimal_reduced": "hinf"}
+
+
+@lru_cache(maxsize=1)
+def _hinf_problem(eps: float = 1e-6):
+    """The mixed-sensitivity plant (W1 = 20/(s+0.01), W2 = 1, W3 = 1/(s+0.1), integrator shifted
+    to -eps), its gamma iteration and the central controller at the paper's gamma."""
+    s = control.tf("s")
+    shifted = shift_integrators(_plant(nominal_params()), eps)
+    w3 = 1 / (s + 0.1)
+    P = mixed_sensitivity_plant(shifted, 20 / (s + 0.01), control.tf(1, 1), w3)
+    opt = gamma_iteration(P, GAMMA_HI, GAMMA_LO, GAMMA_TOL)
+    at_paper = control.tf(central_controller(P, 1.0 / PAPER["hinf_theta"]))
+    return shifted, w3, opt, at_paper
+
+
+@lru_cache(maxsize=1)
+def our_controllers() -> dict:
+    """Table 2's controllers as our procedures compute them (python-control models): the robust
+    PI of eqs. (18)-(19) on eq. (17)'s coefficients, unrounded; IMC from eq. (23) (mu = 1,
+    lambda = 2); the H-infinity central controller at the paper's gamma and at the optimal one,
+    each also balanced-truncated to first order as eq. (29) is."""
+    eq17 = PAPER["eq17"]
+    pi = design_robust_pi(eq17["alpha1"], eq17["c2_min"], eq17["c3_max"], 10.0, 60.0)
+    _, _, opt, at_paper = _hinf_problem()
+    optimal = control.tf(opt.controller)
+    return {"robust_pi_ours": control.tf([pi.kp, pi.ki], [1.0, 0.0]),
+            "imc_ours": control.tf(imc_controller(_plant(nominal_params()), 1.0, 2)),
+            "hinf_ours_paper_gamma": at_paper, "hinf_ours_paper_gamma_reduced": reduce_balanced(at_paper, 1),
+            "hinf_ours_optimal": optimal, "hinf_ours_optimal_reduced": reduce_balanced(optimal, 1)}
+
+
 # ---------------------------------------------------------------- Table 2
 
 def _plant(params: dict[str, float]) -> control.TransferFunction:
@@ -232,13 +270,16 @@ def _plant(params: dict[str, float]) -> control.TransferFunction:
 
 
 def _loop(controller, params: dict[str, float], delay_s: float):
-    """Closed loop sampled at ``DT_S`` (exact for a step: ZOH), or at 1 ms with a z^-N delay."""
+    """Closed loop in state space (plant and controller each realized, then connected, so no
+    high-order polynomial is formed), sampled at ``DT_S`` (exact for a step: ZOH), or at 1 ms
+    with a z^-N delay."""
     G = _plant(params)
     if delay_s == 0.0:
-        return control.c2d(control.feedback(G * controller, 1), DT_S, "zoh"), DT_S, HORIZON_S
+        loop = control.feedback(control.ss(G) * control.ss(controller), 1)
+        return control.c2d(loop, DT_S, "zoh"), DT_S, HORIZON_S
     dt = 1e-3
     delay = control.ss(control.tf([1.0], [1.0] + [0.0] * int(round(delay_s / dt)), dt))
-    open_loop = control.ss(control.c2d(G, dt, "zoh")) * delay * control.ss(control.c2d(controller, dt, "tustin"))
+    open_loop = control.c2d(control.ss(G), dt, "zoh") * delay * control.c2d(control.ss(controller), dt, "tustin")
     return control.feedback(open_loop, 1), dt, 4 * HORIZON_S
 
 
@@ -248,14 +289,44 @@ def tf_step_series(controller, params: dict[str, float],
 
     Without delay the continuous loop is sampled exactly every ``DT_S`` (ZOH of a step input is
     exact); with a delay it is the sampled-data loop at 1 ms (ZOH plant, Tustin controller,
-    z^-N delay), in state space.
+    z^-N delay), in state space.  Stability without delay is read from the roots of the
+    continuous characteristic polynomial: sampled at 0.1 ms, a closed-loop pole at -1e-6 rad/s
+    (an H-infinity controller's zero beside the shifted integrator) sits within rounding of
+    |z| = 1.
     """
+    if delay_s == 0.0:
+        if np.roots(characteristic_coefficients(controller, plant_gain(params), params)).real.max() >= 0.0:
+            return None
     loop, dt, horizon = _loop(controller, params, delay_s)
-    if np.abs(np.linalg.eigvals(control.ss(loop).A)).max() >= 1.0:
+    ss = control.ss(loop)
+    if delay_s > 0.0 and np.abs(np.linalg.eigvals(ss.A)).max() >= 1.0:
         return None
-    num, den = (np.atleast_1d(np.squeeze(c)) for c in control.tfdata(control.tf(loop)))
     t = np.arange(int(round(horizon / dt))) * dt
-    return t, lfilter(num, den, np.ones_like(t))
+    return t, sampled_step_response(ss.A, ss.B, ss.C, ss.D, len(t))
+
+
+def sampled_step_response(A, B, C, D, n: int, block: int = 1000) -> np.ndarray:
+    """Unit-step response of ``x[k+1] = A x[k] + B u[k], y = C x + D u`` (SISO), ``n`` samples
+    from rest, in state space: one block of ``block`` steps is stepped out once (the free
+    response ``C A^m`` and the forced one), then each block starts from the state the last one
+    left.  The transfer-function polynomial of a high-order loop sampled fast (poles clustered
+    near z = 1, as with the H-infinity controllers) is too ill-conditioned to filter with."""
+    A, B, C, D = (np.atleast_2d(np.asarray(m, float)) for m in (A, B, C, D))
+    nx, block = A.shape[0], min(block, n)
+    free = np.empty((block, nx))  # C A^m
+    forced = np.empty(block)  # C sum_{j<m} A^j B + D
+    power, total = np.eye(nx), np.zeros((nx, 1))
+    for m in range(block):
+        free[m] = (C @ power)[0]
+        forced[m] = (C @ total)[0, 0] + D[0, 0]
+        total = A @ total + B
+        power = A @ power
+    y, x = np.empty(n), np.zeros((nx, 1))
+    for start in range(0, n, block):
+        stop = min(start + block, n)
+        y[start:stop] = (free[:stop - start] @ x)[:, 0] + forced[:stop - start]
+        x = power @ x + total  # A^block x + sum_{j<block} A^j B
+    return y
 
 
 def tf_step(controller, params: dict[str, float], delay_s: float = 0.0) -> dict | None:
@@ -329,7 +400,11 @@ class Table2:
 
 
 def table2(mc_samples: int = 1000, twin_random: int = 20, seed: int = 0, progress: bool = True) -> Table2:
-    """Part 6: nominal metrics and uncertain bands, on the TFs and on the twin.
+    """Part 6: nominal metrics and uncertain bands, on the TFs and on the twin, for the paper's
+    printed controllers and for ours (:func:`our_controllers`).
+
+    The paper's controllers run on the twin at nominal, the paper's 10 samples and
+    ``twin_random`` random ones; ours at nominal (their bands come from the transfer functions).
 
     Parameters
     ----------
@@ -344,37 +419,49 @@ def table2(mc_samples: int = 1000, twin_random: int = 20, seed: int = 0, progres
     paper_pts = paper_samples()
     mc = random_samples(mc_samples, seed)
     twin_pts = paper_pts + random_samples(twin_random, seed + 1)
+    controllers = {**TABLE2_CONTROLLERS, **our_controllers()}
     rows, mismatches = {}, []
-    total = len(TABLE2_CONTROLLERS) * (len(twin_pts) + 1)
+    total = len(TABLE2_CONTROLLERS) * (len(twin_pts) + 1) + len(controllers) - len(TABLE2_CONTROLLERS)
     with tqdm(total=total, desc="seed000 twin runs", unit="run", disable=not progress, leave=False) as bar:
-        for name, ctrl in TABLE2_CONTROLLERS.items():
+        for name, ctrl in controllers.items():
+            ours = name in OURS_BESIDE
             tf_nom, tf_delay = tf_step(ctrl, nominal), tf_step(ctrl, nominal, delay_s=0.1)
-            twin_nom = twin_step(ctrl, nominal)
+            twin_nom = None if tf_nom is None else twin_step(ctrl, nominal)  # an unstable loop: not run
             bar.update()
-            tf_pts = [tf_step(ctrl, p) for p in twin_pts]
+            tf_pts = [tf_step(ctrl, p) for p in (paper_pts if ours else twin_pts)]
             tw_pts = []
-            for p in twin_pts:
+            for p in () if ours else twin_pts:
                 tw_pts.append(twin_step(ctrl, p))
                 bar.update()
             for label, a, b in [("nominal", tf_nom, twin_nom)] + [
                     (f"sample {i}", x, y) for i, (x, y) in enumerate(zip(tf_pts, tw_pts))]:
-                for k in KEYS:
-                    if k == "rise_time_0_100_s" and a["overshoot_pct"] < TWIN_TOL_OS_PP:
-                        continue  # reaching 1.0 without overshoot is ill-conditioned (creeps in)
-                    tol = max(TWIN_TOL_REL * abs(a[k]), TWIN_TOL_OS_PP if k == "overshoot_pct" else 0.0)
-                    both_never = np.isnan(a[k]) and np.isnan(b[k])  # e.g. 0-100 % rise never reached
-                    if not (both_never or abs(b[k] - a[k]) <= tol):
-                        mismatches.append(f"{name} {label} {k}: twin {b[k]:.4g} vs tf {a[k]:.4g}")
+                if a is not None:
+                    mismatches += _twin_vs_tf_step(f"{name} {label}", b, a)
             rows[name] = {
-                "paper": PAPER["table2"][name],
+                "source": "ours" if ours else "paper", "beside": OURS_BESIDE.get(name, name),
+                "paper": PAPER["table2"][OURS_BESIDE.get(name, name)],
                 "tf_nominal": tf_nom, "twin_nominal": twin_nom, "tf_nominal_with_0.1s_delay": tf_delay,
                 "tf_paper_samples": band(tf_pts[:len(paper_pts)]),
-                "twin_paper_samples": band(tw_pts[:len(paper_pts)]),
+                "twin_paper_samples": None if ours else band(tw_pts[:len(paper_pts)]),
                 "tf_monte_carlo": band([tf_step(ctrl, p) for p in mc]),
-                "twin_random_samples": band(tw_pts[len(paper_pts):]) if twin_random else None,
-                "mc_samples": mc_samples, "twin_random": twin_random,
+                "twin_random_samples": band(tw_pts[len(paper_pts):]) if twin_random and not ours else None,
+                "mc_samples": mc_samples, "twin_random": 0 if ours else twin_random,
             }
     return Table2(rows, mismatches)
+
+
+def _twin_vs_tf_step(label: str, twin: dict, tf: dict) -> list[str]:
+    """Step metrics of the twin more than :data:`TWIN_TOL_REL` from the transfer function's
+    (overshoot: :data:`TWIN_TOL_OS_PP` floor)."""
+    out = []
+    for k in KEYS:
+        if k == "rise_time_0_100_s" and tf["overshoot_pct"] < TWIN_TOL_OS_PP:
+            continue  # reaching 1.0 without overshoot is ill-conditioned (creeps in)
+        tol = max(TWIN_TOL_REL * abs(tf[k]), TWIN_TOL_OS_PP if k == "overshoot_pct" else 0.0)
+        both_never = np.isnan(tf[k]) and np.isnan(twin[k])  # e.g. 0-100 % rise never reached
+        if not (both_never or abs(twin[k] - tf[k]) <= tol):
+            out.append(f"{label} {k}: twin {twin[k]:.4g} vs tf {tf[k]:.4g}")
+    return out
 
 
 # ---------------------------------------------------------------- disturbance, noise, effort

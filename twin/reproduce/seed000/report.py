@@ -35,13 +35,16 @@ def format_report(res: dict) -> str:
     """Plain-text tables: parts 2, 3, 5, 6 (paper | transfer function | twin) and 7."""
     out = ["Seed 000 (Yadav, Pathak, Gaur 2020) reproduced: paper | ours", ""]
     out.append("Interval model from Table 1's box (exact: coefficients affine in a = K1K2n/(p^2 m + n^2 Im))")
-    out.append(f"{'controller':<10} {'alpha1':>16} {'alpha2':>16} {'beta3':>16} {'SM eq.5':>18} "
+    out.append(f"{'controller':<30} {'alpha1':>16} {'alpha2':>16} {'beta3':>16} {'SM eq.5':>18} "
                f"{'Kharitonov':>11} {'family':>7}")
+    out.append("  (rows *_ours: our designs beside the printed controller they stand for; the paper's columns repeat "
+               "that controller's; no SM where the loop is not of third order)")
     for row in res["interval"]:
         p = row["paper"]
-        out.append(f"{row['controller']:<10} {p['alpha1']:>7.4g} | {row['alpha1']:<6.4g} {p['alpha2']:>7.4g} | "
-                   f"{row['alpha2']:<6.4g} {p['beta3']:>7.4g} | {row['beta3']:<6.4g} {p['sm']:>8.5g} | "
-                   f"{row['sm']:<7.4g} {'stable' if row['kharitonov_stable'] else 'not shown':>11} "
+        ours = {k: _fmt(row.get(k)) if k in row else "-" for k in ("alpha1", "alpha2", "beta3", "sm")}
+        out.append(f"{row['controller']:<30} {p['alpha1']:>7.4g} | {ours['alpha1']:<6} {p['alpha2']:>7.4g} | "
+                   f"{ours['alpha2']:<6} {p['beta3']:>7.4g} | {ours['beta3']:<6} {p['sm']:>8.5g} | "
+                   f"{ours['sm']:<7} {'stable' if row['kharitonov_stable'] else 'not shown':>11} "
                    f"{'stable' if row['family_stable'] else 'UNSTABLE':>7}")
     out += ["", "Robust PI, eqs. (18)-(19), GM 10 dB, PM 60 deg"]
     pi = res["robust_pi"]
@@ -59,8 +62,9 @@ def format_report(res: dict) -> str:
                    f"(2 % ST {row['st_2pct_s']:.3f} s)")
     h = res["hinf"]
     out += ["", f"H-infinity (integrator shifted to -{h['integrator_shift_eps']:g}): optimal gamma {h['gamma_opt']:.4f} "
-                f"(theta {h['theta_opt']:.4g}, {h['iterations']} bisections) | paper theta {h['paper_theta']} "
-                f"(gamma {1 / h['paper_theta']:.2f})"]
+                f"(theta {h['theta_opt']:.4g}; {h['iterations']} bisections, set by our bracket "
+                f"{h['gamma_bracket'][0]:g}-{h['gamma_bracket'][1]:g} and relative tolerance {h['gamma_rel_tol']:g}, "
+                f"not the paper's 'iteration number 14') | paper theta {h['paper_theta']} (gamma {1 / h['paper_theta']:.2f})"]
     for key, label in (("controller_at_paper_gamma", "central controller at the paper's gamma"),
                        ("paper_eq28", "paper eq. (28)"), ("reduced_eq28", "balred(eq. 28, 1)"),
                        ("reduced_at_paper_gamma", "balred(ours at paper gamma, 1)"), ("paper_eq29", "paper eq. (29)"),
@@ -70,24 +74,31 @@ def format_report(res: dict) -> str:
     out.append(f"  Fig. 6 claim (same singular values): max gap eq. 28 vs eq. 29 over 1e-3..1e3 rad/s = "
                f"{h['sv_gap_eq28_vs_eq29_db']:.1f} dB at {h['sv_gap_eq28_vs_eq29_at_rad_s']:.3g} rad/s; "
                f"above 0.1 rad/s {h['sv_gap_eq28_vs_eq29_above_0p1_db']:.2f} dB")
-    out += ["", "Table 2: unit step (OS %, ST 2 % s, RT s: 10-90 % and 0-100 %)",
-            f"{'controller':<10} {'source':<26} {'OS':>14} {'ST':>14} {'RT 10-90':>14} {'RT 0-100':>14}"]
+    out += ["", "Table 2: unit step (OS %, ST 2 % s, RT s: 10-90 % and 0-100 %); the paper's printed controllers, "
+                "then ours (*_ours: robust PI unrounded, IMC from eq. 23, H-infinity at the paper's and the optimal "
+                "gamma, full and balanced-truncated to first order)",
+            f"{'controller':<30} {'source':<26} {'OS':>14} {'ST':>14} {'RT 10-90':>14} {'RT 0-100':>14}"]
     keys = r.KEYS
     for name, row in res["table2"].items():
-        nom, bnd = row["paper"]["nominal"], row["paper"]["band"]
-        out.append(f"{name:<10} {'paper nominal':<26} {nom[0]:>14} {nom[1]:>14} {'':>14} {nom[2]:>14}")
+        if row["source"] == "paper":
+            nom, bnd = row["paper"]["nominal"], row["paper"]["band"]
+            out.append(f"{name:<30} {'paper nominal':<26} {nom[0]:>14} {nom[1]:>14} {'':>14} {nom[2]:>14}")
+        else:
+            out.append(f"{name:<30} (ours, beside {row['beside']})")
         for label, m in (("tf nominal", row["tf_nominal"]), ("twin nominal", row["twin_nominal"]),
                          ("tf nominal, 0.1 s delay", row["tf_nominal_with_0.1s_delay"])):
-            cells = [_fmt(m[k]) for k in keys] if m else ["unstable"] * 4
-            out.append(f"{'':<10} {label:<26} " + " ".join(f"{c:>14}" for c in cells))
-        out.append(f"{'':<10} {'paper uncertain':<26} {_fmt(bnd[0]):>14} {_fmt(bnd[1]):>14} {'':>14} {_fmt(bnd[2]):>14}")
+            cells = [_fmt(m[k]) for k in keys] if m else ["unstable" if label.startswith("tf") else "not run"] * 4
+            out.append(f"{'':<30} {label:<26} " + " ".join(f"{c:>14}" for c in cells))
+        if row["source"] == "paper":
+            out.append(f"{'':<30} {'paper uncertain':<26} {_fmt(bnd[0]):>14} {_fmt(bnd[1]):>14} {'':>14} "
+                       f"{_fmt(bnd[2]):>14}")
         for label, key in (("tf, paper's 10 samples", "tf_paper_samples"), ("twin, paper's 10 samples", "twin_paper_samples"),
                            (f"tf, Monte Carlo {row['mc_samples']}", "tf_monte_carlo"),
                            (f"twin, {row['twin_random']} random", "twin_random_samples")):
             b = row[key]
             if b is None:
                 continue
-            out.append(f"{'':<10} {label:<26} " + " ".join(f"{_fmt(b[k], '.3g'):>14}" for k in keys)
+            out.append(f"{'':<30} {label:<26} " + " ".join(f"{_fmt(b[k], '.3g'):>14}" for k in keys)
                        + (f"  ({b['unstable']} unstable)" if b["unstable"] else ""))
     out += ["", f"Disturbance ({res['settings']['disturbance_V']} V input step at {res['settings']['disturbance_start_s']} s) "
                 f"and encoder noise ({res['settings']['noise_std_m']} m RMS) on the nominal twin; effort of the unit step"]
