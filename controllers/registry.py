@@ -71,8 +71,11 @@ def _seed003_cascade(p, ctx, a):
     """Seed 003's cascade, designed here for the thesis's margins on the machine's model."""
     if a not in ctx.plants:
         raise ValueError(f"no model of axis {a!r} to design the cascade on")
+    ff = p.get("velocity_ref_ff", 0.0)
+    if not (isinstance(ff, (int, float)) and not isinstance(ff, bool) and 0.0 <= ff <= 2.0):
+        raise ValueError(f"velocity_ref_ff = {ff!r}: must be a number from 0 to 2")
     gains = seed003.design_cascade(ctx.plants[a], ctx.delay_s, ctx.dt)
-    return cascade(pid_tf(gains["kp_pos"]), pid_tf(gains["kp_vel"], gains["ki_vel"]), ctx.dt, a, 0.0, ctx.method,
+    return cascade(pid_tf(gains["kp_pos"]), pid_tf(gains["kp_vel"], gains["ki_vel"]), ctx.dt, a, float(ff), ctx.method,
                    f"cascade.{a}")
 
 
@@ -242,7 +245,9 @@ CONTROLLERS = {
                                                           a, f"relay.{a}")), ("amplitude_V", "hysteresis_m")),
     "seed003_cascade": ("seed 003's cascade: velocity PI for GM 9.37 dB and PM 56.4 deg, position P for PM "
                         "67.1 deg (thesis Figs. 4.3, 4.7), designed on the machine's model with its delay and "
-                        "the encoder's backward-difference velocity", _each_axis(_seed003_cascade), ()),
+                        "the encoder's backward-difference velocity; velocity_ref_ff (default 0: the thesis "
+                        "states none) feeds the reference velocity into the velocity loop",
+                        _each_axis(_seed003_cascade), ("velocity_ref_ff",)),
     "seed004_mimo": ("seed 004's MIMO H-infinity loop-shaping controller (Glover-McFarlane, Ws = diag(990, 660) "
                      "(s+110)/(s+1500), positions in mm), balanced-truncated to order 4 (order = 'full': 8), on "
                      "axes x and y together, with ZPETC feedforward (zpetc, default true); designed on first use",

@@ -14,6 +14,7 @@ to -eps (a small stable shift, the usual fix); the shift is a parameter of the d
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import control
@@ -42,7 +43,9 @@ def shift_integrators(plant: control.TransferFunction, eps: float) -> control.Tr
 
 def mixed_sensitivity_plant(plant, w1, w2, w3) -> control.StateSpace:
     """Generalized plant of eq. (24): outputs W1 e, W2 u, W3 y and e; inputs r and u."""
-    return control.ss(control.augw(plant, w1, w2, w3))
+    with warnings.catch_warnings():  # python-control 0.10's augw calls its own deprecated connect()
+        warnings.filterwarnings("ignore", message=r"connect\(\) is deprecated", category=FutureWarning)
+        return control.ss(control.augw(plant, w1, w2, w3))
 
 
 def central_controller(P: control.StateSpace, gamma: float, ncon: int = 1, nmeas: int = 1) -> control.StateSpace:

@@ -305,27 +305,29 @@ def tf_step_series(controller, params: dict[str, float],
     return t, sampled_step_response(ss.A, ss.B, ss.C, ss.D, len(t))
 
 
-def sampled_step_response(A, B, C, D, n: int, block: int = 1000) -> np.ndarray:
+def sampled_step_response(A, B, C, D, n: int, block: int = 1024) -> np.ndarray:
     """Unit-step response of ``x[k+1] = A x[k] + B u[k], y = C x + D u`` (SISO), ``n`` samples
-    from rest, in state space: one block of ``block`` steps is stepped out once (the free
-    response ``C A^m`` and the forced one), then each block starts from the state the last one
-    left.  The transfer-function polynomial of a high-order loop sampled fast (poles clustered
-    near z = 1, as with the H-infinity controllers) is too ill-conditioned to filter with."""
+    from rest, in state space: the powers ``A^m`` of one block (``m < block``, by doubling) give
+    its free response ``C A^m`` and its forced one ``C sum_{j<m} A^j B + D``; each block then
+    starts from the state the last one left.  The transfer-function polynomial of a high-order
+    loop sampled fast (poles clustered near z = 1, as with the H-infinity controllers) is too
+    ill-conditioned to filter with."""
     A, B, C, D = (np.atleast_2d(np.asarray(m, float)) for m in (A, B, C, D))
-    nx, block = A.shape[0], min(block, n)
-    free = np.empty((block, nx))  # C A^m
-    forced = np.empty(block)  # C sum_{j<m} A^j B + D
-    power, total = np.eye(nx), np.zeros((nx, 1))
-    for m in range(block):
-        free[m] = (C @ power)[0]
-        forced[m] = (C @ total)[0, 0] + D[0, 0]
-        total = A @ total + B
-        power = A @ power
+    nx = A.shape[0]
+    powers = np.eye(nx)[None]  # A^0 .. A^(k-1), doubled until a block is covered
+    while len(powers) < block:
+        powers = np.concatenate([powers, powers @ powers[-1] @ A])
+    powers = powers[:block]
+    free = (C @ powers)[:, 0, :]  # (block, nx): C A^m
+    impulse = (free @ B)[:, 0]  # C A^m B
+    forced = np.concatenate([[0.0], np.cumsum(impulse)[:-1]]) + D[0, 0]  # C sum_{j<m} A^j B + D
+    step_block = powers[-1] @ A  # A^block
+    carried = (powers @ B).sum(axis=0)  # sum_{j<block} A^j B
     y, x = np.empty(n), np.zeros((nx, 1))
     for start in range(0, n, block):
         stop = min(start + block, n)
-        y[start:stop] = (free[:stop - start] @ x)[:, 0] + forced[:stop - start]
-        x = power @ x + total  # A^block x + sum_{j<block} A^j B
+        y[start:stop] = free[:stop - start] @ x[:, 0] + forced[:stop - start]
+        x = step_block @ x + carried
     return y
 
 

@@ -44,6 +44,13 @@ DURATION_S, STEADY_FROM_S = 10.0, 2.0
 REFERENCES = ((10.0, 0.5), (0.5, 1.0))  # mm, Hz
 DISTURBANCE_V, BANDWIDTH_HZ, GAIN_ERROR = 0.01, 5.0, 0.2
 CONFIGURATIONS = {"cascade": None, "imbdo": "inverse_model", "dfo": "harmonic", "imbdo_dfo": "inverse_model_harmonic"}
+#: Reference feedforward on the cascade (ours; the thesis states none): none (the thesis's
+#: cascade as designed), the reference velocity into the velocity loop, and that plus the
+#: model's velocity and acceleration terms on the drive (:func:`model_feedforward`).
+FEEDFORWARDS = ("none", "velocity", "velocity_acceleration")
+#: Disturbance amplitudes (V per harmonic) of the amplitude study: the conclusion's dependence
+#: on the assumed 0.01 V.
+AMPLITUDES_V = (0.001, 0.01, 0.1, 1.0)
 #: The thesis's headline reductions of IMBDO plus DFO against the cascade alone (%).
 THESIS = {"mte_pct": (97.52, 98.70, 99.13), "rmse_pct": (98.80, 97.75, 97.97),
           "fft_pct": ((99.78,), (99.67, 99.53), (99.86, 99.81, 99.91))}
@@ -67,13 +74,30 @@ def design() -> dict:
             "q_cutoff_hz": cutoff, "q_order": 2, "sup_q_delta": worst, "gain_error": GAIN_ERROR}
 
 
+def model_feedforward() -> dict:
+    """Feedforward gains from eq. (1), G = b0 / (s^2 + a1 s + a0) in m/V: the reference velocity
+    into the velocity loop, and ``u_ff = (a1 v_ref + a_ref) / b0`` on the drive (V per m/s and
+    per m/s^2): the inverse model but for its a0 term (0.25 % of u at 0.5 Hz) and the delay."""
+    g = machine().plant[0][0]
+    num, den = np.asarray(g.num, float), np.asarray(g.den, float)
+    b0 = num[-1] / den[0]
+    return {"velocity_ref_ff": 1.0, "velocity_ff_V_s_per_m": float(den[1] / den[0] / b0),
+            "acceleration_ff_V_s2_per_m": float(1.0 / b0)}
+
+
 def controller(config: str, harmonics, axes=("x",), bandwidth_hz: float = BANDWIDTH_HZ,
-               cutoff_hz: float | None = None):
+               cutoff_hz: float | None = None, feedforward: str = "none"):
     """The cascade for ``axes``, with the configuration's observer (DFO at ``harmonics`` with
-    ``bandwidth_hz``; the inverse-model cutoff of :func:`q_filter` unless ``cutoff_hz``)."""
+    ``bandwidth_hz``; the inverse-model cutoff of :func:`q_filter` unless ``cutoff_hz``) and one
+    of :data:`FEEDFORWARDS` (ours: the thesis states none)."""
     bm = machine()
     plants = {a.name: bm.plant[i][i] for i, a in enumerate(bm.axes)}
-    ctrl = make_controller("seed003_cascade", DT_S, axes=axes, plants=plants, delay_s=bm.delay_s)
+    ff = model_feedforward()
+    velocity_ff = ff["velocity_ff_V_s_per_m"] if feedforward == "velocity_acceleration" else 0.0
+    acceleration_ff = ff["acceleration_ff_V_s2_per_m"] if feedforward == "velocity_acceleration" else 0.0
+    params = {} if feedforward == "none" else {"velocity_ref_ff": ff["velocity_ref_ff"]}
+    ctrl = make_controller("seed003_cascade", DT_S, params, velocity_ff=velocity_ff, acceleration_ff=acceleration_ff,
+                           axes=axes, plants=plants, delay_s=bm.delay_s)
     kind = CONFIGURATIONS[config]
     if kind is None:
         return ctrl
@@ -90,8 +114,8 @@ def q_filter() -> tuple[float, float]:
     return q_cutoff(2, delay_and_gain_error(machine().delay_s, GAIN_ERROR))
 
 
-def _disturbance(harmonics, seed: int = 0) -> HarmonicInput:
-    return HarmonicInput(amplitudes_V=(DISTURBANCE_V,) * len(harmonics), frequencies_hz=tuple(harmonics), n_axes=2,
+def _disturbance(harmonics, seed: int = 0, amplitude_V: float = DISTURBANCE_V) -> HarmonicInput:
+    return HarmonicInput(amplitudes_V=(amplitude_V,) * len(harmonics), frequencies_hz=tuple(harmonics), n_axes=2,
                          axes=(0,), seed=seed)
 
 
@@ -107,54 +131,83 @@ def _metrics(error_m: np.ndarray, harmonics, search_hz: float = 0.0) -> dict:
     return {"mte_um": float(np.abs(e).max() * 1e6), "rmse_um": float(np.sqrt(np.mean(e**2)) * 1e6), "fft_um": lines}
 
 
-def run_case(amplitude_mm: float, f_hz: float, harmonics, config: str, twin: bool, duration_s: float = DURATION_S) -> dict:
+def run_case(amplitude_mm: float, f_hz: float, harmonics, config: str, twin: bool, duration_s: float = DURATION_S,
+             feedforward: str = "none", amplitude_V: float = DISTURBANCE_V) -> dict:
     """One configuration under one reference and disturbance: TF loop and (``twin``) the twin,
     the tracking error's metrics and those of the disturbance's share."""
     bm = machine()
     n = int(round(duration_s / DT_S))
     t = np.arange(n) * DT_S
     ref = sine_reference(f_hz, amplitude_mm, n)
-    dist = _disturbance(harmonics)
+    dist = _disturbance(harmonics, amplitude_V=amplitude_V)
     d = dist.input_V(t)[:, 0]
     out = {}
     errors = {}
     for label, u_dist in (("with", d), ("without", None)):
-        pos, _ = tf_loop(bm.plant[0][0], controller(config, harmonics), ref, DT_S, bm.delay_s, u_dist_V=u_dist)
+        pos, _ = tf_loop(bm.plant[0][0], controller(config, harmonics, feedforward=feedforward), ref, DT_S,
+                         bm.delay_s, u_dist_V=u_dist)
         errors[label] = ref[:, 0] - pos
     out["tf_loop"] = {**_metrics(errors["with"], harmonics),
                       "disturbance": _metrics(errors["with"] - errors["without"], harmonics)}
     if twin:
         reference = SumOfSines((amplitude_mm * 1e-3,), (f_hz,), n_axes=2, axes=(0,))
-        runs = {label: simulate(bm, controller(config, harmonics, ("x", "y")), reference, duration_s, DT_S,
-                                disturbances=ds, progress=False).error_m()[:, 0]
+        runs = {label: simulate(bm, controller(config, harmonics, ("x", "y"), feedforward=feedforward), reference,
+                                duration_s, DT_S, disturbances=ds, progress=False).error_m()[:, 0]
                 for label, ds in (("with", (dist,)), ("without", ()))}
         out["twin"] = {**_metrics(runs["with"], harmonics),
                        "disturbance": _metrics(runs["with"] - runs["without"], harmonics)}
     return out
 
 
-def cases(twin: bool = True, duration_s: float = DURATION_S, progress=None) -> list[dict]:
-    """Every reference x harmonic set x configuration, with reductions against the cascade."""
+def cases(twin: bool = True, duration_s: float = DURATION_S, progress=None, feedforward: str = "none") -> list[dict]:
+    """Every reference x harmonic set x configuration, with reductions against the cascade (all
+    with ``feedforward``, one of :data:`FEEDFORWARDS`)."""
     rows = []
     for amplitude, f in REFERENCES:
         for h in range(1, len(seed003.HARMONICS_HZ) + 1):
             harmonics = seed003.HARMONICS_HZ[:h]
-            row = {"amplitude_mm": amplitude, "f_hz": f, "harmonics_hz": list(harmonics)}
+            row = {"amplitude_mm": amplitude, "f_hz": f, "harmonics_hz": list(harmonics), "feedforward": feedforward}
             for config in CONFIGURATIONS:
-                row[config] = run_case(amplitude, f, harmonics, config, twin, duration_s)
+                row[config] = run_case(amplitude, f, harmonics, config, twin, duration_s, feedforward)
                 if progress:
                     progress()
             for side in ("tf_loop", "twin") if twin else ("tf_loop",):
-                base = row["cascade"][side]
-                row[f"reduction_pct_{side}"] = {
-                    config: {"mte": _reduction(base["mte_um"], row[config][side]["mte_um"]),
-                             "rmse": _reduction(base["rmse_um"], row[config][side]["rmse_um"]),
-                             "disturbance_mte": _reduction(base["disturbance"]["mte_um"],
-                                                           row[config][side]["disturbance"]["mte_um"]),
-                             "disturbance_fft": [_reduction(a, b) for a, b in zip(base["disturbance"]["fft_um"],
-                                                                                  row[config][side]["disturbance"]["fft_um"])]}
-                    for config in CONFIGURATIONS if config != "cascade"}
+                row[f"reduction_pct_{side}"] = _reductions(row, side)
             rows.append(row)
+    return rows
+
+
+def _reductions(row: dict, side: str) -> dict:
+    """Each observer configuration in ``row``: its reductions (%) against the cascade alone of
+    the tracking error's MTE and RMSE, and of the disturbance's share (MTE and each line)."""
+    base = row["cascade"][side]
+    out = {}
+    for config in CONFIGURATIONS:
+        if config == "cascade" or config not in row:
+            continue
+        m = row[config][side]
+        out[config] = {"mte": _reduction(base["mte_um"], m["mte_um"]), "rmse": _reduction(base["rmse_um"], m["rmse_um"]),
+                       "disturbance_mte": _reduction(base["disturbance"]["mte_um"], m["disturbance"]["mte_um"]),
+                       "disturbance_fft": [_reduction(a, b) for a, b in zip(base["disturbance"]["fft_um"],
+                                                                           m["disturbance"]["fft_um"])]}
+    return out
+
+
+def amplitude_study(feedforward: str = "velocity_acceleration", duration_s: float = DURATION_S) -> list[dict]:
+    """How the headline reductions depend on the assumed disturbance amplitude: the
+    three-harmonic case under the 10 mm, 0.5 Hz reference on the TF loop, cascade against IMBDO
+    + DFO, for each of :data:`AMPLITUDES_V` (the disturbance's share scales with the amplitude,
+    the following error does not)."""
+    amplitude_mm, f_hz = REFERENCES[0]
+    harmonics = seed003.HARMONICS_HZ
+    rows = []
+    for amplitude_V in AMPLITUDES_V:
+        row = {"amplitude_V": amplitude_V, "feedforward": feedforward}
+        for config in ("cascade", "imbdo_dfo"):
+            row[config] = run_case(amplitude_mm, f_hz, harmonics, config, False, duration_s, feedforward, amplitude_V)
+        red = _reductions(row, "tf_loop")["imbdo_dfo"]
+        row["reduction_pct"] = {"mte": red["mte"], "rmse": red["rmse"]}
+        rows.append(row)
     return rows
 
 
