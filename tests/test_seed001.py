@@ -18,7 +18,8 @@ from controllers.design.statefeedback import (energy_weights, integral_augmented
 from controllers.design.tuning import (bee_colony_minimize, detune, limit_cycle, relay_ultimate_gain,
                                        ziegler_nichols)
 from controllers.papers import seed001 as s1
-from twin.metrics import fit_index
+from controllers.design.pid import pid_tf
+from twin.metrics import fit_index, step_metrics
 from twin.reproduce.seed001 import procedure as r
 
 
@@ -248,3 +249,31 @@ def test_bundled_relay_scenario_is_the_reproductions_and_runs_as_a_scenario():
     cycle = limit_cycle(t[t >= 0.5], x[t >= 0.5])
     assert cycle.period_s == pytest.approx(s1.ultimate_point("x", s1.RELAY_DELAY_S, 1e-4)[1], rel=0.1)
     assert np.abs(res.u_V).max() == pytest.approx(data["controller"]["params"]["amplitude_V"])
+
+
+def test_table1_agreement_labels_say_what_is_fitted():
+    """The labels of s1.TABLE1_AGREEMENT, checked: the P rows' overshoot comes back exactly from
+    the closed form the relay delay is derived from (fitted); the P loop's 2 % settling time does
+    not depend on kp while underdamped (about 8/a: a check of the identified model, whatever was
+    fitted); each modified row's overshoot is the detuning's target (fitted)."""
+    assert {s1.TABLE1_AGREEMENT[k]["overshoot"] for k in ("p", "modified_p", "modified_pi", "modified_pid")} == {"fitted"}
+    assert {s1.TABLE1_AGREEMENT[k]["overshoot"] for k in ("pi", "pid")} == {"check"}
+    assert {v["settling"] for v in s1.TABLE1_AGREEMENT.values()} == {"check"}
+    for axis in s1.AXES:
+        G = s1.plant_tf(axis)
+        kp = s1.implied_delay(axis)["kp_V_per_mm"]
+        assert s1.overshoot_pct(control.feedback(kp * G, 1)) == pytest.approx(s1.TABLE1["P"][axis][1], abs=0.05)
+        settle = []
+        for gain in (kp, 2 * kp):
+            t = np.linspace(0.0, 3.0, 30001)
+            y = control.step_response(control.feedback(gain * G, 1), T=t).outputs
+            settle.append(step_metrics(t, y, final=1.0)["settling_time_s"])
+        a = s1.MODEL[axis][1]
+        assert settle[0] == pytest.approx(settle[1], rel=0.1) and settle[0] == pytest.approx(8.0 / a, rel=0.25)
+        gains = s1.ziegler_nichols_gains(axis, *s1.ultimate_point(axis))
+        for kind in ("P", "PI", "PID"):
+            kp_m, ki_m, kd_m = gains[f"modified {kind}"]
+            loop = pid_tf(kp_m, ki_m, kd_m, s1.derivative_filter_s(kp_m, kd_m)).to_control() * G
+            horizon = 3.0 if kind == "P" else 6.0
+            target = s1.TABLE1[f"modified {kind}"][axis][1]
+            assert s1.overshoot_pct(control.feedback(loop, 1), horizon) == pytest.approx(target, abs=0.1)

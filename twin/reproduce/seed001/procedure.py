@@ -182,7 +182,7 @@ def table1(ku_pu: list[tuple[float, float]], twin: bool) -> dict:
     for kind in s1.TABLE1_ROWS:
         gains = [s1.design_gains(a, kind, *ku_pu[i]) for i, a in enumerate(s1.AXES)]
         out[kind] = {"gains": [{k: g[k] for k in ("kp", "ki", "kd")} for g in gains],
-                     **steps(zn_controller(kind, ku_pu), 3.0, twin)}
+                     "agreement": s1.TABLE1_AGREEMENT[kind], **steps(zn_controller(kind, ku_pu), 3.0, twin)}
     return out
 
 

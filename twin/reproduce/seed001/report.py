@@ -99,13 +99,16 @@ def format_report(res: dict) -> str:
         out.append(f"  {test['delay_s'] * 1e3:4.0f} ms exact ultimate point: Ku {_pair([m['ku_V_per_mm'] for m in test['exact']])}, "
                    f"Pu {_pair([m['pu_s'] for m in test['exact']], '{:.4f}')}")
     out += ["", f"   Table 1 from the {rl['used']} relay's (Ku, Pu), delay-free loop: settling 2 % / overshoot, "
-            f"paper | {head}"]
+            f"paper | {head}; [fitted]: agrees by construction (the P rows' overshoot through the relay delay "
+            "derived from it, the modified rows' overshoot as the detuning's target); [check]: an independent "
+            "comparison"]
     names = s1.TABLE1_ROWS
     for kind, row in res["table1"].items():
         paper = res["paper"]["table1"][names[kind]]
         g = row["gains"]
+        agree = row["agreement"]
         out.append(f"  {names[kind]:<13} kp {_pair([x['kp'] for x in g])} ki {_pair([x['ki'] for x in g])} "
-                   f"kd {_pair([x['kd'] for x in g])}")
+                   f"kd {_pair([x['kd'] for x in g])}  [overshoot {agree['overshoot']}, settling {agree['settling']}]")
         for i, a in enumerate("xy"):
             out.append(f"      {a}: paper {paper[a][1]:4.0f} % {paper[a][0]:.2f} s | {_steps(row, i)}")
     out += ["", f"2. Cascades with a P speed loop (speed pole {s1.SPEED_LOOP_FACTOR:g} a, critically damped P, PI "
