@@ -164,6 +164,19 @@ def test_reproduce_seed002_transfer_functions_only(tmp_path):
         pid, npid = row["seed002_pid"]["tf_loop"], row["seed002_npid"]["tf_loop"]
         assert row["max_reduction_pct_tf_loop"] == pytest.approx((pid["max_mm"] - npid["max_mm"]) / pid["max_mm"] * 100)
         assert row["rmse_reduction_pct_tf_loop"] == pytest.approx((pid["rmse_mm"] - npid["rmse_mm"]) / pid["rmse_mm"] * 100)
+    _same_as_committed("seed002", res, lambda out: [  # without the twin, the TF loop has no cutting force
+        v for row in out["tables"] if row["rpm"] is None for v in (*row["seed002_pid"]["tf_loop"].values(),
+                                             *row["seed002_npid"]["tf_loop"].values(), row["max_reduction_pct_tf_loop"])])
+
+
+def _same_as_committed(seed: str, res: dict, part) -> None:
+    """The transfer-function part of a reproduction equals the committed JSON the docs' tables
+    are generated from (``docs/results``): the pages cannot go stale on it."""
+    from twin.reproduce.tables import results_path
+
+    committed = json.loads(results_path(seed).read_text())
+    assert part(res) == pytest.approx(part(committed), rel=1e-9), \
+        f"docs/results/{seed}.json is stale: rerun `uv run python -m twin.reproduce.tables --rerun docs/results --write`"
 
 
 def test_reproduce_seed003_transfer_functions_only():
@@ -173,6 +186,10 @@ def test_reproduce_seed003_transfer_functions_only():
     assert res["design"]["velocity"]["gm_db"] == pytest.approx(9.37, abs=0.01)  # the thesis's margins, met
     assert res["design"]["velocity"]["pm_deg"] == pytest.approx(56.4, abs=0.01)
     assert res["design"]["q_cutoff_hz"] == 100.0 and len(res["cases"]) == 6
+    _same_as_committed("seed003", res, lambda out: [
+        row[c]["tf_loop"]["mte_um"] for rows in (out["cases"], *out["feedforward_cases"].values()) for row in rows
+        for c in ("cascade", "imbdo", "dfo", "imbdo_dfo")]
+        + [row["reduction_pct"]["mte"] for row in out["amplitude_study"]])
 
 
 def test_reproduce_seed001_transfer_functions_only(tmp_path):

@@ -16,6 +16,7 @@ from pathlib import Path
 import typer
 
 from twin.errors import RunInterrupted, SimulationDiverged, TwinInputError
+from twin.reproduce import DEFAULT_SAMPLES, DEFAULT_SEED, DEFAULT_TWIN_SAMPLES
 
 app = typer.Typer(add_completion=False, pretty_exceptions_enable=False, no_args_is_help=True,
                   help="Digital twin of CNC XY feed drives (MuJoCo).")
@@ -191,10 +192,11 @@ def reproduce(source: str = typer.Argument(..., help="Which paper, e.g. seed000 
               as_json: bool = typer.Option(False, "--json", help="Print everything as JSON"),
               rrd: Path = typer.Option(None, "--rrd", help="Record the nominal twin step runs to this .rrd"),
               plots: Path = typer.Option(None, "--plots", help="Write PNG step-response plots to this folder"),
-              samples: int = typer.Option(1000, "--samples", help="Monte Carlo samples on the transfer functions"),
-              twin_samples: int = typer.Option(20, "--twin-samples", help="Random box samples on the twin "
-                                                                          "(besides the paper's 10)"),
-              seed: int = typer.Option(0, "--seed", help="Seed of the random samples")):
+              samples: int = typer.Option(DEFAULT_SAMPLES, "--samples", help="Monte Carlo samples on the transfer "
+                                                                             "functions"),
+              twin_samples: int = typer.Option(DEFAULT_TWIN_SAMPLES, "--twin-samples", help="Random box samples on the "
+                                                                                        "twin (besides the paper's 10)"),
+              seed: int = typer.Option(DEFAULT_SEED, "--seed", help="Seed of the random samples")):
     """Reproduce a paper's design procedures and tables (paper | transfer function | twin).
 
     Exits 1 if a twin number departs from its transfer-function number by more than 2 %.

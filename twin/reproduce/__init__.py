@@ -16,6 +16,10 @@ REPRODUCTIONS = {"seed000": "twin.reproduce.seed000", "seed001": "twin.reproduce
                  "seed003": "twin.reproduce.seed003", "seed004": "twin.reproduce.seed004"}
 
 
+#: ``twin reproduce``'s defaults: Monte Carlo samples, random twin samples, seed.
+DEFAULT_SAMPLES, DEFAULT_TWIN_SAMPLES, DEFAULT_SEED = 1000, 20, 0
+
+
 def twin_vs_tf(label: str, twin: dict, tf: dict, keys, tol_rel: float) -> list[str]:
     """The ``keys`` whose twin value departs from the transfer-function value by more than
     ``tol_rel`` of it, one line each, prefixed by ``label``."""

@@ -16,6 +16,13 @@ def run(samples: int, twin_samples: int, seed: int, progress: bool) -> dict:
     return run_all(samples, twin_samples, seed, progress=progress)
 
 
+def markdown_tables(results: dict) -> dict[str, str]:
+    """The docs page's generated tables (see :func:`.report.markdown_tables`)."""
+    from twin.reproduce.seed000 import report
+
+    return report.markdown_tables(results)
+
+
 def format_report(results: dict) -> str:
     """The text tables: paper | transfer function | twin."""
     from twin.reproduce.seed000 import report

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from twin.reproduce.seed000 import procedure as r
+from twin.reproduce.tables import fmt, markdown_table
 
 
 def run_all(mc_samples: int = 1000, twin_random: int = 20, seed: int = 0, progress: bool = True) -> dict:
@@ -112,6 +113,103 @@ def format_report(res: dict) -> str:
     out += ["", f"Twin vs transfer function (tolerance {r.TWIN_TOL_REL:.0%}, OS floor {r.TWIN_TOL_OS_PP} pp): "
                 + ("all within" if not mism else f"{len(mism)} outside:")] + [f"  {m}" for m in mism]
     return "\n".join(out)
+
+
+#: Names of the Table 2 controllers on the docs page.
+LABELS = {"robust_pi": "robust PI (paper's 38.33 / 45.65)", "imc": "IMC (paper's (0.21 s + 2)/(s + 2))",
+          "hinf": "H∞ (paper's eq. 29)", "robust_pi_ours": "robust PI, ours (38.05 / 45.12)",
+          "imc_ours": "IMC, ours (eq. 23 unrounded)", "hinf_ours_paper_gamma": "H∞, ours at the paper's γ (order 4)",
+          "hinf_ours_paper_gamma_reduced": "H∞, ours at the paper's γ, truncated to order 1",
+          "hinf_ours_optimal": "H∞, ours at the optimal γ (order 4)",
+          "hinf_ours_optimal_reduced": "H∞, ours at the optimal γ, truncated to order 1"}
+
+
+def _metrics_cells(m: dict | None, keys) -> list[str]:
+    return [fmt(m[k], ".4g") for k in keys] if m else ["unstable"] * len(keys)
+
+
+def _band_cells(b: dict | None, keys) -> list[str]:
+    if b is None:
+        return ["–"] * len(keys)
+    return [("–" if b[k] is None else f"{b[k][0]:.3g}–{b[k][1]:.3g}") for k in keys]
+
+
+def markdown_tables(res: dict) -> dict[str, str]:
+    """The docs page's tables (:mod:`twin.reproduce.tables`): ``interval`` (eqs. 30-35 on Table 1's
+    box), ``designs`` (the design procedures beside the paper's numbers), ``table2`` (unit step,
+    the paper's printed controllers and ours) and ``disturbance`` (Figs. 11-13's signals, ours)."""
+    interval = []
+    for row in res["interval"]:
+        p = row["paper"]
+        cells = [LABELS[row["controller"]]]
+        for key in ("alpha1", "alpha2", "beta3", "sm"):
+            cells.append(f"{p[key]:.5g} / {fmt(row.get(key), '.3g')}")
+        cells += ["yes" if row["kharitonov_stable"] else "no", "stable" if row["family_stable"] else "unstable"]
+        interval.append(cells)
+    pi, imc, h = res["robust_pi"], res["imc"], res["hinf"]
+    eq17, box = pi["eq17_coefficients"], pi["box_coefficients"]
+    designs = [
+        ["robust PI on eq. (17)'s coefficients (7.5, 3, 6)", f"Kp {pi['paper']['kp']}, Ki {pi['paper']['ki']}",
+         f"Kp {eq17['kp']:.2f}, Ki {eq17['ki']:.2f} (Kp/Ki {eq17['kp_per_ki']:.4f}); true nominal PM "
+         f"{eq17['nominal_pm_deg']:.1f}°"],
+        ["robust PI on the box's coefficients", "–", f"Kp {box['kp']:.4g}, Ki {box['ki']:.4g}; true nominal PM "
+                                                     f"{box['nominal_pm_deg']:.1f}°"],
+        ["IMC, μ = 1, λ = 2 (eq. 23)", "(0.21 s + 2)/(s + 2)", f"({imc['num'][0]:.4f} s + {imc['num'][1]:.4g})/"
+                                                               f"(s + {imc['den'][1]:.4g})"],
+        ["H∞ optimal γ (θ)", f"θ {h['paper_theta']} (γ {1 / h['paper_theta']:.1f}), 'iteration number 14'",
+         f"γ {h['gamma_opt']:.4f} (θ {h['theta_opt']:.4f}); floor |W3(0) T(0)| {h['gamma_floor_W3T_at_dc']:.3f}; "
+         f"{h['iterations']} bisections from our bracket {h['gamma_bracket'][0]:g}–{h['gamma_bracket'][1]:g} and "
+         f"tolerance {h['gamma_rel_tol']:g}"],
+        ["H∞ central controller at the paper's γ (eq. 28)", _poly(h["paper_eq28"]), _poly(h["controller_at_paper_gamma"])],
+        ["balanced truncation to order 1 (eq. 29)", _poly(h["paper_eq29"]),
+         f"{_poly(h['reduced_at_paper_gamma'])} (of ours); {_poly(h['reduced_eq28'])} (of eq. 28)"],
+        ["H∞ at the optimal γ, full and truncated", "–",
+         f"{_poly(h['controller_opt'])}; truncated {_poly(h['reduced_opt'])}"],
+        ["Fig. 6: eq. (28) and (29) have the same singular values", "claimed",
+         f"{h['sv_gap_eq28_vs_eq29_above_0p1_db']:.2f} dB apart above 0.1 rad/s, {h['sv_gap_eq28_vs_eq29_db']:.1f} dB at "
+         f"{h['sv_gap_eq28_vs_eq29_at_rad_s']:g} rad/s"],
+    ]
+    keys = ("overshoot_pct", "settling_time_s", "rise_time_10_90_s", "rise_time_0_100_s")
+    table2 = []
+    for name, row in res["table2"].items():
+        label = LABELS[name]
+        if row["source"] == "paper":
+            nom, bnd = row["paper"]["nominal"], row["paper"]["band"]
+            table2.append([label, "paper, nominal", nom[0], nom[1], "", nom[2]])
+            table2.append(["", "paper, uncertain", f"{bnd[0][0]}–{bnd[0][1]}", f"{bnd[1][0]}–{bnd[1][1]}", "",
+                           f"{bnd[2][0]}–{bnd[2][1]}"])
+            first = ""
+        else:
+            first = label
+        table2.append([first, "TF, nominal", *_metrics_cells(row["tf_nominal"], keys)])
+        table2.append(["", "twin, nominal", *(_metrics_cells(row["twin_nominal"], keys) if row["twin_nominal"]
+                                              else ["not run"] * len(keys))])
+        bands = [("TF, the paper's 10 samples", row["tf_paper_samples"]),
+                 ("twin, the paper's 10 samples", row["twin_paper_samples"]),
+                 (f"TF, Monte Carlo {row['mc_samples']}", row["tf_monte_carlo"])]
+        for source, band in bands:
+            if band is not None:
+                note = f" ({band['unstable']} unstable)" if band["unstable"] else ""
+                table2.append(["", source + note, *_band_cells(band, keys)])
+        table2.append(["", "TF nominal with eq. (2)'s 0.1 s delay", *_metrics_cells(row["tf_nominal_with_0.1s_delay"], keys)])
+    disturbance = [[LABELS[name], f"{d['u_peak_V']:.3g}", f"{d['u_rms_V']:.3g}",
+                    f"{d['disturbance_dev_rms_m']:.2g} / {d['disturbance_dev_final_m']:.2g}", f"{d['noise_dev_rms_m']:.2g}"]
+                   for name, d in res["disturbance_noise"].items()]
+    return {"interval": markdown_table(["controller", "α1 paper / box", "α2 paper / box", "β3 paper / box",
+                                        "SM paper / box", "Kharitonov proves stability", "actual family"], interval),
+            "designs": markdown_table(["design", "paper", "ours"], designs),
+            "table2": markdown_table(["controller", "source", "OS %", "ST 2 % (s)", "RT 10–90 % (s)", "RT 0–100 % (s)"],
+                                     table2),
+            "disturbance": markdown_table(["controller", "u peak (V)", "u RMS (V)",
+                                           "disturbance: RMS / final deviation (m)", "noise: RMS deviation (m)"],
+                                          disturbance)}
+
+
+def _poly(c: dict) -> str:
+    """A transfer function's coefficients, highest power first, as (num)/(den)."""
+    def side(coeffs):
+        return "[" + ", ".join(f"{v:.4g}" for v in (coeffs if isinstance(coeffs, list) else [coeffs])) + "]"
+    return f"{side(c['num'])}/{side(c['den'])}"
 
 
 def write_plots(directory: Path) -> list[Path]:

@@ -10,6 +10,7 @@ from tqdm import tqdm
 
 from controllers.papers import seed001 as s1
 from twin.reproduce.seed001 import procedure as r
+from twin.reproduce.tables import fmt, markdown_table, pair
 
 PARTS = ("relay", "table1", "cascades", "state_feedback", "mimo", "fractional", "abc", "lmi", "trajectories")
 
@@ -207,6 +208,74 @@ def format_report(res: dict) -> str:
     else:
         out.append("twin left out (--twin-samples 0)")
     return "\n".join(out)
+
+
+def _step_cell(metrics: dict) -> str:
+    return f"{metrics['overshoot_pct']:.1f} % {metrics['settling_time_s']:.3f} s"
+
+
+def markdown_tables(res: dict) -> dict[str, str]:
+    """The docs page's tables (:mod:`twin.reproduce.tables`): ``relay``, ``table1`` (with what is
+    fitted and what is checked), ``state_feedback``, ``fractional`` and ``table2`` (fits)."""
+    twin = res["settings"]["twin"]
+    sides = ("tf", "twin") if twin else ("tf",)
+    test = res["relay"]["tests"][0]
+    relay = [[f"implied by Table 1's P rows ({pair([t['delay_s'] * 1e3 for t in res['relay']['implied']], '.1f')} ms)",
+              pair([t["ku_V_per_mm"] for t in res["relay"]["implied"]]),
+              pair([t["pu_s"] for t in res["relay"]["implied"]], ".4f")]]
+    for side in sides:
+        relay.append([f"{'twin' if side == 'twin' else 'TF loop'}, relay with {test['delay_s'] * 1e3:g} ms delay",
+                      pair([m["ku_V_per_mm"] for m in test[side]]), pair([m["pu_s"] for m in test[side]], ".4f")])
+    relay.append(["exact ultimate point of that loop", pair([m["ku_V_per_mm"] for m in test["exact"]]),
+                  pair([m["pu_s"] for m in test["exact"]], ".4f")])
+    names, paper1 = s1.TABLE1_ROWS, res["paper"]["table1"]
+    table1 = []
+    for kind, row in res["table1"].items():
+        paper, agree = paper1[names[kind]], row["agreement"]
+        cells = [names[kind], pair([g["kp"] for g in row["gains"]]), pair([g["ki"] for g in row["gains"]])]
+        for i, a in enumerate("xy"):
+            cells.append(f"{paper[a][1]:g} % {paper[a][0]:.2f} s")
+            cells.append(" | ".join(_step_cell(row[side][i]) for side in sides))
+        cells += [agree["overshoot"], agree["settling"]]
+        table1.append(cells)
+    head1 = ["controller", "kp x / y (V/mm)", "ki x / y"]
+    for a in "xy":
+        head1 += [f"{a} paper OS, ts", f"{a} TF" + (" | twin" if twin else "")]
+    head1 += ["overshoot agrees", "settling agrees"]
+    sf = []
+    for name, row in res["state_feedback"].items():
+        g = row["gains"]
+        step = row["step"]["tf"]
+        dist = row["disturbance"]["tf"]
+        cells = [name, pair([x["kp"] for x in g]), pair([x["ki"] for x in g]), pair([x["kv"] for x in g], ".3f"),
+                 f"{pair([m['overshoot_pct'] for m in step], '.1f')} %, {pair([m['settling_time_s'] for m in step], '.3f')} s",
+                 f"{pair(dist['peak_um'], '.0f')}; {pair(dist['final_um'], '.0f')}"]
+        if "step_without_ff" in row:
+            cells[4] += f" ({pair([m['overshoot_pct'] for m in row['step_without_ff']['tf']], '.1f')} % without the feedforward)"
+        sf.append(cells)
+    frac = res["fractional"]
+    fractional = [[name, *(f"{m['overshoot_pct']:.1f} % / {fmt(m['settling_time_s'], '.3f')} / "
+                           f"{m['rise_time_10_90_s']:.3f}" for m in ms)] for name, ms in frac["arrangements"].items()]
+    fit = frac["fit"]
+    fractional.append(["FIT: speed loop with its gain scaled by g",
+                       *(f"g = {fit[a]['g']:.3f}: {fit[a]['metrics']['overshoot_pct']:.1f} % / "
+                         f"{fmt(fit[a]['metrics']['settling_time_s'], '.3f')} / {fit[a]['metrics']['rise_time_10_90_s']:.3f}"
+                         for a in "xy")])
+    fractional.append(["the text", *(f"no overshoot / {res['paper']['eq14_settling_s'][a][0]} / {res['paper']['eq14_rise_s'][a][0]}"
+                                     for a in "xy")])
+    table2 = []
+    for path, runs in res["trajectories"].items():
+        paper = res["paper"]["table2"][path]
+        table2.append([path, *(f"{pair(paper[i], '.4g')} | {pair(run['twin' if twin else 'tf'], '.1f')}"
+                               for i, run in enumerate(runs))])
+    return {"relay": markdown_table(["relay test", "Ku x / y (V/mm)", "Pu x / y (s)"], relay),
+            "table1": markdown_table(head1, table1),
+            "state_feedback": markdown_table(["design", "kp x / y (1/s)", "ki x / y (1/s²)", "kv x / y (V/(mm/s))",
+                                              "OS, settling x / y (TF)", "1 V disturbance (µm): peak x / y; final x / y"], sf),
+            "fractional": markdown_table(["reading of eq. (14)'s loop", "x: OS / settling (s) / rise 10–90 (s)",
+                                          "y: OS / settling / rise"], fractional),
+            "table2": markdown_table(["path", "experiment 1, fit x / y: paper | " + ("twin" if twin else "TF"),
+                                      "experiment 2", "experiment 3"], table2)}
 
 
 def write_plots(folder, results: dict) -> list[Path]:

@@ -9,6 +9,7 @@ import numpy as np
 from tqdm import tqdm
 
 from twin.reproduce.seed002 import procedure as r
+from twin.reproduce.tables import fmt, markdown_table
 
 
 def run_all(twin: bool = True, progress: bool = True) -> dict:
@@ -88,6 +89,35 @@ def format_report(res: dict) -> str:
     out += ["", f"Twin vs transfer-function loop (tolerance {r.TWIN_TOL_REL:.0%}): "
                 + ("all within" if not mism else f"{len(mism)} outside:")] + [f"  {m}" for m in mism]
     return "\n".join(out)
+
+
+def markdown_tables(res: dict) -> dict[str, str]:
+    """The docs page's tables (:mod:`twin.reproduce.tables`): ``margins`` (the PID loop's margins
+    and Popov bound under each delay and derivative treatment) and ``tables_1_3`` (max error
+    and RMSE, the NPID's reductions on Table 3's metric and on eq. (9)'s)."""
+    p = r.PAPER
+    margins = [["paper", p["gm_db"], p["pm_deg"], p["ms_db"], p["bw_hz"], p["popov_crossing"], p["ke_max"], "yes"]]
+    for v in res["margins"]:
+        margins.append([v["loop"], fmt(v["gm_db"], ".2f"), fmt(v["pm_deg"], ".2f"), fmt(v["ms_db"], ".2f"),
+                        fmt(v["bw_hz"], ".1f"), fmt(v["popov_crossing"], ".4f"), fmt(v["ke_max"], ".4f"),
+                        {True: "yes", False: "no", None: "–"}[v["ke_within"]]])
+    twin = res["settings"]["twin"]
+    rows = []
+    for row in res["tables"]:
+        paper = row["paper"] or (None, None)
+        pid, npid = row["seed002_pid"], row["seed002_npid"]
+        cells = [row["f_hz"], row["a_mm"], "–" if row["rpm"] is None else f"{row['rpm']:.0f}",
+                 f"{fmt(paper[0], '.4f')} / {fmt(paper[1], '.4f')}", fmt(row["paper_max_reduction_pct"], ".2f"),
+                 f"{pid['tf_loop']['max_mm']:.4f} / {npid['tf_loop']['max_mm']:.4f}",
+                 f"{row['max_reduction_pct_tf_loop']:.2f}", f"{row['rmse_reduction_pct_tf_loop']:.2f}"]
+        if twin:
+            cells += [f"{pid['twin']['max_mm']:.4f} / {npid['twin']['max_mm']:.4f}", f"{row['max_reduction_pct_twin']:.2f}"]
+        rows.append(cells)
+    head = ["Hz", "mm", "rpm", "paper max PID / NPID", "paper red. % (Table 3)", "TF max PID / NPID",
+            "TF red. % (max)", "TF red. % (RMSE, eq. 9)"] + (["twin max PID / NPID", "twin red. % (max)"] if twin else [])
+    return {"margins": markdown_table(["loop", "GM dB", "PM deg", "Ms dB", "S -3 dB (Hz)", "Popov crossing", "Ke_max",
+                                       "Ke = 3.1075 within"], margins),
+            "tables_1_3": markdown_table(head, rows)}
 
 
 def write_plots(directory: Path, results: dict | None = None) -> list[Path]:

@@ -9,6 +9,7 @@ import numpy as np
 from tqdm import tqdm
 
 from twin.reproduce.seed003 import procedure as r
+from twin.reproduce.tables import markdown_table
 
 
 def run_all(twin: bool = True, progress: bool = True) -> dict:
@@ -94,6 +95,50 @@ def format_report(res: dict) -> str:
     out += ["", f"Twin vs transfer-function loop (MTE, RMSE; tolerance {r.TWIN_TOL_REL:.0%}): "
                 + ("all within" if not mism else f"{len(mism)} outside:")] + [f"  {m}" for m in mism]
     return "\n".join(out)
+
+
+def markdown_tables(res: dict) -> dict[str, str]:
+    """The docs page's tables (:mod:`twin.reproduce.tables`): ``design`` (the cascade's margins
+    beside the thesis's), ``cases`` (every numerical case and feedforward: MTE / RMSE and IMBDO
+    + DFO's reductions), ``amplitude`` (the reductions against the assumed disturbance) and
+    ``milling`` (the cutting share of the error and the first tooth line)."""
+    d = res["design"]
+    design = []
+    for loop, gains in (("velocity", f"PI: kp {d['kp_vel']:.4g} V s/m, ki {d['ki_vel']:.4g} V/m"),
+                        ("position", f"P: {d['kp_pos']:.4g} 1/s")):
+        t, o = d[f"thesis_{loop}"], d[loop]
+        design.append([f"{loop} {gains}", f"{t['gm_db']} dB at {t['gm_hz']} Hz", f"{o['gm_db']:.2f} dB at {o['gm_hz']:.1f} Hz",
+                       f"{t['pm_deg']}° at {t['pm_hz']} Hz", f"{o['pm_deg']:.2f}° at {o['pm_hz']:.1f} Hz"])
+    side = "twin" if res["settings"]["twin"] else "tf_loop"
+    cases = []
+    for ff_name, rows in (("none", res["cases"]), *res["feedforward_cases"].items()):
+        for row in rows:
+            h = len(row["harmonics_hz"]) - 1
+            red = row[f"reduction_pct_{side}"]["imbdo_dfo"]
+            cases.append([f"{row['amplitude_mm']:g} mm {row['f_hz']:g} Hz", ", ".join(f"{f:g}" for f in row["harmonics_hz"]),
+                          ff_name.replace("_", " + "),
+                          *(f"{row[c][side]['mte_um']:.3g} / {row[c][side]['rmse_um']:.3g}" for c in r.CONFIGURATIONS),
+                          f"{red['mte']:z.1f} / {red['rmse']:z.1f}",
+                          f"{r.THESIS['mte_pct'][h]} / {r.THESIS['rmse_pct'][h]}"])
+    amplitude = [[f"{row['amplitude_V']:g}", f"{row['cascade']['tf_loop']['mte_um']:.3g}",
+                  f"{row['imbdo_dfo']['tf_loop']['mte_um']:.3g}", f"{row['reduction_pct']['mte']:.1f}",
+                  f"{row['reduction_pct']['rmse']:.1f}"] for row in res["amplitude_study"]]
+    milling = []
+    for row in res["milling"]:
+        for config in r.CONFIGURATIONS:
+            tw, tf = row[config]["twin"], row[config]["tf_loop"]
+            milling.append([f"{row['rpm']:.0f}" if config == "cascade" else "", config, f"{tw['mte_um']:.1f}",
+                            f"{tw['disturbance']['mte_um']:.3g} | {tf['disturbance']['mte_um']:.3g}",
+                            f"{tw['disturbance']['fft_um'][0]:.3g} | {tf['disturbance']['fft_um'][0]:.3g}"])
+    name = "twin" if side == "twin" else "TF loop"
+    return {"design": markdown_table(["loop", "thesis GM", "ours GM", "thesis PM", "ours PM"], design),
+            "cases": markdown_table(["reference", "harmonics (Hz)", "feedforward (ours)",
+                                     *(f"{c} MTE / RMSE (µm, {name})" for c in r.CONFIGURATIONS),
+                                     "IMBDO + DFO reduction MTE / RMSE (%)", "thesis (%)"], cases),
+            "amplitude": markdown_table(["disturbance per harmonic (V)", "cascade MTE (µm)", "IMBDO + DFO MTE (µm)",
+                                         "MTE reduction (%)", "RMSE reduction (%)"], amplitude),
+            "milling": markdown_table(["rpm", "configuration", "MTE (µm, twin)", "cutting share of the MTE (µm): twin | TF",
+                                       "first tooth line (µm): twin | TF"], milling) if milling else ""}
 
 
 def write_plots(directory: Path, results: dict | None = None) -> list[Path]:

@@ -9,6 +9,7 @@ from tqdm import tqdm
 
 from controllers.papers import seed004 as s4
 from twin.reproduce.seed004 import procedure as r
+from twin.reproduce.tables import markdown_table, pair
 
 CONTOUR_GAIN = 300  # Fig. 12(c)'s magnification
 
@@ -139,6 +140,84 @@ def format_comparison(comparison: dict) -> list[str]:
                    f"{air['max_contour_path_um']:>7.2f} | {_pair(cut['max_tracking_settled_um']):>20} | "
                    f"{_pair(cut['max_at_reversal_um']):>15} | "
                    f"{_pair([cut['max_contour_path_um'], cut['max_contour_point_um']]):>20}")
+    return out
+
+
+def markdown_tables(res: dict) -> dict[str, str]:
+    """The docs page's tables (:mod:`twin.reproduce.tables`): ``design`` (loop shaping and its
+    reduction), ``mu`` (robust stability and performance beside sampled plants), ``zpetc``,
+    ``circles`` (the paper's circle tests in the twin) and ``comparison`` (every controller on
+    the same circles, with the static gains)."""
+    d, paper = res["design"], res["paper"]
+    design = [
+        ["γ_min (Riccati)", "–", f"{d['gamma_min']:.5f}"],
+        ["γ_min by SB10AD on the NCF generalized plant (independent)", "–",
+         f"{d['gamma_min_sb10ad']:.5f} (difference {d['gamma_min_rel_diff']:.0e})"],
+        ["γ used", "\"slightly suboptimal\"", f"{d['gamma']:.4f} = {d['gamma_factor']} γ_min (ours)"],
+        ["robustness margin 1/γ", "–", f"{d['margin']:.3f}"],
+        ["order of K = Ws K_inf", paper["controller_order"], f"{d['order']} (shaped plant {d['shaped_order']})"],
+        ["reduced by balanced truncation (AB09AD)", paper["reduced_order"], d["reduced_order"]],
+        ["Hankel singular values dropped (V/mm)", "–", ", ".join(f"{h:.3g}" for h in d["dropped_V_per_mm"])],
+        ["largest relative change of K by the reduction, 1–10⁴ rad/s", "–", f"{d['reduction_rel_error_1_to_1e4_rad_s']:.2f}"],
+        ["sampled loop at 2 kHz: max σ(S), full / reduced", "–",
+         f"{d['loops']['full']['sensitivity_peak']:.2f} / {d['loops']['reduced']['sensitivity_peak']:.2f}"],
+        ["loop broken at input x / y: PM, crossover, GM", "–",
+         f"{pair([q['pm_deg'] for q in d['loop_at_input']], '.1f')}°, "
+         f"{pair([q['w_pm'] for q in d['loop_at_input']], '.0f')} rad/s, {pair([q['gm_db'] for q in d['loop_at_input']], '.1f')} dB"],
+    ]
+    g = res["comparison"]["static_gains"] if "comparison" in res else None
+    if g is not None:
+        design.append(["K(0) of the MIMO controller, diagonal x / y (V/mm)", "–",
+                       f"full {pair(np.diag(g['mimo_full_K0_V_per_mm']), '.1f')}, "
+                       f"reduced {pair(np.diag(g['mimo_reduced_K0_V_per_mm']), '.1f')}"])
+    m = res["mu"]
+    mu = [[kind.upper() if kind == "pid" else "MIMO", f"{q['rs_peak']['value']:.3f} ({q['rs_peak']['w_rad_s']:.0f})",
+           f"{q['rs_peak_below_80']['value']:.3f}", f"{q['rp_peak']['value']:.3f} ({q['rp_peak']['w_rad_s']:.0f})",
+           f"{q['rp_peak_below_5']['value']:.3f}", f"{q['corners_stable']}/{q['corners']}",
+           f"{q['random_stable']}/{q['random']}", f"{q['mu_lower_from_samples']:.3f}",
+           f"{q['worst_wps_sampled']:.2f} ({q['nominal_wps']:.2f})"]
+          for kind, q in ((k, m[k]) for k in r.KINDS)]
+    z = res["zpetc"]
+    zpetc = [[kind.upper() if kind == "pid" else "MIMO", pair(z[kind]["preview_ticks"], "d"),
+              "; ".join(", ".join(f"{c[0]:.4f}" for c in zs) for zs in z[kind]["unacceptable_zeros"]),
+              pair(z[kind]["without"]["max_tracking_settled_um"], ".3f"), pair(z[kind]["with"]["max_tracking_settled_um"], ".3f")]
+             for kind in r.KINDS]
+    out = {"design": markdown_table(["", "paper", "ours"], design),
+           "mu": markdown_table(["controller", "RS peak (rad/s)", "RS max ω ≤ 80", "RP peak (rad/s)", "RP max ω ≤ 5",
+                                 "corners stable", "random stable", "1 / smallest destabilizing scale",
+                                 "worst ‖Wp S‖ sampled (nominal)"], mu),
+           "zpetc": markdown_table(["controller", "preview (ticks) x / y", "zeros left uninverted, x; y",
+                                    "air cut max tracking after 0.1 s without ZPETC (µm)", "with ZPETC (µm)"], zpetc)}
+    if "circles" in res:
+        c = res["circles"]
+        names = {"air_cut": "air cut R 20, 2400 mm/min", "cutting_mechanistic": "cutting, mechanistic force",
+                 "cutting_average_force": "cutting, average force |k| 1800 + 20 % harmonic"}
+        paper_cells = {("mimo", "air_cut"): f"below {pair(paper['air_cut_max_tracking_um'], 'g')}",
+                       ("mimo", "cutting_mechanistic"): f"about {pair(paper['cutting_max_contour_um'], 'g')}",
+                       ("pid", "air_cut"): "larger quadrant glitches", ("pid", "cutting_mechanistic"): "larger than MIMO"}
+        circles = []
+        for kind in r.KINDS:
+            for case, label in names.items():
+                q = c[kind][case]
+                radius = "" if case == "air_cut" else f", R {c[kind]['cutting_radius_mm']:g}"
+                circles.append([f"{'MIMO' if kind == 'mimo' else 'PID (ours)'} {label}{radius}", paper_cells.get((kind, case), "–"),
+                                pair(q["max_tracking_settled_um"], ".2f"), pair(q["max_at_reversal_um"], ".2f"),
+                                f"{q['max_contour_path_um']:.2f} / {q['max_contour_point_um']:.2f}"])
+        out["circles"] = markdown_table(["run", "paper (µm)", "tracking x / y (µm)", "at reversals x / y (µm)",
+                                         "contour to path / to point (µm)"], circles)
+    if "comparison" in res:
+        comparison = []
+        for name, runs in res["comparison"]["runs"].items():
+            gains = g.get(name)
+            kp = pair(gains["kp_V_per_mm"], ".1f") if gains else pair(np.diag(
+                g["mimo_full_K0_V_per_mm" if "full" in name else "mimo_reduced_K0_V_per_mm"]), ".1f") + " (K(0))"
+            air, cut = runs["air_cut"], runs["cutting"]
+            comparison.append([name, kp, pair(air["max_tracking_settled_um"], ".2f"), pair(air["max_at_reversal_um"], ".2f"),
+                               pair(cut["max_tracking_settled_um"], ".1f"), pair(cut["max_at_reversal_um"], ".1f"),
+                               f"{cut['max_contour_path_um']:.1f} / {cut['max_contour_point_um']:.1f}"])
+        out["comparison"] = markdown_table(["controller (every PID ours)", "kp x / y (V/mm)", "air cut: tracking x / y (µm)",
+                                            "air cut: at reversals", "cutting R 28: tracking x / y (µm)",
+                                            "cutting: at reversals", "cutting: contour to path / point"], comparison)
     return out
 
 

@@ -1,0 +1,138 @@
+"""Markdown tables of the reproductions, generated from ``twin reproduce SEED --json`` output.
+
+The paper pages (``docs/papers/seedNNN.md``) hold blocks
+
+    <!-- generated: seed002.tables_1_3 -->
+    | ... the table ... |
+    <!-- end generated -->
+
+whose content is what the seed's ``markdown_tables(results)`` renders for that name from the
+reproduction's JSON (``docs/results/seedNNN.json``, written by ``twin reproduce SEED --json``
+with its default settings).  No result number in those tables is typed by hand.
+
+``python -m twin.reproduce.tables --write`` rewrites the blocks from the JSON files;
+``--check`` exits 1 (naming the blocks) when a page differs from them; ``--rerun`` first runs
+every reproduction again and writes its JSON (minutes), so ``--rerun --check`` verifies that
+the committed results are what the code computes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import sys
+from pathlib import Path
+
+from twin.reproduce import DEFAULT_SAMPLES, DEFAULT_SEED, DEFAULT_TWIN_SAMPLES, REPRODUCTIONS, reproduction
+
+#: The repository's docs folder (this file is twin/reproduce/tables.py).
+DOCS = Path(__file__).resolve().parents[2] / "docs"
+_BLOCK = re.compile(r"(<!-- generated: (\w+)\.(\w+) -->\n)(.*?)(<!-- end generated -->)", re.S)
+
+
+def markdown_table(header: list[str], rows: list[list[str]]) -> str:
+    """A GitHub-flavoured Markdown table (cells already formatted; a ``|`` inside one is escaped),
+    ending in a newline."""
+    def line(cells):
+        return "| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |"
+    return "\n".join([line(header), "|" + "---|" * len(header), *(line(row) for row in rows)]) + "\n"
+
+
+def fmt(value, spec: str = ".3g", none: str = "–") -> str:
+    """A number for a table: ``none`` for None or nan, else formatted with ``spec``."""
+    if value is None or (isinstance(value, float) and value != value):
+        return none
+    return format(value, spec)
+
+
+def pair(values, spec: str = ".3g", sep: str = " / ") -> str:
+    """Per-axis values as ``a / b``."""
+    return sep.join(fmt(v, spec) for v in values)
+
+
+def results_path(seed: str, folder: Path | None = None) -> Path:
+    """Where the committed JSON of ``seed`` lives."""
+    return (folder or DOCS / "results") / f"{seed}.json"
+
+
+def render(seed: str, results: dict) -> dict[str, str]:
+    """Every generated table of ``seed`` by name."""
+    return reproduction(seed).markdown_tables(results)
+
+
+def fill(page: str, tables: dict[str, dict[str, str]]) -> tuple[str, list[str]]:
+    """``page`` with every generated block replaced from ``tables[seed][name]``, and the names
+    of the blocks whose content changed.
+
+    Raises
+    ------
+    KeyError
+        A block names a table that its seed does not render.
+    """
+    changed = []
+
+    def replace(match):
+        seed, name = match.group(2), match.group(3)
+        body = tables[seed][name]
+        if body != match.group(4):
+            changed.append(f"{seed}.{name}")
+        return match.group(1) + body + match.group(5)
+
+    return _BLOCK.sub(replace, page), changed
+
+
+def blocks(page: str) -> list[str]:
+    """The ``seed.name`` of every generated block in ``page``."""
+    return [f"{m.group(2)}.{m.group(3)}" for m in _BLOCK.finditer(page)]
+
+
+def load_tables(folder: Path | None = None) -> dict[str, dict[str, str]]:
+    """Every seed's tables, rendered from its JSON in ``folder`` (default ``docs/results``)."""
+    return {seed: render(seed, json.loads(results_path(seed, folder).read_text())) for seed in REPRODUCTIONS}
+
+
+def pages() -> list[Path]:
+    """The pages that hold generated blocks."""
+    return sorted((DOCS / "papers").glob("*.md"))
+
+
+def _rerun(folder: Path) -> None:
+    """Run every reproduction with ``twin reproduce``'s defaults and write its JSON into
+    ``folder`` as ``twin reproduce SEED --json`` prints it."""
+    folder.mkdir(parents=True, exist_ok=True)
+    for seed in REPRODUCTIONS:
+        print(f"running twin reproduce {seed}", file=sys.stderr)
+        res = reproduction(seed).run(DEFAULT_SAMPLES, DEFAULT_TWIN_SAMPLES, DEFAULT_SEED, progress=False)
+        results_path(seed, folder).write_text(json.dumps(res, indent=1, default=float) + "\n")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m twin.reproduce.tables", description=__doc__.split("\n\n")[0])
+    mode = parser.add_mutually_exclusive_group(required=True)
+    mode.add_argument("--write", action="store_true", help="rewrite the generated blocks of the pages")
+    mode.add_argument("--check", action="store_true", help="exit 1 if a page's block differs from its JSON")
+    parser.add_argument("--rerun", metavar="DIR", type=Path,
+                        help="first run every reproduction and write its JSON into DIR (docs/results to update them)")
+    args = parser.parse_args(argv)
+    folder = None
+    if args.rerun:
+        _rerun(args.rerun)
+        folder = args.rerun
+    tables = load_tables(folder)
+    stale = []
+    for path in pages():
+        text, changed = fill(path.read_text(), tables)
+        stale += [f"{path.name}: {name}" for name in changed]
+        if args.write and changed:
+            path.write_text(text)
+    if args.check and stale:
+        print("generated tables differ from the reproductions' JSON:\n  " + "\n  ".join(stale), file=sys.stderr)
+        return 1
+    print(("rewrote" if args.write else "checked") + f" {sum(len(blocks(p.read_text())) for p in pages())} tables "
+          f"on {len(pages())} pages" + (f"; {len(stale)} changed" if stale else ""))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
