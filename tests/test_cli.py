@@ -172,11 +172,11 @@ def test_reproduce_seed002_transfer_functions_only(tmp_path):
 def _same_as_committed(seed: str, res: dict, part) -> None:
     """The transfer-function part of a reproduction equals the committed JSON the docs' tables
     are generated from (``docs/results``): the pages cannot go stale on it."""
-    from twin.reproduce.tables import results_path
+    from twin.reproductions.tables import results_path
 
     committed = json.loads(results_path(seed).read_text())
     assert part(res) == pytest.approx(part(committed), rel=1e-9), \
-        f"docs/results/{seed}.json is stale: rerun `uv run python -m twin.reproduce.tables --rerun docs/results --write`"
+        f"docs/results/{seed}.json is stale: rerun `uv run python -m twin.reproductions.tables --rerun docs/results --write`"
 
 
 def test_reproduce_seed003_transfer_functions_only():

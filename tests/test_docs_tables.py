@@ -1,20 +1,20 @@
 """The paper pages' tables are generated from the reproductions' committed JSON
 (``docs/results``), and that JSON is what the code computes (checked here where it is cheap, in
-full by ``.ci/run``'s ``python -m twin.reproduce.tables --rerun DIR --check``)."""
+full by ``.ci/run``'s ``python -m twin.reproductions.tables --rerun DIR --check``)."""
 
 import json
 
 import pytest
 
-from twin.reproduce import REPRODUCTIONS
-from twin.reproduce.tables import blocks, fill, load_tables, markdown_table, pages, results_path
+from twin.reproductions import REPRODUCTIONS
+from twin.reproductions.tables import blocks, fill, load_tables, markdown_table, pages, results_path
 
 
 def test_every_generated_table_on_the_pages_is_current():
     tables = load_tables()
     for path in pages():
         _, changed = fill(path.read_text(), tables)
-        assert not changed, f"{path.name}: run `uv run python -m twin.reproduce.tables --write` ({changed})"
+        assert not changed, f"{path.name}: run `uv run python -m twin.reproductions.tables --write` ({changed})"
 
 
 def test_every_table_a_reproduction_renders_is_on_a_page():

@@ -12,7 +12,7 @@ from controllers.blocks import harmonic_estimator, inverse_model_observer, with_
 from controllers.design.cascade import backward_difference, closed_loop, gain_for_phase_margin, pi_for_margins, pi_loop
 from controllers.design.dob import delay_and_gain_error, q_cutoff, q_response, worst_q_delta
 from controllers.design.loop_analysis import loop_margins, popov_crossing
-from twin.reproduce.seed002 import procedure as r
+from twin.reproductions.seed002 import procedure as r
 from twin.sim.tf_loop import tf_loop
 
 
@@ -179,7 +179,7 @@ def test_harmonic_estimator_interpolates_and_is_stable():
 def test_dfo_cancels_the_harmonics_and_the_combination_counts_once():
     """TF loop, seed 003's cascade under three harmonics: the DFO's and IMBDO+DFO's share of the
     error is below 0.1 % of the cascade's; IMBDO alone leaves its |1 - Q e^(-jwT)| (about 1-2 %)."""
-    from twin.reproduce.seed003 import procedure as s3
+    from twin.reproductions.seed003 import procedure as s3
 
     shares = {c: s3.run_case(0.5, 1.0, (0.2, 0.5, 0.8), c, twin=False, duration_s=6.0)["tf_loop"]["disturbance"]
               for c in s3.CONFIGURATIONS}
@@ -189,7 +189,7 @@ def test_dfo_cancels_the_harmonics_and_the_combination_counts_once():
 
 
 def test_seed003_twin_matches_the_tf_loop_with_both_observers():
-    from twin.reproduce.seed003 import procedure as s3
+    from twin.reproductions.seed003 import procedure as s3
 
     case = s3.run_case(10.0, 0.5, (0.2, 0.5, 0.8), "imbdo_dfo", twin=True, duration_s=4.0)
     for key in ("mte_um", "rmse_um"):
@@ -201,7 +201,7 @@ def test_seed003_twin_matches_the_tf_loop_with_both_observers():
 def test_dfo_takes_down_the_tooth_line_of_the_milling_force():
     """Twin, 1500 rpm slot milling, 4 s: the DFO cuts the 50 Hz line of the error by over 95 %;
     the TF loop replaying the twin's force agrees on the MTE within 2 %."""
-    from twin.reproduce.seed003 import procedure as s3
+    from twin.reproductions.seed003 import procedure as s3
 
     base, dfo = (s3.milling_case(1500.0, c, duration_s=4.0) for c in ("cascade", "dfo"))
     assert dfo["twin"]["disturbance"]["fft_um"][0] < 0.05 * base["twin"]["disturbance"]["fft_um"][0]
@@ -214,7 +214,7 @@ def test_observers_leave_the_reference_loop_unchanged():
     """No disturbance: the four configurations track the sine alike (the estimates do not depend
     on the command), as the reference-loop plot states; only the start differs a little, where
     the observers' Tustin inverse model and the ZOH plant part (0.4 um on 180 um)."""
-    from twin.reproduce.seed003 import procedure as s3
+    from twin.reproductions.seed003 import procedure as s3
 
     n = int(3.0 / s3.DT_S)
     ref = s3.sine_reference(0.5, 10.0, n)
@@ -232,7 +232,7 @@ def test_feedforward_removes_the_following_error_and_the_amplitude_decides_the_r
     IMBDO + DFO's MTE reduction then grows with the assumed disturbance amplitude (the
     disturbance's share scales with it, the residual does not): small at 0.001 V, above 97 % at
     1 V, where the thesis's reductions lie."""
-    from twin.reproduce.seed003 import procedure as s3
+    from twin.reproductions.seed003 import procedure as s3
 
     ff = s3.model_feedforward()
     g = r.machine().plant[0][0]  # m/V: b0/(s^2 + a1 s + a0)

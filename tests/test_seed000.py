@@ -16,7 +16,7 @@ from controllers.design.imc import imc_controller
 from controllers.design.kharitonov import (is_hurwitz, kharitonov_polynomials, robustly_stable,
                                     stability_margin_third_order)
 from controllers.design.robust_pi import design_robust_pi, worst_case_margins
-from twin.reproduce.seed000 import procedure as r
+from twin.reproductions.seed000 import procedure as r
 
 
 def _interval(center, rel):

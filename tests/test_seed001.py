@@ -20,7 +20,7 @@ from controllers.design.tuning import (bee_colony_minimize, detune, limit_cycle,
 from controllers.papers import seed001 as s1
 from controllers.design.pid import pid_tf
 from twin.metrics import fit_index, step_metrics
-from twin.reproduce.seed001 import procedure as r
+from twin.reproductions.seed001 import procedure as r
 
 
 def test_ziegler_nichols_rules_on_a_known_ultimate_point():

@@ -16,7 +16,7 @@ from controllers.design.ncf import central_controller, gamma_min, ncf_generalize
 from controllers.design.pid import pid_for_crossover, pid_for_crossover_with_kp, pid_tf
 from controllers.design.zpetc import damping_ratio, zpetc
 from controllers.papers import seed004 as s4
-from twin.reproduce.seed004 import procedure as r
+from twin.reproductions.seed004 import procedure as r
 
 
 def _shaped():

@@ -76,12 +76,12 @@ def test_bad_variations_name_the_field(spec, match):
         parse_variation(spec, LM)
 
 
-SHORT = ["duration_s=0.05"]
+SHORT = {"duration_s": 0.05}
 
 
 def _sweep(tmp_path, name, workers, vary=("overrides.m_x=box", "disturbances.0.spindle_rpm=uniform(5000,12000)"),
            samples=12, batch=3, scenario="seed004_cutting_circle", settings=SHORT, client=None):
-    sw = prepare_sweep(scenario, list(settings), list(vary), samples, 5, False)
+    sw = prepare_sweep(scenario, dict(settings), list(vary), samples, 5, False)
     out = tmp_path / name
     own = client is None
     client = client or make_client(workers)
@@ -135,7 +135,7 @@ def test_a_killed_worker_loses_no_sample(tmp_path):
 
 def test_divergence_and_errors_are_rows_with_their_status(tmp_path):
     _, table = _sweep(tmp_path, "bad.parquet", 1, vary=["controller.params.kp=choice(4000, 1e12, 'abc')"],
-                      samples=24, batch=4, scenario="square_sabau_pid", settings=["duration_s=0.2"])
+                      samples=24, batch=4, scenario="square_sabau_pid", settings={"duration_s": 0.2})
     rows = table.to_pylist()
     by_kp = {r["controller.params.kp"]: r for r in rows}
     assert table.num_rows == 24 and set(by_kp) == {"4000.0", "1000000000000.0", "abc"}
@@ -174,7 +174,7 @@ def test_summary_bands_and_worst_case(tmp_path):
 
 
 def test_seed000_certificate_is_the_reproductions():
-    from twin.reproduce.seed000.procedure import interval_table
+    from twin.reproductions.seed000.procedure import interval_table
 
     plan = _plan("overrides.K1=box", "overrides.m=box", params=get_machine("cncmt").parameters)
     (cert,) = certificates("cncmt", "seed000_robust_pi", plan)

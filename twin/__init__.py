@@ -1,0 +1,30 @@
+"""CNC feed-drive digital twin: MuJoCo XY tables, the source papers' controllers, recordings.
+
+The public API (:mod:`twin.api`) is imported on first use, so that ``import twin`` and the
+command line start fast::
+
+    import twin
+    run = twin.run("seed004_mimo_cutting", duration_s=0.5)
+    run.summary, run.to_pandas()
+
+``twin.load``, ``twin.run``, ``twin.sweep``, ``twin.fidelity``, ``twin.reproduce``, and the
+classes ``twin.Run`` and ``twin.Sweep``; errors are :class:`twin.errors.TwinInputError` and
+:class:`twin.errors.SimulationDiverged`.
+"""
+
+from __future__ import annotations
+
+__all__ = ["Run", "Sweep", "fidelity", "load", "reproduce", "run", "sweep"]
+
+
+def __getattr__(name: str):
+    """``twin.run`` and the other names of :data:`__all__`, from :mod:`twin.api` (PEP 562)."""
+    if name in __all__:
+        from twin import api
+
+        return getattr(api, name)
+    raise AttributeError(f"module 'twin' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *__all__])

@@ -16,7 +16,7 @@ from pathlib import Path
 import typer
 
 from twin.errors import RunInterrupted, SimulationDiverged, TwinInputError
-from twin.reproduce import DEFAULT_SAMPLES, DEFAULT_SEED, DEFAULT_TWIN_SAMPLES
+from twin.reproductions import DEFAULT_SAMPLES, DEFAULT_SEED, DEFAULT_TWIN_SAMPLES
 
 app = typer.Typer(add_completion=False, pretty_exceptions_enable=False, no_args_is_help=True,
                   help="Digital twin of CNC XY feed drives (MuJoCo).")
@@ -72,8 +72,8 @@ def _run(scenario: str, rrd: Path | None, as_json: bool, settings: list[str] | N
          max_steps: int | None = None, plots: Path | None = None) -> None:
     """Run a scenario and report it; a run that diverges or is interrupted still reports,
     records and plots what it computed before the error line."""
-    from twin.scenario import load_scenario, run_scenario
-    from twin.sim.runner import MAX_PHYSICS_STEPS
+    from twin import api
+    from twin.scenario import load_scenario
 
     _check_output("--rrd", rrd, ".rrd")
     _check_plots_folder(plots)
@@ -81,35 +81,28 @@ def _run(scenario: str, rrd: Path | None, as_json: bool, settings: list[str] | N
     if rrd is not None and scn.record_every_ticks == 0:
         raise TwinInputError("record_every_ticks", 0, "the run keeps metrics only: nothing to write to --rrd")
     try:
-        result = run_scenario(scn, max_physics_steps=max_steps or MAX_PHYSICS_STEPS)
+        done = api.run(scn, progress=None, max_physics_steps=max_steps)
     except (SimulationDiverged, RunInterrupted) as exc:
         status = "diverged" if isinstance(exc, SimulationDiverged) else "interrupted"
         if exc.result is not None:
-            _report(scn, exc.result, rrd, as_json, {"status": status, "sim_time_s": exc.sim_time_s}, plots)
+            _report(api.Run(scn, exc.result, status, {"sim_time_s": exc.sim_time_s}), rrd, as_json, plots)
         raise
-    _report(scn, result, rrd, as_json, {"status": "ok"}, plots)
+    _report(done, rrd, as_json, plots)
 
 
-def _report(scn, result, rrd: Path | None, as_json: bool, status: dict, plots: Path | None) -> None:
+def _report(done, rrd: Path | None, as_json: bool, plots: Path | None) -> None:
     """Print the run's summary (text or JSON), write its recording and its plots."""
-    from twin.metrics import tracking_summary
-
-    done = result.info["completed_ticks"]
-    summary = {**status, "completed_ticks": done, **(tracking_summary(result) if done else {}),
-               "loop": result.info["loop"]}
+    summary = done.summary
     if as_json:
-        typer.echo(json.dumps({"scenario": scn.name, "machine": scn.machine, **summary}, indent=2, allow_nan=False))
+        typer.echo(json.dumps(summary, indent=2, allow_nan=False))
     else:
-        _print_summary(f"{scn.name}: {scn.description}", summary)
-    if rrd is not None and len(result.t_s):
-        from twin.recording import record  # rerun is imported only when a recording is asked for
-
-        record(result, rrd)
+        _print_summary(f"{done.scenario.name}: {done.scenario.description}",
+                       {k: v for k, v in summary.items() if k not in ("scenario", "machine")})
+    if rrd is not None and len(done.result.t_s):
+        done.record(rrd)  # rerun is imported only when a recording is asked for
         typer.echo(f"recording written to {rrd} (view with: rerun {rrd})", err=as_json)
-    if plots is not None and len(result.t_s):
-        from twin.plots import write_plots  # matplotlib is imported only when plots are asked for
-
-        for path in write_plots(result, plots, scn.name):
+    if plots is not None and len(done.result.t_s):
+        for path in done.plots(plots):  # matplotlib is imported only when plots are asked for
             typer.echo(f"plot written to {path}", err=as_json)
 
 
@@ -161,21 +154,13 @@ def fidelity(machine: list[str] = typer.Option(None, "--machine", help="Machine(
     Cases: every machine, and linear_motor_xy+average_force (seed 004's cutting-force model
     against its coupled eq. (11) model).
     """
-    from twin.fidelity import CASES, TARGETS, fidelity as check
-    from twin.machines import get_machine
+    from twin import api
+    from twin.fidelity import TARGETS
 
-    names = machine or list(CASES)
-    overrides = _parse_sets(sets or [])
-    for name in names:  # validate everything before computing anything
-        if name not in CASES:
-            raise TwinInputError("--machine", name, f"unknown machine or fidelity case (known: {', '.join(CASES)})")
-        get_machine(CASES[name][0]).resolve(overrides)
-    results = []
-    for name in names:
-        results.append(check(name, overrides))
-        if not as_json:
-            r = results[-1]
-            typer.echo(f"{name:<30} nrmse {r['time_nrmse']:.2e}  |dmag| {r['frf_max_mag_err_db']:.4f} dB  "
+    results = api.fidelity(machine or [], **_parse_sets(sets or []))
+    if not as_json:
+        for r in results:
+            typer.echo(f"{r['case']:<30} nrmse {r['time_nrmse']:.2e}  |dmag| {r['frf_max_mag_err_db']:.4f} dB  "
                        f"|dphase| {r['frf_max_phase_err_deg']:.3f} deg  slip {r['coupling_slip_um']:.4f} um  "
                        f"{'PASS' if r['pass'] else 'FAIL'}")
     if as_json:
@@ -201,17 +186,13 @@ def reproduce(source: str = typer.Argument(..., help="Which paper, e.g. seed000 
 
     Exits 1 if a twin number departs from its transfer-function number by more than 2 %.
     """
-    from twin.reproduce import REPRODUCTIONS, reproduction
+    from twin import api
+    from twin.reproductions import reproduction
 
-    if source not in REPRODUCTIONS:
-        raise TwinInputError("source", source, f"no reproduction of that paper yet (known: {', '.join(REPRODUCTIONS)})")
-    if samples < 1 or twin_samples < 0:
-        raise TwinInputError("--samples" if samples < 1 else "--twin-samples",
-                             samples if samples < 1 else twin_samples, "must be >= 1 (--samples) / >= 0")
     _check_output("--rrd", rrd, ".rrd")
     _check_plots_folder(plots)
+    res = api.reproduce(source, samples=samples, twin_samples=twin_samples, random_seed=seed, progress=not as_json)
     paper = reproduction(source)
-    res = paper.run(samples, twin_samples, seed, progress=not as_json)
     typer.echo(json.dumps(res, indent=1, default=float) if as_json else paper.format_report(res))
     if plots is not None:
         for path in paper.write_plots(plots, res):
@@ -243,45 +224,27 @@ def sweep(target: str = typer.Argument(..., help="Scenario (bundled name or TOML
           as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON")):
     """Run a scenario over sampled parameters on Dask: one Parquet row per sample, a summary of
     bands and the worst case, robustness certificates where one covers the box."""
-    from twin.sweeps import prepare_sweep, sweep_spec
-    from twin.sweeps.run import make_client, read_sweep, run_sweep
-    from twin.sweeps.summary import certificates, format_summary, summarize, write_sweep_plots
+    from twin import api
+    from twin.scenario import parse_settings
+    from twin.sweeps.summary import format_summary
 
-    spec = sweep_spec(target)
-    variations = [f"{k}={v}" for k, v in spec.vary.items()] + list(vary or [])
-    if workers is not None and not 1 <= workers <= 256:
-        raise TwinInputError("--workers", workers, "must be from 1 to 256")
-    if workers is not None and scheduler:
-        raise TwinInputError("--workers", workers, "give --workers or --scheduler, not both")
     _check_plots_folder(plots)
-    sw = prepare_sweep(spec.scenario, spec.set + list(sets or []), variations,
-                       spec.samples if samples is None else samples, spec.seed if seed is None else seed,
-                       spec.latin_hypercube if lhs is None else lhs)
-    out = out or Path(spec.out or f"{sw.name}_sweep.parquet")
-    if not out.parent.is_dir():
-        raise TwinInputError("--out", str(out), f"folder {str(out.parent)!r} does not exist")
-    client = make_client(workers, scheduler)
-    try:
-        done = run_sweep(sw.scenario, sw.plan, sw.axes, out, client, spec.batch_size if batch is None else batch,
-                         resume, progress=not as_json)
-    finally:
-        client.close()
-    table = read_sweep(out)
-    summary = summarize(table, sw.plan, sw.axes)
-    certs = certificates(sw.machine, sw.controller, sw.plan)
-    summary.update(scenario=sw.name, out=str(out), wall_s=done.wall_s, ran=done.ran, skipped=done.skipped,
-                   certificates=certs)
+    done = api.sweep(target, list(vary or []), samples=samples, seed=seed, lhs=lhs, out=out, workers=workers,
+                     scheduler=scheduler, batch=batch, resume=resume, progress=not as_json,
+                     **parse_settings(list(sets or [])))
+    summary = done.summary
     if as_json:
         typer.echo(json.dumps(summary, indent=1))
     else:
-        typer.echo(format_summary(summary, certs, sw.axes))
-        typer.echo(f"  {done.ran} samples run in {done.wall_s:.1f} s ({done.skipped} already in {out})")
+        typer.echo(format_summary(summary, summary["certificates"], done.axes))
+        typer.echo(f"  {summary['ran']} samples run in {summary['wall_s']:.1f} s ({summary['skipped']} already in "
+                   f"{done.out})")
     if plots is not None:
-        for path in write_sweep_plots(table, sw.plan, sw.axes, plots):
+        for path in done.plots(plots):
             typer.echo(f"plot written to {path}", err=as_json)
     if done.interrupted:
-        typer.echo(f"error: sweep interrupted after {table.num_rows} of {len(sw.plan)} samples; "
-                   f"twin sweep ... --out {out} --resume completes it", err=True)
+        typer.echo(f"error: sweep interrupted after {done.table.num_rows} of {len(done.plan)} samples; "
+                   f"twin sweep ... --out {done.out} --resume completes it", err=True)
         raise typer.Exit(130)
 
 
@@ -290,7 +253,7 @@ def list_things():
     """Machines, controller kinds, observers, bundled scenarios and reproducible papers."""
     from controllers import CONTROLLERS, OBSERVERS
     from twin.machines import MACHINES
-    from twin.reproduce import REPRODUCTIONS
+    from twin.reproductions import REPRODUCTIONS
     from twin.scenario import bundled_scenarios, load_scenario
 
     def params(names):

@@ -70,9 +70,10 @@ class Sweep:
     plan: Plan
 
 
-def prepare_sweep(scenario: str, settings: list[str], vary: list[str], samples: int, seed: int,
+def prepare_sweep(scenario: str, settings: dict, vary: list[str], samples: int, seed: int,
                   latin_hypercube: bool) -> Sweep:
-    """Load and check the scenario (once, before any sample runs) and build the plan.
+    """Load and check the scenario with ``settings`` (``{dotted path: value}``, once, before any
+    sample runs) and build the plan.
 
     Raises
     ------
@@ -82,14 +83,14 @@ def prepare_sweep(scenario: str, settings: list[str], vary: list[str], samples: 
         become ``error`` rows.
     """
     from twin.machines import get_machine
-    from twin.scenario import apply_settings, prepare, read_scenario_data, scenario_from_dict
-    from twin.sweeps.run import toml_value
+    from twin.scenario import prepare, read_scenario_data, scenario_from_dict, set_fields
+    from twin.sweeps.run import scenario_value
 
-    data = apply_settings(read_scenario_data(scenario), settings)
+    data = set_fields(read_scenario_data(scenario), settings, "--set ")
     scn = scenario_from_dict(data)
     plan = Plan([parse_variation(v, get_machine(scn.machine).parameters) for v in vary], samples, seed, latin_hypercube)
     checked = prepare(scn)
     # the varied paths lead into the scenario (a value the scenario rejects is that sample's error row)
-    apply_settings(data, [f"{p}={toml_value(v)}" for p, v in plan.values(0).items()])
+    set_fields(data, {p: scenario_value(v) for p, v in plan.values(0).items()}, "--vary ")
     controller = scn.controller.type if scn.controller is not None else None
     return Sweep(data, scn.name, scn.machine, controller, tuple(a.name for a in checked["machine"].axes), plan)

@@ -23,7 +23,7 @@ import time
 from pathlib import Path
 
 SCENARIO = "seed004_cutting_circle"
-SETTINGS = ["duration_s=2.0"]
+SETTINGS = {"duration_s": 2.0}
 VARY = ["overrides.m_x=box", "disturbances.0.spindle_rpm=uniform(5000,12000)"]
 
 
@@ -52,7 +52,7 @@ def run_sweep_bench(samples: int = 1000, repeats: int = 1, memory_samples: int =
                     done = run_sweep(sw.scenario, sw.plan, sw.axes, Path(tmp) / f"s{n}_{r}", client, 10,
                                      progress=progress)
                     times[n].append(done.wall_s)
-            tiny = prepare_sweep(SCENARIO, ["duration_s=0.0005"], VARY, memory_samples, 0, False)
+            tiny = prepare_sweep(SCENARIO, {"duration_s": 0.0005}, VARY, memory_samples, 0, False)
             before = _rss_mb()
             run_sweep(tiny.scenario, tiny.plan, tiny.axes, Path(tmp) / "memory", clients[2], 50, progress=progress)
             growth = _rss_mb() - before

@@ -31,9 +31,9 @@ def metric_columns(axes) -> list[str]:
     return [f"{m}_{a}" for m in ("max_tracking_error_um", "rmse_um", "max_cutting_force_N") for a in axes]
 
 
-def toml_value(value) -> str:
-    """A sampled value as TOML text, for :func:`twin.scenario.apply_settings`."""
-    return repr(float(value)) if isinstance(value, (int, float, np.floating)) else repr(str(value))
+def scenario_value(value):
+    """A sampled value as the scenario takes it: a number as a float, anything else as text."""
+    return float(value) if isinstance(value, (int, float, np.floating)) else str(value)
 
 
 def run_sample(base: dict, index: int, values: dict, seed: int, axes) -> dict:
@@ -44,14 +44,14 @@ def run_sample(base: dict, index: int, values: dict, seed: int, axes) -> dict:
     diverging run is a ``diverged`` row with the simulated time, an invalid or failing one an
     ``error`` row with the message.
     """
-    from twin.scenario import apply_settings, run_scenario, scenario_from_dict
+    from twin.scenario import run_scenario, scenario_from_dict, set_fields
 
     row = {"index": index, "seed": seed, **values, "status": "ok", "error": "", "sim_time_s": math.nan,
            "completed_ticks": 0, **{c: math.nan for c in metric_columns(axes)}}
     start = time.perf_counter()
     result = None
     try:
-        data = apply_settings(base, [f"{p}={toml_value(v)}" for p, v in values.items()])
+        data = set_fields(base, {p: scenario_value(v) for p, v in values.items()})
         data["seed"], data["record_every_ticks"] = seed, 0
         result = run_scenario(scenario_from_dict(data), progress=False)
         row["sim_time_s"] = result.info["completed_ticks"] * result.control_period_s

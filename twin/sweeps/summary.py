@@ -57,7 +57,7 @@ def certificates(machine: str, controller: str | None, plan: Plan) -> list[dict]
     others = [v.path for v in plan.variations if not v.path.startswith("overrides.")]
     seed000 = {"seed000_robust_pi": "robust_pi", "seed000_imc": "imc", "seed000_hinf_reduced": "hinf"}
     if machine == "cncmt" and controller in seed000 and symbols <= {"K1", "K2", "m", "Im"} and not others:
-        from twin.reproduce.seed000.procedure import interval_table
+        from twin.reproductions.seed000.procedure import interval_table
 
         row = next(r for r in interval_table() if r["controller"] == seed000[controller])
         return [{"source": "seed 000, Kharitonov over Table 1's box (K1, K2, m, Im)",
@@ -65,7 +65,7 @@ def certificates(machine: str, controller: str | None, plan: Plan) -> list[dict]
                  "family_stable": bool(row["family_stable"]),
                  "note": "SM < 0: Kharitonov cannot prove stability; family_stable: every member checked"}]
     if machine == "linear_motor_xy" and controller in ("seed004_mimo", "seed004_pid"):
-        from twin.reproduce.seed004.procedure import OMEGA, mu_curves
+        from twin.reproductions.seed004.procedure import OMEGA, mu_curves
 
         rs, rp = mu_curves(controller.removeprefix("seed004_"))
         return [{"source": "seed 004, mu (AB13MD upper bound) over Table 1's box of m, b, k_il, k_c with the "

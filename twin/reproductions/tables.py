@@ -10,7 +10,7 @@ whose content is what the seed's ``markdown_tables(results)`` renders for that n
 reproduction's JSON (``docs/results/seedNNN.json``, written by ``twin reproduce SEED --json``
 with its default settings).  No result number in those tables is typed by hand.
 
-``python -m twin.reproduce.tables --write`` rewrites the blocks from the JSON files;
+``python -m twin.reproductions.tables --write`` rewrites the blocks from the JSON files;
 ``--check`` exits 1 (naming the blocks) when a page differs from them; ``--rerun`` first runs
 every reproduction again and writes its JSON (minutes), so ``--rerun --check`` verifies that
 the committed results are what the code computes.
@@ -24,9 +24,9 @@ import re
 import sys
 from pathlib import Path
 
-from twin.reproduce import DEFAULT_SAMPLES, DEFAULT_SEED, DEFAULT_TWIN_SAMPLES, REPRODUCTIONS, reproduction
+from twin.reproductions import DEFAULT_SAMPLES, DEFAULT_SEED, DEFAULT_TWIN_SAMPLES, REPRODUCTIONS, reproduction
 
-#: The repository's docs folder (this file is twin/reproduce/tables.py).
+#: The repository's docs folder (this file is twin/reproductions/tables.py).
 DOCS = Path(__file__).resolve().parents[2] / "docs"
 _BLOCK = re.compile(r"(<!-- generated: (\w+)\.(\w+) -->\n)(.*?)(<!-- end generated -->)", re.S)
 
@@ -108,7 +108,7 @@ def _rerun(folder: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m twin.reproduce.tables", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(prog="python -m twin.reproductions.tables", description=__doc__.split("\n\n")[0])
     mode = parser.add_mutually_exclusive_group(required=True)
     mode.add_argument("--write", action="store_true", help="rewrite the generated blocks of the pages")
     mode.add_argument("--check", action="store_true", help="exit 1 if a page's block differs from its JSON")

@@ -1,4 +1,4 @@
-"""Tables and plots of ``twin reproduce seed002`` (see :mod:`twin.reproduce.seed002.procedure`)."""
+"""Tables and plots of ``twin reproduce seed002`` (see :mod:`twin.reproductions.seed002.procedure`)."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from twin.reproduce.seed002 import procedure as r
-from twin.reproduce.tables import fmt, markdown_table
+from twin.reproductions.seed002 import procedure as r
+from twin.reproductions.tables import fmt, markdown_table
 
 
 def run_all(twin: bool = True, progress: bool = True) -> dict:
@@ -92,7 +92,7 @@ def format_report(res: dict) -> str:
 
 
 def markdown_tables(res: dict) -> dict[str, str]:
-    """The docs page's tables (:mod:`twin.reproduce.tables`): ``margins`` (the PID loop's margins
+    """The docs page's tables (:mod:`twin.reproductions.tables`): ``margins`` (the PID loop's margins
     and Popov bound under each delay and derivative treatment) and ``tables_1_3`` (max error
     and RMSE, the NPID's reductions on Table 3's metric and on eq. (9)'s)."""
     p = r.PAPER

@@ -29,7 +29,7 @@ from controllers.papers import seed004 as s4
 from twin.machines.linear_motor import cutting_coupled_plant
 from twin.metrics import contour_error
 from twin.references import Circle
-from twin.reproduce import twin_vs_tf
+from twin.reproductions import twin_vs_tf
 
 KINDS = ("mimo", "pid")
 OMEGA = np.logspace(-1, 4, 121)  # rad/s, the mu plots' grid (Figs. 6-7)

@@ -1,4 +1,4 @@
-"""Tables and plots of ``twin reproduce seed000`` (see :mod:`twin.reproduce.seed000.procedure`)."""
+"""Tables and plots of ``twin reproduce seed000`` (see :mod:`twin.reproductions.seed000.procedure`)."""
 
 from __future__ import annotations
 
@@ -6,8 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from twin.reproduce.seed000 import procedure as r
-from twin.reproduce.tables import fmt, markdown_table
+from twin.reproductions.seed000 import procedure as r
+from twin.reproductions.tables import fmt, markdown_table
 
 
 def run_all(mc_samples: int = 1000, twin_random: int = 20, seed: int = 0, progress: bool = True) -> dict:
@@ -135,7 +135,7 @@ def _band_cells(b: dict | None, keys) -> list[str]:
 
 
 def markdown_tables(res: dict) -> dict[str, str]:
-    """The docs page's tables (:mod:`twin.reproduce.tables`): ``interval`` (eqs. 30-35 on Table 1's
+    """The docs page's tables (:mod:`twin.reproductions.tables`): ``interval`` (eqs. 30-35 on Table 1's
     box), ``designs`` (the design procedures beside the paper's numbers), ``table2`` (unit step,
     the paper's printed controllers and ours) and ``disturbance`` (Figs. 11-13's signals, ours)."""
     interval = []

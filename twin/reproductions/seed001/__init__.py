@@ -6,6 +6,6 @@ cascade, the bee colony, the trajectories of Table 2, on the transfer functions 
 twin); :mod:`.report` prints and plots.
 """
 
-from twin.reproduce.seed001.report import failed, format_report, markdown_tables, record, run, write_plots
+from twin.reproductions.seed001.report import failed, format_report, markdown_tables, record, run, write_plots
 
 __all__ = ["failed", "format_report", "markdown_tables", "record", "run", "write_plots"]

@@ -1,4 +1,4 @@
-"""Tables and plots of ``twin reproduce seed003`` (see :mod:`twin.reproduce.seed003.procedure`)."""
+"""Tables and plots of ``twin reproduce seed003`` (see :mod:`twin.reproductions.seed003.procedure`)."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from twin.reproduce.seed003 import procedure as r
-from twin.reproduce.tables import markdown_table
+from twin.reproductions.seed003 import procedure as r
+from twin.reproductions.tables import markdown_table
 
 
 def run_all(twin: bool = True, progress: bool = True) -> dict:
@@ -98,7 +98,7 @@ def format_report(res: dict) -> str:
 
 
 def markdown_tables(res: dict) -> dict[str, str]:
-    """The docs page's tables (:mod:`twin.reproduce.tables`): ``design`` (the cascade's margins
+    """The docs page's tables (:mod:`twin.reproductions.tables`): ``design`` (the cascade's margins
     beside the thesis's), ``cases`` (every numerical case and feedforward: MTE / RMSE and IMBDO
     + DFO's reductions), ``amplitude`` (the reductions against the assumed disturbance) and
     ``milling`` (the cutting share of the error and the first tooth line)."""

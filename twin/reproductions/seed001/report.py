@@ -1,4 +1,4 @@
-"""Tables and plots of ``twin reproduce seed001`` (see :mod:`twin.reproduce.seed001.procedure`)."""
+"""Tables and plots of ``twin reproduce seed001`` (see :mod:`twin.reproductions.seed001.procedure`)."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ import numpy as np
 from tqdm import tqdm
 
 from controllers.papers import seed001 as s1
-from twin.reproduce.seed001 import procedure as r
-from twin.reproduce.tables import fmt, markdown_table, pair
+from twin.reproductions.seed001 import procedure as r
+from twin.reproductions.tables import fmt, markdown_table, pair
 
 PARTS = ("relay", "table1", "cascades", "state_feedback", "mimo", "fractional", "abc", "lmi", "trajectories")
 
@@ -215,7 +215,7 @@ def _step_cell(metrics: dict) -> str:
 
 
 def markdown_tables(res: dict) -> dict[str, str]:
-    """The docs page's tables (:mod:`twin.reproduce.tables`): ``relay``, ``table1`` (with what is
+    """The docs page's tables (:mod:`twin.reproductions.tables`): ``relay``, ``table1`` (with what is
     fitted and what is checked), ``state_feedback``, ``fractional`` and ``table2`` (fits)."""
     twin = res["settings"]["twin"]
     sides = ("tf", "twin") if twin else ("tf",)

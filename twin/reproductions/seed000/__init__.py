@@ -11,28 +11,28 @@ from pathlib import Path
 
 def run(samples: int, twin_samples: int, seed: int, progress: bool) -> dict:
     """Every number of the reproduction (see :func:`.report.run_all`)."""
-    from twin.reproduce.seed000.report import run_all
+    from twin.reproductions.seed000.report import run_all
 
     return run_all(samples, twin_samples, seed, progress=progress)
 
 
 def markdown_tables(results: dict) -> dict[str, str]:
     """The docs page's generated tables (see :func:`.report.markdown_tables`)."""
-    from twin.reproduce.seed000 import report
+    from twin.reproductions.seed000 import report
 
     return report.markdown_tables(results)
 
 
 def format_report(results: dict) -> str:
     """The text tables: paper | transfer function | twin."""
-    from twin.reproduce.seed000 import report
+    from twin.reproductions.seed000 import report
 
     return report.format_report(results)
 
 
 def write_plots(folder: Path, results: dict | None = None) -> list[Path]:
     """PNG step responses as the paper's Figs. 7-10."""
-    from twin.reproduce.seed000.report import write_plots as plots
+    from twin.reproductions.seed000.report import write_plots as plots
 
     return plots(folder)
 
@@ -40,7 +40,7 @@ def write_plots(folder: Path, results: dict | None = None) -> list[Path]:
 def record(path: Path) -> None:
     """Rerun recording of the nominal twin step runs of Table 2."""
     from twin.recording import record_runs
-    from twin.reproduce.seed000 import procedure as r
+    from twin.reproductions.seed000 import procedure as r
 
     nominal = r.nominal_params()
     record_runs({name: r.twin_step_result(c, nominal) for name, c in r.TABLE2_CONTROLLERS.items()}, path)

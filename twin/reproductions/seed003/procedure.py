@@ -34,8 +34,8 @@ from twin.machines.googol import GoogolXY
 from twin.process.cutting import EndMilling
 from twin.process.disturbances import HarmonicInput
 from twin.references import SumOfSines
-from twin.reproduce import twin_vs_tf
-from twin.reproduce.seed002.procedure import CUT, DT_S, TWIN_TOL_REL, machine, sine_reference
+from twin.reproductions import twin_vs_tf
+from twin.reproductions.seed002.procedure import CUT, DT_S, TWIN_TOL_REL, machine, sine_reference
 from twin.sim.runner import simulate
 from twin.sim.tf_loop import tf_loop
 

@@ -11,9 +11,9 @@ from __future__ import annotations
 import importlib
 
 #: Seed name -> package of its reproduction.
-REPRODUCTIONS = {"seed000": "twin.reproduce.seed000", "seed001": "twin.reproduce.seed001",
-                 "seed002": "twin.reproduce.seed002",
-                 "seed003": "twin.reproduce.seed003", "seed004": "twin.reproduce.seed004"}
+REPRODUCTIONS = {"seed000": "twin.reproductions.seed000", "seed001": "twin.reproductions.seed001",
+                 "seed002": "twin.reproductions.seed002",
+                 "seed003": "twin.reproductions.seed003", "seed004": "twin.reproductions.seed004"}
 
 
 #: ``twin reproduce``'s defaults: Monte Carlo samples, random twin samples, seed.

@@ -1,4 +1,4 @@
-"""Tables and plots of ``twin reproduce seed004`` (see :mod:`twin.reproduce.seed004.procedure`)."""
+"""Tables and plots of ``twin reproduce seed004`` (see :mod:`twin.reproductions.seed004.procedure`)."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import numpy as np
 from tqdm import tqdm
 
 from controllers.papers import seed004 as s4
-from twin.reproduce.seed004 import procedure as r
-from twin.reproduce.tables import markdown_table, pair
+from twin.reproductions.seed004 import procedure as r
+from twin.reproductions.tables import markdown_table, pair
 
 CONTOUR_GAIN = 300  # Fig. 12(c)'s magnification
 
@@ -144,7 +144,7 @@ def format_comparison(comparison: dict) -> list[str]:
 
 
 def markdown_tables(res: dict) -> dict[str, str]:
-    """The docs page's tables (:mod:`twin.reproduce.tables`): ``design`` (loop shaping and its
+    """The docs page's tables (:mod:`twin.reproductions.tables`): ``design`` (loop shaping and its
     reduction), ``mu`` (robust stability and performance beside sampled plants), ``zpetc``,
     ``circles`` (the paper's circle tests in the twin) and ``comparison`` (every controller on
     the same circles, with the static gains)."""

@@ -5,6 +5,6 @@ transfer-function loop and the twin); :mod:`.report` prints and plots.  ``sample
 ``seed`` do not apply; ``twin_samples = 0`` leaves the twin out.
 """
 
-from twin.reproduce.seed003.report import failed, format_report, markdown_tables, record, run, write_plots
+from twin.reproductions.seed003.report import failed, format_report, markdown_tables, record, run, write_plots
 
 __all__ = ["failed", "format_report", "markdown_tables", "record", "run", "write_plots"]

@@ -1,0 +1,73 @@
+"""The public Python API (``import twin``) and the runnable examples that use it."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import twin
+from twin.errors import SimulationDiverged, TwinInputError
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+
+
+def test_run_summary_equals_the_cli_json_and_settings_take_both_spellings():
+    settings = {"duration_s": 0.2, "disturbances.0.axial_depth_mm": 1.0}
+    run = twin.run("slot_linear_motor", **settings)
+    cli = subprocess.run([sys.executable, "-m", "twin.cli", "run", "slot_linear_motor", "--json", "--set",
+                          "duration_s=0.2", "--set", "disturbances.0.axial_depth_mm=1.0"],
+                         capture_output=True, text=True, timeout=300, check=True)
+    assert run.summary == json.loads(cli.stdout)
+    same = twin.run("slot_linear_motor", duration_s=0.2, disturbances__0__axial_depth_mm=1.0)
+    assert same.summary == run.summary
+    assert twin.load("slot_linear_motor", **settings).disturbances[0].axial_depth_mm == 1.0
+
+
+def test_to_pandas_is_time_indexed_with_units_in_the_names():
+    run = twin.run("seed004_mimo_air_cut", duration_s=0.1)
+    frame = run.to_pandas()
+    result = run.result
+    assert isinstance(frame, pd.DataFrame) and frame.index.name == "time (s)"
+    np.testing.assert_array_equal(frame.index.to_numpy(), result.t_s)
+    pos = result.table_position_m()
+    np.testing.assert_allclose(frame["actual/y (mm)"], pos[:, 1] * 1e3)
+    np.testing.assert_allclose(frame["error/x (µm)"], (result.ref[:, 0, 0] - pos[:, 0]) * 1e6)
+    np.testing.assert_allclose(frame["control/x (V)"], result.u_V[:, 0])
+    assert {"reference/x (mm)", "force/drive/x (N)", "joints/y/table/velocity (mm/s)"} <= set(frame.columns)
+    # the largest error in the frame is the summary's (every tick is recorded here)
+    assert frame["error/x (µm)"].abs().max() == pytest.approx(run.summary["max_tracking_error_um"]["x"], abs=1e-3)
+
+
+def test_bad_settings_and_divergence_are_the_twins_errors():
+    with pytest.raises(TwinInputError, match="nope"):
+        twin.run("slot_linear_motor", nope=1)
+    with pytest.raises(TwinInputError, match="disturbances.9.spindle_rpm"):
+        twin.load("slot_linear_motor", **{"disturbances.9.spindle_rpm": 1.0})
+    with pytest.raises(TwinInputError, match="source = 'seed999'"):
+        twin.reproduce("seed999")
+    with pytest.raises(SimulationDiverged) as err:
+        twin.run("step_cncmt_hinf", controller={"type": "pid", "params": {"kp": 1e9}}, duration_s=0.5)
+    partial = twin.run("step_cncmt_hinf", controller={"type": "pid", "params": {"kp": 1e9}}, duration_s=0.5,
+                       keep_partial=True)
+    assert partial.status == "diverged" and partial.summary["sim_time_s"] == err.value.sim_time_s
+
+
+@pytest.mark.parametrize("script, args, check", [
+    ("run_and_plot.py", ["--duration", "0.3"], "run_and_plot.png"),
+    ("compare_controllers.py", ["--duration", "0.3"], "MIMO H-infinity"),
+    ("sweep_box.py", ["--samples", "4", "--workers", "1"], "4 samples in"),
+])
+def test_examples_run(tmp_path, script, args, check):
+    extra = ["--out", str(tmp_path)] if script != "compare_controllers.py" else []
+    r = subprocess.run([sys.executable, str(EXAMPLES / script), *args, *extra], capture_output=True, text=True,
+                       timeout=300, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert check in r.stdout
+    if script == "run_and_plot.py":
+        assert (tmp_path / "run_and_plot.png").stat().st_size > 10_000
+    if script == "sweep_box.py":
+        assert (tmp_path / "square_sabau_pid_sweep.parquet").is_dir()
