@@ -15,7 +15,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-
 #: Largest degree of a transfer function's denominator: a realization of order n is an n x n
 #: matrix run every tick, and canonical forms of higher order lose all precision anyway.
 MAX_ORDER = 100
@@ -94,8 +93,10 @@ def tf_to_ss(tf: SisoTf) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray
         Improper model (more zeros than poles).
     """
     if tf.relative_degree < 0:
-        raise ValueError(f"transfer function {_listing(tf.num)}/{_listing(tf.den)} is improper "
-                         f"(numerator degree above the denominator's)")
+        raise ValueError(
+            f"transfer function {_listing(tf.num)}/{_listing(tf.den)} is improper "
+            f"(numerator degree above the denominator's)"
+        )
     den = np.asarray(tf.den) / tf.den[0]
     n = len(den) - 1
     num = np.concatenate([np.zeros(n + 1 - len(tf.num)), tf.num]) / tf.den[0]
@@ -197,8 +198,7 @@ def summed_inputs(*systems):
     B = np.zeros((sum(n), sum(m)))
     r = c = 0
     for (Ai, Bi, _, _), ni, mi in zip(systems, n, m):
-        A[r:r + ni, r:r + ni] = Ai
-        B[r:r + ni, c:c + mi] = Bi
+        A[r : r + ni, r : r + ni] = Ai
+        B[r : r + ni, c : c + mi] = Bi
         r, c = r + ni, c + mi
     return A, B, np.hstack([s[2] for s in systems]), np.hstack([s[3] for s in systems])
-

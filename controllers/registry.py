@@ -6,14 +6,26 @@ it serves.  Gains are SI (V per m of error, ...); the description of each says i
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import math
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from controllers.blocks import (NONLINEARITIES, Controller, Linear, Sum, cascade, error_feedback, harmonic_observer,
-                                inverse_model_observer, lti_block, lure, relay_feedback, sum_of, with_feedforward)
+from controllers.blocks import (
+    NONLINEARITIES,
+    Controller,
+    Linear,
+    Sum,
+    cascade,
+    error_feedback,
+    harmonic_observer,
+    inverse_model_observer,
+    lti_block,
+    lure,
+    relay_feedback,
+    sum_of,
+    with_feedforward,
+)
 from controllers.design.pid import pid_tf
 from controllers.lti import SisoTf
 from controllers.papers import seed000, seed001, seed002, seed003
@@ -50,9 +62,11 @@ class Context:
 
 def _each_axis(build_one):
     """Builder that makes one controller per served axis, ``build_one(params, ctx, axis)``."""
+
     def build(p, ctx):
         parts = [build_one(p, ctx, a) for a in ctx.axes]
         return Controller([b for c in parts for b in c.blocks], ctx.dt, parts[0].name)
+
     return build
 
 
@@ -75,8 +89,15 @@ def _seed003_cascade(p, ctx, a):
     if not (isinstance(ff, (int, float)) and not isinstance(ff, bool) and 0.0 <= ff <= 2.0):
         raise ValueError(f"velocity_ref_ff = {ff!r}: must be a number from 0 to 2")
     gains = seed003.design_cascade(ctx.plants[a], ctx.delay_s, ctx.dt)
-    return cascade(pid_tf(gains["kp_pos"]), pid_tf(gains["kp_vel"], gains["ki_vel"]), ctx.dt, a, float(ff), ctx.method,
-                   f"cascade.{a}")
+    return cascade(
+        pid_tf(gains["kp_pos"]),
+        pid_tf(gains["kp_vel"], gains["ki_vel"]),
+        ctx.dt,
+        a,
+        float(ff),
+        ctx.method,
+        f"cascade.{a}",
+    )
 
 
 def _generic_lure(p, ctx, a):
@@ -101,20 +122,26 @@ def _seed004(kind):
     """Seed 004's MIMO loop-shaping controller or its PID pair on axes x and y, with ZPETC
     feedforward on the reference preview (``zpetc``, default true); designed in
     :mod:`controllers.papers.seed004` (python-control, cached)."""
+
     def build(p, ctx):
         import control
 
         from controllers.papers import seed004
+
         if ctx.axes != ("x", "y"):
-            raise ValueError(f"axes = {list(ctx.axes)}: seed 004's controllers serve axes x and y together "
-                             "([controller], not [controllers.<axis>])")
+            raise ValueError(
+                f"axes = {list(ctx.axes)}: seed 004's controllers serve axes x and y together "
+                "([controller], not [controllers.<axis>])"
+            )
         if not math.isclose(ctx.dt, seed004.DT_S):
-            raise ValueError(f"control_period_s = {ctx.dt:g}: seed 004's controllers are designed for {seed004.DT_S:g} s")
+            raise ValueError(
+                f"control_period_s = {ctx.dt:g}: seed 004's controllers are designed for {seed004.DT_S:g} s"
+            )
         zpetc_on, order = p.get("zpetc", True), p.get("order", "reduced")
         tuning, ki_scale = p.get("tuning", "loop_at_input"), p.get("ki_scale", 1.0)
         if not isinstance(zpetc_on, bool):
             raise ValueError(f"zpetc = {zpetc_on!r}: must be true or false")
-        if kind == "pid" and order != "reduced" or order not in ("reduced", "full"):
+        if (kind == "pid" and order != "reduced") or order not in ("reduced", "full"):
             raise ValueError(f"order = {order!r}: use 'reduced'" + (" or 'full'" if kind == "mimo" else ""))
         if kind == "mimo" and ("tuning" in p or "ki_scale" in p):
             raise ValueError("tuning and ki_scale are parameters of seed004_pid, not of the MIMO controller")
@@ -127,13 +154,28 @@ def _seed004(kind):
             for a, (filt, _) in zip(ctx.axes, seed004.zpetc_filters(kind, order, tuning, ki_scale)):
                 taps = max(len(filt.num), len(filt.den))
                 num, den = (np.pad(c, (0, taps - len(c))) for c in (filt.num, filt.den))
-                blocks += [lti_block(control.tf(num, den, ctx.dt), ctx.dt, [f"preview.{a}.{filt.preview}"],
-                                     [f"zpetc:ref.{a}"], name=f"zpetc.{a}"),
-                           Sum((1.0, -1.0), (f"zpetc:ref.{a}", f"pos.{a}"), f"zpetc:error.{a}", name=f"zpetc_error.{a}")]
-        blocks.append(lti_block(seed004.controller_si(kind, order, tuning, ki_scale), ctx.dt, errors,
-                                [f"u.{a}" for a in ctx.axes],
-                                ctx.method, name=f"seed004_{kind}"))
+                blocks += [
+                    lti_block(
+                        control.tf(num, den, ctx.dt),
+                        ctx.dt,
+                        [f"preview.{a}.{filt.preview}"],
+                        [f"zpetc:ref.{a}"],
+                        name=f"zpetc.{a}",
+                    ),
+                    Sum((1.0, -1.0), (f"zpetc:ref.{a}", f"pos.{a}"), f"zpetc:error.{a}", name=f"zpetc_error.{a}"),
+                ]
+        blocks.append(
+            lti_block(
+                seed004.controller_si(kind, order, tuning, ki_scale),
+                ctx.dt,
+                errors,
+                [f"u.{a}" for a in ctx.axes],
+                ctx.method,
+                name=f"seed004_{kind}",
+            )
+        )
         return Controller(blocks, ctx.dt, f"seed004_{kind}")
+
     return build
 
 
@@ -149,7 +191,9 @@ def _seed001(p, ctx):
             raise ValueError(f"{key} = {v!r}: must be true or false")
     ku, pu = p.get("ku_V_per_mm"), p.get("pu_s")
     for key, v in (("ku_V_per_mm", ku), ("pu_s", pu)):
-        if v is not None and not (isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0 and math.isfinite(v)):
+        if v is not None and not (
+            isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0 and math.isfinite(v)
+        ):
             raise ValueError(f"{key} = {v!r}: must be a number > 0")
     if (ku is None) != (pu is None):
         raise ValueError("ku_V_per_mm and pu_s go together")
@@ -158,28 +202,60 @@ def _seed001(p, ctx):
     mm = seed001.MM_PER_M
     if design == "state_feedback_mimo":
         if ctx.axes != ("x", "y"):
-            raise ValueError(f"axes = {list(ctx.axes)}: the MIMO state feedback serves axes x and y together "
-                             "([controller], not [controllers.<axis>])")
+            raise ValueError(
+                f"axes = {list(ctx.axes)}: the MIMO state feedback serves axes x and y together "
+                "([controller], not [controllers.<axis>])"
+            )
         K, N = seed001.mimo_pole_placement()
         D = mm * np.hstack([N, -K[:, [1, 3]], -K[:, [0, 2]]])
         inputs = ("ref.x", "ref.y", "pos.x", "pos.y", "vel.x", "vel.y")
-        return Controller([Linear(np.zeros((0, 0)), np.zeros((0, 6)), np.zeros((2, 0)), D, inputs, ("u.x", "u.y"),
-                                  name="state_feedback_mimo")], ctx.dt, "seed001")
+        return Controller(
+            [
+                Linear(
+                    np.zeros((0, 0)),
+                    np.zeros((0, 6)),
+                    np.zeros((2, 0)),
+                    D,
+                    inputs,
+                    ("u.x", "u.y"),
+                    name="state_feedback_mimo",
+                )
+            ],
+            ctx.dt,
+            "seed001",
+        )
     parts = []
     for a in ctx.axes:
         if a not in seed001.AXES:
             raise ValueError(f"axis {a!r}: seed 001 models axes x and y")
         g = seed001.design_gains(a, design, ku, pu)
         if g["form"] == "pid":
-            parts.append(error_feedback(pid_tf(mm * g["kp"], mm * g["ki"], mm * g["kd"], g["tf_s"]), ctx.dt, (a,),
-                                        ctx.method, name=f"seed001.{a}"))
+            parts.append(
+                error_feedback(
+                    pid_tf(mm * g["kp"], mm * g["ki"], mm * g["kd"], g["tf_s"]),
+                    ctx.dt,
+                    (a,),
+                    ctx.method,
+                    name=f"seed001.{a}",
+                )
+            )
         elif g["form"] == "fo_pi":
             A, B, C, D = seed001.fractional_pi_state_space(a)
             parts.append(error_feedback((A, B, mm * C, mm * D), ctx.dt, (a,), ctx.method, name=f"seed001.{a}"))
         else:
             ff = g["position_ref_ff"] if feedforward else 0.0
-            parts.append(cascade(pid_tf(g["kp"], g["ki"], g["kd"], g["tf_s"]), pid_tf(mm * g["kv"]), ctx.dt, a, 0.0,
-                                 ctx.method, f"seed001.{a}", position_ref_ff=ff))
+            parts.append(
+                cascade(
+                    pid_tf(g["kp"], g["ki"], g["kd"], g["tf_s"]),
+                    pid_tf(mm * g["kv"]),
+                    ctx.dt,
+                    a,
+                    0.0,
+                    ctx.method,
+                    f"seed001.{a}",
+                    position_ref_ff=ff,
+                )
+            )
     ctrl = Controller([b for c in parts for b in c.blocks], ctx.dt, "seed001")
     if velocity_ff:  # the drive's VFF_GAIN: u += ref_vel / K_M, K_M = K/a (V per mm/s -> V per m/s)
         ctrl = with_feedforward(ctrl, [mm * seed001.MODEL[a][1] / seed001.MODEL[a][0] for a in ctx.axes], 0.0)
@@ -216,71 +292,123 @@ def _linear(p, ctx):
 
 #: name -> (description with units, builder(params, Context) -> Controller, parameter names)
 CONTROLLERS = {
-    "seed000_robust_pi": ("robust PI 38.33 + 45.65/s (V/m), seed 000 eqs. (18)-(19)",
-                          _per_axis_lti(lambda p: seed000.ROBUST_PI), ()),
+    "seed000_robust_pi": (
+        "robust PI 38.33 + 45.65/s (V/m), seed 000 eqs. (18)-(19)",
+        _per_axis_lti(lambda p: seed000.ROBUST_PI),
+        (),
+    ),
     "seed000_imc": ("IMC (0.21 s + 2)/(s + 2), seed 000 eq. (23)", _per_axis_lti(lambda p: seed000.IMC), ()),
     "seed000_hinf": ("full 4th-order H-infinity, seed 000 eq. (28)", _per_axis_lti(lambda p: seed000.HINF), ()),
-    "seed000_hinf_reduced": ("reduced H-infinity 20.97/(s + 5.5), seed 000 eq. (29)",
-                             _per_axis_lti(lambda p: seed000.HINF_REDUCED), ()),
-    "seed002_pid": ("PID 0.8998 + 0.005155 s + 0.0006077/s (V/mm), seed 002 eq. (6); derivative "
-                    "filter tf_s (default 1e-4 s)", _per_axis_lti(lambda p: seed002.pid(p.get("tf_s", 1e-4))),
-                    ("tf_s",)),
-    "seed002_npid": ("nonlinear PID, seed 002 eqs. (6)-(8): eq. (6) PID behind Ke = cosh(KO e), e clipped "
-                     "at e_max; ko_per_mm (default 6), e_max_mm (default 0.3), tf_s (default 1e-4 s)",
-                     _each_axis(_npid), ("tf_s", "ko_per_mm", "e_max_mm")),
-    "pid": ("kp + ki/s + kd s/(tf_s s + 1); gains in V/m, V/(m s), V s/m",
-            _per_axis_lti(lambda p: pid_tf(p.get("kp", 0.0), p.get("ki", 0.0), p.get("kd", 0.0), p.get("tf_s", 0.0))),
-            ("kp", "ki", "kd", "tf_s")),
-    "tf": ("any C(s) = num/den (coefficients, highest power first) on the error, V/m",
-           _per_axis_lti(lambda p: SisoTf(p["num"], p["den"])), ("num", "den")),
-    "cascade": ("position P/PI around velocity P/PI: v_ref = (kp_pos + ki_pos/s) e + velocity_ref_ff "
-                "ref_vel (1/s, 1/s^2), u = (kp_vel + ki_vel/s)(v_ref - vel) (V s/m, V/m)",
-                _each_axis(_cascade), ("kp_pos", "ki_pos", "kp_vel", "ki_vel", "velocity_ref_ff")),
-    "lure": ("Lur'e: u = num/den (V/m) of f(error), f = nonlinearity: saturation (limit, m), dead_zone "
-             "(width, m) or cosh_gain (k 1/m, e_max m)",
-             _each_axis(_generic_lure), ("num", "den", "nonlinearity", "limit", "width", "k", "e_max")),
-    "relay": ("relay with hysteresis on the error for the relay tuning test: u = +-amplitude_V (default 1 V), "
-              "switching when the error leaves +-hysteresis_m (default 0 m)",
-              _each_axis(lambda p, ctx, a: relay_feedback(p.get("amplitude_V", 1.0), p.get("hysteresis_m", 0.0), ctx.dt,
-                                                          a, f"relay.{a}")), ("amplitude_V", "hysteresis_m")),
-    "seed003_cascade": ("seed 003's cascade: velocity PI for GM 9.37 dB and PM 56.4 deg, position P for PM "
-                        "67.1 deg (thesis Figs. 4.3, 4.7), designed on the machine's model with its delay and "
-                        "the encoder's backward-difference velocity; velocity_ref_ff (default 0: the thesis "
-                        "states none) feeds the reference velocity into the velocity loop",
-                        _each_axis(_seed003_cascade), ("velocity_ref_ff",)),
-    "seed004_mimo": ("seed 004's MIMO H-infinity loop-shaping controller (Glover-McFarlane, Ws = diag(990, 660) "
-                     "(s+110)/(s+1500), positions in mm), balanced-truncated to order 4 (order = 'full': 8), on "
-                     "axes x and y together, with ZPETC feedforward (zpetc, default true); designed on first use",
-                     _seed004("mimo"), ("zpetc", "order")),
-    "seed004_pid": ("a PID per axis for seed 004's SISO comparison, designed here (the paper gives no gains): "
-                    "tuning = 'loop_at_input' (default: the crossover and phase margin of the MIMO loop broken at "
-                    "that input, integral corner a decade below) or 'mimo_diagonal' (the MIMO diagonal loop's "
-                    "crossover, kp = the MIMO controller's static gain); ki_scale multiplies the integral gain; "
-                    "ZPETC feedforward (zpetc, default true)", _seed004("pid"), ("zpetc", "order", "tuning", "ki_scale")),
-    "seed001": ("seed 001's designs on the sabau_xy axes (design = " + ", ".join(seed001.DESIGNS)
-                + "; default pi_p_pole_placement); feedforward = false drops the PI-P reference feedforward; "
-                "velocity_ff = true adds the drive's velocity feedforward ref_vel/K_M (the MC206X's VFF_GAIN); "
-                "ku_V_per_mm, pu_s set the ZN designs' ultimate point (default: the 10 ms-delay model's); "
-                "control_period_s = 1e-3", _seed001, ("design", "feedforward", "velocity_ff", "ku_V_per_mm", "pu_s")),
+    "seed000_hinf_reduced": (
+        "reduced H-infinity 20.97/(s + 5.5), seed 000 eq. (29)",
+        _per_axis_lti(lambda p: seed000.HINF_REDUCED),
+        (),
+    ),
+    "seed002_pid": (
+        "PID 0.8998 + 0.005155 s + 0.0006077/s (V/mm), seed 002 eq. (6); derivative filter tf_s (default 1e-4 s)",
+        _per_axis_lti(lambda p: seed002.pid(p.get("tf_s", 1e-4))),
+        ("tf_s",),
+    ),
+    "seed002_npid": (
+        "nonlinear PID, seed 002 eqs. (6)-(8): eq. (6) PID behind Ke = cosh(KO e), e clipped "
+        "at e_max; ko_per_mm (default 6), e_max_mm (default 0.3), tf_s (default 1e-4 s)",
+        _each_axis(_npid),
+        ("tf_s", "ko_per_mm", "e_max_mm"),
+    ),
+    "pid": (
+        "kp + ki/s + kd s/(tf_s s + 1); gains in V/m, V/(m s), V s/m",
+        _per_axis_lti(lambda p: pid_tf(p.get("kp", 0.0), p.get("ki", 0.0), p.get("kd", 0.0), p.get("tf_s", 0.0))),
+        ("kp", "ki", "kd", "tf_s"),
+    ),
+    "tf": (
+        "any C(s) = num/den (coefficients, highest power first) on the error, V/m",
+        _per_axis_lti(lambda p: SisoTf(p["num"], p["den"])),
+        ("num", "den"),
+    ),
+    "cascade": (
+        "position P/PI around velocity P/PI: v_ref = (kp_pos + ki_pos/s) e + velocity_ref_ff "
+        "ref_vel (1/s, 1/s^2), u = (kp_vel + ki_vel/s)(v_ref - vel) (V s/m, V/m)",
+        _each_axis(_cascade),
+        ("kp_pos", "ki_pos", "kp_vel", "ki_vel", "velocity_ref_ff"),
+    ),
+    "lure": (
+        "Lur'e: u = num/den (V/m) of f(error), f = nonlinearity: saturation (limit, m), dead_zone "
+        "(width, m) or cosh_gain (k 1/m, e_max m)",
+        _each_axis(_generic_lure),
+        ("num", "den", "nonlinearity", "limit", "width", "k", "e_max"),
+    ),
+    "relay": (
+        "relay with hysteresis on the error for the relay tuning test: u = +-amplitude_V (default 1 V), "
+        "switching when the error leaves +-hysteresis_m (default 0 m)",
+        _each_axis(
+            lambda p, ctx, a: relay_feedback(
+                p.get("amplitude_V", 1.0), p.get("hysteresis_m", 0.0), ctx.dt, a, f"relay.{a}"
+            )
+        ),
+        ("amplitude_V", "hysteresis_m"),
+    ),
+    "seed003_cascade": (
+        "seed 003's cascade: velocity PI for GM 9.37 dB and PM 56.4 deg, position P for PM "
+        "67.1 deg (thesis Figs. 4.3, 4.7), designed on the machine's model with its delay and "
+        "the encoder's backward-difference velocity; velocity_ref_ff (default 0: the thesis "
+        "states none) feeds the reference velocity into the velocity loop",
+        _each_axis(_seed003_cascade),
+        ("velocity_ref_ff",),
+    ),
+    "seed004_mimo": (
+        "seed 004's MIMO H-infinity loop-shaping controller (Glover-McFarlane, Ws = diag(990, 660) "
+        "(s+110)/(s+1500), positions in mm), balanced-truncated to order 4 (order = 'full': 8), on "
+        "axes x and y together, with ZPETC feedforward (zpetc, default true); designed on first use",
+        _seed004("mimo"),
+        ("zpetc", "order"),
+    ),
+    "seed004_pid": (
+        "a PID per axis for seed 004's SISO comparison, designed here (the paper gives no gains): "
+        "tuning = 'loop_at_input' (default: the crossover and phase margin of the MIMO loop broken at "
+        "that input, integral corner a decade below) or 'mimo_diagonal' (the MIMO diagonal loop's "
+        "crossover, kp = the MIMO controller's static gain); ki_scale multiplies the integral gain; "
+        "ZPETC feedforward (zpetc, default true)",
+        _seed004("pid"),
+        ("zpetc", "order", "tuning", "ki_scale"),
+    ),
+    "seed001": (
+        "seed 001's designs on the sabau_xy axes (design = "
+        + ", ".join(seed001.DESIGNS)
+        + "; default pi_p_pole_placement); feedforward = false drops the PI-P reference feedforward; "
+        "velocity_ff = true adds the drive's velocity feedforward ref_vel/K_M (the MC206X's VFF_GAIN); "
+        "ku_V_per_mm, pu_s set the ZN designs' ultimate point (default: the 10 ms-delay model's); "
+        "control_period_s = 1e-3",
+        _seed001,
+        ("design", "feedforward", "velocity_ff", "ku_V_per_mm", "pu_s"),
+    ),
     "sum": ("u = the sum of the parts' u: parts = [{ type = ... }, ...], each any kind", _sum, ()),
-    "linear": ("any state space A, B, C, D (domain discrete or continuous) from named inputs (default "
-               "['error']) to outputs (default ['u']); names without '.axis' are per axis",
-               _linear, ("A", "B", "C", "D", "inputs", "outputs", "domain")),
+    "linear": (
+        "any state space A, B, C, D (domain discrete or continuous) from named inputs (default "
+        "['error']) to outputs (default ['u']); names without '.axis' are per axis",
+        _linear,
+        ("A", "B", "C", "D", "inputs", "outputs", "domain"),
+    ),
 }
 
 #: Observer add-ons: name -> (description, parameter names).
 OBSERVERS = {
-    "inverse_model": ("inverse-model disturbance observer d = Q P_n^-1 pos - Q z^-m u_prev, Q = 1/(tau s + 1)^order, "
-                      "tau = 1/(2 pi cutoff_hz); P_n the machine's model unless num/den (m/V) are given; u_prev "
-                      "delayed to match delay_s (s, default the machine's drive delay)",
-                      ("cutoff_hz", "order", "num", "den", "delay_s")),
-    "harmonic": ("harmonic disturbance force observer: the input disturbance's sinusoids at frequencies_hz (list), "
-                 "estimated from the inverse-model signal (cutoff_hz, order) with an internal model of bandwidth_hz "
-                 "(default 5) and predicted over the drive delay", ("frequencies_hz", "bandwidth_hz", "cutoff_hz",
-                                                                    "order", "num", "den", "delay_s")),
-    "inverse_model_harmonic": ("inverse-model observer plus the harmonic observer on what it leaves: u = u_c - d_imbdo "
-                               "- d_harmonic; parameters of both", ("frequencies_hz", "bandwidth_hz", "cutoff_hz",
-                                                                     "order", "num", "den", "delay_s")),
+    "inverse_model": (
+        "inverse-model disturbance observer d = Q P_n^-1 pos - Q z^-m u_prev, Q = 1/(tau s + 1)^order, "
+        "tau = 1/(2 pi cutoff_hz); P_n the machine's model unless num/den (m/V) are given; u_prev "
+        "delayed to match delay_s (s, default the machine's drive delay)",
+        ("cutoff_hz", "order", "num", "den", "delay_s"),
+    ),
+    "harmonic": (
+        "harmonic disturbance force observer: the input disturbance's sinusoids at frequencies_hz (list), "
+        "estimated from the inverse-model signal (cutoff_hz, order) with an internal model of bandwidth_hz "
+        "(default 5) and predicted over the drive delay",
+        ("frequencies_hz", "bandwidth_hz", "cutoff_hz", "order", "num", "den", "delay_s"),
+    ),
+    "inverse_model_harmonic": (
+        "inverse-model observer plus the harmonic observer on what it leaves: u = u_c - d_imbdo "
+        "- d_harmonic; parameters of both",
+        ("frequencies_hz", "bandwidth_hz", "cutoff_hz", "order", "num", "den", "delay_s"),
+    ),
 }
 
 
@@ -314,31 +442,74 @@ def make_observers(name: str, params: dict, ctx: Context) -> list:
         cutoff, order = params.get("cutoff_hz", 100.0), params.get("order", 2)
         delay = params.get("delay_s", ctx.delay_s)
         if name in ("inverse_model", "inverse_model_harmonic"):
-            out.append(inverse_model_observer(plant, cutoff, order, ctx.dt, a, ctx.method, name=f"observer.{a}",
-                                              delay_s=delay))
+            out.append(
+                inverse_model_observer(plant, cutoff, order, ctx.dt, a, ctx.method, name=f"observer.{a}", delay_s=delay)
+            )
         if name == "harmonic":
-            out.append(harmonic_observer(plant, params.get("frequencies_hz", ()), params.get("bandwidth_hz", 5.0),
-                                         ctx.dt, a, ctx.method, f"harmonic.{a}", delay, cutoff, order))
+            out.append(
+                harmonic_observer(
+                    plant,
+                    params.get("frequencies_hz", ()),
+                    params.get("bandwidth_hz", 5.0),
+                    ctx.dt,
+                    a,
+                    ctx.method,
+                    f"harmonic.{a}",
+                    delay,
+                    cutoff,
+                    order,
+                )
+            )
         if name == "inverse_model_harmonic":
             # the harmonic observer compares the plant with u_prev + the inverse-model estimate of the
             # tick before (already in u_prev), so it estimates what that observer left
             previous, residual = f"harmonic.{a}:imbdo_prev.{a}", f"harmonic.{a}:u_residual.{a}"
-            out += [Linear([[0.0]], [[1.0]], [[1.0]], [[0.0]], (f"observer.{a}:d_hat.{a}",), (previous,),
-                           name=f"imbdo_prev.{a}"),
-                    Sum((1.0, 1.0), (f"u_prev.{a}", previous), residual, name=f"residual.{a}"),
-                    harmonic_observer(plant, params.get("frequencies_hz", ()), params.get("bandwidth_hz", 5.0), ctx.dt,
-                                      a, ctx.method, f"harmonic.{a}", delay, cutoff, order, u_signal=residual)]
+            out += [
+                Linear(
+                    [[0.0]],
+                    [[1.0]],
+                    [[1.0]],
+                    [[0.0]],
+                    (f"observer.{a}:d_hat.{a}",),
+                    (previous,),
+                    name=f"imbdo_prev.{a}",
+                ),
+                Sum((1.0, 1.0), (f"u_prev.{a}", previous), residual, name=f"residual.{a}"),
+                harmonic_observer(
+                    plant,
+                    params.get("frequencies_hz", ()),
+                    params.get("bandwidth_hz", 5.0),
+                    ctx.dt,
+                    a,
+                    ctx.method,
+                    f"harmonic.{a}",
+                    delay,
+                    cutoff,
+                    order,
+                    u_signal=residual,
+                ),
+            ]
     return out
 
 
-def make_controller(name: str, dt: float, params: dict | None = None, method: str = "tustin",
-                    velocity_ff=0.0, acceleration_ff=0.0, axes=("x",), plants: dict | None = None,
-                    parts=(), delay_s: float = 0.0) -> Controller:
+def make_controller(
+    name: str,
+    dt: float,
+    params: dict | None = None,
+    method: str = "tustin",
+    velocity_ff=0.0,
+    acceleration_ff=0.0,
+    axes=("x",),
+    plants: dict | None = None,
+    parts=(),
+    delay_s: float = 0.0,
+) -> Controller:
     """Build a named controller for ``axes`` at period ``dt`` (s).
 
     ``velocity_ff``, ``acceleration_ff`` (V/(m/s), V/(m/s^2)) add reference feedforward to u;
     ``plants`` are the machine's per-axis models (m/V) and ``delay_s`` its drive delay (s), for
-    model-based designs; ``parts`` are the built controllers a ``sum`` adds up.  An observer is added with ``with_correction(ctrl, make_observers(...))``.
+    model-based designs; ``parts`` are the built controllers a ``sum`` adds up.  An observer is
+    added with ``with_correction(ctrl, make_observers(...))``.
 
     Raises
     ------

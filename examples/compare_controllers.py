@@ -12,12 +12,18 @@ import twin
 
 
 def main(duration_s: float) -> dict:
-    controllers = {"MIMO H-infinity (seed 004)": {"type": "seed004_mimo"},
-                   "PID (ours, the MIMO loop's margins)": {"type": "seed004_pid"},
-                   "PD with the MIMO's static gain": {"type": "seed004_pid",
-                                                      "params": {"tuning": "mimo_diagonal", "ki_scale": 0.0}}}
-    return {name: twin.run("seed004_mimo_cutting", duration_s=duration_s, controller=controller).summary
-            for name, controller in controllers.items()}
+    controllers = {
+        "MIMO H-infinity (seed 004)": {"type": "seed004_mimo"},
+        "PID (ours, the MIMO loop's margins)": {"type": "seed004_pid"},
+        "PD with the MIMO's static gain": {
+            "type": "seed004_pid",
+            "params": {"tuning": "mimo_diagonal", "ki_scale": 0.0},
+        },
+    }
+    return {
+        name: twin.run("seed004_mimo_cutting", duration_s=duration_s, controller=controller).summary
+        for name, controller in controllers.items()
+    }
 
 
 if __name__ == "__main__":

@@ -12,9 +12,9 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.pyplot as plt
 
-import twin  # noqa: E402
+import twin
 
 
 def main(duration_s: float, out: Path) -> dict:
@@ -36,6 +36,8 @@ if __name__ == "__main__":
     parser.add_argument("--out", type=Path, default=Path("example_out"), help="folder for the plot")
     args = parser.parse_args()
     summary = main(args.duration, args.out)
-    print(f"max contour error {summary['max_contour_error_um']:.1f} um, max tracking error x / y "
-          f"{summary['max_tracking_error_um']['x']:.1f} / {summary['max_tracking_error_um']['y']:.1f} um; "
-          f"plot in {args.out / 'run_and_plot.png'}")
+    print(
+        f"max contour error {summary['max_contour_error_um']:.1f} um, max tracking error x / y "
+        f"{summary['max_tracking_error_um']['x']:.1f} / {summary['max_tracking_error_um']['y']:.1f} um; "
+        f"plot in {args.out / 'run_and_plot.png'}"
+    )

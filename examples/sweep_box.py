@@ -14,8 +14,14 @@ import twin
 
 def main(samples: int, workers: int, out: Path, duration_s: float = 0.5):
     out.mkdir(parents=True, exist_ok=True)
-    return twin.sweep("square_sabau_pid", ["overrides.K_x=box", "overrides.K_y=box"], samples=samples,
-                      workers=workers, out=out / "square_sabau_pid_sweep.parquet", duration_s=duration_s)
+    return twin.sweep(
+        "square_sabau_pid",
+        ["overrides.K_x=box", "overrides.K_y=box"],
+        samples=samples,
+        workers=workers,
+        out=out / "square_sabau_pid_sweep.parquet",
+        duration_s=duration_s,
+    )
 
 
 if __name__ == "__main__":
@@ -26,5 +32,7 @@ if __name__ == "__main__":
     args = parser.parse_args()
     sweep = main(args.samples, args.workers, args.out)
     frame = sweep.to_pandas()
-    print(frame[["index", "overrides.K_x", "overrides.K_y", "status", "max_tracking_error_um_x"]].to_string(index=False))
+    print(
+        frame[["index", "overrides.K_x", "overrides.K_y", "status", "max_tracking_error_um_x"]].to_string(index=False)
+    )
     print(f"{sweep.summary['ran']} samples in {sweep.summary['wall_s']:.1f} s; results in {sweep.out}")

@@ -12,7 +12,9 @@ _checkout = Path(__file__).resolve().parent.parent
 _tag = hashlib.sha1(str(_checkout).encode()).hexdigest()[:12]
 os.environ.setdefault("NUMBA_CACHE_DIR", os.path.join(tempfile.gettempdir(), "cnc-twin-numba-" + _tag))
 # hypothesis's example database and caches (its default: .hypothesis/ in the working folder)
-os.environ.setdefault("HYPOTHESIS_STORAGE_DIRECTORY", os.path.join(tempfile.gettempdir(), "cnc-twin-hypothesis-" + _tag))
+os.environ.setdefault(
+    "HYPOTHESIS_STORAGE_DIRECTORY", os.path.join(tempfile.gettempdir(), "cnc-twin-hypothesis-" + _tag)
+)
 
 from hypothesis import settings  # noqa: E402
 

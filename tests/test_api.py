@@ -18,9 +18,24 @@ EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 def test_run_summary_equals_the_cli_json_and_settings_take_both_spellings():
     settings = {"duration_s": 0.2, "disturbances.0.axial_depth_mm": 1.0}
     run = twin.run("slot_linear_motor", **settings)
-    cli = subprocess.run([sys.executable, "-m", "twin.cli", "run", "slot_linear_motor", "--json", "--set",
-                          "duration_s=0.2", "--set", "disturbances.0.axial_depth_mm=1.0"],
-                         capture_output=True, text=True, timeout=300, check=True)
+    cli = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "twin.cli",
+            "run",
+            "slot_linear_motor",
+            "--json",
+            "--set",
+            "duration_s=0.2",
+            "--set",
+            "disturbances.0.axial_depth_mm=1.0",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=True,
+    )
     assert run.summary == json.loads(cli.stdout)
     same = twin.run("slot_linear_motor", duration_s=0.2, disturbances__0__axial_depth_mm=1.0)
     assert same.summary == run.summary
@@ -45,26 +60,35 @@ def test_to_pandas_is_time_indexed_with_units_in_the_names():
 def test_bad_settings_and_divergence_are_the_twins_errors():
     with pytest.raises(TwinInputError, match="nope"):
         twin.run("slot_linear_motor", nope=1)
-    with pytest.raises(TwinInputError, match="disturbances.9.spindle_rpm"):
+    with pytest.raises(TwinInputError, match=r"disturbances\.9\.spindle_rpm"):
         twin.load("slot_linear_motor", **{"disturbances.9.spindle_rpm": 1.0})
     with pytest.raises(TwinInputError, match="source = 'seed999'"):
         twin.reproduce("seed999")
     with pytest.raises(SimulationDiverged) as err:
         twin.run("step_cncmt_hinf", controller={"type": "pid", "params": {"kp": 1e9}}, duration_s=0.5)
-    partial = twin.run("step_cncmt_hinf", controller={"type": "pid", "params": {"kp": 1e9}}, duration_s=0.5,
-                       keep_partial=True)
+    partial = twin.run(
+        "step_cncmt_hinf", controller={"type": "pid", "params": {"kp": 1e9}}, duration_s=0.5, keep_partial=True
+    )
     assert partial.status == "diverged" and partial.summary["sim_time_s"] == err.value.sim_time_s
 
 
-@pytest.mark.parametrize("script, args, check", [
-    ("run_and_plot.py", ["--duration", "0.3"], "run_and_plot.png"),
-    ("compare_controllers.py", ["--duration", "0.3"], "MIMO H-infinity"),
-    ("sweep_box.py", ["--samples", "4", "--workers", "1"], "4 samples in"),
-])
+@pytest.mark.parametrize(
+    "script, args, check",
+    [
+        ("run_and_plot.py", ["--duration", "0.3"], "run_and_plot.png"),
+        ("compare_controllers.py", ["--duration", "0.3"], "MIMO H-infinity"),
+        ("sweep_box.py", ["--samples", "4", "--workers", "1"], "4 samples in"),
+    ],
+)
 def test_examples_run(tmp_path, script, args, check):
     extra = ["--out", str(tmp_path)] if script != "compare_controllers.py" else []
-    r = subprocess.run([sys.executable, str(EXAMPLES / script), *args, *extra], capture_output=True, text=True,
-                       timeout=300, cwd=tmp_path)
+    r = subprocess.run(
+        [sys.executable, str(EXAMPLES / script), *args, *extra],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=tmp_path,
+    )
     assert r.returncode == 0, r.stderr
     assert check in r.stdout
     if script == "run_and_plot.py":

@@ -27,15 +27,18 @@ def _twin(*args, cwd=None):
     return subprocess.run([*TWIN, *args], capture_output=True, text=True, cwd=cwd, timeout=300)
 
 
-@pytest.mark.parametrize("text, field", [
-    (GOOD.replace('"cncmt"', '"lathe"'), "machine = 'lathe'"),
-    (GOOD.replace('"seed000_imc"', '"lqg"'), "controller.type = 'lqg'"),
-    (GOOD + "\nspindle_rpm = 3000\n", "spindle_rpm"),
-    (GOOD.replace('machine = "cncmt"', 'machine = "cncmt"\noverrides = { m = -50.0 }'), "overrides.m = -50.0"),
-    (GOOD.replace("control_period_s = 1e-3", "control_period_s = 1.5e-4"), "control_period_s = 0.00015"),
-    (GOOD.replace("duration_s = 0.5", "duration_s = [0.5"), "malformed TOML"),
-    (GOOD.replace("duration_s = 0.5", "duration_s = -1.0"), "duration_s = -1.0"),
-])
+@pytest.mark.parametrize(
+    "text, field",
+    [
+        (GOOD.replace('"cncmt"', '"lathe"'), "machine = 'lathe'"),
+        (GOOD.replace('"seed000_imc"', '"lqg"'), "controller.type = 'lqg'"),
+        (GOOD + "\nspindle_rpm = 3000\n", "spindle_rpm"),
+        (GOOD.replace('machine = "cncmt"', 'machine = "cncmt"\noverrides = { m = -50.0 }'), "overrides.m = -50.0"),
+        (GOOD.replace("control_period_s = 1e-3", "control_period_s = 1.5e-4"), "control_period_s = 0.00015"),
+        (GOOD.replace("duration_s = 0.5", "duration_s = [0.5"), "malformed TOML"),
+        (GOOD.replace("duration_s = 0.5", "duration_s = -1.0"), "duration_s = -1.0"),
+    ],
+)
 def test_bad_scenarios(tmp_path, text, field):
     path = tmp_path / "bad.toml"
     path.write_text(text)
@@ -58,8 +61,11 @@ def test_run_json_and_recording(tmp_path):
 
 def test_divergence_exit_code(tmp_path):
     path = tmp_path / "div.toml"
-    path.write_text(GOOD.replace('type = "seed000_imc"', 'type = "pid"\nparams = { kp = -500.0 }')
-                    .replace("duration_s = 0.5", "duration_s = 60.0"))
+    path.write_text(
+        GOOD.replace('type = "seed000_imc"', 'type = "pid"\nparams = { kp = -500.0 }').replace(
+            "duration_s = 0.5", "duration_s = 60.0"
+        )
+    )
     r = _twin("run", str(path))
     assert r.returncode == 3 and "diverged at t =" in r.stderr and "Traceback" not in r.stderr
 
@@ -85,15 +91,23 @@ def test_run_writes_report_plots(tmp_path):
     (tmp_path / "file").write_text("")
     r = _twin("run", "seed004_air_cut_circle", "--plots", str(tmp_path / "file"))
     assert r.returncode == 2 and r.stderr.strip().splitlines() == [
-        f"error: --plots = {str(tmp_path / 'file')!r}: exists and is not a folder"]
+        f"error: --plots = {str(tmp_path / 'file')!r}: exists and is not a folder"
+    ]
 
 
 def test_fidelity_json_keys():
     r = _twin("fidelity", "--machine", "cncmt", "--set", "m=60", "--json")
     assert r.returncode == 0, r.stderr
     (res,) = json.loads(r.stdout)
-    for key in ("machine", "tf", "time_nrmse", "frf_max_mag_err_db", "frf_max_phase_err_deg",
-                "coupling_slip_um", "pass"):
+    for key in (
+        "machine",
+        "tf",
+        "time_nrmse",
+        "frf_max_mag_err_db",
+        "frf_max_phase_err_deg",
+        "coupling_slip_um",
+        "pass",
+    ):
         assert key in res
     assert res["tf"]["x"]["delay_s"] == 0.0 and res["pass"] is True
 
@@ -122,8 +136,19 @@ def test_list_and_bench():
 
 def test_reproduce_seed000_small_counts(tmp_path):
     rrd = tmp_path / "s0.rrd"
-    r = _twin("reproduce", "seed000", "--json", "--samples", "5", "--twin-samples", "0",
-              "--rrd", str(rrd), "--plots", str(tmp_path / "plots"))
+    r = _twin(
+        "reproduce",
+        "seed000",
+        "--json",
+        "--samples",
+        "5",
+        "--twin-samples",
+        "0",
+        "--rrd",
+        str(rrd),
+        "--plots",
+        str(tmp_path / "plots"),
+    )
     assert r.returncode == 0, r.stderr
     res = json.loads(r.stdout)
     assert res["twin_vs_tf_mismatches"] == []
@@ -143,7 +168,9 @@ def test_reproduce_seed000_text_report():
 def test_reproduce_unknown_source_exits_2():
     r = _twin("reproduce", "seed999")
     assert r.returncode == 2 and r.stderr.strip().splitlines() == [
-        "error: source = 'seed999': no reproduction of that paper yet (known: seed000, seed001, seed002, seed003, seed004)"]
+        "error: source = 'seed999': no reproduction of that paper yet "
+        "(known: seed000, seed001, seed002, seed003, seed004)"
+    ]
 
 
 def test_reproduce_seed002_transfer_functions_only(tmp_path):
@@ -163,10 +190,23 @@ def test_reproduce_seed002_transfer_functions_only(tmp_path):
         assert row["paper_max_reduction_pct"] == pytest.approx((paper_pid - paper_npid) / paper_pid * 100, abs=0.01)
         pid, npid = row["seed002_pid"]["tf_loop"], row["seed002_npid"]["tf_loop"]
         assert row["max_reduction_pct_tf_loop"] == pytest.approx((pid["max_mm"] - npid["max_mm"]) / pid["max_mm"] * 100)
-        assert row["rmse_reduction_pct_tf_loop"] == pytest.approx((pid["rmse_mm"] - npid["rmse_mm"]) / pid["rmse_mm"] * 100)
-    _same_as_committed("seed002", res, lambda out: [  # without the twin, the TF loop has no cutting force
-        v for row in out["tables"] if row["rpm"] is None for v in (*row["seed002_pid"]["tf_loop"].values(),
-                                             *row["seed002_npid"]["tf_loop"].values(), row["max_reduction_pct_tf_loop"])])
+        assert row["rmse_reduction_pct_tf_loop"] == pytest.approx(
+            (pid["rmse_mm"] - npid["rmse_mm"]) / pid["rmse_mm"] * 100
+        )
+    _same_as_committed(
+        "seed002",
+        res,
+        lambda out: [  # without the twin, the TF loop has no cutting force
+            v
+            for row in out["tables"]
+            if row["rpm"] is None
+            for v in (
+                *row["seed002_pid"]["tf_loop"].values(),
+                *row["seed002_npid"]["tf_loop"].values(),
+                row["max_reduction_pct_tf_loop"],
+            )
+        ],
+    )
 
 
 def _same_as_committed(seed: str, res: dict, part) -> None:
@@ -175,8 +215,10 @@ def _same_as_committed(seed: str, res: dict, part) -> None:
     from twin.reproductions.tables import results_path
 
     committed = json.loads(results_path(seed).read_text())
-    assert part(res) == pytest.approx(part(committed), rel=1e-9), \
-        f"docs/results/{seed}.json is stale: rerun `uv run python -m twin.reproductions.tables --rerun docs/results --write`"
+    assert part(res) == pytest.approx(part(committed), rel=1e-9), (
+        f"docs/results/{seed}.json is stale: rerun "
+        "`uv run python -m twin.reproductions.tables --rerun docs/results --write`"
+    )
 
 
 def test_reproduce_seed003_transfer_functions_only():
@@ -186,10 +228,19 @@ def test_reproduce_seed003_transfer_functions_only():
     assert res["design"]["velocity"]["gm_db"] == pytest.approx(9.37, abs=0.01)  # the thesis's margins, met
     assert res["design"]["velocity"]["pm_deg"] == pytest.approx(56.4, abs=0.01)
     assert res["design"]["q_cutoff_hz"] == 100.0 and len(res["cases"]) == 6
-    _same_as_committed("seed003", res, lambda out: [
-        row[c]["tf_loop"]["mte_um"] for rows in (out["cases"], *out["feedforward_cases"].values()) for row in rows
-        for c in ("cascade", "imbdo", "dfo", "imbdo_dfo")]
-        + [row["reduction_pct"]["mte"] for row in out["amplitude_study"]])
+    _same_as_committed(
+        "seed003",
+        res,
+        lambda out: (
+            [
+                row[c]["tf_loop"]["mte_um"]
+                for rows in (out["cases"], *out["feedforward_cases"].values())
+                for row in rows
+                for c in ("cascade", "imbdo", "dfo", "imbdo_dfo")
+            ]
+            + [row["reduction_pct"]["mte"] for row in out["amplitude_study"]]
+        ),
+    )
 
 
 def test_reproduce_seed001_transfer_functions_only(tmp_path):
@@ -200,13 +251,22 @@ def test_reproduce_seed001_transfer_functions_only(tmp_path):
     # ZN P from the 10 ms relay test: Table 1's 20 % / 8 % overshoot within a few points
     assert [m["overshoot_pct"] for m in res["table1"]["p"]["tf"]] == pytest.approx([20.0, 8.0], abs=2.0)
     assert all(res["lmi"][d]["in_region"] == [True, True] for d in ("lmi", "pi_p_lmi"))
-    assert len(list((tmp_path / "p").glob("seed001_*.png"))) == 7   # the trajectories need the twin
+    assert len(list((tmp_path / "p").glob("seed001_*.png"))) == 7  # the trajectories need the twin
 
 
 def test_run_cutting_scenario_with_settings_and_recording(tmp_path):
     rrd = tmp_path / "slot.rrd"
-    r = _twin("run", "slot_linear_motor", "--set", "duration_s=0.3", "--set", "disturbances.0.axial_depth_mm=1.0",
-              "--rrd", str(rrd), "--json")
+    r = _twin(
+        "run",
+        "slot_linear_motor",
+        "--set",
+        "duration_s=0.3",
+        "--set",
+        "disturbances.0.axial_depth_mm=1.0",
+        "--rrd",
+        str(rrd),
+        "--json",
+    )
     assert r.returncode == 0, r.stderr
     out = json.loads(r.stdout)
     # 1 mm deep slot at 0.1 mm/tooth: the mean feed-normal force is ~56 N, peaks above it
@@ -215,32 +275,40 @@ def test_run_cutting_scenario_with_settings_and_recording(tmp_path):
     assert counts["/force/cutting/x"] == counts["/force/cutting/y"] == 600 + 1  # 0.3 s at 2 kHz
 
 
-@pytest.mark.parametrize("setting, message", [
-    ("disturbances.3.spindle_rpm=1", "--set disturbances.3.spindle_rpm = '3'"),
-    ("disturbances.0.radial_depth_mm=20", "disturbances.0.radial_depth_mm = 20"),
-    ("duration_s", "--set = 'duration_s'"),
-])
+@pytest.mark.parametrize(
+    "setting, message",
+    [
+        ("disturbances.3.spindle_rpm=1", "--set disturbances.3.spindle_rpm = '3'"),
+        ("disturbances.0.radial_depth_mm=20", "disturbances.0.radial_depth_mm = 20"),
+        ("duration_s", "--set = 'duration_s'"),
+    ],
+)
 def test_run_bad_setting(setting, message):
     r = _twin("run", "slot_linear_motor", "--set", setting)
     assert r.returncode == 2
     assert message in r.stderr and "Traceback" not in r.stderr
 
 
-@pytest.mark.parametrize("args, field", [
-    (["--set", "duration_s=nan"], "duration_s = nan"),
-    (["--set", "overrides.n_x=1e200"], "overrides.n_x = 1e+200"),
-    (["--set", "duration_s=1e308"], "duration_s = 1e+308"),
-    (["--set", "timestep_s=5e-324"], "timestep_s = 5e-324"),
-    (["--set", "timestep_s=5e-324", "--set", "control_period_s=5e-324"], "timestep_s = 5e-324"),
-    (["--set", "reference.type=\"polyline\"", "--set", "reference.points_mm=[[0,0],[1e157,0]]"],
-     "reference.polyline.points_mm.1.0 = 1e+157"),
-    (["--set", "seed=-1"], "seed = -1"),
-    (["--set", "reference.radius_mm=5e-324"], "reference.circle.radius_mm"),
-    (["--set", "duration_s=1e-5"], "shorter than one control period"),
-    (["--max-steps", "1000"], "more than the 1,000 allowed"),
-    (["--rrd", "/nonexistent-folder/x.rrd"], "--rrd = '/nonexistent-folder/x.rrd'"),
-    (["--set", "machine=\x1b[31m" + "a" * 300], "machine = '\\x1b[31maaaa"),
-])
+@pytest.mark.parametrize(
+    "args, field",
+    [
+        (["--set", "duration_s=nan"], "duration_s = nan"),
+        (["--set", "overrides.n_x=1e200"], "overrides.n_x = 1e+200"),
+        (["--set", "duration_s=1e308"], "duration_s = 1e+308"),
+        (["--set", "timestep_s=5e-324"], "timestep_s = 5e-324"),
+        (["--set", "timestep_s=5e-324", "--set", "control_period_s=5e-324"], "timestep_s = 5e-324"),
+        (
+            ["--set", 'reference.type="polyline"', "--set", "reference.points_mm=[[0,0],[1e157,0]]"],
+            "reference.polyline.points_mm.1.0 = 1e+157",
+        ),
+        (["--set", "seed=-1"], "seed = -1"),
+        (["--set", "reference.radius_mm=5e-324"], "reference.circle.radius_mm"),
+        (["--set", "duration_s=1e-5"], "shorter than one control period"),
+        (["--max-steps", "1000"], "more than the 1,000 allowed"),
+        (["--rrd", "/nonexistent-folder/x.rrd"], "--rrd = '/nonexistent-folder/x.rrd'"),
+        (["--set", "machine=\x1b[31m" + "a" * 300], "machine = '\\x1b[31maaaa"),
+    ],
+)
 def test_hostile_input_is_one_error_line(args, field):
     """Each is refused before the run, in one line naming the field (values escaped, shortened)."""
     r = _twin("run", "demo_circle_cncmt_xy", *args)
@@ -251,7 +319,7 @@ def test_hostile_input_is_one_error_line(args, field):
 
 def test_scenario_that_is_a_folder_or_not_utf8(tmp_path):
     bad = tmp_path / "bad.toml"
-    bad.write_bytes(b"machine = \"cncmt\"\n\xff\xfe\n")
+    bad.write_bytes(b'machine = "cncmt"\n\xff\xfe\n')
     for target, words in ((tmp_path, "not a file"), (bad, "not UTF-8")):
         r = _twin("run", str(target))
         assert r.returncode == 2 and words in r.stderr and "Traceback" not in r.stderr
@@ -260,8 +328,11 @@ def test_scenario_that_is_a_folder_or_not_utf8(tmp_path):
 def test_divergence_keeps_the_partial_run(tmp_path):
     """Exit 3 after printing how far the run got and writing its recording up to there."""
     path = tmp_path / "div.toml"
-    path.write_text(GOOD.replace('type = "seed000_imc"', 'type = "pid"\nparams = { kp = -500.0 }')
-                    .replace("duration_s = 0.5", "duration_s = 60.0"))
+    path.write_text(
+        GOOD.replace('type = "seed000_imc"', 'type = "pid"\nparams = { kp = -500.0 }').replace(
+            "duration_s = 0.5", "duration_s = 60.0"
+        )
+    )
     r = _twin("run", str(path), "--json", "--rrd", str(tmp_path / "div.rrd"))
     assert r.returncode == 3 and r.stderr.strip().splitlines()[-1].startswith("error: simulation diverged at t = 0.17")
     out = json.loads(r.stdout)
@@ -275,9 +346,12 @@ def test_interrupt_keeps_the_partial_run(tmp_path):
     import threading
     import time
 
-    p = subprocess.Popen([*TWIN, "run", "demo_circle_cncmt_xy", "--set", "duration_s=600", "--json",
-                          "--rrd", str(tmp_path / "cut.rrd")], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                         text=True)
+    p = subprocess.Popen(
+        [*TWIN, "run", "demo_circle_cncmt_xy", "--set", "duration_s=600", "--json", "--rrd", str(tmp_path / "cut.rrd")],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     err = []
     reader = threading.Thread(target=lambda: err.extend(iter(lambda: p.stderr.read(1), "")), daemon=True)
     reader.start()
@@ -302,10 +376,11 @@ def test_run_imports_only_what_it_needs(scenario):
     """twin run of a bundled scenario (observer, 4th-order H-infinity, milling) loads neither
     python-control nor scipy.signal, matplotlib or rerun (without --rrd): together about 2 s of
     start-up."""
-    code = ("import sys; from twin.cli import main; sys.argv = ['twin', 'run', %r, '--json', '--set', "
-            "'duration_s=0.01']\ntry:\n    main()\nexcept SystemExit as e:\n    assert not e.code, e.code\n"
-            "print(sorted(m for m in ('control', 'scipy.signal', 'matplotlib', 'rerun') if m in sys.modules))"
-            % scenario)
+    code = (
+        f"import sys; from twin.cli import main; sys.argv = ['twin', 'run', {scenario!r}, '--json', '--set', "
+        "'duration_s=0.01']\ntry:\n    main()\nexcept SystemExit as e:\n    assert not e.code, e.code\n"
+        "print(sorted(m for m in ('control', 'scipy.signal', 'matplotlib', 'rerun', 'pandas') if m in sys.modules))"
+    )
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr
     assert r.stdout.strip().splitlines()[-1] == "[]"

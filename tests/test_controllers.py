@@ -5,8 +5,19 @@ import numpy as np
 import pytest
 
 from controllers import CONTROLLERS, Program, error_feedback, make_controller, open_loop
-from controllers.blocks import (Controller, Linear, SignalError, Static, Sum, cascade, inverse_model_observer, lure,
-                                preview_ticks_needed, standard_signals, with_correction)
+from controllers.blocks import (
+    Controller,
+    Linear,
+    SignalError,
+    Static,
+    Sum,
+    cascade,
+    inverse_model_observer,
+    lure,
+    preview_ticks_needed,
+    standard_signals,
+    with_correction,
+)
 from controllers.design.pid import pid_tf
 from controllers.lti import SisoTf
 from controllers.papers import seed000
@@ -38,15 +49,21 @@ def test_linear_block_matches_python_control(method):
     ctrl = error_feedback(seed000.HINF, dt, method=method)
     e = np.sin(np.arange(n) * dt * 7.0)
     u = _drive(Program([ctrl], standard_signals("x")), {"error.x": e}, n, ["u.x"])[:, 0]
-    ref = control.forced_response(control.c2d(control.ss(seed000.HINF.to_control()), dt, method), T=np.arange(n) * dt, U=e).outputs
+    ref = control.forced_response(
+        control.c2d(control.ss(seed000.HINF.to_control()), dt, method), T=np.arange(n) * dt, U=e
+    ).outputs
     assert np.abs(u - ref).max() <= 1e-12 * np.abs(ref).max()
 
 
 def test_mimo_linear_block_steady_state():
     c = control.tf([[[2.0], [1.0]], [[0.0], [3.0]]], [[[1.0, 1.0], [1.0]], [[1.0], [1.0, 2.0]]])
     ctrl = error_feedback(c, 1e-3, axes=("x", "y"))
-    u = _drive(Program([ctrl], standard_signals("xy")), {"error.x": np.ones(20000), "error.y": np.ones(20000)},
-               20000, ["u.x", "u.y"])[-1]
+    u = _drive(
+        Program([ctrl], standard_signals("xy")),
+        {"error.x": np.ones(20000), "error.y": np.ones(20000)},
+        20000,
+        ["u.x", "u.y"],
+    )[-1]
     assert u == pytest.approx([2.0 + 1.0, 0.0 + 1.5], rel=1e-6)  # C(0) @ [1, 1]
 
 
@@ -78,8 +95,10 @@ def test_npid_is_the_pid_of_the_shaped_error():
     u = _drive(Program([npid], standard_signals("x")), {"error.x": e}, n, ["u.x"])[:, 0]
     shaped = np.cosh(6e3 * np.clip(e, -0.3e-3, 0.3e-3)) * e
     from controllers.papers import seed002
-    ref = control.forced_response(control.c2d(control.ss(seed002.pid(1e-4).to_control()), dt, "tustin"), T=np.arange(n) * dt,
-                                  U=shaped).outputs
+
+    ref = control.forced_response(
+        control.c2d(control.ss(seed002.pid(1e-4).to_control()), dt, "tustin"), T=np.arange(n) * dt, U=shaped
+    ).outputs
     assert np.abs(u - ref).max() <= 1e-9 * np.abs(ref).max()
     # the gain at the clip is the paper's Ke = 3.1075 at KO = 6, e_max = 0.3
     assert (shaped / np.where(e == 0, 1, e)).max() == pytest.approx(3.1075, abs=1e-4)
@@ -116,8 +135,9 @@ def test_inverse_model_observer_recovers_an_input_disturbance():
 def test_observer_add_on_subtracts_the_estimate():
     dt = 1e-3
     base = make_controller("pid", dt, {"kp": 1.0})
-    obs = make_observers("inverse_model", {"cutoff_hz": 20.0, "order": 2},
-                         Context(dt, ("x",), plants={"x": SisoTf([1.0], [1.0, 1.0])}))
+    obs = make_observers(
+        "inverse_model", {"cutoff_hz": 20.0, "order": 2}, Context(dt, ("x",), plants={"x": SisoTf([1.0], [1.0, 1.0])})
+    )
     ctrl = with_correction(base, obs)
     prog = Program([ctrl], standard_signals("x"))
     out = _drive(prog, {"error.x": [0.3] * 5, "pos.x": [0.1] * 5}, 5, ["u.x", "observer.x:d_hat.x"])
@@ -129,16 +149,16 @@ def test_preview_signals_and_sum():
     """A D-only linear block on preview.x.3 plays r[k+3]; a sum adds two parts."""
     assert preview_ticks_needed(["preview.x.3", "ref.x"]) == 3
     for bad in ("preview.x.0", "preview.x.100000000", "preview.x"):  # the last two would exhaust memory or
-        with pytest.raises(ValueError, match="preview"):            # name nothing
+        with pytest.raises(ValueError, match="preview"):  # name nothing
             preview_ticks_needed([bad])
-    ff = _controller([Linear(np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), [[2.0]], ["preview.x.3"],
-                             ["u.x"])])
+    ff = _controller([Linear(np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), [[2.0]], ["preview.x.3"], ["u.x"])])
     names = standard_signals("x", 3)
     assert names[-3:] == ["preview.x.1", "preview.x.2", "preview.x.3"]
     out = _drive(Program([ff], names), {"preview.x.3": [1.0, 5.0]}, 2, ["u.x"])
     assert out[:, 0].tolist() == [2.0, 10.0]
-    total = make_controller("sum", 1e-3, parts=[make_controller("pid", 1e-3, {"kp": 2.0}),
-                                                make_controller("pid", 1e-3, {"kp": 3.0})])
+    total = make_controller(
+        "sum", 1e-3, parts=[make_controller("pid", 1e-3, {"kp": 2.0}), make_controller("pid", 1e-3, {"kp": 3.0})]
+    )
     assert _drive(Program([total], standard_signals("x")), {"error.x": [1.0]}, 1, ["u.x"])[0, 0] == 5.0
 
 
@@ -151,8 +171,10 @@ def test_missing_signal_names_block_and_signal():
         Program([_controller([Sum((1.0,), ("error.x",), "pos.x")])], standard_signals("x"))
 
 
-@pytest.mark.parametrize("kp, ki, kd, order", [(2.0, 3.0, 0.5, 2), (2.0, 0.0, 0.5, 1), (2.0, 3.0, 0.0, 1),
-                                                (2.0, 0.0, 0.0, 0), (0.0, 3.0, 0.0, 1)])
+@pytest.mark.parametrize(
+    "kp, ki, kd, order",
+    [(2.0, 3.0, 0.5, 2), (2.0, 0.0, 0.5, 1), (2.0, 3.0, 0.0, 1), (2.0, 0.0, 0.0, 0), (0.0, 3.0, 0.0, 1)],
+)
 def test_pid_tf(kp, ki, kd, order):
     """Every gain pattern against the sum of its terms; no state for a zero gain's factor."""
     c = pid_tf(kp, ki, kd, 0.01)
@@ -173,15 +195,25 @@ def test_published_seed000_controllers():
 def test_registry_rejects_unknown_parameters_and_builds_every_kind():
     with pytest.raises(ValueError, match="gain"):
         make_controller("pid", 1e-3, {"gain": 1.0})
-    params = {"tf": {"num": [1.0], "den": [1.0]}, "lure": {"num": [1.0], "den": [1.0], "nonlinearity": "dead_zone",
-                                                           "width": 1e-6},
-              "linear": {"D": [[1.0]]}, "sum": {}}
+    params = {
+        "tf": {"num": [1.0], "den": [1.0]},
+        "lure": {"num": [1.0], "den": [1.0], "nonlinearity": "dead_zone", "width": 1e-6},
+        "linear": {"D": [[1.0]]},
+        "sum": {},
+    }
     for name in CONTROLLERS:
         parts = [make_controller("pid", 1e-3, {"kp": 1.0}, axes=("x", "y"))] if name == "sum" else ()
         googol = SisoTf([78.02], [1.0, 163.0, 193.3])  # seed 002 eq. (1) in m/V, for model-based kinds
         dt = 5e-4 if name.startswith("seed004") else 1e-3  # seed 004's are designed for 2 kHz
-        ctrl = make_controller(name, dt, params.get(name, {}), axes=("x", "y"), parts=parts,
-                               plants={"x": googol, "y": googol}, delay_s=1.2e-3)
+        ctrl = make_controller(
+            name,
+            dt,
+            params.get(name, {}),
+            axes=("x", "y"),
+            parts=parts,
+            plants={"x": googol, "y": googol},
+            delay_s=1.2e-3,
+        )
         assert sorted(ctrl.drives) == ["x", "y"], name
         preview = preview_ticks_needed(s for b in ctrl.blocks for s in b.inputs)
         Program([ctrl], standard_signals("xy", preview))  # every signal it reads exists
@@ -199,15 +231,18 @@ def test_lure_block_is_nonlinearity_then_linear():
     assert cascade(control.tf(1, 1), control.tf(1, 1), 1e-3, "y").drives == ["y"]
 
 
-@pytest.mark.parametrize("params, match", [
-    ({"cutoff_hz": 500.0}, "Nyquist frequency 500 Hz"),   # dt = 1 ms
-    ({"cutoff_hz": 1e-7}, "at least 1e-6 Hz"),
-    ({"order": 1}, "relative degree 2"),
-    ({"order": 11}, "to 10"),
-    ({"order": 2.5}, "whole number"),
-    ({"delay_s": 0.1001}, "100 control periods"),
-    ({"delay_s": -1e-3}, "from 0"),
-])
+@pytest.mark.parametrize(
+    "params, match",
+    [
+        ({"cutoff_hz": 500.0}, "Nyquist frequency 500 Hz"),  # dt = 1 ms
+        ({"cutoff_hz": 1e-7}, "at least 1e-6 Hz"),
+        ({"order": 1}, "relative degree 2"),
+        ({"order": 11}, "to 10"),
+        ({"order": 2.5}, "whole number"),
+        ({"delay_s": 0.1001}, "100 control periods"),
+        ({"delay_s": -1e-3}, "from 0"),
+    ],
+)
 def test_observer_limits(params, match):
     """Limits that keep the observer's realization small: each named in its error."""
     plant = SisoTf([78.02], [1.0, 163.0, 193.3])

@@ -7,29 +7,55 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from twin.process.cutting import (ALUMINIUM_7075_T6, AverageForce, EndMilling, ForceModels, immersion_angles,
-                                  mean_tool_forces_N, step_tool_forces_N)
 from twin.errors import TwinInputError
 from twin.machines import build
-from twin.scenario import scenario_from_dict, run_scenario
+from twin.process.cutting import (
+    ALUMINIUM_7075_T6,
+    AverageForce,
+    EndMilling,
+    ForceModels,
+    immersion_angles,
+    mean_tool_forces_N,
+    step_tool_forces_N,
+)
+from twin.scenario import run_scenario, scenario_from_dict
 
 K = ALUMINIUM_7075_T6
 RPM, FLUTES, D_MM = 6000.0, 2, 10.0
 FEED_M_PER_S = 0.02  # 0.1 mm per tooth at 6000 rpm, 2 flutes
-SETTLED_S = 0.2      # mean forces taken after this; 0.4 s = 80 whole tooth periods
+SETTLED_S = 0.2  # mean forces taken after this; 0.4 s = 80 whole tooth periods
 
 
 def _slot_scenario(axial_mm=2.0, radial_mm=D_MM, mode="up", duration_s=0.6, **extra):
     """X feed at constant speed on linear_motor_xy, stiff PIDs with feedforward, cutter engaged."""
-    cut = dict(type="end_milling", spindle_rpm=RPM, n_flutes=FLUTES, diameter_mm=D_MM,
-               axial_depth_mm=axial_mm, radial_depth_mm=radial_mm, mode=mode, **extra)
-    return scenario_from_dict(dict(
-        machine="linear_motor_xy", duration_s=duration_s, timestep_s=1e-4, control_period_s=5e-4,
-        controllers={"x": dict(type="pid", params=dict(kp=2e4, ki=2e5, kd=150, tf_s=5e-4),
-                               velocity_ff=1.97, acceleration_ff=0.533),
-                     "y": dict(type="pid", params=dict(kp=7e3, ki=7e4, kd=50, tf_s=5e-4),
-                               velocity_ff=0.367, acceleration_ff=0.173)},
-        reference=dict(type="ramp", rate_m_per_s=FEED_M_PER_S, axes=["x"]), disturbances=[cut]))
+    cut = dict(
+        type="end_milling",
+        spindle_rpm=RPM,
+        n_flutes=FLUTES,
+        diameter_mm=D_MM,
+        axial_depth_mm=axial_mm,
+        radial_depth_mm=radial_mm,
+        mode=mode,
+        **extra,
+    )
+    return scenario_from_dict(
+        dict(
+            machine="linear_motor_xy",
+            duration_s=duration_s,
+            timestep_s=1e-4,
+            control_period_s=5e-4,
+            controllers={
+                "x": dict(
+                    type="pid", params=dict(kp=2e4, ki=2e5, kd=150, tf_s=5e-4), velocity_ff=1.97, acceleration_ff=0.533
+                ),
+                "y": dict(
+                    type="pid", params=dict(kp=7e3, ki=7e4, kd=50, tf_s=5e-4), velocity_ff=0.367, acceleration_ff=0.173
+                ),
+            },
+            reference=dict(type="ramp", rate_m_per_s=FEED_M_PER_S, axes=["x"]),
+            disturbances=[cut],
+        )
+    )
 
 
 def _mean_workpiece_force(result):
@@ -119,7 +145,9 @@ def test_average_force_model_is_seed_004_eq_4_5():
     data = mujoco.MjData(bm.model)
     data.qvel[bm.joint_dof_index("x_table")] = 0.03
     data.qvel[bm.joint_dof_index("y_table")] = -0.01
-    np.testing.assert_allclose(forces.force_N(data.qpos, data.qvel, 0.0), [-2500 * 0.03 - 2500 * -0.01, -2500 * -0.01 + 2500 * 0.03, 0.0])
+    np.testing.assert_allclose(
+        forces.force_N(data.qpos, data.qvel, 0.0), [-2500 * 0.03 - 2500 * -0.01, -2500 * -0.01 + 2500 * 0.03, 0.0]
+    )
 
 
 def test_average_force_harmonic_fraction_bounded():

@@ -5,29 +5,40 @@ import math
 import numpy as np
 import pytest
 
-from twin.process.disturbances import HarmonicInput
 from twin.errors import TwinInputError
+from twin.process.disturbances import HarmonicInput
 from twin.scenario import run_scenario, scenario_from_dict
 
-CUT = dict(type="end_milling", spindle_rpm=1500.0, n_flutes=2, diameter_mm=10.0, axial_depth_mm=1.0,
-           radial_depth_mm=10.0)
+CUT = dict(
+    type="end_milling", spindle_rpm=1500.0, n_flutes=2, diameter_mm=10.0, axial_depth_mm=1.0, radial_depth_mm=10.0
+)
 OPTIONS = {
     "end_milling (seed 002's spindle speeds)": dict(disturbances=[CUT]),
-    "average_force with tooth harmonic (seed 004)": dict(disturbances=[dict(
-        type="average_force", harmonic_fraction=0.2, spindle_rpm=3500.0, n_flutes=2)]),
-    "harmonic_input 0.2/0.5/0.8 Hz (seed 003)": dict(disturbances=[dict(
-        type="harmonic_input", amplitudes_V=[0.01, 0.01, 0.01], frequencies_hz=[0.2, 0.5, 0.8])]),
-    "voltage_step + sensor noise (seed 000)": dict(disturbances=[dict(type="voltage_step", amplitude_V=0.005,
-                                                                      start_s=0.05)],
-                                                   sensors=dict(noise_std_m=2e-6)),
+    "average_force with tooth harmonic (seed 004)": dict(
+        disturbances=[dict(type="average_force", harmonic_fraction=0.2, spindle_rpm=3500.0, n_flutes=2)]
+    ),
+    "harmonic_input 0.2/0.5/0.8 Hz (seed 003)": dict(
+        disturbances=[dict(type="harmonic_input", amplitudes_V=[0.01, 0.01, 0.01], frequencies_hz=[0.2, 0.5, 0.8])]
+    ),
+    "voltage_step + sensor noise (seed 000)": dict(
+        disturbances=[dict(type="voltage_step", amplitude_V=0.005, start_s=0.05)], sensors=dict(noise_std_m=2e-6)
+    ),
 }
 
 
 def _scenario(seed, **extra):
-    return scenario_from_dict(dict(
-        machine="googol_xy", duration_s=0.25, timestep_s=1e-4, control_period_s=1e-4, seed=seed,
-        controller=dict(type="seed002_pid"),
-        reference=dict(type="sines", amplitudes_m=[0.01], frequencies_hz=[0.4], axes=["x"]), **extra))
+    return scenario_from_dict(
+        dict(
+            machine="googol_xy",
+            duration_s=0.25,
+            timestep_s=1e-4,
+            control_period_s=1e-4,
+            seed=seed,
+            controller=dict(type="seed002_pid"),
+            reference=dict(type="sines", amplitudes_m=[0.01], frequencies_hz=[0.4], axes=["x"]),
+            **extra,
+        )
+    )
 
 
 def _series(res):
@@ -58,15 +69,17 @@ def test_disturbance_own_seed_overrides_scenario_seed():
     assert np.array_equal(_series(run_scenario(_scenario(1, **own))), _series(run_scenario(_scenario(2, **own))))
 
 
-@pytest.mark.parametrize("entry, field", [
-    ({**CUT, "radial_depth_mm": 12.0}, "disturbances.0.radial_depth_mm"),
-    ({**CUT, "n_flutes": 0}, "disturbances.0.end_milling.n_flutes"),
-    (dict(type="average_force", harmonic_fraction=0.3), "disturbances.0.average_force.harmonic_fraction"),
-    (dict(type="harmonic_input", amplitudes_V=[0.1], frequencies_hz=[0.2], axes=["z"]), "disturbances.0.axes"),
-    (dict(type="harmonic_input", amplitudes_V=[0.1, 0.2], frequencies_hz=[0.2]),
-     "disturbances.0.frequencies_hz"),
-    (dict(type="chatter"), "disturbances.0"),
-])
+@pytest.mark.parametrize(
+    "entry, field",
+    [
+        ({**CUT, "radial_depth_mm": 12.0}, "disturbances.0.radial_depth_mm"),
+        ({**CUT, "n_flutes": 0}, "disturbances.0.end_milling.n_flutes"),
+        (dict(type="average_force", harmonic_fraction=0.3), "disturbances.0.average_force.harmonic_fraction"),
+        (dict(type="harmonic_input", amplitudes_V=[0.1], frequencies_hz=[0.2], axes=["z"]), "disturbances.0.axes"),
+        (dict(type="harmonic_input", amplitudes_V=[0.1, 0.2], frequencies_hz=[0.2]), "disturbances.0.frequencies_hz"),
+        (dict(type="chatter"), "disturbances.0"),
+    ],
+)
 def test_bad_disturbance_names_its_field(entry, field):
     with pytest.raises(TwinInputError) as err:
         run_scenario(_scenario(0, disturbances=[entry]))

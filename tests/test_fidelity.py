@@ -20,17 +20,24 @@ def test_fidelity_nominal(name):
     _check(r)
 
 
-@pytest.mark.parametrize("corner", [
-    {"K1": 3.0, "K2": 5.0, "m": 30.0, "Im": 0.008},   # fastest corner of Table 1's box
-    {"K1": 1.0, "K2": 3.0, "m": 70.0, "Im": 0.012},   # slowest corner
-])
+@pytest.mark.parametrize(
+    "corner",
+    [
+        {"K1": 3.0, "K2": 5.0, "m": 30.0, "Im": 0.008},  # fastest corner of Table 1's box
+        {"K1": 1.0, "K2": 3.0, "m": 70.0, "Im": 0.012},  # slowest corner
+    ],
+)
 def test_fidelity_cncmt_box_corners(corner):
     _check(fidelity("cncmt", corner, frf_period_s=2.0, frf_tones=15))
 
 
 def test_fidelity_linear_motor_box_corner_with_friction_forced_off():
-    r = fidelity("linear_motor_xy", {"m_x": 52.3 * 1.3, "m_y": 17 * 0.6, "b_x": 232.2, "F_coul_x": 20.0},
-                 frf_period_s=2.0, frf_tones=15)
+    r = fidelity(
+        "linear_motor_xy",
+        {"m_x": 52.3 * 1.3, "m_y": 17 * 0.6, "b_x": 232.2, "F_coul_x": 20.0},
+        frf_period_s=2.0,
+        frf_tones=15,
+    )
     assert r["friction_forced_off"] == ["F_coul_x", "F_coul_y"]
     _check(r)
 
@@ -40,4 +47,3 @@ def test_average_force_case_couples_the_axes():
     # eq. (11): the cross channels x<-u_y and y<-u_x are k_c k_j/(m_i m_j) over the common denominator
     assert r["tf"]["x<-u_y"]["num"][-1] == pytest.approx(-2500 * 98.2 / (52.3 * 17.0))
     assert r["frf_cross_max_rel_err"] < 0.02
-

@@ -7,16 +7,17 @@ from controllers import open_loop
 from twin.fidelity import TARGETS, coupling_slip_um
 from twin.machines import build
 from twin.references import Step
-from twin.sim.runner import simulate
 from twin.scenario import run_scenario, scenario_from_dict
+from twin.sim.runner import simulate
 
 
 def _open_loop(bm, u_V, duration_s):
     dt = bm.model.opt.timestep
-    n = int(round(duration_s / dt))
+    n = round(duration_s / dt)
     u = np.tile(np.asarray(u_V, float), (n, 1))
-    return simulate(bm, open_loop(u, dt, [a.name for a in bm.axes]), Step(0.0, n_axes=len(bm.axes)), duration_s, dt,
-                    progress=False)
+    return simulate(
+        bm, open_loop(u, dt, [a.name for a in bm.axes]), Step(0.0, n_axes=len(bm.axes)), duration_s, dt, progress=False
+    )
 
 
 def test_coulomb_friction_holds_below_and_subtracts_above_breakaway():
@@ -36,9 +37,14 @@ def test_coulomb_friction_holds_below_and_subtracts_above_breakaway():
 
 # creep_V drives each table with about 1.2 x its 50 N friction (cncmt: K1 K2 n / p = 320 N/V;
 # googol: 78.02 m/(V s^2) x ~372 kg equivalent mass ~ 29 kN/V)
-@pytest.mark.parametrize("name, friction, creep_V", [("cncmt", {"F_coul_x": 50.0}, 0.19),
-                                                     ("cncmt_xy", {"F_coul_x": 50.0, "F_coul_y": 50.0}, 0.19),
-                                                     ("googol_xy", {"F_coul_x": 50.0, "F_coul_y": 50.0}, 0.002)])
+@pytest.mark.parametrize(
+    "name, friction, creep_V",
+    [
+        ("cncmt", {"F_coul_x": 50.0}, 0.19),
+        ("cncmt_xy", {"F_coul_x": 50.0, "F_coul_y": 50.0}, 0.19),
+        ("googol_xy", {"F_coul_x": 50.0, "F_coul_y": 50.0}, 0.002),
+    ],
+)
 def test_gear_slip_within_budget_with_friction_on(name, friction, creep_V):
     """Friction loss on the table slide must not make the motor-screw-table coupling lag:
     the +-10 V reversal and a slow creep near breakaway both keep slip under the 0.1 um budget."""
@@ -52,12 +58,22 @@ def test_gear_slip_within_budget_with_friction_on(name, friction, creep_V):
 
 
 def _circle_with_pid(friction_N):
-    return run_scenario(scenario_from_dict(dict(
-        machine="linear_motor_xy", overrides={"F_coul_x": friction_N, "F_coul_y": friction_N},
-        duration_s=3.2, timestep_s=1e-4, control_period_s=5e-4,
-        controllers={"x": dict(type="pid", params=dict(kp=2e4, ki=2e5, kd=150, tf_s=5e-4)),
-                     "y": dict(type="pid", params=dict(kp=7e3, ki=7e4, kd=50, tf_s=5e-4))},
-        reference=dict(type="circle", radius_mm=20.0, feed_mm_per_min=2400.0))))
+    return run_scenario(
+        scenario_from_dict(
+            dict(
+                machine="linear_motor_xy",
+                overrides={"F_coul_x": friction_N, "F_coul_y": friction_N},
+                duration_s=3.2,
+                timestep_s=1e-4,
+                control_period_s=5e-4,
+                controllers={
+                    "x": dict(type="pid", params=dict(kp=2e4, ki=2e5, kd=150, tf_s=5e-4)),
+                    "y": dict(type="pid", params=dict(kp=7e3, ki=7e4, kd=50, tf_s=5e-4)),
+                },
+                reference=dict(type="circle", radius_mm=20.0, feed_mm_per_min=2400.0),
+            )
+        )
+    )
 
 
 def test_quadrant_glitches_at_reversals_grow_with_friction():
@@ -74,8 +90,8 @@ def test_quadrant_glitches_at_reversals_grow_with_friction():
             reversals = np.flatnonzero(np.diff(np.sign(v)) != 0)
             reversals = reversals[res.t_s[reversals] > 0.2]
             assert len(reversals) == 2
-            window = int(round(0.06 / res.control_period_s))  # 60 ms after the reversal
-            glitch = max(added[i:i + window, a].max() for i in reversals)
+            window = round(0.06 / res.control_period_s)  # 60 ms after the reversal
+            glitch = max(added[i : i + window, a].max() for i in reversals)
             per_axis.append(glitch)
             settled = res.t_s > 0.2
             k = np.argmax(np.where(settled, added[:, a], 0.0))  # the worst added error overall ...

@@ -25,12 +25,18 @@ from twin.scenario import bundled_scenarios
 
 BUNDLED = {name: tomllib.loads(path.read_text()) for name, path in sorted(bundled_scenarios().items())}
 
-numbers = st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.integers(-10**30, 10**30),
-                    st.sampled_from([0, -1, 1e308, 5e-324, -0.0, 1e-12, 2**63]))
+numbers = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.integers(-(10**30), 10**30),
+    st.sampled_from([0, -1, 1e308, 5e-324, -0.0, 1e-12, 2**63]),
+)
 texts = st.text(max_size=20)
 scalars = st.one_of(numbers, texts, st.booleans())
-values = st.recursive(scalars, lambda inner: st.one_of(st.lists(inner, max_size=4),
-                                                      st.dictionaries(texts, inner, max_size=3)), max_leaves=8)
+values = st.recursive(
+    scalars,
+    lambda inner: st.one_of(st.lists(inner, max_size=4), st.dictionaries(texts, inner, max_size=3)),
+    max_leaves=8,
+)
 
 
 def _paths(data, prefix=()):
@@ -51,7 +57,7 @@ def _toml_value(value) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, int):
-        return str(value) if -2**63 <= value < 2**63 else repr(float(value))
+        return str(value) if -(2**63) <= value < 2**63 else repr(float(value))
     if isinstance(value, float):
         return "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf") if math.isinf(value) else repr(value)
     if isinstance(value, dict):

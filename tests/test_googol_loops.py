@@ -24,8 +24,7 @@ def _dense(L, n=2_000_000):
     i_gm = np.flatnonzero(phase < -180)[0]
     i_pm = np.flatnonzero(np.abs(Lw) < 1)[0]
     S = -20 * np.log10(np.abs(1 + Lw))
-    return (-20 * np.log10(abs(Lw[i_gm])), 180 + phase[i_pm], S.max(), w[np.flatnonzero(S > -3)[0]],
-            Lw.real[i_gm])
+    return (-20 * np.log10(abs(Lw[i_gm])), 180 + phase[i_pm], S.max(), w[np.flatnonzero(S > -3)[0]], Lw.real[i_gm])
 
 
 @pytest.mark.parametrize("delay, tf_s", [("exact", 0.0), ("pade2", 0.0), ("exact", 1e-4)])
@@ -60,7 +59,7 @@ def test_tf_loop_error_follows_the_sampled_sensitivity():
     n = int(6.0 / r.DT_S)
     ref = r.sine_reference(f, a * 1e3, n)
     pos, _ = tf_loop(r.machine().plant[0][0], make_controller("seed002_pid", r.DT_S), ref, r.DT_S, r.machine().delay_s)
-    e = (ref[:, 0] - pos)[int(3.0 / r.DT_S):]
+    e = (ref[:, 0] - pos)[int(3.0 / r.DT_S) :]
     L = r.sampled_loop()(np.array([2 * math.pi * f]))[0]
     assert np.abs(e).max() == pytest.approx(abs(1 / (1 + L)) * a, rel=5e-3)
 
@@ -157,7 +156,7 @@ def test_imbdo_reduces_a_harmonic_input_disturbance_as_predicted(f_hz):
         if observe:
             ctrl = with_correction(ctrl, [inverse_model_observer(bm.plant[0][0], 100.0, 2, dt, delay_s=bm.delay_s)])
         pos, _ = tf_loop(bm.plant[0][0], ctrl, np.zeros((n, 3)), dt, bm.delay_s, u_dist_V=d)
-        e = -pos[int(2.0 / dt):]
+        e = -pos[int(2.0 / dt) :]
         window = np.hanning(len(e))
         spectrum = np.abs(np.fft.rfft(e * window))
         lines[name] = spectrum[np.argmin(np.abs(np.fft.rfftfreq(len(e), dt) - f_hz))]
@@ -181,8 +180,10 @@ def test_dfo_cancels_the_harmonics_and_the_combination_counts_once():
     error is below 0.1 % of the cascade's; IMBDO alone leaves its |1 - Q e^(-jwT)| (about 1-2 %)."""
     from twin.reproductions.seed003 import procedure as s3
 
-    shares = {c: s3.run_case(0.5, 1.0, (0.2, 0.5, 0.8), c, twin=False, duration_s=6.0)["tf_loop"]["disturbance"]
-              for c in s3.CONFIGURATIONS}
+    shares = {
+        c: s3.run_case(0.5, 1.0, (0.2, 0.5, 0.8), c, twin=False, duration_s=6.0)["tf_loop"]["disturbance"]
+        for c in s3.CONFIGURATIONS
+    }
     base = shares["cascade"]["mte_um"]
     assert 0.005 < shares["imbdo"]["mte_um"] / base < 0.03
     assert shares["dfo"]["mte_um"] < 1e-3 * base and shares["imbdo_dfo"]["mte_um"] < 1e-3 * base
@@ -218,8 +219,11 @@ def test_observers_leave_the_reference_loop_unchanged():
 
     n = int(3.0 / s3.DT_S)
     ref = s3.sine_reference(0.5, 10.0, n)
-    errors = {c: ref[:, 0] - tf_loop(s3.machine().plant[0][0], s3.controller(c, (0.2, 0.5, 0.8)), ref, s3.DT_S,
-                                     s3.machine().delay_s)[0] for c in s3.CONFIGURATIONS}
+    errors = {
+        c: ref[:, 0]
+        - tf_loop(s3.machine().plant[0][0], s3.controller(c, (0.2, 0.5, 0.8)), ref, s3.DT_S, s3.machine().delay_s)[0]
+        for c in s3.CONFIGURATIONS
+    }
     settled = slice(int(1.0 / s3.DT_S), None)
     for c in ("imbdo", "dfo", "imbdo_dfo"):
         assert np.abs(errors[c] - errors["cascade"]).max() < 5e-3 * np.abs(errors["cascade"]).max()
@@ -243,8 +247,9 @@ def test_feedforward_removes_the_following_error_and_the_amplitude_decides_the_r
     mte = {}
     for amplitude in (0.001, 1.0):
         for config in ("cascade", "imbdo_dfo"):
-            mte[amplitude, config] = s3.run_case(10.0, 0.5, harmonics, config, False, 4.0, "velocity_acceleration",
-                                                 amplitude)["tf_loop"]["mte_um"]
+            mte[amplitude, config] = s3.run_case(
+                10.0, 0.5, harmonics, config, False, 4.0, "velocity_acceleration", amplitude
+            )["tf_loop"]["mte_um"]
     assert plain > 150.0 and mte[0.001, "cascade"] < 1.0
     reduction = {a: 1 - mte[a, "imbdo_dfo"] / mte[a, "cascade"] for a in (0.001, 1.0)}
     assert reduction[0.001] < 0.2 < 0.97 < reduction[1.0]

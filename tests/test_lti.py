@@ -12,8 +12,10 @@ def _frequency_response(A, B, C, D, z):
     return C @ np.linalg.solve(z * np.eye(A.shape[0]) - A, B) + D
 
 
-RANDOM_TFS = [SisoTf(np.random.default_rng(seed).normal(size=k), np.poly(-np.random.default_rng(seed).uniform(1, 50, n)))
-              for seed, (k, n) in enumerate([(1, 1), (2, 2), (3, 3), (4, 4), (3, 5)])]
+RANDOM_TFS = [
+    SisoTf(np.random.default_rng(seed).normal(size=k), np.poly(-np.random.default_rng(seed).uniform(1, 50, n)))
+    for seed, (k, n) in enumerate([(1, 1), (2, 2), (3, 3), (4, 4), (3, 5)])
+]
 
 
 @pytest.mark.parametrize("tf", RANDOM_TFS)
@@ -46,7 +48,7 @@ def test_zoh_matches_python_control(tf):
 
 
 def test_static_gain_and_improper_models():
-    A, B, C, D = discretize(*tf_to_ss(SisoTf([3.0], [2.0])), 1e-3)
+    A, _B, _C, D = discretize(*tf_to_ss(SisoTf([3.0], [2.0])), 1e-3)
     assert A.shape == (0, 0) and D[0, 0] == 1.5
     with pytest.raises(ValueError, match="improper"):
         tf_to_ss(SisoTf([1.0, 0.0], [1.0]))
@@ -76,7 +78,7 @@ def test_series_delay_and_summed_inputs_are_products_and_sums():
 
 
 def test_state_space_takes_python_control_models():
-    A, B, C, D, dt = state_space(control.c2d(control.tf([1.0], [1.0, 2.0]), 0.01))
+    A, _B, _C, _D, dt = state_space(control.c2d(control.tf([1.0], [1.0, 2.0]), 0.01))
     assert dt == 0.01 and A.shape == (1, 1)
     assert state_space(SisoTf([1.0], [1.0, 2.0]))[4] is None
 

@@ -33,9 +33,10 @@ def test_override_applied_with_mjspec():
     assert g.den[0] == pytest.approx(J)
 
 
-@pytest.mark.parametrize("overrides, field", [({"mass": 3.0}, "overrides.mass"),
-                                              ({"m": -5.0}, "overrides.m"),
-                                              ({"Im": 1e-4}, "overrides.Im")])
+@pytest.mark.parametrize(
+    "overrides, field",
+    [({"mass": 3.0}, "overrides.mass"), ({"m": -5.0}, "overrides.m"), ({"Im": 1e-4}, "overrides.Im")],
+)
 def test_bad_overrides_name_the_field(overrides, field):
     with pytest.raises(TwinInputError) as err:
         build("cncmt", overrides)
@@ -94,8 +95,10 @@ def test_googol_realizes_identified_g_with_any_masses():
         assert d.qacc[bm.joint_dof_index("y_table")] == pytest.approx(78.02, rel=5e-4)
 
 
-@pytest.mark.parametrize("name, overrides, field", [("sabau_xy", {"m_y": 1.0}, "overrides.m_y"),
-                                                    ("linear_motor_xy", {"m_x": 10.0}, "overrides.m_x")])
+@pytest.mark.parametrize(
+    "name, overrides, field",
+    [("sabau_xy", {"m_y": 1.0}, "overrides.m_y"), ("linear_motor_xy", {"m_x": 10.0}, "overrides.m_x")],
+)
 def test_stacked_axes_mass_order(name, overrides, field):
     with pytest.raises(TwinInputError) as err:
         build(name, overrides)

@@ -49,13 +49,22 @@ def circle_run():
 def test_series_are_named_and_counted(circle_run, tmp_path):
     counts = read_back(record(circle_run, tmp_path / "run.rrd"))
     for axis in ("x", "y"):
-        for entity in (f"reference/{axis}", f"actual/{axis}", f"error/{axis}", f"control/{axis}",
-                       f"torque/drive/{axis}", f"joints/{axis}/motor/angle", f"joints/{axis}/screw/velocity",
-                       f"joints/{axis}/table/velocity"):
+        for entity in (
+            f"reference/{axis}",
+            f"actual/{axis}",
+            f"error/{axis}",
+            f"control/{axis}",
+            f"torque/drive/{axis}",
+            f"joints/{axis}/motor/angle",
+            f"joints/{axis}/screw/velocity",
+            f"joints/{axis}/table/velocity",
+        ):
             assert counts["/" + entity] == 500 + 1, entity  # 500 ticks + the static legend name and colour
         assert f"/force/cutting/{axis}" not in counts  # no force model in this run
-    names = {tuple(_columns(tmp_path / "run.rrd", f"/{e}/x")["SeriesLines:names"][0])
-             for e in ("reference", "actual", "error", "control")}
+    names = {
+        tuple(_columns(tmp_path / "run.rrd", f"/{e}/x")["SeriesLines:names"][0])
+        for e in ("reference", "actual", "error", "control")
+    }
     assert names == {("x reference (mm)",), ("x actual (mm)",), ("x error (µm)",), ("x control input (V)",)}
 
 
@@ -65,8 +74,9 @@ def test_machine_geometry_and_poses_follow_the_joints(circle_run, tmp_path):
     model = circle_run.machine.model
     geoms = [k for k in counts if k.count("/") == 3 and k.startswith("/machine/") and "cutting" not in k]
     assert len(geoms) == model.ngeom  # boxes and cylinders: every geom is drawn
-    assert "Cylinders3D:radii" in _columns(path, "/machine/x_screw/x_screw_marker") or \
-        "Boxes3D:half_sizes" in _columns(path, "/machine/x_screw/x_screw_marker")
+    assert "Cylinders3D:radii" in _columns(path, "/machine/x_screw/x_screw_marker") or "Boxes3D:half_sizes" in _columns(
+        path, "/machine/x_screw/x_screw_marker"
+    )
     pos = circle_run.table_position_m()
     for axis, body in ((0, "x_table"), (1, "y_table")):
         translation = np.array([row[0] for row in _columns(path, f"/machine/{body}")["Transform3D:translation"]])
@@ -92,8 +102,10 @@ def test_contour_is_seen_from_above_with_y_up(circle_run, tmp_path):
     assert (strip[:, 2] == 0).all()
     coordinates = _columns(path, "/contour")["ViewCoordinates:xyz"][0]
     assert coordinates == [[3, 5, 1]]  # x Right, y Forward, z Up (Rerun codes 3, 5, 1): RIGHT_HAND_Z_UP
-    view, = [v for v in _views(path).values() if v["ViewBlueprint:space_origin"] == ["contour"]]
-    assert view["ViewBlueprint:class_identifier"] == ["3D"] and f"error x{gain}" in view["ViewBlueprint:display_name"][0]
+    (view,) = [v for v in _views(path).values() if v["ViewBlueprint:space_origin"] == ["contour"]]
+    assert (
+        view["ViewBlueprint:class_identifier"] == ["3D"] and f"error x{gain}" in view["ViewBlueprint:display_name"][0]
+    )
     eye, target = view["EyeControls3D:position"][0], view["EyeControls3D:look_target"][0]
     assert view["EyeControls3D:eye_up"] == [[0.0, 1.0, 0.0]]  # +y up on the screen
     assert eye[:2] == pytest.approx(target[:2]) and eye[2] > target[2]  # straight down from above: +x right
@@ -102,8 +114,14 @@ def test_contour_is_seen_from_above_with_y_up(circle_run, tmp_path):
 def test_cutting_force_arrow_and_series(tmp_path):
     bm = build("linear_motor_xy")
     force = AverageForce(k_il_N_s_per_m=-1800.0, k_c_N_s_per_m=1800.0)
-    res = simulate(bm, make_controller("pid", 1e-3, {"kp": 2e4}, axes=("x", "y")), Circle(20.0, 2400.0), 0.3, 1e-3,
-                   disturbances=(force,))
+    res = simulate(
+        bm,
+        make_controller("pid", 1e-3, {"kp": 2e4}, axes=("x", "y")),
+        Circle(20.0, 2400.0),
+        0.3,
+        1e-3,
+        disturbances=(force,),
+    )
     path = record(res, tmp_path / "cut.rrd")
     counts = read_back(path)
     assert counts["/force/cutting/x"] == counts["/force/cutting/y"] == 300 + 1
@@ -127,8 +145,10 @@ def test_recording_decimates_long_runs(tmp_path):
 
 def test_several_runs_get_a_prefix_each(tmp_path):
     bm = build("cncmt")
-    runs = {name: simulate(bm, make_controller(name, 1e-3), Step(0.01), 0.2, 1e-3)
-            for name in ("seed000_imc", "seed000_robust_pi")}
+    runs = {
+        name: simulate(bm, make_controller(name, 1e-3), Step(0.01), 0.2, 1e-3)
+        for name in ("seed000_imc", "seed000_robust_pi")
+    }
     counts = read_back(record_runs(runs, tmp_path / "two.rrd"))
     assert counts["/seed000_imc/actual/x"] == counts["/seed000_robust_pi/machine/x_table"] + 1 == 201
 

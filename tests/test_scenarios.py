@@ -39,8 +39,13 @@ def test_seed004_air_cut_contour_error_is_micrometres():
     assert tracking_summary(res)["max_contour_error_um"] < 10.0
 
 
-BASE = {"machine": "googol_xy", "duration_s": 0.3, "timestep_s": 1e-4, "control_period_s": 1e-4,
-        "reference": {"type": "sines", "amplitudes_m": [0.002], "frequencies_hz": [1.0], "axes": ["x"]}}
+BASE = {
+    "machine": "googol_xy",
+    "duration_s": 0.3,
+    "timestep_s": 1e-4,
+    "control_period_s": 1e-4,
+    "reference": {"type": "sines", "amplitudes_m": [0.002], "frequencies_hz": [1.0], "axes": ["x"]},
+}
 
 
 def _run(controller: dict, **extra):
@@ -52,16 +57,29 @@ def test_every_block_kind_from_a_scenario_file_tracks():
     kinds = {
         "pid": {"type": "seed002_pid"},
         "npid": {"type": "seed002_npid", "params": {"ko_per_mm": 6.0, "e_max_mm": 0.3}},
-        "lure": {"type": "lure", "params": {"num": [899.8], "den": [1.0], "nonlinearity": "saturation",
-                                            "limit": 0.01}},
+        "lure": {"type": "lure", "params": {"num": [899.8], "den": [1.0], "nonlinearity": "saturation", "limit": 0.01}},
         "cascade": {"type": "cascade", "params": {"kp_pos": 200.0, "kp_vel": 7.0, "ki_vel": 400.0}},
-        "cascade+observer": {"type": "cascade", "params": {"kp_pos": 200.0, "kp_vel": 7.0, "ki_vel": 400.0},
-                             "observer": {"type": "inverse_model", "params": {"cutoff_hz": 20.0, "order": 2}}},
-        "linear (MIMO, continuous)": {"type": "linear", "params": {
-            "domain": "continuous", "inputs": ["error.x", "error.y"], "outputs": ["u.x", "u.y"],
-            "A": [[0.0]], "B": [[1.0, 0.0]], "C": [[0.6077], [0.0]], "D": [[899.8, 0.0], [0.0, 899.8]]}},
-        "sum": {"type": "sum", "parts": [{"type": "pid", "params": {"kp": 500.0}},
-                                         {"type": "pid", "params": {"kp": 399.8, "ki": 0.6077}}]},
+        "cascade+observer": {
+            "type": "cascade",
+            "params": {"kp_pos": 200.0, "kp_vel": 7.0, "ki_vel": 400.0},
+            "observer": {"type": "inverse_model", "params": {"cutoff_hz": 20.0, "order": 2}},
+        },
+        "linear (MIMO, continuous)": {
+            "type": "linear",
+            "params": {
+                "domain": "continuous",
+                "inputs": ["error.x", "error.y"],
+                "outputs": ["u.x", "u.y"],
+                "A": [[0.0]],
+                "B": [[1.0, 0.0]],
+                "C": [[0.6077], [0.0]],
+                "D": [[899.8, 0.0], [0.0, 899.8]],
+            },
+        },
+        "sum": {
+            "type": "sum",
+            "parts": [{"type": "pid", "params": {"kp": 500.0}}, {"type": "pid", "params": {"kp": 399.8, "ki": 0.6077}}],
+        },
     }
     for name, spec in kinds.items():
         res = _run(spec)
@@ -70,23 +88,38 @@ def test_every_block_kind_from_a_scenario_file_tracks():
 
 
 def test_tachometer_and_decimated_recording_from_a_scenario():
-    res = _run({"type": "cascade", "params": {"kp_pos": 200.0, "kp_vel": 7.0, "ki_vel": 400.0}},
-               sensors={"velocity": "tachometer"}, record_every_ticks=10)
+    res = _run(
+        {"type": "cascade", "params": {"kp_pos": 200.0, "kp_vel": 7.0, "ki_vel": 400.0}},
+        sensors={"velocity": "tachometer"},
+        record_every_ticks=10,
+    )
     assert len(res.t_s) == 300 and res.error_max_m[0] < 0.1 * 0.002
 
 
-@pytest.mark.parametrize("controller, field, words", [
-    ({"type": "linear", "params": {"inputs": ["vel.z"], "D": [[1.0]]}}, "controller block linear/linear.x",
-     "vel.z"),
-    ({"type": "cascade", "params": {"kp_pos": 1.0, "gain": 2.0}}, "controller.params", "'gain' is not one of"),
-    ({"type": "pid", "observer": {"type": "kalman"}}, "controller.observer.type", "kalman"),
-    ({"type": "pid", "observer": {"type": "inverse_model", "params": {"order": 1}}}, "controller.observer.params",
-     "relative degree 2"),
-    ({"type": "lure", "params": {"num": [1.0], "den": [1.0], "nonlinearity": "cosh_gain", "k": 6.0}},
-     "controller.params", "'e_max' is needed"),
-    ({"type": "sum"}, "controller.parts", "give parts"),
-    ({"type": "linear", "params": {"D": [[1.0, 2.0]]}}, "controller.params", "D has shape"),
-])
+@pytest.mark.parametrize(
+    "controller, field, words",
+    [
+        (
+            {"type": "linear", "params": {"inputs": ["vel.z"], "D": [[1.0]]}},
+            "controller block linear/linear.x",
+            "vel.z",
+        ),
+        ({"type": "cascade", "params": {"kp_pos": 1.0, "gain": 2.0}}, "controller.params", "'gain' is not one of"),
+        ({"type": "pid", "observer": {"type": "kalman"}}, "controller.observer.type", "kalman"),
+        (
+            {"type": "pid", "observer": {"type": "inverse_model", "params": {"order": 1}}},
+            "controller.observer.params",
+            "relative degree 2",
+        ),
+        (
+            {"type": "lure", "params": {"num": [1.0], "den": [1.0], "nonlinearity": "cosh_gain", "k": 6.0}},
+            "controller.params",
+            "'e_max' is needed",
+        ),
+        ({"type": "sum"}, "controller.parts", "give parts"),
+        ({"type": "linear", "params": {"D": [[1.0, 2.0]]}}, "controller.params", "D has shape"),
+    ],
+)
 def test_bad_controllers_name_the_field(controller, field, words):
     with pytest.raises(TwinInputError) as err:
         _run(controller)
@@ -97,12 +130,25 @@ def test_inverse_model_observer_removes_a_step_input_disturbance_on_the_twin():
     """Cascade with a P velocity loop (no integral action) on googol_xy under a 0.05 V input
     step: without the observer the table settles 35.65 um off; with it, the offset goes to
     zero and the peak drops."""
-    spec = {**BASE, "duration_s": 1.0, "reference": {"type": "step", "amplitude_m": 0.0},
-            "disturbances": [{"type": "voltage_step", "amplitude_V": 0.05, "start_s": 0.2, "axes": ["x"]}]}
+    spec = {
+        **BASE,
+        "duration_s": 1.0,
+        "reference": {"type": "step", "amplitude_m": 0.0},
+        "disturbances": [{"type": "voltage_step", "amplitude_V": 0.05, "start_s": 0.2, "axes": ["x"]}],
+    }
     cascade = {"type": "cascade", "params": {"kp_pos": 200.0, "kp_vel": 7.0}}
     plain = run_scenario(scenario_from_dict({**spec, "controller": cascade}))
-    observed = run_scenario(scenario_from_dict({**spec, "controller": {**cascade, "observer": {
-        "type": "inverse_model", "params": {"cutoff_hz": 20.0, "order": 2}}}}))
+    observed = run_scenario(
+        scenario_from_dict(
+            {
+                **spec,
+                "controller": {
+                    **cascade,
+                    "observer": {"type": "inverse_model", "params": {"cutoff_hz": 20.0, "order": 2}},
+                },
+            }
+        )
+    )
     # independent: at rest u = kp_vel kp_pos e and y = G(0) (u + d), G(0) = 78.02/193.3 m/V (eq. 1)
     g0 = 78.02 / 193.3
     offset = g0 * 0.05 / (1 + g0 * 7.0 * 200.0)
@@ -111,11 +157,14 @@ def test_inverse_model_observer_removes_a_step_input_disturbance_on_the_twin():
     assert observed.error_max_m[0] < 0.8 * plain.error_max_m[0]
 
 
-@pytest.mark.parametrize("setting, field, words", [
-    ("disturbances.0.n_flutes=2147483648", "disturbances.0.end_milling.n_flutes", "less than or equal to 100"),
-    ("disturbances.0.spindle_rpm=0.5", "disturbances.0.end_milling.spindle_rpm", "greater than or equal to 1"),
-    ("timestep_s=1e308", "timestep_s", "less than or equal to 0.01"),
-])
+@pytest.mark.parametrize(
+    "setting, field, words",
+    [
+        ("disturbances.0.n_flutes=2147483648", "disturbances.0.end_milling.n_flutes", "less than or equal to 100"),
+        ("disturbances.0.spindle_rpm=0.5", "disturbances.0.end_milling.spindle_rpm", "greater than or equal to 1"),
+        ("timestep_s=1e308", "timestep_s", "less than or equal to 0.01"),
+    ],
+)
 def test_counts_and_rates_the_loops_run_over_are_bounded(setting, field, words):
     """Each count a force model loops over, and the timestep, has a bound named in its error."""
     with pytest.raises(TwinInputError) as err:

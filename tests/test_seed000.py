@@ -11,10 +11,20 @@ import control
 import numpy as np
 import pytest
 
-from controllers.design.hinf import central_controller, gamma_iteration, mixed_sensitivity_plant, reduce_balanced, shift_integrators
+from controllers.design.hinf import (
+    central_controller,
+    gamma_iteration,
+    mixed_sensitivity_plant,
+    reduce_balanced,
+    shift_integrators,
+)
 from controllers.design.imc import imc_controller
-from controllers.design.kharitonov import (is_hurwitz, kharitonov_polynomials, robustly_stable,
-                                    stability_margin_third_order)
+from controllers.design.kharitonov import (
+    is_hurwitz,
+    kharitonov_polynomials,
+    robustly_stable,
+    stability_margin_third_order,
+)
 from controllers.design.robust_pi import design_robust_pi, worst_case_margins
 from twin.reproductions.seed000 import procedure as r
 
@@ -28,21 +38,20 @@ def _interval(center, rel):
 STABLE = [
     # built on seed 000 eq. (31): its alpha1, alpha2 as lower and beta3 as upper bounds (other bounds ours)
     ([1.0, 7.5, 115.0, 200.0], [1.0, 9.7, 186.0, 273.9]),
-    _interval(np.poly([-1, -2, -3, -4]), 0.05),       # (s+1)(s+2)(s+3)(s+4) +-5 %
-    _interval(np.poly([-1, -1, -1, -1, -1]), 0.03),   # (s+1)^5 +-3 %
+    _interval(np.poly([-1, -2, -3, -4]), 0.05),  # (s+1)(s+2)(s+3)(s+4) +-5 %
+    _interval(np.poly([-1, -1, -1, -1, -1]), 0.03),  # (s+1)^5 +-3 %
     _interval(np.poly([-0.5, -1 + 2j, -1 - 2j, -3]).real, 0.02),
 ]
 UNSTABLE = [
-    ([1.0, 1.0, 1.0, 1.0], [1.0, 2.0, 2.0, 5.0]),    # a1 a2 = 1 < a0 a3 = 5 at a vertex
-    _interval(np.poly([-1, -2, -3, -4]), 0.9),        # +-90 %: a vertex loses the Routh test
-    _interval(np.poly([-1, -1, -1, -1, -1]), 0.5),    # (s+1)^5 +-50 %
+    ([1.0, 1.0, 1.0, 1.0], [1.0, 2.0, 2.0, 5.0]),  # a1 a2 = 1 < a0 a3 = 5 at a vertex
+    _interval(np.poly([-1, -2, -3, -4]), 0.9),  # +-90 %: a vertex loses the Routh test
+    _interval(np.poly([-1, -1, -1, -1, -1]), 0.5),  # (s+1)^5 +-50 %
     _interval(np.poly([-0.05, -0.1 + 3j, -0.1 - 3j, -2, -5]).real, 0.2),
 ]
 
 
 def _vertex_stable(lo, hi):
-    return all(is_hurwitz(np.where(np.array(pick, bool), hi, lo))
-               for pick in itertools.product((0, 1), repeat=len(lo)))
+    return all(is_hurwitz(np.where(np.array(pick, bool), hi, lo)) for pick in itertools.product((0, 1), repeat=len(lo)))
 
 
 @pytest.mark.parametrize("lo, hi, expected", [(*b, True) for b in STABLE] + [(*b, False) for b in UNSTABLE])
@@ -123,27 +132,35 @@ def test_imc_reproduces_eq23_and_first_order_form():
     assert round(num[0], 2) == 0.21 and num[1] == pytest.approx(2.0) and den == pytest.approx([1.0, 2.0])
     # first-order plant k/(s + d), lambda = 1: C = (s + d)/(k mu s), a PI
     C1 = imc_controller(control.tf([2.0], [1.0, 3.0]), 0.5, 1)
-    assert control.tf(C1).num[0][0] == pytest.approx([1.0, 3.0]) and control.tf(C1).den[0][0] == pytest.approx([1.0, 0.0])
+    assert control.tf(C1).num[0][0] == pytest.approx([1.0, 3.0]) and control.tf(C1).den[0][0] == pytest.approx(
+        [1.0, 0.0]
+    )
     with pytest.raises(ValueError, match="lam"):
         imc_controller(control.tf([4.85], [1.0, 9.7, 0.0]), 1.0, 1)
     for row, paper in zip(r.imc_design()["table3"], r.PAPER["table3"]):
         assert (row["damping"], row["wn_rad_s"], row["st_4_over_xi_wn_s"]) == pytest.approx(
-            (paper[1], paper[2], paper[4]), rel=1e-5)
+            (paper[1], paper[2], paper[4]), rel=1e-5
+        )
 
 
 def test_hinf_gamma_iteration_and_reduction():
     """Reported beside eqs. (28)-(29): no threshold on the match, but gamma must respect its
     lower bound |W3(0) T(0)| = 10 (integral action makes T(0) = 1) and be admissible."""
     s = control.tf("s")
-    P = mixed_sensitivity_plant(shift_integrators(control.tf([4.85], [1.0, 9.7, 0.0]), 1e-6),
-                                20 / (s + 0.01), control.tf(1, 1), 1 / (s + 0.1))
+    P = mixed_sensitivity_plant(
+        shift_integrators(control.tf([4.85], [1.0, 9.7, 0.0]), 1e-6), 20 / (s + 0.01), control.tf(1, 1), 1 / (s + 0.1)
+    )
     it = gamma_iteration(P)
     assert 10.0 <= it.gamma <= 10.1
     # python-control's own mixsyn (SB10AD's optimizer) on the same weights agrees
     with warnings.catch_warnings():  # python-control 0.10's mixsyn calls its own deprecated connect()
         warnings.filterwarnings("ignore", message=r"connect\(\) is deprecated", category=FutureWarning)
-        _, _, (gamma_mixsyn, _) = control.mixsyn(shift_integrators(control.tf([4.85], [1.0, 9.7, 0.0]), 1e-6),
-                                                 20 / (s + 0.01), control.tf(1, 1), 1 / (s + 0.1))
+        _, _, (gamma_mixsyn, _) = control.mixsyn(
+            shift_integrators(control.tf([4.85], [1.0, 9.7, 0.0]), 1e-6),
+            20 / (s + 0.01),
+            control.tf(1, 1),
+            1 / (s + 0.1),
+        )
     assert it.gamma == pytest.approx(gamma_mixsyn, rel=0.01)
     with pytest.raises(ValueError, match="no admissible"):
         central_controller(P, 9.0)
@@ -224,5 +241,7 @@ def test_our_designs_stand_beside_the_printed_controllers():
         assert abs(a["overshoot_pct"] - b["overshoot_pct"]) < 0.5
         assert a["settling_time_s"] == pytest.approx(b["settling_time_s"], rel=0.02)
     eq28 = r.tf_step(r.HINF_EQ28, nominal)
-    assert r.tf_step(ours["hinf_ours_paper_gamma"], nominal)["overshoot_pct"] == pytest.approx(eq28["overshoot_pct"], abs=0.2)
+    assert r.tf_step(ours["hinf_ours_paper_gamma"], nominal)["overshoot_pct"] == pytest.approx(
+        eq28["overshoot_pct"], abs=0.2
+    )
     assert r.tf_step(ours["hinf_ours_optimal_reduced"], nominal) is None

@@ -13,12 +13,10 @@ from scipy.linalg import solve_continuous_are
 from controllers import make_controller
 from controllers.design.fractional import bromwich_inverse, fractional_pi, oustaloup, step_response
 from controllers.design.lmi import PoleRegion, region_state_feedback
-from controllers.design.statefeedback import (energy_weights, integral_augmented, lqr, p_p_cascade, pi_p_cascade,
-                                              place)
-from controllers.design.tuning import (bee_colony_minimize, detune, limit_cycle, relay_ultimate_gain,
-                                       ziegler_nichols)
-from controllers.papers import seed001 as s1
 from controllers.design.pid import pid_tf
+from controllers.design.statefeedback import energy_weights, integral_augmented, lqr, p_p_cascade, pi_p_cascade, place
+from controllers.design.tuning import bee_colony_minimize, detune, limit_cycle, relay_ultimate_gain, ziegler_nichols
+from controllers.papers import seed001 as s1
 from twin.metrics import fit_index, step_metrics
 from twin.reproductions.seed001 import procedure as r
 
@@ -26,7 +24,7 @@ from twin.reproductions.seed001 import procedure as r
 def test_ziegler_nichols_rules_on_a_known_ultimate_point():
     # Astrom and Hagglund's table: P 0.5 Ku; PI 0.45 Ku, Ti = Pu/1.2; PID 0.6 Ku, Ti = Pu/2, Td = Pu/8
     assert ziegler_nichols(4.0, 0.1, "P") == (2.0, 0.0, 0.0)
-    kp, ki, kd = ziegler_nichols(4.0, 0.1, "PI")
+    kp, ki, _kd = ziegler_nichols(4.0, 0.1, "PI")
     assert (kp, ki) == pytest.approx((1.8, 1.8 / (0.1 / 1.2)))
     assert ziegler_nichols(4.0, 0.1, "PID") == pytest.approx((2.4, 2.4 / 0.05, 2.4 * 0.0125))
     with pytest.raises(ValueError, match="kind"):
@@ -50,7 +48,7 @@ def test_implied_delay_gives_back_the_ultimate_gain():
         K, a = s1.MODEL[axis]
         w = imp["wu_rad_s"]
         L = imp["ku_V_per_mm"] * K / (1j * w * (1j * w + a)) * np.exp(-1j * w * imp["delay_s"])
-        assert L == pytest.approx(-1.0, abs=1e-9)
+        assert pytest.approx(-1.0, abs=1e-9) == L
         # and the P gain gives Table 1's overshoot on the delay-free model
         T = control.feedback(imp["kp_V_per_mm"] * s1.plant_tf(axis), 1)
         assert s1.overshoot_pct(T) == pytest.approx(s1.TABLE1["P"][axis][1], abs=0.05)
@@ -66,14 +64,14 @@ def test_ultimate_point_matches_python_control_margin():
 
 
 def test_detune_finds_the_largest_factor_meeting_the_target():
-    assert detune(lambda c: c ** 2, 0.25) == pytest.approx(0.5, rel=1e-6)
+    assert detune(lambda c: c**2, 0.25) == pytest.approx(0.5, rel=1e-6)
     with pytest.raises(ValueError, match="no factor"):
         detune(lambda c: 1.0 + c, 0.5)
 
 
 def test_pole_placement_and_its_p_p_cascade_have_the_asked_poles():
     for axis in s1.AXES:
-        A, B, C = s1.model(axis)
+        A, B, _C = s1.model(axis)
         K = place(A, B, s1.POLES)
         assert np.sort(np.linalg.eigvals(A - B @ K).real) == pytest.approx(np.sort(s1.POLES), rel=1e-9)
         g = p_p_cascade(K)
@@ -89,8 +87,8 @@ def _pi_p_closed_loop(axis, g, feedforward):
     K, a = s1.MODEL[axis]
     speed = K / (s + a)
     # u = kv (kp e + ki e/s - omega) + kr r, omega = speed u, theta = omega/s
-    inner = control.feedback(g.kv * speed, 1)   # v_ref -> omega
-    outer = (g.kp + g.ki / s) * inner / s         # e -> theta
+    inner = control.feedback(g.kv * speed, 1)  # v_ref -> omega
+    outer = (g.kp + g.ki / s) * inner / s  # e -> theta
     ff = g.kr / g.kv if feedforward else 0.0
     return control.minreal((g.kp + g.ki / s + ff) * inner / s / (1 + outer), verbose=False)
 
@@ -99,24 +97,24 @@ def test_integral_state_feedback_equals_pi_p_with_feedforward():
     for axis in s1.AXES:
         A, B, C = s1.model(axis)
         Aa, Ba = integral_augmented(A, B, C)
-        poles = s1.POLES + (s1.INTEGRAL_POLE,)
+        poles = (*s1.POLES, s1.INTEGRAL_POLE)
         K = place(Aa, Ba, poles)
         g = pi_p_cascade(K)
         with_ff, without = _pi_p_closed_loop(axis, g, True), _pi_p_closed_loop(axis, g, False)
         assert np.sort(with_ff.poles().real) == pytest.approx(np.sort(poles), rel=1e-6)
-        assert len(with_ff.zeros()) == 0          # the feedforward removes the cascade's zero
+        assert len(with_ff.zeros()) == 0  # the feedforward removes the cascade's zero
         assert without.zeros()[0].real == pytest.approx(-g.ki / g.kp, rel=1e-6)
         assert control.dcgain(with_ff) == pytest.approx(1.0, rel=1e-9)
 
 
 def test_lqr_gain_solves_the_riccati_equation_with_energy_weights():
     axis = "x"
-    A, B, C = s1.model(axis)
+    A, B, _C = s1.model(axis)
     J, k = s1.energy_inertia_stiffness(axis)
-    assert J == pytest.approx(s1.GAIN_TIME_CONSTANT[axis][1] / s1.GAIN_TIME_CONSTANT[axis][0], rel=1e-3)
+    assert pytest.approx(s1.GAIN_TIME_CONSTANT[axis][1] / s1.GAIN_TIME_CONSTANT[axis][0], rel=1e-3) == J
     Q = energy_weights(J, k)
     x = np.array([2.0, 3.0])
-    assert x @ Q @ x == pytest.approx(J * 4 + k * 9)   # 2 E of eq. (7)
+    assert x @ Q @ x == pytest.approx(J * 4 + k * 9)  # 2 E of eq. (7)
     P = solve_continuous_are(A, B, Q, np.eye(1))
     assert lqr(A, B, Q, 1.0) == pytest.approx(B.T @ P, rel=1e-8)
 
@@ -139,14 +137,15 @@ def test_oustaloup_matches_s_alpha_inside_its_band():
     for lam in (s1.EQ14["x"][2], s1.EQ14["y"][2]):
         o = oustaloup(-lam, *s1.OUSTALOUP_BAND, s1.OUSTALOUP_ORDER)
         ratio = o.response(w) / (1j * w) ** -lam
-        assert np.abs(20 * np.log10(np.abs(ratio))).max() < 0.05   # dB
-        assert np.abs(np.degrees(np.angle(ratio))).max() < 0.6     # deg
+        assert np.abs(20 * np.log10(np.abs(ratio))).max() < 0.05  # dB
+        assert np.abs(np.degrees(np.angle(ratio))).max() < 0.6  # deg
         A, B, C, D = o.state_space()
         ss = np.array([(C @ np.linalg.solve(1j * wi * np.eye(len(A)) - A, B) + D)[0, 0] for wi in w])
         assert ss == pytest.approx(o.response(w), rel=1e-9)
     A, B, C, D = fractional_pi(0.2, 6.0, 0.78, *s1.OUSTALOUP_BAND, s1.OUSTALOUP_ORDER)
     assert D[0, 0] + (C @ np.linalg.solve(1j * 10.0 * np.eye(len(A)) - A, B))[0, 0] == pytest.approx(
-        0.2 + 6.0 * (10j) ** -0.78, rel=0.01)
+        0.2 + 6.0 * (10j) ** -0.78, rel=0.01
+    )
 
 
 def test_bromwich_inverse_on_an_underdamped_step():
@@ -156,8 +155,15 @@ def test_bromwich_inverse_on_an_underdamped_step():
     exact = 1 - np.exp(-z * w * t) * (np.cos(wd * t) + z / math.sqrt(1 - z * z) * np.sin(wd * t))
     assert np.abs(y - exact).max() < 1e-6
     # the eq. (14) loop's exact response agrees with a wide, high-order Oustaloup one
-    t, y = step_response(lambda s: (0.2229 + 5.9392 * s ** -0.7792) * 1054 / (s * (s + 40.85))
-                         / (1 + (0.2229 + 5.9392 * s ** -0.7792) * 1054 / (s * (s + 40.85))), 3.0)
+    t, y = step_response(
+        lambda s: (
+            (0.2229 + 5.9392 * s**-0.7792)
+            * 1054
+            / (s * (s + 40.85))
+            / (1 + (0.2229 + 5.9392 * s**-0.7792) * 1054 / (s * (s + 40.85)))
+        ),
+        3.0,
+    )
     A, B, C, D = fractional_pi(*s1.EQ14["x"], 1e-4, 1e5, 8)
     T = control.feedback(control.ss(A, B, C, D) * s1.plant_tf("x"), 1)
     ref = np.asarray(control.step_response(T, t[::50]).outputs).ravel()
@@ -167,11 +173,12 @@ def test_bromwich_inverse_on_an_underdamped_step():
 def test_bee_colony_is_reproducible_with_its_seed_and_finds_a_minimum():
     def cost(x):
         return float(np.sum((x - 0.3) ** 2))
+
     a = bee_colony_minimize(cost, [-1, -1], [1, 1], 15, seed=4)
     b = bee_colony_minimize(cost, [-1, -1], [1, 1], 15, seed=4)
     assert a.x.tolist() == b.x.tolist() and a.best_cost == b.best_cost
     assert a.cost < 1e-3 and len(a.best_cost) == 15
-    assert all(x >= y for x, y in zip(a.best_cost, a.best_cost[1:]))   # the best never gets worse
+    assert all(x >= y for x, y in zip(a.best_cost, a.best_cost[1:]))  # the best never gets worse
 
 
 def test_lqr_step_metrics_agree_with_python_control():
@@ -242,6 +249,7 @@ def test_trajectory_fit_twin_matches_tf_and_improves_with_the_experiments():
 
 def test_bundled_relay_scenario_is_the_reproductions_and_runs_as_a_scenario():
     from twin.scenario import load_scenario, run_scenario
+
     data = r.scenario_data("seed001_relay")
     assert data["drive"]["delay_s"] == s1.RELAY_DELAY_S
     res = run_scenario(load_scenario("seed001_relay", ["duration_s=1.5"]), progress=False)
@@ -256,7 +264,9 @@ def test_table1_agreement_labels_say_what_is_fitted():
     the closed form the relay delay is derived from (fitted); the P loop's 2 % settling time does
     not depend on kp while underdamped (about 8/a: a check of the identified model, whatever was
     fitted); each modified row's overshoot is the detuning's target (fitted)."""
-    assert {s1.TABLE1_AGREEMENT[k]["overshoot"] for k in ("p", "modified_p", "modified_pi", "modified_pid")} == {"fitted"}
+    assert {s1.TABLE1_AGREEMENT[k]["overshoot"] for k in ("p", "modified_p", "modified_pi", "modified_pid")} == {
+        "fitted"
+    }
     assert {s1.TABLE1_AGREEMENT[k]["overshoot"] for k in ("pi", "pid")} == {"check"}
     assert {v["settling"] for v in s1.TABLE1_AGREEMENT.values()} == {"check"}
     for axis in s1.AXES:

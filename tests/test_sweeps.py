@@ -32,15 +32,16 @@ def test_box_draws_stay_in_the_documented_range():
         lo, hi = LM[key].box
         v = np.array([plan.values(i)[f"overrides.{key}"] for i in range(len(plan))])
         assert lo <= v.min() and v.max() <= hi
-        assert v.min() < lo + 0.01 * (hi - lo) and v.max() > hi - 0.01 * (hi - lo)   # the whole box is used
+        assert v.min() < lo + 0.01 * (hi - lo) and v.max() > hi - 0.01 * (hi - lo)  # the whole box is used
 
 
 def test_sample_values_depend_on_seed_and_index_only():
     a = _plan("overrides.m_x=box", "disturbances.0.spindle_rpm=uniform(5000,12000)", samples=50, seed=7)
     b = _plan("overrides.m_x=box", "disturbances.0.spindle_rpm=uniform(5000,12000)", samples=50, seed=7)
     assert [a.values(i) for i in range(50)] == [b.values(i) for i in reversed(range(50))][::-1]
-    assert a.values(3) != _plan("overrides.m_x=box", "disturbances.0.spindle_rpm=uniform(5000,12000)",
-                                samples=50, seed=8).values(3)
+    assert a.values(3) != _plan(
+        "overrides.m_x=box", "disturbances.0.spindle_rpm=uniform(5000,12000)", samples=50, seed=8
+    ).values(3)
     assert len({a.sample_seed(i) for i in range(50)}) == 50
 
 
@@ -67,10 +68,17 @@ def test_latin_hypercube_puts_one_sample_in_every_stratum():
     assert normal.mean() == pytest.approx(10.0, abs=0.2) and normal.std() == pytest.approx(2.0, rel=0.15)
 
 
-@pytest.mark.parametrize("spec, match", [("overrides.m_x=uniform(2, 1)", "a < b"), ("overrides.nope=box", "machine"),
-                                         ("overrides.m_x=normal(1, 0)", "sigma"), ("m_x", "PATH=SPEC"),
-                                         ("overrides.m_x=grid(0, 1, 1.5)", "whole n"),
-                                         ("overrides.m_x=uniform(a, 1)", "not a number")])
+@pytest.mark.parametrize(
+    "spec, match",
+    [
+        ("overrides.m_x=uniform(2, 1)", "a < b"),
+        ("overrides.nope=box", "machine"),
+        ("overrides.m_x=normal(1, 0)", "sigma"),
+        ("m_x", "PATH=SPEC"),
+        ("overrides.m_x=grid(0, 1, 1.5)", "whole n"),
+        ("overrides.m_x=uniform(a, 1)", "not a number"),
+    ],
+)
 def test_bad_variations_name_the_field(spec, match):
     with pytest.raises(TwinInputError, match=match):
         parse_variation(spec, LM)
@@ -79,8 +87,17 @@ def test_bad_variations_name_the_field(spec, match):
 SHORT = {"duration_s": 0.05}
 
 
-def _sweep(tmp_path, name, workers, vary=("overrides.m_x=box", "disturbances.0.spindle_rpm=uniform(5000,12000)"),
-           samples=12, batch=3, scenario="seed004_cutting_circle", settings=SHORT, client=None):
+def _sweep(
+    tmp_path,
+    name,
+    workers,
+    vary=("overrides.m_x=box", "disturbances.0.spindle_rpm=uniform(5000,12000)"),
+    samples=12,
+    batch=3,
+    scenario="seed004_cutting_circle",
+    settings=SHORT,
+    client=None,
+):
     sw = prepare_sweep(scenario, dict(settings), list(vary), samples, 5, False)
     out = tmp_path / name
     own = client is None
@@ -119,8 +136,14 @@ def test_a_killed_worker_loses_no_sample(tmp_path):
         killed.append(pid)
 
     try:
-        sw = prepare_sweep("seed004_cutting_circle", SHORT, ["overrides.m_x=box",
-                                                            "disturbances.0.spindle_rpm=uniform(5000,12000)"], 40, 5, False)
+        sw = prepare_sweep(
+            "seed004_cutting_circle",
+            SHORT,
+            ["overrides.m_x=box", "disturbances.0.spindle_rpm=uniform(5000,12000)"],
+            40,
+            5,
+            False,
+        )
         killer = threading.Thread(target=kill_one_worker)
         killer.start()
         run_sweep(sw.scenario, sw.plan, sw.axes, out, client, 2, progress=False)
@@ -134,8 +157,16 @@ def test_a_killed_worker_loses_no_sample(tmp_path):
 
 
 def test_divergence_and_errors_are_rows_with_their_status(tmp_path):
-    _, table = _sweep(tmp_path, "bad.parquet", 1, vary=["controller.params.kp=choice(4000, 1e12, 'abc')"],
-                      samples=24, batch=4, scenario="square_sabau_pid", settings={"duration_s": 0.2})
+    _, table = _sweep(
+        tmp_path,
+        "bad.parquet",
+        1,
+        vary=["controller.params.kp=choice(4000, 1e12, 'abc')"],
+        samples=24,
+        batch=4,
+        scenario="square_sabau_pid",
+        settings={"duration_s": 0.2},
+    )
     rows = table.to_pylist()
     by_kp = {r["controller.params.kp"]: r for r in rows}
     assert table.num_rows == 24 and set(by_kp) == {"4000.0", "1000000000000.0", "abc"}
@@ -187,8 +218,10 @@ def test_seed000_certificate_is_the_reproductions():
 def _cli(*args, **kw):
     import subprocess
     import sys
-    return subprocess.run([sys.executable, "-m", "twin.cli", "sweep", *args], capture_output=True, text=True,
-                          timeout=300, **kw)
+
+    return subprocess.run(
+        [sys.executable, "-m", "twin.cli", "sweep", *args], capture_output=True, text=True, timeout=300, **kw
+    )
 
 
 def test_cli_sweep_file_writes_parquet_summary_and_plots(tmp_path):
@@ -196,19 +229,35 @@ def test_cli_sweep_file_writes_parquet_summary_and_plots(tmp_path):
     from pathlib import Path
 
     import twin
+
     example = Path(twin.__file__).parent / "sweeps" / "examples" / "seed004_cutting_circle.toml"
     out = tmp_path / "s.parquet"
-    r = _cli(str(example), "--samples", "4", "--workers", "1", "--set", "duration_s=0.05", "--out", str(out),
-             "--plots", str(tmp_path / "p"), "--json")
+    r = _cli(
+        str(example),
+        "--samples",
+        "4",
+        "--workers",
+        "1",
+        "--set",
+        "duration_s=0.05",
+        "--out",
+        str(out),
+        "--plots",
+        str(tmp_path / "p"),
+        "--json",
+    )
     assert r.returncode == 0, r.stderr
     summary = json.loads(r.stdout)
     assert summary["status"] == {"ok": 4} and summary["ran"] == 4 and summary["certificates"] == []
     assert read_sweep(out).num_rows == 4
-    assert sorted(p.name for p in (tmp_path / "p").iterdir()) == ["sweep_histograms.png",
-                                                                   "sweep_metric_vs_parameters.png"]
+    assert sorted(p.name for p in (tmp_path / "p").iterdir()) == [
+        "sweep_histograms.png",
+        "sweep_metric_vs_parameters.png",
+    ]
     bad = _cli(str(example), "--vary", "overrides.m_x=uniform(1)", "--out", str(tmp_path / "b.parquet"))
     assert bad.returncode == 2 and bad.stderr.strip().splitlines() == [
-        "error: --vary overrides.m_x = 'uniform(1)': uniform takes 2 argument(s)"]
+        "error: --vary overrides.m_x = 'uniform(1)': uniform takes 2 argument(s)"
+    ]
 
 
 def test_cli_interrupted_sweep_keeps_its_parts_and_resume_completes_it(tmp_path):
@@ -216,15 +265,29 @@ def test_cli_interrupted_sweep_keeps_its_parts_and_resume_completes_it(tmp_path)
     import sys
 
     out = tmp_path / "i.parquet"
-    args = ["seed004_cutting_circle", "--vary", "overrides.m_x=box", "--samples", "300", "--batch", "5",
-            "--workers", "1", "--set", "duration_s=0.05", "--out", str(out)]
-    proc = subprocess.Popen([sys.executable, "-m", "twin.cli", "sweep", *args], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+    args = [
+        "seed004_cutting_circle",
+        "--vary",
+        "overrides.m_x=box",
+        "--samples",
+        "300",
+        "--batch",
+        "5",
+        "--workers",
+        "1",
+        "--set",
+        "duration_s=0.05",
+        "--out",
+        str(out),
+    ]
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "twin.cli", "sweep", *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
     deadline = time.time() + 120
     while not any(out.glob("part-*.parquet")) and time.time() < deadline:
         time.sleep(0.02)
     proc.send_signal(signal.SIGINT)
-    stdout, stderr = proc.communicate(timeout=120)
+    _stdout, stderr = proc.communicate(timeout=120)
     assert proc.returncode == 130, stderr
     kept = read_sweep(out).num_rows
     assert 0 < kept < 300 and "--resume completes it" in stderr.strip().splitlines()[-1]

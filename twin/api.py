@@ -73,9 +73,15 @@ class Run:
         from twin.metrics import tracking_summary
 
         done = self.result.info["completed_ticks"]
-        return {"scenario": self.scenario.name, "machine": self.scenario.machine, "status": self.status, **self.extra,
-                "completed_ticks": done, **(tracking_summary(self.result) if done else {}),
-                "loop": self.result.info["loop"]}
+        return {
+            "scenario": self.scenario.name,
+            "machine": self.scenario.machine,
+            "status": self.status,
+            **self.extra,
+            "completed_ticks": done,
+            **(tracking_summary(self.result) if done else {}),
+            "loop": self.result.info["loop"],
+        }
 
     def to_pandas(self):
         """The run's named series as a ``pandas.DataFrame`` indexed by simulated time (s), one
@@ -104,8 +110,14 @@ class Run:
         return write_plots(self.result, Path(folder), self.scenario.name)
 
 
-def run(scenario, *, progress: bool | None = False, max_physics_steps: int | None = None,
-        keep_partial: bool = False, **settings) -> Run:
+def run(
+    scenario,
+    *,
+    progress: bool | None = False,
+    max_physics_steps: int | None = None,
+    keep_partial: bool = False,
+    **settings,
+) -> Run:
     """Run a scenario (a name, a path, or a :func:`load`-ed scenario) with ``settings``.
 
     Parameters
@@ -188,10 +200,21 @@ class Sweep:
         return write_sweep_plots(self.table, self.plan, self.axes, Path(folder))
 
 
-def sweep(target: str | Path, vary: list[str] | tuple = (), *, samples: int | None = None, seed: int | None = None,
-          lhs: bool | None = None, out: str | Path | None = None, workers: int | None = None,
-          scheduler: str | None = None, batch: int | None = None, resume: bool = False, progress: bool = False,
-          **settings) -> Sweep:
+def sweep(
+    target: str | Path,
+    vary: list[str] | tuple = (),
+    *,
+    samples: int | None = None,
+    seed: int | None = None,
+    lhs: bool | None = None,
+    out: str | Path | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    batch: int | None = None,
+    resume: bool = False,
+    progress: bool = False,
+    **settings,
+) -> Sweep:
     """Run a scenario (or a sweep TOML file) over sampled parameters on Dask, as ``twin sweep``.
 
     ``vary`` holds ``PATH=SPEC`` strings (``overrides.m=box``, ``disturbances.0.spindle_rpm=
@@ -211,21 +234,41 @@ def sweep(target: str | Path, vary: list[str] | tuple = (), *, samples: int | No
     if workers is not None and scheduler:
         raise TwinInputError("workers", workers, "give workers or scheduler, not both")
     sets = {**parse_settings(spec.set), **_paths(settings)}
-    sw = prepare_sweep(spec.scenario, sets, variations, spec.samples if samples is None else samples,
-                       spec.seed if seed is None else seed, spec.latin_hypercube if lhs is None else lhs)
+    sw = prepare_sweep(
+        spec.scenario,
+        sets,
+        variations,
+        spec.samples if samples is None else samples,
+        spec.seed if seed is None else seed,
+        spec.latin_hypercube if lhs is None else lhs,
+    )
     out = Path(out or spec.out or f"{sw.name}_sweep.parquet")
     if not out.parent.is_dir():
         raise TwinInputError("out", str(out), f"folder {str(out.parent)!r} does not exist")
     client = make_client(workers, scheduler)
     try:
-        done = run_sweep(sw.scenario, sw.plan, sw.axes, out, client, spec.batch_size if batch is None else batch,
-                         resume, progress=progress)
+        done = run_sweep(
+            sw.scenario,
+            sw.plan,
+            sw.axes,
+            out,
+            client,
+            spec.batch_size if batch is None else batch,
+            resume,
+            progress=progress,
+        )
     finally:
         client.close()
     table = read_sweep(out)
     summary = summarize(table, sw.plan, sw.axes)
-    summary.update(scenario=sw.name, out=str(out), wall_s=done.wall_s, ran=done.ran, skipped=done.skipped,
-                   certificates=certificates(sw.machine, sw.controller, sw.plan))
+    summary.update(
+        scenario=sw.name,
+        out=str(out),
+        wall_s=done.wall_s,
+        ran=done.ran,
+        skipped=done.skipped,
+        certificates=certificates(sw.machine, sw.controller, sw.plan),
+    )
     return Sweep(summary, out, table, sw.plan, sw.axes, done.interrupted)
 
 
@@ -239,7 +282,8 @@ def fidelity(machines: list[str] | tuple = (), **symbols: float) -> list[dict]:
     TwinInputError
         An unknown machine or case, or an override the machine refuses, before anything runs.
     """
-    from twin.fidelity import CASES, fidelity as check
+    from twin.fidelity import CASES
+    from twin.fidelity import fidelity as check
     from twin.machines import get_machine
 
     names = list(machines) or list(CASES)
@@ -250,8 +294,14 @@ def fidelity(machines: list[str] | tuple = (), **symbols: float) -> list[dict]:
     return [check(name, symbols) for name in names]
 
 
-def reproduce(seed: str, *, samples: int = DEFAULT_SAMPLES, twin_samples: int = DEFAULT_TWIN_SAMPLES,
-              random_seed: int = DEFAULT_SEED, progress: bool = False) -> dict:
+def reproduce(
+    seed: str,
+    *,
+    samples: int = DEFAULT_SAMPLES,
+    twin_samples: int = DEFAULT_TWIN_SAMPLES,
+    random_seed: int = DEFAULT_SEED,
+    progress: bool = False,
+) -> dict:
     """A paper's reproduction, as ``twin reproduce SEED --json`` returns it (``seed000`` ...
     ``seed004``); ``twin_samples = 0`` leaves the twin out.
 
@@ -265,6 +315,9 @@ def reproduce(seed: str, *, samples: int = DEFAULT_SAMPLES, twin_samples: int = 
     if seed not in REPRODUCTIONS:
         raise TwinInputError("source", seed, f"no reproduction of that paper yet (known: {', '.join(REPRODUCTIONS)})")
     if samples < 1 or twin_samples < 0:
-        raise TwinInputError("samples" if samples < 1 else "twin_samples", samples if samples < 1 else twin_samples,
-                             "must be >= 1 (samples) / >= 0 (twin_samples)")
+        raise TwinInputError(
+            "samples" if samples < 1 else "twin_samples",
+            samples if samples < 1 else twin_samples,
+            "must be >= 1 (samples) / >= 0 (twin_samples)",
+        )
     return reproduction(seed).run(samples, twin_samples, random_seed, progress)

@@ -55,8 +55,9 @@ def _cases() -> dict:
     googol = build("googol_xy", timestep_s=1e-4)
     sine = SumOfSines((0.01,), (0.5,), n_axes=2, axes=(0,))
     ctx = Context(1e-4, ("x", "y"), plants={a.name: googol.plant[i][i] for i, a in enumerate(googol.axes)})
-    cascade_dob = with_correction(make_controller("cascade", 1e-4, CASCADE, axes=ctx.axes),
-                                  make_observers("inverse_model", OBSERVER, ctx))
+    cascade_dob = with_correction(
+        make_controller("cascade", 1e-4, CASCADE, axes=ctx.axes), make_observers("inverse_model", OBSERVER, ctx)
+    )
     npid = make_controller("seed002_npid", 1e-4, axes=ctx.axes)
     cutting = prepare(load_scenario("seed004_cutting_circle"))
     cutting.pop("duration_s")
@@ -65,8 +66,10 @@ def _cases() -> dict:
         "hinf_cncmt": (cncmt, lambda sec: simulate(cncmt, hinf, Step(0.01), sec, 1e-4, progress=False)),
         "cascade_dob_googol": (googol, lambda sec: simulate(googol, cascade_dob, sine, sec, 1e-4, progress=False)),
         "npid_googol": (googol, lambda sec: simulate(googol, npid, sine, sec, 1e-4, progress=False)),
-        "cutting_circle_linear_motor": (cutting_machine, lambda sec: simulate(cutting_machine, **cutting, duration_s=sec,
-                                                                               progress=False)),
+        "cutting_circle_linear_motor": (
+            cutting_machine,
+            lambda sec: simulate(cutting_machine, **cutting, duration_s=sec, progress=False),
+        ),
     }
 
 
@@ -96,10 +99,13 @@ def startup(repeats: int = 5) -> dict:
         run_scenario(scenario, progress=False)
         in_process.append(time.perf_counter() - t0)
         help_.append(_wall_s([*twin, "--help"]))
-    return {"scenario": STARTUP_SCENARIO, "run_process_s": statistics.median(process),
-            "run_in_process_s": statistics.median(in_process),
-            "overhead_s": statistics.median(p - i for p, i in zip(process, in_process)),
-            "help_process_s": statistics.median(help_)}
+    return {
+        "scenario": STARTUP_SCENARIO,
+        "run_process_s": statistics.median(process),
+        "run_in_process_s": statistics.median(in_process),
+        "overhead_s": statistics.median(p - i for p, i in zip(process, in_process)),
+        "help_process_s": statistics.median(help_),
+    }
 
 
 def run_bench(seconds: float = 2.0, repeats: int = 5) -> dict:
@@ -115,7 +121,7 @@ def run_bench(seconds: float = 2.0, repeats: int = 5) -> dict:
     out = {"simulated_s": seconds, "repeats": repeats, "cases": {}, "startup": startup(repeats)}
     for name, (bm, run) in _cases().items():
         dt = bm.model.opt.timestep
-        n = int(round(seconds / dt))
+        n = round(seconds / dt)
         run(0.01)  # warm-up: load the compiled loop
         raw, closed, ratios = [], [], []
         for _ in range(repeats):

@@ -18,12 +18,17 @@ import typer
 from twin.errors import RunInterrupted, SimulationDiverged, TwinInputError
 from twin.reproductions import DEFAULT_SAMPLES, DEFAULT_SEED, DEFAULT_TWIN_SAMPLES
 
-app = typer.Typer(add_completion=False, pretty_exceptions_enable=False, no_args_is_help=True,
-                  help="Digital twin of CNC XY feed drives (MuJoCo).")
+app = typer.Typer(
+    add_completion=False,
+    pretty_exceptions_enable=False,
+    no_args_is_help=True,
+    help="Digital twin of CNC XY feed drives (MuJoCo).",
+)
 
 
 def _guard(func):
     """Turn the twin's own errors into one stderr line and an exit code."""
+
     @wraps(func)
     def wrapper(*args, **kwargs):
         try:
@@ -37,6 +42,7 @@ def _guard(func):
         except RunInterrupted as exc:
             typer.echo(f"error: {exc}", err=True)
             raise typer.Exit(130) from None
+
     return wrapper
 
 
@@ -68,8 +74,14 @@ def _print_summary(name: str, summary: dict) -> None:
         typer.echo(f"  {key:<24} {value}")
 
 
-def _run(scenario: str, rrd: Path | None, as_json: bool, settings: list[str] | None = None,
-         max_steps: int | None = None, plots: Path | None = None) -> None:
+def _run(
+    scenario: str,
+    rrd: Path | None,
+    as_json: bool,
+    settings: list[str] | None = None,
+    max_steps: int | None = None,
+    plots: Path | None = None,
+) -> None:
     """Run a scenario and report it; a run that diverges or is interrupted still reports,
     records and plots what it computed before the error line."""
     from twin import api
@@ -96,8 +108,10 @@ def _report(done, rrd: Path | None, as_json: bool, plots: Path | None) -> None:
     if as_json:
         typer.echo(json.dumps(summary, indent=2, allow_nan=False))
     else:
-        _print_summary(f"{done.scenario.name}: {done.scenario.description}",
-                       {k: v for k, v in summary.items() if k not in ("scenario", "machine")})
+        _print_summary(
+            f"{done.scenario.name}: {done.scenario.description}",
+            {k: v for k, v in summary.items() if k not in ("scenario", "machine")},
+        )
     if rrd is not None and len(done.result.t_s):
         done.record(rrd)  # rerun is imported only when a recording is asked for
         typer.echo(f"recording written to {rrd} (view with: rerun {rrd})", err=as_json)
@@ -108,24 +122,31 @@ def _report(done, rrd: Path | None, as_json: bool, plots: Path | None) -> None:
 
 @app.command()
 @_guard
-def run(scenario: str = typer.Argument(..., help="Scenario TOML file, or a bundled scenario name"),
-        rrd: Path = typer.Option(None, "--rrd", help="Write a Rerun recording to this .rrd file"),
-        as_json: bool = typer.Option(False, "--json", help="Print metrics as JSON"),
-        sets: list[str] = typer.Option(None, "--set", help="Change a field: PATH=VALUE, e.g. "
-                                                           "disturbances.0.spindle_rpm=2500"),
-        max_steps: int = typer.Option(None, "--max-steps", min=1, help="Physics steps a run may take (default "
-                                                                      "100 000 000, about 5 minutes)"),
-        plots: Path = typer.Option(None, "--plots", help="Write PNG plots (errors, inputs, forces, contour) "
-                                                         "to this folder")):
+def run(
+    scenario: str = typer.Argument(..., help="Scenario TOML file, or a bundled scenario name"),
+    rrd: Path = typer.Option(None, "--rrd", help="Write a Rerun recording to this .rrd file"),
+    as_json: bool = typer.Option(False, "--json", help="Print metrics as JSON"),
+    sets: list[str] = typer.Option(
+        None, "--set", help="Change a field: PATH=VALUE, e.g. disturbances.0.spindle_rpm=2500"
+    ),
+    max_steps: int = typer.Option(
+        None, "--max-steps", min=1, help="Physics steps a run may take (default 100 000 000, about 5 minutes)"
+    ),
+    plots: Path = typer.Option(
+        None, "--plots", help="Write PNG plots (errors, inputs, forces, contour) to this folder"
+    ),
+):
     """Run a closed-loop scenario and print its tracking metrics."""
     _run(scenario, rrd, as_json, sets, max_steps, plots)
 
 
 @app.command()
 @_guard
-def demo(rrd: Path = typer.Option(Path("demo.rrd"), "--rrd", help="Rerun recording to write"),
-         as_json: bool = typer.Option(False, "--json", help="Print metrics as JSON"),
-         plots: Path = typer.Option(None, "--plots", help="Write PNG plots to this folder")):
+def demo(
+    rrd: Path = typer.Option(Path("demo.rrd"), "--rrd", help="Rerun recording to write"),
+    as_json: bool = typer.Option(False, "--json", help="Print metrics as JSON"),
+    plots: Path = typer.Option(None, "--plots", help="Write PNG plots to this folder"),
+):
     """The main job: seed 004's cutting circle (R 28 mm, 4800 mm/min, 10000 rpm end milling) on the
     linear-motor table under the MIMO H-infinity loop-shaping controller with ZPETC."""
     _run("seed004_mimo_cutting", rrd, as_json, plots=plots)
@@ -146,9 +167,11 @@ def _parse_sets(sets: list[str]) -> dict[str, float]:
 
 @app.command()
 @_guard
-def fidelity(machine: list[str] = typer.Option(None, "--machine", help="Machine(s) or fidelity case(s); default all"),
-             sets: list[str] = typer.Option(None, "--set", help="Parameter override SYMBOL=VALUE"),
-             as_json: bool = typer.Option(False, "--json", help="Print the results as JSON")):
+def fidelity(
+    machine: list[str] = typer.Option(None, "--machine", help="Machine(s) or fidelity case(s); default all"),
+    sets: list[str] = typer.Option(None, "--set", help="Parameter override SYMBOL=VALUE"),
+    as_json: bool = typer.Option(False, "--json", help="Print the results as JSON"),
+):
     """Compare each MJCF twin with its transfer function (time, frequency, gear slip).
 
     Cases: every machine, and linear_motor_xy+average_force (seed 004's cutting-force model
@@ -160,9 +183,11 @@ def fidelity(machine: list[str] = typer.Option(None, "--machine", help="Machine(
     results = api.fidelity(machine or [], **_parse_sets(sets or []))
     if not as_json:
         for r in results:
-            typer.echo(f"{r['case']:<30} nrmse {r['time_nrmse']:.2e}  |dmag| {r['frf_max_mag_err_db']:.4f} dB  "
-                       f"|dphase| {r['frf_max_phase_err_deg']:.3f} deg  slip {r['coupling_slip_um']:.4f} um  "
-                       f"{'PASS' if r['pass'] else 'FAIL'}")
+            typer.echo(
+                f"{r['case']:<30} nrmse {r['time_nrmse']:.2e}  |dmag| {r['frf_max_mag_err_db']:.4f} dB  "
+                f"|dphase| {r['frf_max_phase_err_deg']:.3f} deg  slip {r['coupling_slip_um']:.4f} um  "
+                f"{'PASS' if r['pass'] else 'FAIL'}"
+            )
     if as_json:
         typer.echo(json.dumps(results, indent=2))
     else:
@@ -173,15 +198,17 @@ def fidelity(machine: list[str] = typer.Option(None, "--machine", help="Machine(
 
 @app.command()
 @_guard
-def reproduce(source: str = typer.Argument(..., help="Which paper, e.g. seed000 (twin list shows them)"),
-              as_json: bool = typer.Option(False, "--json", help="Print everything as JSON"),
-              rrd: Path = typer.Option(None, "--rrd", help="Record the nominal twin step runs to this .rrd"),
-              plots: Path = typer.Option(None, "--plots", help="Write PNG step-response plots to this folder"),
-              samples: int = typer.Option(DEFAULT_SAMPLES, "--samples", help="Monte Carlo samples on the transfer "
-                                                                             "functions"),
-              twin_samples: int = typer.Option(DEFAULT_TWIN_SAMPLES, "--twin-samples", help="Random box samples on the "
-                                                                                        "twin (besides the paper's 10)"),
-              seed: int = typer.Option(DEFAULT_SEED, "--seed", help="Seed of the random samples")):
+def reproduce(
+    source: str = typer.Argument(..., help="Which paper, e.g. seed000 (twin list shows them)"),
+    as_json: bool = typer.Option(False, "--json", help="Print everything as JSON"),
+    rrd: Path = typer.Option(None, "--rrd", help="Record the nominal twin step runs to this .rrd"),
+    plots: Path = typer.Option(None, "--plots", help="Write PNG step-response plots to this folder"),
+    samples: int = typer.Option(DEFAULT_SAMPLES, "--samples", help="Monte Carlo samples on the transfer functions"),
+    twin_samples: int = typer.Option(
+        DEFAULT_TWIN_SAMPLES, "--twin-samples", help="Random box samples on the twin (besides the paper's 10)"
+    ),
+    seed: int = typer.Option(DEFAULT_SEED, "--seed", help="Seed of the random samples"),
+):
     """Reproduce a paper's design procedures and tables (paper | transfer function | twin).
 
     Exits 1 if a twin number departs from its transfer-function number by more than 2 %.
@@ -206,22 +233,25 @@ def reproduce(source: str = typer.Argument(..., help="Which paper, e.g. seed000 
 
 @app.command()
 @_guard
-def sweep(target: str = typer.Argument(..., help="Scenario (bundled name or TOML file), or a sweep TOML file "
-                                                 "(with a [vary] table)"),
-          vary: list[str] = typer.Option(None, "--vary", help="PATH=SPEC: box, corners, uniform(a,b), normal(mu,s), "
-                                                             "choice(v,...), grid(a,b,n), line(n)"),
-          sets: list[str] = typer.Option(None, "--set", help="Change a scenario field: PATH=VALUE"),
-          samples: int = typer.Option(None, "--samples", help="Random draws (per grid/corner combination); "
-                                                              "default 100"),
-          seed: int = typer.Option(None, "--seed", help="Sweep seed: every sample's draws and scenario seed"),
-          lhs: bool = typer.Option(None, "--lhs/--no-lhs", help="Latin hypercube for the random specs"),
-          out: Path = typer.Option(None, "--out", help="Parquet dataset folder (default <scenario>_sweep.parquet)"),
-          workers: int = typer.Option(None, "--workers", help="Local cluster processes (default: one per core)"),
-          scheduler: str = typer.Option(None, "--scheduler", help="Run on a Dask scheduler, e.g. tcp://host:8786"),
-          batch: int = typer.Option(None, "--batch", help="Samples per Dask task (default 10)"),
-          resume: bool = typer.Option(False, "--resume", help="Complete an interrupted sweep in --out"),
-          plots: Path = typer.Option(None, "--plots", help="Write histogram and parameter PNGs to this folder"),
-          as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON")):
+def sweep(
+    target: str = typer.Argument(
+        ..., help="Scenario (bundled name or TOML file), or a sweep TOML file (with a [vary] table)"
+    ),
+    vary: list[str] = typer.Option(
+        None, "--vary", help="PATH=SPEC: box, corners, uniform(a,b), normal(mu,s), choice(v,...), grid(a,b,n), line(n)"
+    ),
+    sets: list[str] = typer.Option(None, "--set", help="Change a scenario field: PATH=VALUE"),
+    samples: int = typer.Option(None, "--samples", help="Random draws (per grid/corner combination); default 100"),
+    seed: int = typer.Option(None, "--seed", help="Sweep seed: every sample's draws and scenario seed"),
+    lhs: bool = typer.Option(None, "--lhs/--no-lhs", help="Latin hypercube for the random specs"),
+    out: Path = typer.Option(None, "--out", help="Parquet dataset folder (default <scenario>_sweep.parquet)"),
+    workers: int = typer.Option(None, "--workers", help="Local cluster processes (default: one per core)"),
+    scheduler: str = typer.Option(None, "--scheduler", help="Run on a Dask scheduler, e.g. tcp://host:8786"),
+    batch: int = typer.Option(None, "--batch", help="Samples per Dask task (default 10)"),
+    resume: bool = typer.Option(False, "--resume", help="Complete an interrupted sweep in --out"),
+    plots: Path = typer.Option(None, "--plots", help="Write histogram and parameter PNGs to this folder"),
+    as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON"),
+):
     """Run a scenario over sampled parameters on Dask: one Parquet row per sample, a summary of
     bands and the worst case, robustness certificates where one covers the box."""
     from twin import api
@@ -229,22 +259,37 @@ def sweep(target: str = typer.Argument(..., help="Scenario (bundled name or TOML
     from twin.sweeps.summary import format_summary
 
     _check_plots_folder(plots)
-    done = api.sweep(target, list(vary or []), samples=samples, seed=seed, lhs=lhs, out=out, workers=workers,
-                     scheduler=scheduler, batch=batch, resume=resume, progress=not as_json,
-                     **parse_settings(list(sets or [])))
+    done = api.sweep(
+        target,
+        list(vary or []),
+        samples=samples,
+        seed=seed,
+        lhs=lhs,
+        out=out,
+        workers=workers,
+        scheduler=scheduler,
+        batch=batch,
+        resume=resume,
+        progress=not as_json,
+        **parse_settings(list(sets or [])),
+    )
     summary = done.summary
     if as_json:
         typer.echo(json.dumps(summary, indent=1))
     else:
         typer.echo(format_summary(summary, summary["certificates"], done.axes))
-        typer.echo(f"  {summary['ran']} samples run in {summary['wall_s']:.1f} s ({summary['skipped']} already in "
-                   f"{done.out})")
+        typer.echo(
+            f"  {summary['ran']} samples run in {summary['wall_s']:.1f} s ({summary['skipped']} already in {done.out})"
+        )
     if plots is not None:
         for path in done.plots(plots):
             typer.echo(f"plot written to {path}", err=as_json)
     if done.interrupted:
-        typer.echo(f"error: sweep interrupted after {done.table.num_rows} of {len(done.plan)} samples; "
-                   f"twin sweep ... --out {done.out} --resume completes it", err=True)
+        typer.echo(
+            f"error: sweep interrupted after {done.table.num_rows} of {len(done.plan)} samples; "
+            f"twin sweep ... --out {done.out} --resume completes it",
+            err=True,
+        )
         raise typer.Exit(130)
 
 
@@ -276,13 +321,16 @@ def list_things():
 
 @app.command()
 @_guard
-def bench(as_json: bool = typer.Option(False, "--json", help="Print the figures as JSON"),
-          seconds: float = typer.Option(2.0, help="Simulated time per measurement (s)"),
-          repeats: int = typer.Option(None, help="Alternating repeats; medians are reported (default 5; --sweep: 1)"),
-          sweep: bool = typer.Option(False, "--sweep", help="Benchmark twin sweep instead (twin/sweeps/bench.py)"),
-          samples: int = typer.Option(1000, "--samples", help="--sweep: samples of 2 s of the cutting circle"),
-          memory_samples: int = typer.Option(10_000, "--memory-samples", help="--sweep: one-tick samples for the "
-                                                                              "client memory check")):
+def bench(
+    as_json: bool = typer.Option(False, "--json", help="Print the figures as JSON"),
+    seconds: float = typer.Option(2.0, help="Simulated time per measurement (s)"),
+    repeats: int = typer.Option(None, help="Alternating repeats; medians are reported (default 5; --sweep: 1)"),
+    sweep: bool = typer.Option(False, "--sweep", help="Benchmark twin sweep instead (twin/sweeps/bench.py)"),
+    samples: int = typer.Option(1000, "--samples", help="--sweep: samples of 2 s of the cutting circle"),
+    memory_samples: int = typer.Option(
+        10_000, "--memory-samples", help="--sweep: one-tick samples for the client memory check"
+    ),
+):
     """Steps per second, bare mj_step vs the closed loop, for four controller kinds, and start-up time
     (twin/bench.py); with --sweep, twin sweep's wall time, samples/s, parallel efficiency and memory."""
     from twin.bench import run_bench
@@ -302,12 +350,16 @@ def bench(as_json: bool = typer.Option(False, "--json", help="Print the figures 
     typer.echo(f"medians of {repeats} alternating repeats, {seconds:g} s simulated each")
     typer.echo(f"{'case':<30} {'bare steps/s':>14} {'closed steps/s':>15} {'ratio':>6} {'x realtime':>11}  loop")
     for name, f in figures["cases"].items():
-        typer.echo(f"{name:<30} {f['raw_steps_per_s']:>14,.0f} {f['closed_loop_steps_per_s']:>15,.0f} "
-                   f"{f['ratio']:>6.3f} {f['realtime_factor']:>11.1f}  {f['loop']}")
+        typer.echo(
+            f"{name:<30} {f['raw_steps_per_s']:>14,.0f} {f['closed_loop_steps_per_s']:>15,.0f} "
+            f"{f['ratio']:>6.3f} {f['realtime_factor']:>11.1f}  {f['loop']}"
+        )
     f = figures["startup"]
-    typer.echo(f"start-up: twin run {f['scenario']} {f['run_process_s']:.2f} s as a new process, "
-               f"{f['run_in_process_s']:.2f} s in process, overhead {f['overhead_s']:.2f} s; "
-               f"twin --help {f['help_process_s']:.2f} s")
+    typer.echo(
+        f"start-up: twin run {f['scenario']} {f['run_process_s']:.2f} s as a new process, "
+        f"{f['run_in_process_s']:.2f} s in process, overhead {f['overhead_s']:.2f} s; "
+        f"twin --help {f['help_process_s']:.2f} s"
+    )
 
 
 def _bench_sweep(as_json: bool, samples: int, memory_samples: int, repeats: int) -> None:
@@ -320,15 +372,23 @@ def _bench_sweep(as_json: bool, samples: int, memory_samples: int, repeats: int)
     if as_json:
         typer.echo(json.dumps({"sweep": f}, indent=2))
         return
-    typer.echo(f"twin sweep {f['scenario']} ({', '.join(f['settings'])}) --vary {' --vary '.join(f['vary'])}, "
-               f"{f['samples']} samples, median of {f['repeats']}:")
-    typer.echo(f"  1 worker {f['wall_s_1_worker']:.1f} s, 2 workers {f['wall_s_2_workers']:.1f} s "
-               f"(target <= {f['target_wall_s']:g} s), {f['samples_per_s_2_workers']:.1f} samples/s; parallel "
-               f"efficiency {f['parallel_efficiency']:.3f} (target >= {f['target_efficiency']:g})")
-    typer.echo(f"  client memory grew {f['client_memory_growth_MB']:.1f} MB over {f['memory_samples']} one-tick samples")
-    typer.echo(f"  a plain loop over twin run processes: {f['twin_run_loop_s_per_sample']:.2f} s per sample "
-               f"({f['twin_run_loop_samples']} timed), {f['twin_run_loop_extrapolated_s']:.0f} s for "
-               f"{f['samples']} samples")
+    typer.echo(
+        f"twin sweep {f['scenario']} ({', '.join(f['settings'])}) --vary {' --vary '.join(f['vary'])}, "
+        f"{f['samples']} samples, median of {f['repeats']}:"
+    )
+    typer.echo(
+        f"  1 worker {f['wall_s_1_worker']:.1f} s, 2 workers {f['wall_s_2_workers']:.1f} s "
+        f"(target <= {f['target_wall_s']:g} s), {f['samples_per_s_2_workers']:.1f} samples/s; parallel "
+        f"efficiency {f['parallel_efficiency']:.3f} (target >= {f['target_efficiency']:g})"
+    )
+    typer.echo(
+        f"  client memory grew {f['client_memory_growth_MB']:.1f} MB over {f['memory_samples']} one-tick samples"
+    )
+    typer.echo(
+        f"  a plain loop over twin run processes: {f['twin_run_loop_s_per_sample']:.2f} s per sample "
+        f"({f['twin_run_loop_samples']} timed), {f['twin_run_loop_extrapolated_s']:.0f} s for "
+        f"{f['samples']} samples"
+    )
 
 
 def _terminate(signum, frame):

@@ -17,7 +17,7 @@ class TwinInputError(ValueError):
 def _short(text: str, limit: int) -> str:
     """One line: control characters escaped, at most ``limit`` characters."""
     text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in str(text)).strip()
-    return text if len(text) <= limit else text[:limit - 3] + "..."
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 class SimulationDiverged(RuntimeError):

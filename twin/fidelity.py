@@ -20,7 +20,7 @@ Friction is forced off (the reference models have none).
 Besides one case per machine, ``linear_motor_xy+average_force`` runs ``linear_motor_xy`` with
 seed 004's average cutting force (:class:`twin.process.cutting.AverageForce`, Table 1's nominal
 k_il = -2500, k_c = 2500 N s/m, written into ``xfrc_applied`` every physics step) against the
-coupled 4-state model of eq. (11) (:func:`twin.machines.linear_motor.cutting_coupled_plant`).
+coupled 4-state model of eq. (11) (:func:`controllers.papers.seed004.cutting_coupled_plant`).
 """
 
 from __future__ import annotations
@@ -32,28 +32,29 @@ import numpy as np
 
 from controllers.blocks import error_feedback, open_loop
 from controllers.lti import SisoTf
-from twin.process.cutting import AverageForce
+from controllers.papers.seed004 import cutting_coupled_plant
 from twin.errors import TwinInputError
 from twin.machines import MACHINES, build, get_machine
-from twin.machines.linear_motor import cutting_coupled_plant
+from twin.process.cutting import AverageForce
 from twin.references import Step, SumOfSines
 from twin.sim.runner import simulate
 
-TARGETS = {"time_nrmse": 0.005, "frf_max_mag_err_db": 0.2, "frf_max_phase_err_deg": 2.0,
-           "coupling_slip_um": 0.1}
+TARGETS = {"time_nrmse": 0.005, "frf_max_mag_err_db": 0.2, "frf_max_phase_err_deg": 2.0, "coupling_slip_um": 0.1}
 FULL_SCALE_V = 10.0
 FRICTION_SYMBOLS = ("F_coul_x", "F_coul_y")
 #: Seed 004 Table 1, up milling (N s/m).
 SEED004_CUTTING = AverageForce(k_il_N_s_per_m=-2500.0, k_c_N_s_per_m=2500.0)
 #: Fidelity cases: name -> (machine, cutting-force model or None).
-CASES = {**{name: (name, None) for name in MACHINES},
-         "linear_motor_xy+average_force": ("linear_motor_xy", SEED004_CUTTING)}
+CASES = {
+    **{name: (name, None) for name in MACHINES},
+    "linear_motor_xy+average_force": ("linear_motor_xy", SEED004_CUTTING),
+}
 
 
 def _discrete_reference(bm, reference, dt):
     """ZOH-exact state-space model of the reference at ``dt``, with the drive delay in samples."""
     g = control.c2d(control.ss(reference), dt, "zoh")
-    return g, int(round(bm.delay_s / dt))
+    return g, round(bm.delay_s / dt)
 
 
 def _tf_listing(bm, reference) -> dict:
@@ -66,8 +67,7 @@ def _tf_listing(bm, reference) -> dict:
             if not (np.abs(num) > 1e-12 * np.abs(plant.den[i][j]).max()).any():
                 continue
             key = yi if len(names) == 1 or i == j else f"{yi}<-u_{uj}"
-            out[key] = {"num": num.tolist(), "den": np.asarray(plant.den[i][j], float).tolist(),
-                        "delay_s": bm.delay_s}
+            out[key] = {"num": num.tolist(), "den": np.asarray(plant.den[i][j], float).tolist(), "delay_s": bm.delay_s}
     return out
 
 
@@ -76,7 +76,7 @@ def time_response_nrmse(bm, reference, duration_s: float = 1.0, disturbances=())
     (a python-control model, V to m)."""
     dt = bm.model.opt.timestep
     n_axes = len(bm.axes)
-    n = int(round(duration_s / dt))
+    n = round(duration_s / dt)
     t = np.arange(n) * dt
     test = np.where(t < 0.2, 1.0, np.where(t < 0.4, -1.0, 0.0)) + 0.5 * np.sin(2 * math.pi * 3.0 * t)
     g, delay = _discrete_reference(bm, reference, dt)
@@ -84,8 +84,16 @@ def time_response_nrmse(bm, reference, duration_s: float = 1.0, disturbances=())
     for k in range(n_axes):
         u = np.zeros((n, n_axes))
         u[:, k] = test
-        res = simulate(bm, open_loop(u, dt, [a.name for a in bm.axes]), Step(0.0, n_axes=n_axes), duration_s, dt,
-                       disturbances=disturbances, progress=False, record_every=1)
+        res = simulate(
+            bm,
+            open_loop(u, dt, [a.name for a in bm.axes]),
+            Step(0.0, n_axes=n_axes),
+            duration_s,
+            dt,
+            disturbances=disturbances,
+            progress=False,
+            record_every=1,
+        )
         u_delayed = np.vstack([np.zeros((delay, n_axes)), u[: n - delay]]) if delay else u
         y_ref = np.atleast_2d(control.forced_response(g, T=t, U=u_delayed.T).outputs).T
         err = res.table_position_m() - y_ref
@@ -99,9 +107,16 @@ def multisine_bins(period_s: float, f_min_hz: float, f_max_hz: float, n_tones: i
     return np.unique(np.round(np.geomspace(k_min, k_max, n_tones)).astype(int))
 
 
-def frequency_response_errors(bm, reference, period_s: float = 10.0, f_max_hz: float = 50.0,
-                              n_tones: int = 40, crossover_hz: float = 2.0, settle_s: float = 5.0,
-                              disturbances=()) -> dict:
+def frequency_response_errors(
+    bm,
+    reference,
+    period_s: float = 10.0,
+    f_max_hz: float = 50.0,
+    n_tones: int = 40,
+    crossover_hz: float = 2.0,
+    settle_s: float = 5.0,
+    disturbances=(),
+) -> dict:
     """Check (b): measured frequency response against ``reference`` (a python-control model,
     V to m), worst magnitude (dB) and phase (deg)."""
     dt = bm.model.opt.timestep
@@ -110,7 +125,7 @@ def frequency_response_errors(bm, reference, period_s: float = 10.0, f_max_hz: f
     freqs = bins / period_s
     # proportional gain per axis: loop gain 1 at crossover_hz on the diagonal channel
     kp = [1.0 / abs(reference[i, i](2j * math.pi * crossover_hz)) for i in range(n_axes)]
-    n_period = int(round(period_s / dt))
+    n_period = round(period_s / dt)
     settle = max(1, math.ceil(settle_s / period_s))  # whole periods discarded as transient
     phases = -math.pi * bins * (bins - 1) / len(bins)  # Schroeder: low crest factor
     Y = np.zeros((len(bins), n_axes, n_axes), complex)
@@ -118,12 +133,14 @@ def frequency_response_errors(bm, reference, period_s: float = 10.0, f_max_hz: f
     for k in range(n_axes):
         amp = 0.2 / kp[k]  # about 0.2 V per tone at high frequency
         ref = SumOfSines((amp,) * len(bins), tuple(freqs), tuple(phases), n_axes=n_axes, axes=(k,))
-        ctrls = [error_feedback(SisoTf((kp[i],), (1.0,)), dt, (a.name,), name=f"P.{a.name}")
-                 for i, a in enumerate(bm.axes)]
-        res = simulate(bm, ctrls, ref, (settle + 1) * period_s, dt, disturbances=disturbances, progress=False,
-                       record_every=1)
-        y = res.table_position_m()[settle * n_period:]
-        u = res.u_applied_V[settle * n_period:]
+        ctrls = [
+            error_feedback(SisoTf((kp[i],), (1.0,)), dt, (a.name,), name=f"P.{a.name}") for i, a in enumerate(bm.axes)
+        ]
+        res = simulate(
+            bm, ctrls, ref, (settle + 1) * period_s, dt, disturbances=disturbances, progress=False, record_every=1
+        )
+        y = res.table_position_m()[settle * n_period :]
+        u = res.u_applied_V[settle * n_period :]
         Y[:, :, k] = np.fft.rfft(y, axis=0)[bins]
         U[:, :, k] = np.fft.rfft(u, axis=0)[bins]
     G_meas = Y @ np.linalg.inv(U)
@@ -132,9 +149,12 @@ def frequency_response_errors(bm, reference, period_s: float = 10.0, f_max_hz: f
     G_ref = np.stack([g(zi) * zi ** (-delay) for zi in z]).reshape(len(bins), n_axes, n_axes)
     diag = np.arange(n_axes)
     ratio = G_meas[:, diag, diag] / G_ref[:, diag, diag]
-    out = {"frf_max_mag_err_db": float(np.abs(20 * np.log10(np.abs(ratio))).max()),
-           "frf_max_phase_err_deg": float(np.abs(np.degrees(np.angle(ratio))).max()),
-           "frf_band_hz": [float(freqs[0]), float(freqs[-1])], "frf_tones": int(len(bins))}
+    out = {
+        "frf_max_mag_err_db": float(np.abs(20 * np.log10(np.abs(ratio))).max()),
+        "frf_max_phase_err_deg": float(np.abs(np.degrees(np.angle(ratio))).max()),
+        "frf_band_hz": [float(freqs[0]), float(freqs[-1])],
+        "frf_tones": len(bins),
+    }
     off = ~np.eye(n_axes, dtype=bool)
     if n_axes > 1 and np.abs(G_ref[:, off]).max() > 0:
         # cross-coupling channels: relative complex error against the direct channel's size
@@ -148,17 +168,23 @@ def coupling_slip_um(bm, duration_s: float = 0.4) -> float:
     if not bm.couplings:
         return 0.0
     dt = bm.model.opt.timestep
-    n = int(round(duration_s / dt))
+    n = round(duration_s / dt)
     n_axes = len(bm.axes)
     u = np.full((n, n_axes), FULL_SCALE_V)
-    u[n // 2:] = -FULL_SCALE_V
-    res = simulate(bm, open_loop(u, dt, [a.name for a in bm.axes]), Step(0.0, n_axes=n_axes), duration_s, dt,
-                   progress=False, record_every=1)
+    u[n // 2 :] = -FULL_SCALE_V
+    res = simulate(
+        bm,
+        open_loop(u, dt, [a.name for a in bm.axes]),
+        Step(0.0, n_axes=n_axes),
+        duration_s,
+        dt,
+        progress=False,
+        record_every=1,
+    )
     return float(bm.slip_m(res.qpos).max() * 1e6)
 
 
-def fidelity(case: str, overrides: dict | None = None, *, frf_period_s: float = 10.0,
-             frf_tones: int = 40) -> dict:
+def fidelity(case: str, overrides: dict | None = None, *, frf_period_s: float = 10.0, frf_tones: int = 40) -> dict:
     """All three checks for one case of :data:`CASES` (a machine name, or a machine with a
     cutting-force model); see the module docstring.
 
@@ -184,9 +210,14 @@ def fidelity(case: str, overrides: dict | None = None, *, frf_period_s: float = 
     if cutting is not None:
         reference = control.ss(*cutting_coupled_plant(bm.params, cutting.k_il_N_s_per_m, cutting.k_c_N_s_per_m))
         disturbances = (cutting,)
-    out = {"machine": machine, "case": case, "overrides": overrides, "friction_forced_off": sorted(forced),
-           "tf": _tf_listing(bm, reference),
-           "time_nrmse": time_response_nrmse(bm, reference, disturbances=disturbances)}
+    out = {
+        "machine": machine,
+        "case": case,
+        "overrides": overrides,
+        "friction_forced_off": sorted(forced),
+        "tf": _tf_listing(bm, reference),
+        "time_nrmse": time_response_nrmse(bm, reference, disturbances=disturbances),
+    }
     out.update(frequency_response_errors(bm, reference, frf_period_s, n_tones=frf_tones, disturbances=disturbances))
     out["coupling_slip_um"] = coupling_slip_um(bm)
     out["targets"] = TARGETS

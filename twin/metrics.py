@@ -13,8 +13,9 @@ import numpy as np
 from numba import njit
 
 
-def step_metrics(t_s: np.ndarray, y: np.ndarray, final: float | None = None,
-                 settling_band: float = 0.02) -> dict[str, float]:
+def step_metrics(
+    t_s: np.ndarray, y: np.ndarray, final: float | None = None, settling_band: float = 0.02
+) -> dict[str, float]:
     """Overshoot, settling and rise times of a step response.
 
     Parameters

@@ -13,6 +13,7 @@ def plot_folder(folder):
     ``save(fig, name)`` that writes ``folder/name`` (folder created) at 120 dpi, closes the
     figure and appends the path to the list ``written``."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -24,6 +25,7 @@ def plot_folder(folder):
         written.append(folder / name)
         fig.savefig(written[-1], dpi=120, bbox_inches="tight")
         plt.close(fig)
+
     return plt, save, written
 
 
@@ -59,17 +61,34 @@ def write_plots(result, directory: Path, name: str = "run") -> list[Path]:
     axes = result.axis_names
     error_um = result.error_m() * 1e6
     written = [
-        _axes_plot(plt, t, {f"{a}": error_um[:, i] for i, a in enumerate(axes)}, "reference - actual (µm)",
-                   f"{name}: tracking error", directory / f"{name}_tracking_error.png"),
-        _axes_plot(plt, t, {f"{a}": result.u_V[:, i] for i, a in enumerate(axes)}, "control input (V)",
-                   f"{name}: control input", directory / f"{name}_control.png"),
+        _axes_plot(
+            plt,
+            t,
+            {f"{a}": error_um[:, i] for i, a in enumerate(axes)},
+            "reference - actual (µm)",
+            f"{name}: tracking error",
+            directory / f"{name}_tracking_error.png",
+        ),
+        _axes_plot(
+            plt,
+            t,
+            {f"{a}": result.u_V[:, i] for i, a in enumerate(axes)},
+            "control input (V)",
+            f"{name}: control input",
+            directory / f"{name}_control.png",
+        ),
     ]
     quantity, unit = machine.drive_quantity(machine.axes[0])
-    panels = [(f"drive {quantity} ({unit})",
-               {a.name: result.actuator_force[:, machine.model.actuator(a.actuator).id] for a in machine.axes})]
+    panels = [
+        (
+            f"drive {quantity} ({unit})",
+            {a.name: result.actuator_force[:, machine.model.actuator(a.actuator).id] for a in machine.axes},
+        )
+    ]
     if result.has_workpiece_force:
-        panels.append(("cutting force on the workpiece (N)",
-                       {a: result.workpiece_force_N[:, i] for i, a in enumerate(axes)}))
+        panels.append(
+            ("cutting force on the workpiece (N)", {a: result.workpiece_force_N[:, i] for i, a in enumerate(axes)})
+        )
     fig, plot_axes = plt.subplots(len(panels), 1, figsize=(8, 3.2 * len(panels)), sharex=True, squeeze=False)
     for ax, (ylabel, series) in zip(plot_axes[:, 0], panels):
         for label, values in series.items():

@@ -16,7 +16,7 @@ import numpy as np
 
 def _per_axis(signal: np.ndarray, n_axes: int, axes: tuple[int, ...] | None) -> np.ndarray:
     out = np.zeros((signal.shape[0], n_axes, 3))
-    for a in (range(n_axes) if axes is None else axes):
+    for a in range(n_axes) if axes is None else axes:
         out[:, a, :] = signal
     return out
 

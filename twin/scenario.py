@@ -14,7 +14,7 @@ from contextlib import contextmanager
 from dataclasses import replace
 from importlib import resources
 from pathlib import Path
-from typing import Annotated, Literal, Union
+from typing import Annotated, Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, PositiveFloat, ValidationError
@@ -22,12 +22,12 @@ from pydantic import BaseModel, ConfigDict, Field, PositiveFloat, ValidationErro
 from controllers import CONTROLLERS, OBSERVERS, make_controller
 from controllers.blocks import with_correction
 from controllers.registry import Context, make_observers
-from twin.process.cutting import MATERIALS, MAX_FLUTES, MIN_SPINDLE_RPM, AverageForce, EndMilling
-from twin.process.disturbances import MAX_INPUT_HARMONICS, HarmonicInput, VoltageStep
-from twin.sim.drive import Drive, Encoder, substeps_per_tick
 from twin.errors import TwinInputError
 from twin.machines import build
+from twin.process.cutting import MATERIALS, MAX_FLUTES, MIN_SPINDLE_RPM, AverageForce, EndMilling
+from twin.process.disturbances import MAX_INPUT_HARMONICS, HarmonicInput, VoltageStep
 from twin.references import MAX_SINES, Circle, Polyline, Ramp, Step, SumOfSines, square
+from twin.sim.drive import Drive, Encoder, substeps_per_tick
 from twin.sim.runner import MAX_PHYSICS_STEPS, RunResult, simulate
 
 
@@ -107,8 +107,9 @@ class PolylineRef(_Strict):
     feed_mm_per_min: float = Field(ge=MIN_FEED_MM_PER_MIN, le=MAX_FEED_MM_PER_MIN)
 
 
-ReferenceSpec = Annotated[Union[StepRef, RampRef, SinesRef, CircleRef, SquareRef, PolylineRef],
-                          Field(discriminator="type")]
+ReferenceSpec = Annotated[
+    StepRef | RampRef | SinesRef | CircleRef | SquareRef | PolylineRef, Field(discriminator="type")
+]
 
 
 class DriveSpec(_Strict):
@@ -172,8 +173,9 @@ class HarmonicInputSpec(_Strict):
     type: Literal["harmonic_input"]
     amplitudes_V: list[float] = Field(max_length=MAX_INPUT_HARMONICS)
     frequencies_hz: list[PositiveFloat] = Field(max_length=MAX_INPUT_HARMONICS)
-    phases_rad: list[float] | None = Field(None, max_length=MAX_INPUT_HARMONICS,
-                                           description="None: drawn from the seed")
+    phases_rad: list[float] | None = Field(
+        None, max_length=MAX_INPUT_HARMONICS, description="None: drawn from the seed"
+    )
     axes: list[str] | None = None
     start_s: float = Field(0.0, ge=0)
     seed: int | None = Field(None, ge=0)
@@ -188,8 +190,9 @@ class VoltageStepSpec(_Strict):
     axes: list[str] | None = None
 
 
-DisturbanceSpec = Annotated[Union[EndMillingSpec, AverageForceSpec, HarmonicInputSpec, VoltageStepSpec],
-                            Field(discriminator="type")]
+DisturbanceSpec = Annotated[
+    EndMillingSpec | AverageForceSpec | HarmonicInputSpec | VoltageStepSpec, Field(discriminator="type")
+]
 
 
 #: Shortest physics step (s): 0.1 us, a thousand times finer than any mode of these drives needs.
@@ -211,8 +214,9 @@ class Scenario(_Strict):
     timestep_s: float = Field(1e-4, ge=MIN_TIMESTEP_S, le=MAX_TIMESTEP_S)
     control_period_s: float = Field(1e-3, ge=MIN_TIMESTEP_S, le=MAX_CONTROL_PERIOD_S)
     seed: int = Field(0, ge=0)
-    record_every_ticks: int | None = Field(None, ge=0, description="record every Nth tick; 0: metrics only; "
-                                                                    "default every tick up to 100 000 ticks")
+    record_every_ticks: int | None = Field(
+        None, ge=0, description="record every Nth tick; 0: metrics only; default every tick up to 100 000 ticks"
+    )
     controller: ControllerSpec | None = None
     controllers: dict[str, ControllerSpec] | None = None
     reference: ReferenceSpec
@@ -310,8 +314,9 @@ def read_scenario_data(source: str | Path) -> dict:
     if not path.exists():
         bundled = bundled_scenarios()
         if str(source) not in bundled:
-            raise TwinInputError("scenario", str(source),
-                                 f"no such file or bundled scenario (bundled: {', '.join(sorted(bundled))})")
+            raise TwinInputError(
+                "scenario", str(source), f"no such file or bundled scenario (bundled: {', '.join(sorted(bundled))})"
+            )
         path = bundled[str(source)]
     if not path.is_file():
         raise TwinInputError("scenario", str(source), "not a file")
@@ -376,10 +381,16 @@ def _reference(spec, axis_names: list[str]):
         return Ramp(spec.rate_m_per_s, spec.t0_s, n, axes_idx(spec.axes))
     if isinstance(spec, SinesRef):
         if len(spec.amplitudes_m) != len(spec.frequencies_hz):
-            raise TwinInputError("reference.frequencies_hz", spec.frequencies_hz,
-                                 "needs as many entries as amplitudes_m")
-        return SumOfSines(tuple(spec.amplitudes_m), tuple(spec.frequencies_hz),
-                          tuple(spec.phases_rad) if spec.phases_rad else None, n, axes_idx(spec.axes))
+            raise TwinInputError(
+                "reference.frequencies_hz", spec.frequencies_hz, "needs as many entries as amplitudes_m"
+            )
+        return SumOfSines(
+            tuple(spec.amplitudes_m),
+            tuple(spec.frequencies_hz),
+            tuple(spec.phases_rad) if spec.phases_rad else None,
+            n,
+            axes_idx(spec.axes),
+        )
     if isinstance(spec, CircleRef):
         return Circle(spec.radius_mm, spec.feed_mm_per_min)
     if isinstance(spec, SquareRef):
@@ -413,21 +424,33 @@ def _controller(spec: ControllerSpec, field: str, base: Context):
     if spec.type not in CONTROLLERS:
         raise TwinInputError(f"{field}.type", spec.type, f"unknown controller (known: {', '.join(CONTROLLERS)})")
     if (spec.type == "sum") != (spec.parts is not None):
-        raise TwinInputError(f"{field}.parts", [p.type for p in spec.parts or []],
-                             "give parts for type 'sum', and only there")
+        raise TwinInputError(
+            f"{field}.parts", [p.type for p in spec.parts or []], "give parts for type 'sum', and only there"
+        )
     parts = [_controller(p, f"{field}.parts.{i}", base) for i, p in enumerate(spec.parts or [])]
     ctx = replace(base, method=spec.discretization)
     try:
         with _design_warnings_as_errors():
-            ctrl = make_controller(spec.type, ctx.dt, spec.params, ctx.method, spec.velocity_ff,
-                                   spec.acceleration_ff, ctx.axes, ctx.plants, parts, ctx.delay_s)
+            ctrl = make_controller(
+                spec.type,
+                ctx.dt,
+                spec.params,
+                ctx.method,
+                spec.velocity_ff,
+                spec.acceleration_ff,
+                ctx.axes,
+                ctx.plants,
+                parts,
+                ctx.delay_s,
+            )
     except (ValueError, KeyError, TypeError, RuntimeWarning) as exc:
         raise TwinInputError(f"{field}.params", spec.params, _design_failure(exc)) from None
     if spec.observer is None:
         return ctrl
     if spec.observer.type not in OBSERVERS:
-        raise TwinInputError(f"{field}.observer.type", spec.observer.type,
-                             f"unknown observer (known: {', '.join(OBSERVERS)})")
+        raise TwinInputError(
+            f"{field}.observer.type", spec.observer.type, f"unknown observer (known: {', '.join(OBSERVERS)})"
+        )
     try:
         with _design_warnings_as_errors():
             observers = make_observers(spec.observer.type, spec.observer.params, ctx)
@@ -444,17 +467,42 @@ def _disturbance(spec, index: int, axis_names: list[str], seed: int):
     try:
         if isinstance(spec, EndMillingSpec):
             coeffs = replace(MATERIALS[spec.material], **spec.coefficients.model_dump(exclude_none=True))
-            return EndMilling(spec.spindle_rpm, spec.n_flutes, spec.diameter_mm, spec.axial_depth_mm,
-                              spec.radial_depth_mm, spec.mode, coeffs, spec.start_s, spec.stop_s,
-                              spec.spindle_phase_rad, seed)
+            return EndMilling(
+                spec.spindle_rpm,
+                spec.n_flutes,
+                spec.diameter_mm,
+                spec.axial_depth_mm,
+                spec.radial_depth_mm,
+                spec.mode,
+                coeffs,
+                spec.start_s,
+                spec.stop_s,
+                spec.spindle_phase_rad,
+                seed,
+            )
         if isinstance(spec, AverageForceSpec):
-            return AverageForce(spec.k_il_N_s_per_m, spec.k_c_N_s_per_m, spec.harmonic_fraction, spec.spindle_rpm,
-                                spec.n_flutes, spec.start_s, spec.stop_s, spec.harmonic_phase_rad, seed)
+            return AverageForce(
+                spec.k_il_N_s_per_m,
+                spec.k_c_N_s_per_m,
+                spec.harmonic_fraction,
+                spec.spindle_rpm,
+                spec.n_flutes,
+                spec.start_s,
+                spec.stop_s,
+                spec.harmonic_phase_rad,
+                seed,
+            )
         axes = _axes_indices(spec.axes, axis_names, f"{field}.axes")
         if isinstance(spec, HarmonicInputSpec):
-            return HarmonicInput(tuple(spec.amplitudes_V), tuple(spec.frequencies_hz),
-                                 tuple(spec.phases_rad) if spec.phases_rad is not None else None,
-                                 n, axes, spec.start_s, seed)
+            return HarmonicInput(
+                tuple(spec.amplitudes_V),
+                tuple(spec.frequencies_hz),
+                tuple(spec.phases_rad) if spec.phases_rad is not None else None,
+                n,
+                axes,
+                spec.start_s,
+                seed,
+            )
         return VoltageStep(spec.amplitude_V, spec.start_s, n, axes)
     except TwinInputError as exc:
         name = exc.field.removeprefix("disturbance.")
@@ -475,8 +523,9 @@ def prepare(scn: Scenario):
     names = [a.name for a in machine.axes]
     substeps = substeps_per_tick(scn.control_period_s, scn.timestep_s)
     delay = machine.delay_s if scn.drive.delay_s is None else scn.drive.delay_s
-    base = Context(scn.control_period_s, tuple(names), plants={a: machine.plant[i][i] for i, a in enumerate(names)},
-                   delay_s=delay)
+    base = Context(
+        scn.control_period_s, tuple(names), plants={a: machine.plant[i][i] for i, a in enumerate(names)}, delay_s=delay
+    )
     if (scn.controller is None) == (scn.controllers is None):
         raise TwinInputError("controller", None, "give either [controller] (all axes) or [controllers.<axis>]")
     if scn.controllers is not None:
@@ -488,13 +537,24 @@ def prepare(scn: Scenario):
     else:
         ctrls = [_controller(scn.controller, "controller", base)]
     drive = Drive(len(names), substeps, scn.timestep_s, delay, scn.drive.saturation_V)
-    encoder = Encoder(_per_axis(scn.sensors.encoder_resolution_m, len(names), "sensors.encoder_resolution_m"),
-                      _per_axis(scn.sensors.noise_std_m, len(names), "sensors.noise_std_m"),
-                      np.array(machine.sensor_gains), scn.seed, scn.sensors.velocity)
-    return {"machine": machine, "controllers": ctrls, "reference": _reference(scn.reference, names),
-            "duration_s": scn.duration_s, "control_period_s": scn.control_period_s,
-            "drive": drive, "encoder": encoder, "record_every": scn.record_every_ticks,
-            "disturbances": [_disturbance(d, i, names, scn.seed) for i, d in enumerate(scn.disturbances)]}
+    encoder = Encoder(
+        _per_axis(scn.sensors.encoder_resolution_m, len(names), "sensors.encoder_resolution_m"),
+        _per_axis(scn.sensors.noise_std_m, len(names), "sensors.noise_std_m"),
+        np.array(machine.sensor_gains),
+        scn.seed,
+        scn.sensors.velocity,
+    )
+    return {
+        "machine": machine,
+        "controllers": ctrls,
+        "reference": _reference(scn.reference, names),
+        "duration_s": scn.duration_s,
+        "control_period_s": scn.control_period_s,
+        "drive": drive,
+        "encoder": encoder,
+        "record_every": scn.record_every_ticks,
+        "disturbances": [_disturbance(d, i, names, scn.seed) for i, d in enumerate(scn.disturbances)],
+    }
 
 
 def run_scenario(scn: Scenario, progress: bool | None = None, max_physics_steps: int = MAX_PHYSICS_STEPS) -> RunResult:

@@ -44,22 +44,57 @@ def named_series(result, rows: slice = slice(None)) -> list[Series]:
     for i, axis in enumerate(machine.axes):
         a = axis.name
         strong, pale = axis_colors(a)
-        out += [Series(f"reference/{a}", ref[:, i] * 1e3, f"{a} reference", "mm", pale, 3.0),
-                Series(f"actual/{a}", pos[:, i] * 1e3, f"{a} actual", "mm", strong),
-                Series(f"error/{a}", (ref[:, i] - pos[:, i]) * 1e6, f"{a} error", "µm", strong),
-                Series(f"control/{a}", result.u_V[rows, i], f"{a} control input", "V", strong)]
+        out += [
+            Series(f"reference/{a}", ref[:, i] * 1e3, f"{a} reference", "mm", pale, 3.0),
+            Series(f"actual/{a}", pos[:, i] * 1e3, f"{a} actual", "mm", strong),
+            Series(f"error/{a}", (ref[:, i] - pos[:, i]) * 1e6, f"{a} error", "µm", strong),
+            Series(f"control/{a}", result.u_V[rows, i], f"{a} control input", "V", strong),
+        ]
         quantity, unit = machine.drive_quantity(axis)
-        out.append(Series(f"{quantity}/drive/{a}", result.actuator_force[rows, machine.model.actuator(axis.actuator).id],
-                          f"{a} drive {quantity}", unit, strong))
+        out.append(
+            Series(
+                f"{quantity}/drive/{a}",
+                result.actuator_force[rows, machine.model.actuator(axis.actuator).id],
+                f"{a} drive {quantity}",
+                unit,
+                strong,
+            )
+        )
         if result.has_workpiece_force:
-            out.append(Series(f"force/cutting/{a}", result.workpiece_force_N[rows, i],
-                              f"{a} cutting force on the workpiece", "N", strong))
+            out.append(
+                Series(
+                    f"force/cutting/{a}",
+                    result.workpiece_force_N[rows, i],
+                    f"{a} cutting force on the workpiece",
+                    "N",
+                    strong,
+                )
+            )
         for part, joint, color in (("motor", axis.motor_joint, strong), ("screw", axis.screw_joint, pale)):
             if joint:
-                out += [Series(f"joints/{a}/{part}/angle", result.qpos[rows, machine.joint_qpos_index(joint)],
-                               f"{a} {part} angle", "rad", color),
-                        Series(f"joints/{a}/{part}/velocity", result.qvel[rows, machine.joint_dof_index(joint)],
-                               f"{a} {part} speed", "rad/s", color)]
-        out.append(Series(f"joints/{a}/table/velocity", result.qvel[rows, machine.joint_dof_index(axis.table_joint)] * 1e3,
-                          f"{a} table velocity", "mm/s", strong))
+                out += [
+                    Series(
+                        f"joints/{a}/{part}/angle",
+                        result.qpos[rows, machine.joint_qpos_index(joint)],
+                        f"{a} {part} angle",
+                        "rad",
+                        color,
+                    ),
+                    Series(
+                        f"joints/{a}/{part}/velocity",
+                        result.qvel[rows, machine.joint_dof_index(joint)],
+                        f"{a} {part} speed",
+                        "rad/s",
+                        color,
+                    ),
+                ]
+        out.append(
+            Series(
+                f"joints/{a}/table/velocity",
+                result.qvel[rows, machine.joint_dof_index(axis.table_joint)] * 1e3,
+                f"{a} table velocity",
+                "mm/s",
+                strong,
+            )
+        )
     return out

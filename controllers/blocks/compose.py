@@ -41,8 +41,10 @@ def lti_block(sys, dt: float, inputs, outputs, method: str = "tustin", name: str
         raise ValueError(f"method = {method!r}: use 'tustin' or 'zoh'")
     A, B, C, D, sys_dt = state_space(sys)
     if (B.shape[1], C.shape[0]) != (len(inputs), len(outputs)):
-        raise ValueError(f"block {name!r}: the model has {B.shape[1]} inputs and {C.shape[0]} outputs, "
-                         f"wired to {len(inputs)} and {len(outputs)} signals")
+        raise ValueError(
+            f"block {name!r}: the model has {B.shape[1]} inputs and {C.shape[0]} outputs, "
+            f"wired to {len(inputs)} and {len(outputs)} signals"
+        )
     if sys_dt is None:
         A, B, C, D = discretize(A, B, C, D, dt, method)
     elif not np.isclose(sys_dt, dt):
@@ -68,13 +70,28 @@ def with_feedforward(ctrl: Controller, velocity_ff, acceleration_ff) -> Controll
     if not (kv.any() or ka.any()):
         return ctrl
     inner = rename(ctrl, {f"u.{a}": f"{ctrl.name}:u.{a}" for a in axes})
-    sums = [Sum((1.0, kv[i], ka[i]), (f"{ctrl.name}:u.{a}", f"ref_vel.{a}", f"ref_acc.{a}"), f"u.{a}",
-                name=f"feedforward.{a}") for i, a in enumerate(axes)]
+    sums = [
+        Sum(
+            (1.0, kv[i], ka[i]),
+            (f"{ctrl.name}:u.{a}", f"ref_vel.{a}", f"ref_acc.{a}"),
+            f"u.{a}",
+            name=f"feedforward.{a}",
+        )
+        for i, a in enumerate(axes)
+    ]
     return Controller(inner.blocks + sums, ctrl.dt, ctrl.name)
 
 
-def cascade(outer, inner, dt: float, axis: str = "x", velocity_ref_ff: float = 0.0,
-            method: str = "tustin", name: str = "cascade", position_ref_ff: float = 0.0) -> Controller:
+def cascade(
+    outer,
+    inner,
+    dt: float,
+    axis: str = "x",
+    velocity_ref_ff: float = 0.0,
+    method: str = "tustin",
+    name: str = "cascade",
+    position_ref_ff: float = 0.0,
+) -> Controller:
     """Position loop around a velocity loop on one axis.
 
     ``v_ref = C_pos(z) error + velocity_ref_ff * ref_vel + position_ref_ff * ref`` (m/s), then
@@ -96,25 +113,31 @@ def cascade(outer, inner, dt: float, axis: str = "x", velocity_ref_ff: float = 0
     v_ref, v_err = f"{name}:v_ref.{axis}", f"{name}:v_error.{axis}"
     weights, signals = (1.0, velocity_ref_ff, -1.0), (v_ref, f"ref_vel.{axis}", f"vel.{axis}")
     if position_ref_ff:
-        weights, signals = weights + (position_ref_ff,), signals + (f"ref.{axis}",)
-    blocks = [lti_block(outer, dt, [f"error.{axis}"], [v_ref], method, "position"),
-              Sum(weights, signals, v_err, "velocity_error"),
-              lti_block(inner, dt, [v_err], [f"u.{axis}"], method, "velocity")]
+        weights, signals = (*weights, position_ref_ff), (*signals, f"ref.{axis}")
+    blocks = [
+        lti_block(outer, dt, [f"error.{axis}"], [v_ref], method, "position"),
+        Sum(weights, signals, v_err, "velocity_error"),
+        lti_block(inner, dt, [v_err], [f"u.{axis}"], method, "velocity"),
+    ]
     return Controller(blocks, dt, name)
 
 
-def lure(sys, nonlinearity: str, settings, dt: float, axis: str = "x", method: str = "tustin",
-         name: str = "lure") -> Controller:
+def lure(
+    sys, nonlinearity: str, settings, dt: float, axis: str = "x", method: str = "tustin", name: str = "lure"
+) -> Controller:
     """Lur'e form: a static nonlinearity on the error, then a linear part:
     ``u = C(z) f(error)`` (see :data:`controllers.blocks.core.NONLINEARITIES`)."""
     shaped = f"{name}:f_error.{axis}"
-    blocks = [Static(nonlinearity, tuple(settings), (f"error.{axis}",), (shaped,), "nonlinearity"),
-              lti_block(sys, dt, [shaped], [f"u.{axis}"], method, "linear")]
+    blocks = [
+        Static(nonlinearity, tuple(settings), (f"error.{axis}",), (shaped,), "nonlinearity"),
+        lti_block(sys, dt, [shaped], [f"u.{axis}"], method, "linear"),
+    ]
     return Controller(blocks, dt, name)
 
 
-def relay_feedback(amplitude_V: float, hysteresis_m: float, dt: float, axis: str = "x",
-                   name: str = "relay") -> Controller:
+def relay_feedback(
+    amplitude_V: float, hysteresis_m: float, dt: float, axis: str = "x", name: str = "relay"
+) -> Controller:
     """Relay with hysteresis on the error, for the relay (Astrom-Hagglund) tuning experiment.
 
     ``u = d`` while ``error + (eps/d) u_prev >= 0``, else ``-d``: the output switches to ``+d``
@@ -134,8 +157,10 @@ def relay_feedback(amplitude_V: float, hysteresis_m: float, dt: float, axis: str
         if not number or not (value > 0 if least == "> 0" else value >= 0):
             raise ValueError(f"{key} = {value!r}: must be a finite number {least}")
     switching = f"{name}:switching.{axis}"
-    blocks = [Sum((1.0, hysteresis_m / amplitude_V), (f"error.{axis}", f"u_prev.{axis}"), switching, "hysteresis"),
-              Static("relay", (amplitude_V,), (switching,), (f"u.{axis}",), "relay")]
+    blocks = [
+        Sum((1.0, hysteresis_m / amplitude_V), (f"error.{axis}", f"u_prev.{axis}"), switching, "hysteresis"),
+        Static("relay", (amplitude_V,), (switching,), (f"u.{axis}",), "relay"),
+    ]
     return Controller(blocks, dt, name)
 
 
@@ -147,8 +172,16 @@ MAX_OBSERVER_ORDER = 10
 MAX_HARMONICS = 10
 
 
-def inverse_model_observer(plant, cutoff_hz: float, order: int, dt: float, axis: str = "x",
-                           method: str = "tustin", name: str = "dob", delay_s: float = 0.0) -> Linear:
+def inverse_model_observer(
+    plant,
+    cutoff_hz: float,
+    order: int,
+    dt: float,
+    axis: str = "x",
+    method: str = "tustin",
+    name: str = "dob",
+    delay_s: float = 0.0,
+) -> Linear:
     """Inverse-model disturbance observer: ``d_hat = Q P_n^-1 pos - Q z^-m u_prev`` (V).
 
     ``Q(s) = 1/(tau s + 1)^order`` with ``tau = 1/(2 pi cutoff_hz)``; ``order`` must be at least
@@ -172,23 +205,29 @@ def inverse_model_observer(plant, cutoff_hz: float, order: int, dt: float, axis:
     """
     nyquist_hz = 0.5 / dt
     if not 1e-6 <= cutoff_hz < nyquist_hz:
-        raise ValueError(f"cutoff_hz = {cutoff_hz!r}: must be at least 1e-6 Hz and below the Nyquist "
-                         f"frequency {nyquist_hz:g} Hz")
+        raise ValueError(
+            f"cutoff_hz = {cutoff_hz!r}: must be at least 1e-6 Hz and below the Nyquist frequency {nyquist_hz:g} Hz"
+        )
     if not (plant.relative_degree <= order <= MAX_OBSERVER_ORDER and int(order) == order):
-        raise ValueError(f"order = {order!r}: must be a whole number from the plant's relative degree "
-                         f"{plant.relative_degree} (else Q/P_n is improper) to {MAX_OBSERVER_ORDER}")
+        raise ValueError(
+            f"order = {order!r}: must be a whole number from the plant's relative degree "
+            f"{plant.relative_degree} (else Q/P_n is improper) to {MAX_OBSERVER_ORDER}"
+        )
     tau = 1.0 / (2.0 * math.pi * cutoff_hz)
     q_den = np.array([1.0])
     for _ in range(int(order)):
         q_den = np.polymul(q_den, [tau, 1.0])
     if not 0 <= delay_s <= MAX_OBSERVER_DELAY_TICKS * dt:
-        raise ValueError(f"delay_s = {delay_s!r}: must be from 0 to {MAX_OBSERVER_DELAY_TICKS} control periods "
-                         f"({MAX_OBSERVER_DELAY_TICKS * dt:g} s)")
-    lag = max(int(round(delay_s / dt)) - 1, 0)
+        raise ValueError(
+            f"delay_s = {delay_s!r}: must be from 0 to {MAX_OBSERVER_DELAY_TICKS} control periods "
+            f"({MAX_OBSERVER_DELAY_TICKS * dt:g} s)"
+        )
+    lag = max(round(delay_s / dt) - 1, 0)
     from_pos = discretize(*tf_to_ss(SisoTf(plant.den, np.polymul(plant.num, q_den))), dt, method)
     from_u = series(delay_ticks(lag), discretize(*tf_to_ss(SisoTf((-1.0,), q_den)), dt, method))
-    return Linear(*summed_inputs(from_pos, from_u), (f"pos.{axis}", f"u_prev.{axis}"), (f"{name}:d_hat.{axis}",),
-                  name=name)
+    return Linear(
+        *summed_inputs(from_pos, from_u), (f"pos.{axis}", f"u_prev.{axis}"), (f"{name}:d_hat.{axis}",), name=name
+    )
 
 
 def with_correction(ctrl: Controller, observers) -> Controller:
@@ -204,8 +243,10 @@ def with_correction(ctrl: Controller, observers) -> Controller:
             if ":d_hat." in out:
                 estimates.setdefault(out.rsplit(".", 1)[1], []).append(out)
     renames = {f"u.{a}": f"{ctrl.name}:u_ctrl.{a}" for a in estimates}
-    sums = [Sum((1.0,) + (-1.0,) * len(outs), (renames[f"u.{a}"], *outs), f"u.{a}", f"correction.{a}")
-            for a, outs in estimates.items()]
+    sums = [
+        Sum((1.0,) + (-1.0,) * len(outs), (renames[f"u.{a}"], *outs), f"u.{a}", f"correction.{a}")
+        for a, outs in estimates.items()
+    ]
     inner = rename(ctrl, renames)
     return Controller(inner.blocks + list(observers) + sums, ctrl.dt, ctrl.name)
 
@@ -224,9 +265,19 @@ def harmonic_estimator(frequencies_hz, bandwidth_hz: float, targets) -> SisoTf:
     return SisoTf(num, den)
 
 
-def harmonic_observer(plant, frequencies_hz, bandwidth_hz: float, dt: float, axis: str = "x",
-                      method: str = "tustin", name: str = "dfo", delay_s: float = 0.0, cutoff_hz: float = 100.0,
-                      order: int = 2, u_signal: str | None = None) -> Linear:
+def harmonic_observer(
+    plant,
+    frequencies_hz,
+    bandwidth_hz: float,
+    dt: float,
+    axis: str = "x",
+    method: str = "tustin",
+    name: str = "dfo",
+    delay_s: float = 0.0,
+    cutoff_hz: float = 100.0,
+    order: int = 2,
+    u_signal: str | None = None,
+) -> Linear:
     """Harmonic disturbance force observer: the sinusoids of known frequencies in the input
     disturbance, estimated from the inverse-model signal and predicted to when the
     correction acts.
@@ -248,11 +299,18 @@ def harmonic_observer(plant, frequencies_hz, bandwidth_hz: float, dt: float, axi
     """
     freqs = np.asarray(frequencies_hz, float).ravel()
     listing = [float(f) for f in freqs]
-    if not (1 <= len(freqs) <= MAX_HARMONICS and len(set(listing)) == len(listing) and (freqs > 0).all()
-            and (freqs < bandwidth_hz).all() and bandwidth_hz < cutoff_hz):
-        raise ValueError(f"frequencies_hz = {listing[:MAX_HARMONICS]}{' ...' if len(listing) > MAX_HARMONICS else ''}: "
-                         f"1 to {MAX_HARMONICS} different frequencies, each > 0 and below bandwidth_hz = "
-                         f"{bandwidth_hz!r}, which must be below cutoff_hz = {cutoff_hz!r}")
+    if not (
+        1 <= len(freqs) <= MAX_HARMONICS
+        and len(set(listing)) == len(listing)
+        and (freqs > 0).all()
+        and (freqs < bandwidth_hz).all()
+        and bandwidth_hz < cutoff_hz
+    ):
+        raise ValueError(
+            f"frequencies_hz = {listing[:MAX_HARMONICS]}{' ...' if len(listing) > MAX_HARMONICS else ''}: "
+            f"1 to {MAX_HARMONICS} different frequencies, each > 0 and below bandwidth_hz = "
+            f"{bandwidth_hz!r}, which must be below cutoff_hz = {cutoff_hz!r}"
+        )
     raw = inverse_model_observer(plant, cutoff_hz, order, dt, axis, method, f"{name}:raw", delay_s)
     if u_signal is not None:
         raw = replace(raw, inputs=(f"pos.{axis}", u_signal))
@@ -285,6 +343,7 @@ def open_loop(values, dt: float, axes=("x",), name: str = "open_loop") -> Contro
 
 def rename(ctrl: Controller, mapping: dict[str, str]) -> Controller:
     """The same controller with signals renamed (``mapping`` old -> new) in every block."""
+
     def names(seq):
         return tuple(mapping.get(s, s) for s in seq)
 

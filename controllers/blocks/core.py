@@ -55,8 +55,10 @@ class Linear:
         want = {"A": (n, n), "B": (n, ni), "C": (no, n), "D": (no, ni)}
         for key, shape in want.items():
             if getattr(self, key).shape != shape:
-                raise ValueError(f"block {self.name!r}: {key} has shape {getattr(self, key).shape}, "
-                                 f"needs {shape} for {ni} inputs, {no} outputs and order {n}")
+                raise ValueError(
+                    f"block {self.name!r}: {key} has shape {getattr(self, key).shape}, "
+                    f"needs {shape} for {ni} inputs, {no} outputs and order {n}"
+                )
             if not np.isfinite(getattr(self, key)).all():
                 raise ValueError(f"block {self.name!r}: {key} has non-finite entries")
 
@@ -109,13 +111,16 @@ class Static:
     def __post_init__(self):
         self.inputs, self.outputs = _names(self.inputs), _names(self.outputs)
         if self.nonlinearity not in NONLINEARITIES:
-            raise ValueError(f"block {self.name!r}: nonlinearity {self.nonlinearity!r} is not one of "
-                             f"{', '.join(NONLINEARITIES)}")
+            raise ValueError(
+                f"block {self.name!r}: nonlinearity {self.nonlinearity!r} is not one of {', '.join(NONLINEARITIES)}"
+            )
         names = NONLINEARITIES[self.nonlinearity][1]
         self.settings = tuple(float(p) for p in self.settings)
         if len(self.settings) != len(names) or not all(np.isfinite(self.settings)) or min(self.settings) < 0:
-            raise ValueError(f"block {self.name!r}: {self.nonlinearity} takes {', '.join(names)} "
-                             f"(finite, >= 0), got {list(self.settings)}")
+            raise ValueError(
+                f"block {self.name!r}: {self.nonlinearity} takes {', '.join(names)} "
+                f"(finite, >= 0), got {list(self.settings)}"
+            )
         if len(self.inputs) != len(self.outputs):
             raise ValueError(f"block {self.name!r}: needs as many outputs as inputs")
 
@@ -141,8 +146,9 @@ class Sequence:
         self.outputs = _names(self.outputs)
         self.values = np.atleast_2d(np.asarray(self.values, float))
         if self.values.shape[1] != len(self.outputs):
-            raise ValueError(f"block {self.name!r}: values have {self.values.shape[1]} columns for "
-                             f"{len(self.outputs)} outputs")
+            raise ValueError(
+                f"block {self.name!r}: values have {self.values.shape[1]} columns for {len(self.outputs)} outputs"
+            )
 
     @property
     def inputs(self) -> tuple[str, ...]:

@@ -60,8 +60,12 @@ class Program:
                 ins = []
                 for s in b.inputs:
                     if s not in index:
-                        raise SignalError(label, s, "no such signal: neither the loop nor an earlier "
-                                                    f"block writes it (loop signals: {_summary(loop_signals)})")
+                        raise SignalError(
+                            label,
+                            s,
+                            "no such signal: neither the loop nor an earlier "
+                            f"block writes it (loop signals: {_summary(loop_signals)})",
+                        )
                     ins.append(index[s])
                 outs = []
                 for s in b.outputs:
@@ -110,8 +114,8 @@ class Program:
                 kernels.run_blocks(i, i + 1, self.ops, self.io, self.par, self.state, self.scratch, self.bus)
             else:
                 row = self.ops[i]
-                ins = self.io[row[kernels.IN_START]:row[kernels.IN_START] + row[kernels.N_IN]]
-                outs = self.io[row[kernels.OUT_START]:row[kernels.OUT_START] + row[kernels.N_OUT]]
+                ins = self.io[row[kernels.IN_START] : row[kernels.IN_START] + row[kernels.N_IN]]
+                outs = self.io[row[kernels.OUT_START] : row[kernels.OUT_START] + row[kernels.N_OUT]]
                 self.bus[outs] = b.step(self.bus[ins].copy())
 
 

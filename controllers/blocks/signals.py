@@ -54,7 +54,8 @@ def preview_ticks_needed(signals) -> int:
         parts = name.split(".")
         if parts[0] == "preview":
             if len(parts) != 3 or not parts[2].isdigit() or not 1 <= int(parts[2]) <= MAX_PREVIEW_TICKS:
-                raise ValueError(f"{name!r}: a preview signal is preview.<axis>.<ticks ahead, "
-                                 f"1 to {MAX_PREVIEW_TICKS}>")
+                raise ValueError(
+                    f"{name!r}: a preview signal is preview.<axis>.<ticks ahead, 1 to {MAX_PREVIEW_TICKS}>"
+                )
             most = max(most, int(parts[2]))
     return most

@@ -31,6 +31,7 @@ def pi_for_margins(plant, gm_db: float, pm_deg: float, guess: tuple[float, float
     ValueError
         No PI reaches both margins from the guess (within 0.01 dB and 0.01 deg).
     """
+
     def residual(x):
         m = loop_margins(pi_loop(*np.exp(x), plant), n=20_000)
         return [m.gm_db - gm_db, m.pm_deg - pm_deg]
@@ -41,8 +42,11 @@ def pi_for_margins(plant, gm_db: float, pm_deg: float, guess: tuple[float, float
     kp, ki = (float(v) for v in np.exp(x))
     m = loop_margins(pi_loop(kp, ki, plant))
     if not (abs(m.gm_db - gm_db) < 0.01 and abs(m.pm_deg - pm_deg) < 0.01):
-        closest = (f"closest: {m.gm_db:.3g} dB, {m.pm_deg:.3g} deg" if np.isfinite([m.gm_db, m.pm_deg]).all()
-                   else "the search found no loop with finite margins")
+        closest = (
+            f"closest: {m.gm_db:.3g} dB, {m.pm_deg:.3g} deg"
+            if np.isfinite([m.gm_db, m.pm_deg]).all()
+            else "the search found no loop with finite margins"
+        )
         raise ValueError(f"no PI gives GM {gm_db} dB and PM {pm_deg} deg ({closest})")
     return kp, ki, m
 
@@ -61,7 +65,9 @@ def gain_for_phase_margin(plant, pm_deg: float, lo: float, hi: float) -> tuple[f
 
 def backward_difference(dt: float):
     """Velocity measured as (y_k - y_k-1)/dt, relative to the true derivative: (1 - e^(-jw dt))/(jw dt)."""
+
     def M(w):
         w = np.asarray(w, float)
         return (1 - np.exp(-1j * w * dt)) / (1j * w * dt)
+
     return M

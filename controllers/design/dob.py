@@ -26,9 +26,11 @@ def q_response(cutoff_hz: float, order: int, w: np.ndarray) -> np.ndarray:
 def delay_and_gain_error(delay_s: float, gain_error: float):
     """|Delta(jw)|: the worst of ``(1 + delta) e^(-jw T) - 1`` over ``|delta| <= gain_error``
     (an unmodelled delay T and a gain error), attained at one of the two extremes."""
+
     def size(w):
         phasor = np.exp(-1j * np.asarray(w, float) * delay_s)
         return np.maximum(np.abs((1 + gain_error) * phasor - 1), np.abs((1 - gain_error) * phasor - 1))
+
     return size
 
 

@@ -66,23 +66,26 @@ def oustaloup(alpha: float, wb: float, wh: float, order: int) -> Oustaloup:
         N: ``2 N + 1`` zeros and poles.
     """
     if not (-1.0 < alpha < 1.0 and 0 < wb < wh and int(order) == order >= 1):
-        raise ValueError(f"oustaloup: needs -1 < alpha < 1, 0 < wb < wh and a whole order >= 1, got "
-                         f"alpha = {alpha}, band = [{wb}, {wh}], order = {order}")
+        raise ValueError(
+            f"oustaloup: needs -1 < alpha < 1, 0 < wb < wh and a whole order >= 1, got "
+            f"alpha = {alpha}, band = [{wb}, {wh}], order = {order}"
+        )
     k = np.arange(-order, order + 1)
     span = wh / wb
     zeros = wb * span ** ((k + order + 0.5 * (1 - alpha)) / (2 * order + 1))
     poles = wb * span ** ((k + order + 0.5 * (1 + alpha)) / (2 * order + 1))
-    return Oustaloup(float(wh ** alpha), zeros, poles)
+    return Oustaloup(float(wh**alpha), zeros, poles)
 
 
-def fractional_pi(kp: float, ki: float, lam: float, wb: float, wh: float,
-                  order: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def fractional_pi(
+    kp: float, ki: float, lam: float, wb: float, wh: float, order: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``kp + ki s^-lam`` (eq. 14's form) as ``(A, B, C, D)``, ``s^-lam`` by :func:`oustaloup`."""
     A, B, C, D = oustaloup(-lam, wb, wh, order).state_space()
     return A, B, ki * C, ki * D + kp
 
 
-def bromwich_inverse(F, t_max_s: float, n: int = 2 ** 17, digits: float = 10.0) -> tuple[np.ndarray, np.ndarray]:
+def bromwich_inverse(F, t_max_s: float, n: int = 2**17, digits: float = 10.0) -> tuple[np.ndarray, np.ndarray]:
     """``f(t)`` on ``[0, t_max_s]`` from its Laplace transform ``F(s)``: the Bromwich integral on
     ``Re s = c`` by the trapezoidal rule, all times at once by FFT (Durbin's Fourier-series
     method).

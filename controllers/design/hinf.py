@@ -95,8 +95,14 @@ class GammaIteration:
         return 1.0 / self.gamma
 
 
-def gamma_iteration(P: control.StateSpace, gamma_max: float = 1e4, gamma_min: float = 1e-3,
-                    tol: float = 1e-3, ncon: int = 1, nmeas: int = 1) -> GammaIteration:
+def gamma_iteration(
+    P: control.StateSpace,
+    gamma_max: float = 1e4,
+    gamma_min: float = 1e-3,
+    tol: float = 1e-3,
+    ncon: int = 1,
+    nmeas: int = 1,
+) -> GammaIteration:
     """Bisect (geometrically) on gamma for the smallest admissible one (``ncon`` control
     inputs and ``nmeas`` measurements, as for :func:`central_controller`).
 

@@ -37,8 +37,9 @@ def imc_controller(plant: control.TransferFunction, mu_s: float, lam: int) -> co
     num = np.trim_zeros(num, "f")
     relative_degree = len(den) - len(num)
     if lam < relative_degree:
-        raise ValueError(f"lam = {lam}: Q(s) is improper unless lambda >= the plant's relative "
-                         f"degree {relative_degree}")
+        raise ValueError(
+            f"lam = {lam}: Q(s) is improper unless lambda >= the plant's relative degree {relative_degree}"
+        )
     filt = np.array([1.0])
     for _ in range(lam):
         filt = np.polymul(filt, [mu_s, 1.0])

@@ -36,8 +36,11 @@ class PoleRegion:
         """Whether every pole lies in the region (``tol`` relative)."""
         p = np.asarray(poles, complex)
         zeta = -p.real / np.abs(p)
-        return bool(np.all(p.real <= -self.alpha * (1 - tol)) and np.all(zeta >= self.damping * (1 - tol))
-                    and np.all(np.abs(p) <= self.radius * (1 + tol)))
+        return bool(
+            np.all(p.real <= -self.alpha * (1 - tol))
+            and np.all(zeta >= self.damping * (1 - tol))
+            and np.all(np.abs(p) <= self.radius * (1 + tol))
+        )
 
 
 def region_state_feedback(A: np.ndarray, B: np.ndarray, region: PoleRegion, margin: float = 1e-3) -> np.ndarray:
@@ -61,10 +64,12 @@ def region_state_feedback(A: np.ndarray, B: np.ndarray, region: PoleRegion, marg
     M = A @ P - B @ Y
     s, c = math.sin(math.acos(region.damping)), region.damping
     eye, eye2 = np.eye(n), np.eye(2 * n)
-    cons = [P >> eye,
-            M + M.T + 2 * region.alpha * P << -margin * eye,
-            cp.bmat([[s * (M + M.T), c * (M - M.T)], [c * (M.T - M), s * (M + M.T)]]) << -margin * eye2,
-            cp.bmat([[-region.radius * P, M], [M.T, -region.radius * P]]) << -margin * eye2]
+    cons = [
+        P >> eye,
+        M + M.T + 2 * region.alpha * P << -margin * eye,
+        cp.bmat([[s * (M + M.T), c * (M - M.T)], [c * (M.T - M), s * (M + M.T)]]) << -margin * eye2,
+        cp.bmat([[-region.radius * P, M], [M.T, -region.radius * P]]) << -margin * eye2,
+    ]
     problem = cp.Problem(cp.Minimize(cp.norm(Y, "fro") + 0.1 * cp.trace(P)), cons)
     with warnings.catch_warnings():  # an inaccurate solution is accepted only if its poles check out, below
         warnings.filterwarnings("ignore", message="Solution may be inaccurate", category=UserWarning)

@@ -14,9 +14,9 @@ def frequency_response(sys, omega) -> np.ndarray:
     w = np.atleast_1d(np.asarray(omega, float))
     n = A.shape[0]
     if n == 0:
-        return np.broadcast_to(D.astype(complex), (len(w),) + D.shape).copy()
+        return np.broadcast_to(D.astype(complex), (len(w), *D.shape)).copy()
     pencil = 1j * w[:, None, None] * np.eye(n) - A
-    return C @ np.linalg.solve(pencil, np.broadcast_to(B.astype(complex), (len(w),) + B.shape)) + D
+    return C @ np.linalg.solve(pencil, np.broadcast_to(B.astype(complex), (len(w), *B.shape))) + D
 
 
 def loop_at_input(loop_response: np.ndarray, channel: int) -> np.ndarray:

@@ -45,8 +45,12 @@ def constant_upper_lft(N, delta) -> tuple[np.ndarray, ...] | None:
     if abs(np.linalg.det(closing)) < 1e-12:
         return None
     gain = delta @ np.linalg.solve(closing, np.eye(n))  # delta (I - D11 delta)^-1
-    return (A + B[:, :n] @ gain @ C[:n], B[:, n:] + B[:, :n] @ gain @ D[:n, n:],
-            C[n:] + D[n:, :n] @ gain @ C[:n], D[n:, n:] + D[n:, :n] @ gain @ D[:n, n:])
+    return (
+        A + B[:, :n] @ gain @ C[:n],
+        B[:, n:] + B[:, :n] @ gain @ D[:n, n:],
+        C[n:] + D[n:, :n] @ gain @ C[:n],
+        D[n:, n:] + D[n:, :n] @ gain @ D[:n, n:],
+    )
 
 
 def is_stable(N, delta) -> bool:

@@ -58,8 +58,8 @@ def central_controller(A, B, C, gamma: float) -> control.StateSpace:
     g_min = _gamma_min(X, Z)
     if not gamma > g_min:
         raise ValueError(f"gamma = {gamma:g}: must exceed gamma_min = {g_min:g}")
-    L = (1.0 - gamma ** 2) * np.eye(A.shape[0]) + X @ Z
-    H = gamma ** 2 * np.linalg.solve(L.T, Z @ C.T)
+    L = (1.0 - gamma**2) * np.eye(A.shape[0]) + X @ Z
+    H = gamma**2 * np.linalg.solve(L.T, Z @ C.T)
     return control.ss(A - B @ B.T @ X + H @ C, H, B.T @ X, np.zeros((B.shape[1], C.shape[0])))
 
 
@@ -73,9 +73,7 @@ def ncf_generalized_plant(A, B, C) -> control.StateSpace:
     m, p, n = B.shape[1], C.shape[0], A.shape[0]
     Bw = np.hstack([Z @ C.T, B])
     Cz = np.vstack([np.zeros((m, n)), C, C])
-    D = np.block([[np.zeros((m, p)), np.eye(m)],
-                  [np.eye(p), np.zeros((p, m))],
-                  [np.eye(p), np.zeros((p, m))]])
+    D = np.block([[np.zeros((m, p)), np.eye(m)], [np.eye(p), np.zeros((p, m))], [np.eye(p), np.zeros((p, m))]])
     return control.ss(A, Bw, Cz, D)
 
 

@@ -34,8 +34,9 @@ def pid_tf(kp: float, ki: float = 0.0, kd: float = 0.0, tf_s: float = 0.0) -> Si
     return SisoTf((kp,), (1.0,))
 
 
-def pid_for_crossover(plant, w_c: float, pm_deg: float, integral_ratio: float = 0.1,
-                      filter_ratio: float = 10.0) -> tuple[float, float, float, float]:
+def pid_for_crossover(
+    plant, w_c: float, pm_deg: float, integral_ratio: float = 0.1, filter_ratio: float = 10.0
+) -> tuple[float, float, float, float]:
     """PID whose loop ``C P`` crosses over at ``w_c`` with phase margin ``pm_deg``: the
     conventional loop-shaping rule (integral corner ``integral_ratio * w_c``, derivative filter
     corner ``filter_ratio * w_c``), solved for ``kp`` and ``kd`` from ``C(j w_c) P(j w_c) =
@@ -70,8 +71,9 @@ def pid_for_crossover(plant, w_c: float, pm_deg: float, integral_ratio: float = 
     return float(kp), float(kp * w_i), float(kd), tf_s
 
 
-def pid_for_crossover_with_kp(plant, w_c: float, kp: float, integral_ratio: float = 0.1,
-                              filter_ratio: float = 10.0) -> tuple[float, float, float, float]:
+def pid_for_crossover_with_kp(
+    plant, w_c: float, kp: float, integral_ratio: float = 0.1, filter_ratio: float = 10.0
+) -> tuple[float, float, float, float]:
     """PID with a given proportional gain ``kp`` whose loop ``C P`` crosses over at ``w_c``:
     integral corner ``integral_ratio * w_c``, derivative filter corner ``filter_ratio * w_c``,
     and the ``kd >= 0`` that makes ``|C(j w_c) P(j w_c)| = 1`` (the phase margin follows).
@@ -102,7 +104,9 @@ def pid_for_crossover_with_kp(plant, w_c: float, kp: float, integral_ratio: floa
     # |a + kd b|^2 = need^2: |b|^2 kd^2 + 2 Re(a conj b) kd + |a|^2 - need^2 = 0
     qa, qb, qc = abs(b) ** 2, 2.0 * (a * b.conjugate()).real, abs(a) ** 2 - need**2
     if qc > 0:
-        raise ValueError(f"kp = {kp:.4g} alone gives a loop gain of {abs(a) / need:.3g} at {w_c:g} rad/s: "
-                         "no kd >= 0 puts the crossover there")
+        raise ValueError(
+            f"kp = {kp:.4g} alone gives a loop gain of {abs(a) / need:.3g} at {w_c:g} rad/s: "
+            "no kd >= 0 puts the crossover there"
+        )
     kd = (-qb + np.sqrt(qb * qb - 4.0 * qa * qc)) / (2.0 * qa)
     return float(kp), float(kp * w_i), float(kd), tf_s

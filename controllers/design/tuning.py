@@ -114,8 +114,9 @@ class BeeColonyResult:
     evaluations: int
 
 
-def bee_colony_minimize(cost, lower, upper, iterations: int, seed: int, population: int = 10,
-                        limit: int = 20) -> BeeColonyResult:
+def bee_colony_minimize(
+    cost, lower, upper, iterations: int, seed: int, population: int = 10, limit: int = 20
+) -> BeeColonyResult:
     """Minimize ``cost(x)`` over the box ``[lower, upper]`` with niapy's Artificial Bee Colony.
 
     Parameters

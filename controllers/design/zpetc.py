@@ -83,8 +83,9 @@ def zpetc(loop_num, loop_den, radius: float = 0.95, min_damping: float = 0.5) ->
     d = int(np.argmax(num != 0))
     b = num[d:]
     zeros = np.roots(b)  # b(z^-1) = b0 prod(1 - z_i z^-1): roots of b0 z^m + b1 z^(m-1) + ...
-    unacceptable = np.array([abs(z) >= 1.0 or (abs(z) >= radius and damping_ratio(z) < min_damping) for z in zeros],
-                            bool)
+    unacceptable = np.array(
+        [abs(z) >= 1.0 or (abs(z) >= radius and damping_ratio(z) < min_damping) for z in zeros], bool
+    )
     bad, good = zeros[unacceptable], zeros[~unacceptable]
     b_a = b[0] * np.atleast_1d(np.real(np.poly(good)))  # ascending powers of z^-1: poly gives [1, -sum, ...]
     b_u = np.atleast_1d(np.real(np.poly(bad)))  # B_u(z^-1) = prod(1 - z_i z^-1), ascending in z^-1

@@ -21,13 +21,22 @@ Designs return gains only; :mod:`controllers.registry` (``seed001``) wires them 
 from __future__ import annotations
 
 import math
-from functools import lru_cache
+from functools import cache, lru_cache
 
 import numpy as np
 
 from controllers.design.pid import pid_tf
-from controllers.design.statefeedback import (CascadeGains, axis_model, energy_weights, integral_augmented, lqr,
-                                              mimo_model, p_p_cascade, pi_p_cascade, place)
+from controllers.design.statefeedback import (
+    CascadeGains,
+    axis_model,
+    energy_weights,
+    integral_augmented,
+    lqr,
+    mimo_model,
+    p_p_cascade,
+    pi_p_cascade,
+    place,
+)
 from controllers.design.tuning import detune, ziegler_nichols
 
 AXES = ("x", "y")
@@ -40,12 +49,23 @@ MM_PER_M = 1e3
 DT_S = 1e-3
 
 #: Table 1: controller -> axis -> (2 % settling time s, overshoot %).
-TABLE1 = {"P": {"x": (0.18, 20.0), "y": (0.1, 8.0)}, "modified P": {"x": (0.25, 1.0), "y": (0.18, 0.0)},
-          "PI": {"x": (0.3, 28.0), "y": (0.12, 36.0)}, "modified PI": {"x": (0.6, 20.0), "y": (0.5, 19.0)},
-          "PID": {"x": (0.22, 28.0), "y": (0.17, 25.0)}, "modified PID": {"x": (0.81, 20.0), "y": (0.6, 21.0)}}
+TABLE1 = {
+    "P": {"x": (0.18, 20.0), "y": (0.1, 8.0)},
+    "modified P": {"x": (0.25, 1.0), "y": (0.18, 0.0)},
+    "PI": {"x": (0.3, 28.0), "y": (0.12, 36.0)},
+    "modified PI": {"x": (0.6, 20.0), "y": (0.5, 19.0)},
+    "PID": {"x": (0.22, 28.0), "y": (0.17, 25.0)},
+    "modified PID": {"x": (0.81, 20.0), "y": (0.6, 21.0)},
+}
 #: Table 1's rows by the registry's design name.
-TABLE1_ROWS = {"p": "P", "modified_p": "modified P", "pi": "PI", "modified_pi": "modified PI", "pid": "PID",
-               "modified_pid": "modified PID"}
+TABLE1_ROWS = {
+    "p": "P",
+    "modified_p": "modified P",
+    "pi": "PI",
+    "modified_pi": "modified PI",
+    "pid": "PID",
+    "modified_pid": "modified PID",
+}
 #: Which of Table 1's numbers our reproduction meets by construction ("fitted") and which are
 #: independent checks ("check"), per row and metric.  The P rows' overshoot fixes kp, so Ku, and
 #: so the 10 ms relay delay (:func:`implied_delay`, rounded to 10 ms); an underdamped P loop on
@@ -72,10 +92,12 @@ FRACTIONAL_FASTER_S = 0.1
 #: Parameter box of section 5.3 (relative).
 BOX = 0.10
 #: Table 2: trajectory -> experiment (1-3) -> (fit X %, fit Y %).
-TABLE2 = {"square L 3 cm": ((79.0, 76.0), (80.0, 80.0), (85.0, 86.4)),
-          "square L 5 cm": ((82.0, 84.1), (84.5, 86.0), (86.0, 87.3)),
-          "circle R 1 cm": ((92.0, 92.7), (93.2, 96.0), (99.7, 99.6)),
-          "circle R 5 cm": ((93.0, 97.0), (95.0, 98.0), (99.8, 99.7))}
+TABLE2 = {
+    "square L 3 cm": ((79.0, 76.0), (80.0, 80.0), (85.0, 86.4)),
+    "square L 5 cm": ((82.0, 84.1), (84.5, 86.0), (86.0, 87.3)),
+    "circle R 1 cm": ((92.0, 92.7), (93.2, 96.0), (99.7, 99.6)),
+    "circle R 5 cm": ((93.0, 97.0), (95.0, 98.0), (99.8, 99.7)),
+}
 #: The text's claim for SISO state feedback against PID and cascade.
 STATE_FEEDBACK_GAIN_PCT = 20.0
 
@@ -124,9 +146,14 @@ def implied_delay(axis: str) -> dict:
     zeta = -ln_os / math.hypot(math.pi, ln_os)
     kp = (a / (2 * zeta)) ** 2 / K
     ku = 2 * kp
-    w = math.sqrt((-a * a + math.sqrt(a ** 4 + 4 * (K * ku) ** 2)) / 2)
-    return {"kp_V_per_mm": kp, "ku_V_per_mm": ku, "wu_rad_s": w, "pu_s": 2 * math.pi / w,
-            "delay_s": (math.pi / 2 - math.atan(w / a)) / w}
+    w = math.sqrt((-a * a + math.sqrt(a**4 + 4 * (K * ku) ** 2)) / 2)
+    return {
+        "kp_V_per_mm": kp,
+        "ku_V_per_mm": ku,
+        "wu_rad_s": w,
+        "pu_s": 2 * math.pi / w,
+        "delay_s": (math.pi / 2 - math.atan(w / a)) / w,
+    }
 
 
 def ultimate_point(axis: str, delay_s: float = RELAY_DELAY_S, dt: float = DT_S) -> tuple[float, float]:
@@ -137,7 +164,7 @@ def ultimate_point(axis: str, delay_s: float = RELAY_DELAY_S, dt: float = DT_S) 
     from scipy.optimize import brentq
 
     G = control.c2d(plant_tf(axis), dt, "zoh")
-    n = int(round(delay_s / dt))
+    n = round(delay_s / dt)
 
     def loop(w):
         return G(np.exp(1j * w * dt)) * np.exp(-1j * w * n * dt)
@@ -159,7 +186,7 @@ def continuous_step(closed_loop, horizon_s: float = 3.0, n: int = 6001) -> tuple
     import control
 
     t = np.linspace(0.0, horizon_s, n)
-    return t, np.asarray(control.step_response(closed_loop, t).outputs, float).reshape(-1)[: n]
+    return t, np.asarray(control.step_response(closed_loop, t).outputs, float).reshape(-1)[:n]
 
 
 def overshoot_pct(closed_loop, horizon_s: float = 3.0) -> float:
@@ -168,7 +195,7 @@ def overshoot_pct(closed_loop, horizon_s: float = 3.0) -> float:
     return max(0.0, (float(y.max()) - 1.0) * 100.0)
 
 
-@lru_cache(maxsize=None)
+@cache
 def ziegler_nichols_gains(axis: str, ku: float, pu_s: float) -> dict:
     """Table 1's three ZN controllers and their "modified" versions (V/mm, V/(mm s), V s/mm).
 
@@ -187,11 +214,15 @@ def ziegler_nichols_gains(axis: str, ku: float, pu_s: float) -> dict:
         out[kind] = (kp, ki, kd)
         target = TABLE1[f"modified {kind}"][axis][1]
         if kind == "P":
-            c = detune(lambda f: overshoot_pct(control.feedback(f * kp * G, 1)), max(target, 0.05))
+            c = detune(lambda f, kp=kp: overshoot_pct(control.feedback(f * kp * G, 1)), max(target, 0.05))
             out[f"modified {kind}"] = (c * kp, 0.0, 0.0)
         else:
-            c = detune(lambda f: overshoot_pct(control.feedback(
-                pid_tf(kp, f * ki, kd, derivative_filter_s(kp, kd)).to_control() * G, 1), 6.0), target)
+            c = detune(
+                lambda f, kp=kp, ki=ki, kd=kd: overshoot_pct(
+                    control.feedback(pid_tf(kp, f * ki, kd, derivative_filter_s(kp, kd)).to_control() * G, 1), 6.0
+                ),
+                target,
+            )
             out[f"modified {kind}"] = (kp, c * ki, kd)
     return out
 
@@ -212,7 +243,7 @@ def cascade_rules(axis: str) -> dict:
     return {"P-P": (kp, 0.0, 0.0, kv), "PI-P": (kp, ki, 0.0, kv), "P-PID": (kp, ki, kp / w_v, kv)}
 
 
-@lru_cache(maxsize=None)
+@cache
 def state_feedback(axis: str, design: str) -> CascadeGains:
     """Parts 3-5 and 8 on one axis: the state feedback and the cascade equal to it.
 
@@ -233,7 +264,7 @@ def state_feedback(axis: str, design: str) -> CascadeGains:
     if design == "lmi":
         return p_p_cascade(_lmi(A, B))
     if design == "pi_p_pole_placement":
-        return pi_p_cascade(place(Aa, Ba, POLES + (INTEGRAL_POLE,)))
+        return pi_p_cascade(place(Aa, Ba, (*POLES, INTEGRAL_POLE)))
     if design == "pi_p_lqr":
         J, k = energy_inertia_stiffness(axis)
         wn = math.sqrt(POLES[0] * POLES[1])
@@ -252,8 +283,8 @@ def energy_inertia_stiffness(axis: str) -> tuple[float, float]:
     bandwidth ``omega_n = sqrt(50 * 70)`` rad/s (:data:`POLES`), ``k = J omega_n^2`` (V/mm), so
     kinetic and potential energy weigh equally at that frequency.
     """
-    K, a = MODEL[axis]
-    J = 1.0 / K   # T_M/K_M = (1/a)/(K/a) = 1/K
+    K, _a = MODEL[axis]
+    J = 1.0 / K  # T_M/K_M = (1/a)/(K/a) = 1/K
     return J, J * POLES[0] * POLES[1]
 
 
@@ -293,10 +324,13 @@ def fractional_pi_state_space(axis: str):
 #: Designs the ``seed001`` registry entry builds, with what each is.
 DESIGNS = {
     "p": "Ziegler-Nichols P from the ultimate point (Table 1)",
-    "pi": "Ziegler-Nichols PI", "pid": "Ziegler-Nichols PID (derivative filter Td/10)",
-    "modified_p": "ZN P detuned to Table 1's modified overshoot", "modified_pi": "ZN PI, ki detuned likewise",
+    "pi": "Ziegler-Nichols PI",
+    "pid": "Ziegler-Nichols PID (derivative filter Td/10)",
+    "modified_p": "ZN P detuned to Table 1's modified overshoot",
+    "modified_pi": "ZN PI, ki detuned likewise",
     "modified_pid": "ZN PID, ki detuned likewise",
-    "p_p": "cascade P position / P speed (part 2's rules)", "pi_p": "cascade PI position / P speed",
+    "p_p": "cascade P position / P speed (part 2's rules)",
+    "pi_p": "cascade PI position / P speed",
     "p_pid": "cascade PID position / P speed",
     "pole_placement": "state feedback, poles -50 and -70 rad/s, run as the P-P cascade",
     "lqr_classical": "LQR Q = diag(0, 1), R = 1, as the P-P cascade",
@@ -311,7 +345,7 @@ DESIGNS = {
 }
 
 
-@lru_cache(maxsize=None)
+@cache
 def design_gains(axis: str, design: str, ku: float | None = None, pu_s: float | None = None) -> dict:
     """The gains of a per-axis ``design`` (a key of :data:`DESIGNS`, not the MIMO one), mm units.
 
@@ -332,8 +366,15 @@ def design_gains(axis: str, design: str, ku: float | None = None, pu_s: float | 
         return {"form": "pid", "kp": kp, "ki": ki, "kd": kd, "tf_s": derivative_filter_s(kp, kd)}
     if design in ("p_p", "pi_p", "p_pid"):
         kp, ki, kd, kv = cascade_rules(axis)[design.upper().replace("_", "-")]
-        return {"form": "cascade", "kp": kp, "ki": ki, "kd": kd, "kv": kv, "position_ref_ff": 0.0,
-                "tf_s": derivative_filter_s(kp, kd)}
+        return {
+            "form": "cascade",
+            "kp": kp,
+            "ki": ki,
+            "kd": kd,
+            "kv": kv,
+            "position_ref_ff": 0.0,
+            "tf_s": derivative_filter_s(kp, kd),
+        }
     if design == "mu_cascade":
         kp, ki, kv = EQ15_16[axis]
         return {"form": "cascade", "kp": kp, "ki": ki, "kd": 0.0, "kv": kv, "position_ref_ff": 0.0, "tf_s": 0.0}
@@ -341,6 +382,13 @@ def design_gains(axis: str, design: str, ku: float | None = None, pu_s: float | 
         return {"form": "fo_pi"}
     if design in DESIGNS and design != "state_feedback_mimo":
         g = state_feedback(axis, design)
-        return {"form": "cascade", "kp": g.kp, "ki": g.ki, "kd": 0.0, "kv": g.kv, "position_ref_ff": g.kr / g.kv,
-                "tf_s": 0.0}
+        return {
+            "form": "cascade",
+            "kp": g.kp,
+            "ki": g.ki,
+            "kd": 0.0,
+            "kv": g.kv,
+            "position_ref_ff": g.kr / g.kv,
+            "tf_s": 0.0,
+        }
     raise ValueError(f"design = {design!r}: use one of {', '.join(DESIGNS)}")

@@ -34,8 +34,13 @@ def design_cascade(plant, delay_s: float, dt: float) -> dict:
         :class:`~controllers.design.loop_analysis.LoopMargins`.  Cached per (plant, delay, dt):
         treat it as read-only.
     """
-    from controllers.design.cascade import backward_difference, closed_loop, gain_for_phase_margin, pi_for_margins
-    from controllers.design.cascade import pi_loop
+    from controllers.design.cascade import (
+        backward_difference,
+        closed_loop,
+        gain_for_phase_margin,
+        pi_for_margins,
+        pi_loop,
+    )
 
     measure = backward_difference(dt)
 

@@ -1,7 +1,7 @@
 """Seed 004 (Choi, Hong, Kim, Kim 1999): the MIMO H-infinity loop-shaping controller, the SISO
 PID it is compared with, and the uncertain model of its mu analysis, designed here.
 
-- Design model: eq. (11)'s 4-state plant (:func:`twin.machines.linear_motor.cutting_coupled_plant`)
+- Design model: eq. (11)'s 4-state plant (:func:`cutting_coupled_plant`)
   at Table 1's nominal values, up milling ``k_il = -2500``, ``k_c = 2500`` N s/m, and the
   machine's input gain 98.2 N/V (assumed: the paper gives none).
 - **Position unit of the design: mm** (assumption).  The paper gives no units; with the
@@ -35,8 +35,14 @@ from functools import lru_cache
 import numpy as np
 
 #: Table 1: nominal value and relative uncertainty (fraction).
-TABLE1 = {"k_il": (-2500.0, 1.10), "k_c": (2500.0, 1.10), "m_x": (52.3, 0.30), "m_y": (17.0, 0.40),
-          "b_x": (193.5, 0.20), "b_y": (36.0, 0.20)}
+TABLE1 = {
+    "k_il": (-2500.0, 1.10),
+    "k_c": (2500.0, 1.10),
+    "m_x": (52.3, 0.30),
+    "m_y": (17.0, 0.40),
+    "b_x": (193.5, 0.20),
+    "b_y": (36.0, 0.20),
+}
 INPUT_GAIN_N_PER_V = 98.2
 #: Design model's position unit per metre (mm: see the module docstring).
 POSITION_UNIT_PER_M = 1e3
@@ -45,22 +51,55 @@ AMPLIFIER_WEIGHT = ((1.0, 600.0), (1.0, 2000.0))  # (s + 600)/(s + 2000)
 PERFORMANCE_WEIGHT = ((2.0, 200.0), (1.0, 5.0))  # 2 (s + 100)/(s + 5)
 GAMMA_FACTOR, REDUCED_ORDER, DT_S = 1.1, 4, 5e-4
 #: The paper's statements this reproduction compares with.
-PAPER = {"controller_order": 8, "reduced_order": 4, "k_il_range": (-5250.0, 250.0), "k_c_range": (-250.0, 5250.0),
-         "air_cut_max_tracking_um": (6.0, 7.0), "cutting_max_contour_um": (36.0, 41.0),
-         "robust_frequency_rad_s": 80.0, "performance_frequency_rad_s": 5.0}
+PAPER = {
+    "controller_order": 8,
+    "reduced_order": 4,
+    "k_il_range": (-5250.0, 250.0),
+    "k_c_range": (-250.0, 5250.0),
+    "air_cut_max_tracking_um": (6.0, 7.0),
+    "cutting_max_contour_um": (36.0, 41.0),
+    "robust_frequency_rad_s": 80.0,
+    "performance_frequency_rad_s": 5.0,
+}
 
 
 def nominal_params() -> dict:
     """Table 1's nominal machine with the assumed input gain (SI)."""
-    return {"m_x": TABLE1["m_x"][0], "m_y": TABLE1["m_y"][0], "b_x": TABLE1["b_x"][0], "b_y": TABLE1["b_y"][0],
-            "k_x": INPUT_GAIN_N_PER_V, "k_y": INPUT_GAIN_N_PER_V}
+    return {
+        "m_x": TABLE1["m_x"][0],
+        "m_y": TABLE1["m_y"][0],
+        "b_x": TABLE1["b_x"][0],
+        "b_y": TABLE1["b_y"][0],
+        "k_x": INPUT_GAIN_N_PER_V,
+        "k_y": INPUT_GAIN_N_PER_V,
+    }
+
+
+def cutting_coupled_plant(params: dict[str, float], k_il_N_s_per_m: float, k_c_N_s_per_m: float):
+    """Seed 004's coupled 4-state model with the average cutting force, eq. (11), as continuous
+    state-space matrices ``(A, B, C, D)``.
+
+    State ``[y_x, v_x, y_y, v_y]`` (m, m/s), inputs ``u_x, u_y`` (V), outputs the positions (m);
+    A is eq. (11)'s (rows 2 and 4: ``(k_il - b_i)/m_i`` and ``-+k_c/m_i``), B takes the
+    ``k_i/m_i`` input columns of eq. (11)'s B (the uncertainty channels are left out).
+    """
+    mx, my, bx, by = params["m_x"], params["m_y"], params["b_x"], params["b_y"]
+    k_il, k_c = k_il_N_s_per_m, k_c_N_s_per_m
+    A = [
+        [0.0, 1.0, 0.0, 0.0],
+        [0.0, (k_il - bx) / mx, 0.0, -k_c / mx],
+        [0.0, 0.0, 0.0, 1.0],
+        [0.0, k_c / my, 0.0, (k_il - by) / my],
+    ]
+    B = [[0.0, 0.0], [params["k_x"] / mx, 0.0], [0.0, 0.0], [0.0, params["k_y"] / my]]
+    C = [[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]]
+    return np.array(A), np.array(B), np.array(C), np.zeros((2, 2))
 
 
 def design_plant(k_il: float = TABLE1["k_il"][0], k_c: float = TABLE1["k_c"][0], params: dict | None = None):
     """Eq. (11)'s plant, inputs V, outputs mm (the design unit)."""
     import control
 
-    from twin.machines.linear_motor import cutting_coupled_plant
     A, B, C, D = cutting_coupled_plant(params or nominal_params(), k_il, k_c)
     return control.ss(A, B, C * POSITION_UNIT_PER_M, D)
 
@@ -73,6 +112,7 @@ def plant_si(k_il: float = TABLE1["k_il"][0], k_c: float = TABLE1["k_c"][0], par
 def shaping_weight():
     """``Ws = diag(990, 660) (s + 110)/(s + 1500)``."""
     import control
+
     return control.append(*(control.tf([g, g * WS_ZERO], [1.0, WS_POLE]) for g in WS_GAINS))
 
 
@@ -90,12 +130,18 @@ def mimo_design() -> dict:
     import control
 
     from controllers.design.ncf import loop_shaping
+
     design = loop_shaping(design_plant(), shaping_weight(), GAMMA_FACTOR)
     full = control.ss(design.K)
     hankel = control.hsvd(full)
     reduced = control.balred(full, REDUCED_ORDER, method="truncate")
-    return {"design": design, "full": full * POSITION_UNIT_PER_M, "reduced": reduced * POSITION_UNIT_PER_M,
-            "hankel": np.asarray(hankel), "dropped": np.asarray(hankel[REDUCED_ORDER:])}
+    return {
+        "design": design,
+        "full": full * POSITION_UNIT_PER_M,
+        "reduced": reduced * POSITION_UNIT_PER_M,
+        "hankel": np.asarray(hankel),
+        "dropped": np.asarray(hankel[REDUCED_ORDER:]),
+    }
 
 
 def loop_margins_at_inputs(controller_si, k_il: float = TABLE1["k_il"][0], k_c: float = TABLE1["k_c"][0]) -> list:
@@ -103,10 +149,12 @@ def loop_margins_at_inputs(controller_si, k_il: float = TABLE1["k_il"][0], k_c: 
     :class:`~controllers.design.loop_analysis.LoopMargins` per axis."""
     from controllers.design.loop_analysis import loop_margins
     from controllers.design.mimo import frequency_response, loop_at_input
+
     plant = plant_si(k_il, k_c)
 
     def broken(axis):
         return lambda w: loop_at_input(frequency_response(controller_si, w) @ frequency_response(plant, w), axis)
+
     return [loop_margins(broken(i), 1e-1, 1e5, 30_000) for i in range(2)]
 
 
@@ -124,12 +172,14 @@ def _diagonal_plant(axis: str):
     def plant(w):
         s = 1j * np.asarray(w, float)
         return p[f"k_{axis}"] / (s * (p[f"m_{axis}"] * s + p[f"b_{axis}"] - k_il))
+
     return plant
 
 
 def mimo_static_gain_V_per_m(order: str = "reduced") -> np.ndarray:
     """K(0) of the MIMO controller (2 x 2, V/m): finite, since Ws has no integrator."""
     import control
+
     return np.asarray(control.dcgain(mimo_design()[order]), float)
 
 
@@ -137,12 +187,19 @@ def mimo_diagonal_margins(order: str = "reduced") -> list:
     """Margins of each diagonal loop ``K_ii G_ii`` of the MIMO controller on the diagonal plant."""
     from controllers.design.loop_analysis import loop_margins
     from controllers.design.mimo import frequency_response
+
     K = mimo_design()[order]
     out = []
     for i, a in enumerate("xy"):
         plant = _diagonal_plant(a)
-        out.append(loop_margins(lambda w, i=i, plant=plant: frequency_response(K, np.asarray(w, float))[:, i, i]
-                                * plant(w), 1e-1, 1e5, 30_000))
+        out.append(
+            loop_margins(
+                lambda w, i=i, plant=plant: frequency_response(K, np.asarray(w, float))[:, i, i] * plant(w),
+                1e-1,
+                1e5,
+                30_000,
+            )
+        )
     return out
 
 
@@ -174,6 +231,7 @@ def pid_design(tuning: str = "loop_at_input", ki_scale: float = 1.0) -> dict:
     """
     from controllers.design.loop_analysis import loop_margins
     from controllers.design.pid import pid_for_crossover, pid_for_crossover_with_kp, pid_tf
+
     check_pid_tuning(tuning, ki_scale)
     if tuning == "loop_at_input":
         targets = loop_margins_at_inputs(mimo_design()["reduced"])
@@ -198,6 +256,7 @@ def pid_controller_si(tuning: str = "loop_at_input", ki_scale: float = 1.0):
     import control
 
     from controllers.design.pid import pid_tf
+
     return control.append(*(pid_tf(*g).to_control() for g in pid_design(tuning, ki_scale)["gains"]))
 
 
@@ -219,6 +278,7 @@ def uncertain_plant(performance: bool):
     is ``Wp e``.  States: ``p_x, v_x, p_y, v_y`` (m, m/s), then the weights'.
     """
     import control
+
     p = nominal_params()
     (k_il, a_il), (k_c, a_c) = TABLE1["k_il"], TABLE1["k_c"]
     n_p = 2 if performance else 0
@@ -271,16 +331,21 @@ def robust_stability_structure() -> tuple[list, list]:
 def robust_performance_structure() -> tuple[list, list]:
     """Robust stability's structure plus the 2 x 2 complex performance block."""
     nblock, itype = robust_stability_structure()
-    return nblock + [2], itype + [2]
+    return [*nblock, 2], [*itype, 2]
 
 
 def stable_range_claim() -> dict:
     """The paper's stated range of cutting-force gains (N s/m) and Table 1's box they come from."""
     (k_il, a1), (k_c, a2) = TABLE1["k_il"], TABLE1["k_c"]
-    box = {"k_il": tuple(sorted((k_il * (1 - a1), k_il * (1 + a1)))),
-           "k_c": tuple(sorted((k_c * (1 - a2), k_c * (1 + a2))))}
-    return {"paper": {"k_il": PAPER["k_il_range"], "k_c": PAPER["k_c_range"]}, "table1_box": box,
-            "agree": all(math.isclose(a, b) for key in box for a, b in zip(box[key], PAPER[f"{key}_range"]))}
+    box = {
+        "k_il": tuple(sorted((k_il * (1 - a1), k_il * (1 + a1)))),
+        "k_c": tuple(sorted((k_c * (1 - a2), k_c * (1 + a2)))),
+    }
+    return {
+        "paper": {"k_il": PAPER["k_il_range"], "k_c": PAPER["k_c_range"]},
+        "table1_box": box,
+        "agree": all(math.isclose(a, b) for key in box for a, b in zip(box[key], PAPER[f"{key}_range"])),
+    }
 
 
 def controller_si(kind: str, order: str = "reduced", tuning: str = "loop_at_input", ki_scale: float = 1.0):
@@ -298,6 +363,7 @@ def closed_loop_discrete(controller, k_il: float = 0.0, k_c: float = 0.0, dt: fl
     """Reference (m) to position (m) of the sampled loop: eq. (11)'s plant (cutting gains
     ``k_il``, ``k_c``; 0 for an air cut) held by a ZOH, the controller by Tustin, at ``dt``."""
     import control
+
     plant = plant_si(k_il, k_c)
     loop = control.c2d(control.ss(plant), dt, "zoh") * control.c2d(control.ss(controller), dt, "tustin")
     return control.feedback(loop, np.eye(2))
@@ -316,6 +382,7 @@ def zpetc_filters(kind: str, order: str = "reduced", tuning: str = "loop_at_inpu
     import control
 
     from controllers.design.zpetc import zpetc
+
     T = closed_loop_discrete(controller_si(kind, order, tuning, ki_scale))
     out = []
     for i in range(2):

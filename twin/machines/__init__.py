@@ -9,8 +9,7 @@ from twin.machines.googol import GoogolXY
 from twin.machines.linear_motor import LinearMotorXY
 from twin.machines.sabau import SabauXY
 
-MACHINES: dict[str, Machine] = {m.name: m for m in (CNCMT(), CNCMTXY(), GoogolXY(),
-                                                    LinearMotorXY(), SabauXY())}
+MACHINES: dict[str, Machine] = {m.name: m for m in (CNCMT(), CNCMTXY(), GoogolXY(), LinearMotorXY(), SabauXY())}
 
 
 def get_machine(name: str) -> Machine:
@@ -27,10 +26,9 @@ def get_machine(name: str) -> Machine:
         raise TwinInputError("machine", name, f"unknown machine (known: {', '.join(MACHINES)})") from None
 
 
-def build(name: str, overrides: dict[str, float] | None = None,
-          timestep_s: float | None = None) -> BuiltMachine:
+def build(name: str, overrides: dict[str, float] | None = None, timestep_s: float | None = None) -> BuiltMachine:
     """Build machine ``name`` with parameter ``overrides`` (source symbols)."""
     return get_machine(name).build(overrides, timestep_s)
 
 
-__all__ = ["Axis", "BuiltMachine", "Machine", "Parameter", "MACHINES", "build", "get_machine", "mjcf_dir"]
+__all__ = ["MACHINES", "Axis", "BuiltMachine", "Machine", "Parameter", "build", "get_machine", "mjcf_dir"]

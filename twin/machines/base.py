@@ -117,15 +117,18 @@ class BuiltMachine:
         """:attr:`plant` as a ``control.TransferFunction`` (imports python-control)."""
         import control
 
-        return control.tf([[list(g.num) for g in row] for row in self.plant],
-                          [[list(g.den) for g in row] for row in self.plant])
+        return control.tf(
+            [[list(g.num) for g in row] for row in self.plant], [[list(g.den) for g in row] for row in self.plant]
+        )
 
     def drive_quantity(self, axis: Axis) -> tuple[str, str]:
         """(``"torque"``, ``"N m"``) for an axis driven on a hinge (a motor shaft), else
         (``"force"``, ``"N"``: a linear motor, or a tendon over slides)."""
         act = self.model.actuator(axis.actuator).id
-        if (self.model.actuator_trntype[act] == mujoco.mjtTrn.mjTRN_JOINT
-                and self.model.jnt_type[self.model.actuator_trnid[act, 0]] == mujoco.mjtJoint.mjJNT_HINGE):
+        if (
+            self.model.actuator_trntype[act] == mujoco.mjtTrn.mjTRN_JOINT
+            and self.model.jnt_type[self.model.actuator_trnid[act, 0]] == mujoco.mjtJoint.mjJNT_HINGE
+        ):
             return "torque", "N m"
         return "force", "N"
 
@@ -225,8 +228,9 @@ class Machine:
         for key, value in (overrides or {}).items():
             if key not in self.parameters:
                 known = ", ".join(self.parameters)
-                raise TwinInputError(f"overrides.{key}", value, f"unknown parameter of machine "
-                                     f"'{self.name}' (known: {known})")
+                raise TwinInputError(
+                    f"overrides.{key}", value, f"unknown parameter of machine '{self.name}' (known: {known})"
+                )
             try:
                 value = float(value)
             except (TypeError, ValueError):
@@ -236,14 +240,16 @@ class Machine:
             nominal = self.parameters[key].value
             limit = OVERRIDE_RANGE * abs(nominal) if nominal else OVERRIDE_RANGE
             if abs(value) > limit or (nominal and value and abs(value) < abs(nominal) / OVERRIDE_RANGE):
-                raise TwinInputError(f"overrides.{key}", value, f"must be within a factor {OVERRIDE_RANGE:g} of the "
-                                     f"nominal {nominal:g} {self.parameters[key].unit}")
+                raise TwinInputError(
+                    f"overrides.{key}",
+                    value,
+                    f"must be within a factor {OVERRIDE_RANGE:g} of the "
+                    f"nominal {nominal:g} {self.parameters[key].unit}",
+                )
             if self.parameters[key].positive and value <= 0:
-                raise TwinInputError(f"overrides.{key}", value,
-                                     f"must be > 0 ({self.parameters[key].description})")
+                raise TwinInputError(f"overrides.{key}", value, f"must be > 0 ({self.parameters[key].description})")
             if self.parameters[key].nonnegative and value < 0:
-                raise TwinInputError(f"overrides.{key}", value,
-                                     f"must be >= 0 ({self.parameters[key].description})")
+                raise TwinInputError(f"overrides.{key}", value, f"must be >= 0 ({self.parameters[key].description})")
             params[key] = value
         self.check(params)
         return params
@@ -272,8 +278,7 @@ class Machine:
         """Encoder gain per axis."""
         return (1.0,) * len(self.axes)
 
-    def build(self, overrides: dict[str, float] | None = None,
-              timestep_s: float | None = None) -> BuiltMachine:
+    def build(self, overrides: dict[str, float] | None = None, timestep_s: float | None = None) -> BuiltMachine:
         """Apply parameters with MjSpec, compile, and derive the reference model."""
         params = self.resolve(overrides)
         spec = mujoco.MjSpec.from_file(str(mjcf_dir() / self.xml))
@@ -286,8 +291,17 @@ class Machine:
         # a diverged state stays in MjData (not reset to the initial one) so the runner reports it
         model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_AUTORESET
         couplings, leads = self.couplings(params)
-        return BuiltMachine(self.name, model, params, self.axes, self.plant(params, model),
-                            self.delay(params), couplings, leads, self.sensor_gains(params))
+        return BuiltMachine(
+            self.name,
+            model,
+            params,
+            self.axes,
+            self.plant(params, model),
+            self.delay(params),
+            couplings,
+            leads,
+            self.sensor_gains(params),
+        )
 
 
 def coulomb_friction_parameters(axes: tuple[str, ...], source: str = "") -> dict[str, Parameter]:
@@ -295,8 +309,12 @@ def coulomb_friction_parameters(axes: tuple[str, ...], source: str = "") -> dict
     ``frictionloss``; 0 by default (the papers' models have none); the catalogue estimates
     mu m g + 4 seals in the machine READMEs."""
     note = source or "the source gives no value; catalogue estimate in the machine README"
-    return {f"F_coul_{a}": Parameter(0.0, "N", f"Coulomb friction on the {a.upper()} guideway ({note})",
-                                     positive=False, nonnegative=True) for a in axes}
+    return {
+        f"F_coul_{a}": Parameter(
+            0.0, "N", f"Coulomb friction on the {a.upper()} guideway ({note})", positive=False, nonnegative=True
+        )
+        for a in axes
+    }
 
 
 def set_gear(spec: mujoco.MjSpec, equality: str, ratio: float) -> None:
@@ -327,11 +345,9 @@ def set_axial_inertia(spec: mujoco.MjSpec, body: str, axis: int, inertia_kg_m2: 
 def check_stacked_masses(params: dict[str, float]) -> None:
     """Y rides on X: require m_x > m_y > m_workpiece (kg), naming the offending symbol."""
     if params["m_y"] <= params["m_workpiece"]:
-        raise TwinInputError("overrides.m_y", params["m_y"],
-                             f"must exceed m_workpiece = {params['m_workpiece']:g} kg")
+        raise TwinInputError("overrides.m_y", params["m_y"], f"must exceed m_workpiece = {params['m_workpiece']:g} kg")
     if params["m_x"] <= params["m_y"]:
-        raise TwinInputError("overrides.m_x", params["m_x"],
-                             f"must exceed m_y = {params['m_y']:g} kg (Y rides on X)")
+        raise TwinInputError("overrides.m_x", params["m_x"], f"must exceed m_y = {params['m_y']:g} kg (Y rides on X)")
 
 
 def diagonal_plant(channels: list[SisoTf]) -> tuple[tuple[SisoTf, ...], ...]:

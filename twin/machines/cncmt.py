@@ -16,28 +16,37 @@ screw speed; on the motor shaft it would enter as n^2 H2.
 
 from __future__ import annotations
 
-
 from controllers.lti import SisoTf
 from twin.errors import TwinInputError
-from twin.machines.base import (Axis, Machine, Parameter, coulomb_friction_parameters, diagonal_plant,
-                                set_axial_inertia, set_gear, set_mass)
+from twin.machines.base import (
+    Axis,
+    Machine,
+    Parameter,
+    coulomb_friction_parameters,
+    diagonal_plant,
+    set_axial_inertia,
+    set_gear,
+    set_mass,
+)
 
 SEED = "seed 000 (Yadav et al. 2020)"
 
 
-def leadscrew_parameters(suffix: str = "", mass_kg: float = 50.0,
-                         mass_note: str = "mass of table + workpiece") -> dict[str, Parameter]:
+def leadscrew_parameters(
+    suffix: str = "", mass_kg: float = 50.0, mass_note: str = "mass of table + workpiece"
+) -> dict[str, Parameter]:
     """Table 1 parameters of one lead-screw axis, symbols optionally suffixed (``_x``)."""
     s = suffix
     return {
         f"K1{s}": Parameter(2.0, "V/V", f"power amplifier gain, {SEED} Table 1", (1.0, 3.0)),
         f"K2{s}": Parameter(4.0, "N m/V", f"servomotor gain, {SEED} Table 1", (3.0, 5.0)),
-        f"m{s}": Parameter(mass_kg, "kg", f"{mass_note}, {SEED} Table 1 (m)",
-                           (0.6 * mass_kg, 1.4 * mass_kg)),
-        f"Im{s}": Parameter(0.01, "kg m^2", f"equivalent inertia at the motor (rotor + screw/n^2), "
-                                            f"{SEED} Table 1", (0.008, 0.012)),
-        f"p{s}": Parameter(0.05, "m/rad", f"lead (table travel per screw radian) as eq. (2) needs; "
-                                          f"Table 1 says 5 mm pitch, {SEED}"),
+        f"m{s}": Parameter(mass_kg, "kg", f"{mass_note}, {SEED} Table 1 (m)", (0.6 * mass_kg, 1.4 * mass_kg)),
+        f"Im{s}": Parameter(
+            0.01, "kg m^2", f"equivalent inertia at the motor (rotor + screw/n^2), {SEED} Table 1", (0.008, 0.012)
+        ),
+        f"p{s}": Parameter(
+            0.05, "m/rad", f"lead (table travel per screw radian) as eq. (2) needs; Table 1 says 5 mm pitch, {SEED}"
+        ),
         f"n{s}": Parameter(2.0, "-", f"gear ratio motor:screw, {SEED} Table 1"),
         f"H1{s}": Parameter(1.0, "-", f"encoder gain (measured = H1 x), {SEED} Table 1"),
         f"H2{s}": Parameter(0.1, "V s/rad", f"tachogenerator gain on screw speed, {SEED} Table 1"),
@@ -55,11 +64,17 @@ class _LeadScrewMachine(Machine):
 
     suffixes: tuple[str, ...] = ("",)
     common = {
-        "Js": Parameter(8e-4, "kg m^2", "lead-screw inertia (32 mm x 1 m steel screw; assumed, "
-                                        "part of Im: rotor gets Im - Js/n^2)"),
+        "Js": Parameter(
+            8e-4, "kg m^2", "lead-screw inertia (32 mm x 1 m steel screw; assumed, part of Im: rotor gets Im - Js/n^2)"
+        ),
         "m_workpiece": Parameter(10.0, "kg", "workpiece mass, part of m (assumed split)"),
-        "Td": Parameter(0.0, "s", f"transport delay of eq. (2) (0.1 s in the paper's simulations;"
-                                  f" off by default: {SEED} analyses without it)", positive=False),
+        "Td": Parameter(
+            0.0,
+            "s",
+            f"transport delay of eq. (2) (0.1 s in the paper's simulations;"
+            f" off by default: {SEED} analyses without it)",
+            positive=False,
+        ),
     }
 
     def _axis_values(self, params, s):
@@ -71,12 +86,14 @@ class _LeadScrewMachine(Machine):
         for s in self.suffixes:
             v = self._axis_values(params, s)
             if v["Im"] - params["Js"] / v["n"] ** 2 <= 0:
-                raise TwinInputError(f"overrides.Im{s}", v["Im"],
-                                     f"must exceed Js/n^2 = {params['Js'] / v['n'] ** 2:g} kg m^2")
+                raise TwinInputError(
+                    f"overrides.Im{s}", v["Im"], f"must exceed Js/n^2 = {params['Js'] / v['n'] ** 2:g} kg m^2"
+                )
         table_mass = params[f"m{self.suffixes[-1]}"]
         if table_mass <= params["m_workpiece"]:
-            raise TwinInputError(f"overrides.m{self.suffixes[-1]}", table_mass,
-                                 f"must exceed m_workpiece = {params['m_workpiece']:g} kg")
+            raise TwinInputError(
+                f"overrides.m{self.suffixes[-1]}", table_mass, f"must exceed m_workpiece = {params['m_workpiece']:g} kg"
+            )
 
     def configure(self, spec, params):
         top = self.suffixes[-1]
@@ -112,8 +129,10 @@ class _LeadScrewMachine(Machine):
         pairs, leads = [], {}
         for axis, s in zip(self.axes, self.suffixes):
             a = axis.name
-            pairs += [(f"{a}_motor", f"{a}_screw", params[f"n{s}"]),
-                      (f"{a}_screw", f"{a}_table", 1.0 / params[f"p{s}"])]
+            pairs += [
+                (f"{a}_motor", f"{a}_screw", params[f"n{s}"]),
+                (f"{a}_screw", f"{a}_table", 1.0 / params[f"p{s}"]),
+            ]
             leads[a] = params[f"p{s}"]
         return pairs, leads
 
@@ -135,9 +154,13 @@ class CNCMTXY(_LeadScrewMachine):
     xml = "cncmt_xy/cncmt_xy.xml"
     summary = "two seed-000 axes, the Y drive train and table riding on the X table"
     suffixes = ("_x", "_y")
-    parameters = {**leadscrew_parameters("_x", 50.0, "mass of the X table alone (the Y axis "
-                                                     "adds its own mass on top)"),
-                  **leadscrew_parameters("_y", 50.0, "mass of Y table + workpiece"),
-                  **_LeadScrewMachine.common, **coulomb_friction_parameters(("x", "y"))}
-    axes = (Axis("x", "x_drive", "x_table", "x_motor", "x_screw"),
-            Axis("y", "y_drive", "y_table", "y_motor", "y_screw"))
+    parameters = {
+        **leadscrew_parameters("_x", 50.0, "mass of the X table alone (the Y axis adds its own mass on top)"),
+        **leadscrew_parameters("_y", 50.0, "mass of Y table + workpiece"),
+        **_LeadScrewMachine.common,
+        **coulomb_friction_parameters(("x", "y")),
+    }
+    axes = (
+        Axis("x", "x_drive", "x_table", "x_motor", "x_screw"),
+        Axis("y", "y_drive", "y_table", "y_motor", "y_screw"),
+    )

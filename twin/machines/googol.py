@@ -18,11 +18,18 @@ from __future__ import annotations
 
 import math
 
-
 from controllers.lti import SisoTf
 from twin.errors import TwinInputError
-from twin.machines.base import (Axis, Machine, Parameter, coulomb_friction_parameters, diagonal_plant,
-                                set_axial_inertia, set_gear, set_mass)
+from twin.machines.base import (
+    Axis,
+    Machine,
+    Parameter,
+    coulomb_friction_parameters,
+    diagonal_plant,
+    set_axial_inertia,
+    set_gear,
+    set_mass,
+)
 
 SEED = "seed 002 (Anang et al.) eq. (1)"
 
@@ -42,8 +49,10 @@ class GoogolXY(Machine):
         "m_workpiece": Parameter(2.0, "kg", "workpiece mass (assumed)"),
         **coulomb_friction_parameters(("x", "y")),
     }
-    axes = (Axis("x", "x_drive", "x_table", "x_motor", "x_screw"),
-            Axis("y", "y_drive", "y_table", "y_motor", "y_screw"))
+    axes = (
+        Axis("x", "x_drive", "x_table", "x_motor", "x_screw"),
+        Axis("y", "y_drive", "y_table", "y_motor", "y_screw"),
+    )
 
     def check(self, params):
         if params["Td"] < 0:

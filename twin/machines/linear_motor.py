@@ -10,11 +10,16 @@ quantified in the paper: 0 N by default, set per scenario.
 
 from __future__ import annotations
 
-import numpy as np
-
 from controllers.lti import SisoTf
-from twin.machines.base import (Axis, Machine, Parameter, check_stacked_masses, coulomb_friction_parameters,
-                                diagonal_plant, set_mass)
+from twin.machines.base import (
+    Axis,
+    Machine,
+    Parameter,
+    check_stacked_masses,
+    coulomb_friction_parameters,
+    diagonal_plant,
+    set_mass,
+)
 
 SEED = "seed 004 (Choi et al. 1999)"
 
@@ -24,10 +29,12 @@ class LinearMotorXY(Machine):
     xml = "linear_motor_xy/linear_motor_xy.xml"
     summary = "seed 004 linear-motor XY table, m_x 52.3 kg, m_y 17 kg (Y on X), 1/2 um encoders"
     parameters = {
-        "m_x": Parameter(52.3, "kg", f"mass moved by X (X + Y carriages + workpiece), {SEED} Table 1",
-                         (52.3 * 0.7, 52.3 * 1.3)),
-        "m_y": Parameter(17.0, "kg", f"mass moved by Y (Y carriage + workpiece), {SEED} Table 1",
-                         (17.0 * 0.6, 17.0 * 1.4)),
+        "m_x": Parameter(
+            52.3, "kg", f"mass moved by X (X + Y carriages + workpiece), {SEED} Table 1", (52.3 * 0.7, 52.3 * 1.3)
+        ),
+        "m_y": Parameter(
+            17.0, "kg", f"mass moved by Y (Y carriage + workpiece), {SEED} Table 1", (17.0 * 0.6, 17.0 * 1.4)
+        ),
         "b_x": Parameter(193.5, "N s/m", f"viscous damping X, {SEED} Table 1", (154.8, 232.2)),
         "b_y": Parameter(36.0, "N s/m", f"viscous damping Y, {SEED} Table 1", (28.8, 43.2)),
         "k_x": Parameter(98.2, "N/V", "input gain X: 982 N peak force at 10 V (assumed)"),
@@ -50,25 +57,6 @@ class LinearMotorXY(Machine):
             spec.actuator(f"{a}_drive").gainprm[0] = params[f"k_{a}"]
 
     def plant(self, params, model):
-        return diagonal_plant([SisoTf((params[f"k_{a}"],), (params[f"m_{a}"], params[f"b_{a}"], 0.0))
-                               for a in ("x", "y")])
-
-
-def cutting_coupled_plant(params: dict[str, float], k_il_N_s_per_m: float, k_c_N_s_per_m: float):
-    """Seed 004's coupled 4-state model with the average cutting force, eq. (11), as continuous
-    state-space matrices ``(A, B, C, D)``.
-
-    State ``[y_x, v_x, y_y, v_y]`` (m, m/s), inputs ``u_x, u_y`` (V), outputs the positions (m);
-    A is eq. (11)'s (rows 2 and 4: ``(k_il - b_i)/m_i`` and ``-+k_c/m_i``), B takes the
-    ``k_i/m_i`` input columns of eq. (11)'s B (the uncertainty channels are left out).
-    """
-    mx, my, bx, by = params["m_x"], params["m_y"], params["b_x"], params["b_y"]
-    k_il, k_c = k_il_N_s_per_m, k_c_N_s_per_m
-    A = [[0.0, 1.0, 0.0, 0.0],
-         [0.0, (k_il - bx) / mx, 0.0, -k_c / mx],
-         [0.0, 0.0, 0.0, 1.0],
-         [0.0, k_c / my, 0.0, (k_il - by) / my]]
-    B = [[0.0, 0.0], [params["k_x"] / mx, 0.0], [0.0, 0.0], [0.0, params["k_y"] / my]]
-    C = [[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]]
-    return np.array(A), np.array(B), np.array(C), np.zeros((2, 2))
-
+        return diagonal_plant(
+            [SisoTf((params[f"k_{a}"],), (params[f"m_{a}"], params[f"b_{a}"], 0.0)) for a in ("x", "y")]
+        )

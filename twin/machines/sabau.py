@@ -13,10 +13,8 @@ slide sized so that it gets the eq. (6) cross-acceleration.
 
 from __future__ import annotations
 
-
 from controllers.lti import SisoTf
-from twin.machines.base import (Axis, Machine, Parameter, check_stacked_masses, coulomb_friction_parameters,
-                                set_mass)
+from twin.machines.base import Axis, Machine, Parameter, check_stacked_masses, coulomb_friction_parameters, set_mass
 
 SEED = "seed 001 (Sabau 2022)"
 
@@ -35,10 +33,8 @@ class SabauXY(Machine):
         "a_x": _boxed(40.85, "1/s", f"1/T_Mx, eq. (1), {SEED}"),
         "K_y": _boxed(2188.0, "mm/(V s^2)", f"K_My/T_My, eq. (3), {SEED}"),
         "a_y": _boxed(87.81, "1/s", f"1/T_My, eq. (3), {SEED}"),
-        "H_wx_uy": _boxed(15.0, "mm/(V s^2)", f"u_y to X acceleration, eq. (6), {SEED}",
-                          positive=False),
-        "H_wy_ux": _boxed(24.5, "mm/(V s^2)", f"u_x to Y acceleration, eq. (6), {SEED}",
-                          positive=False),
+        "H_wx_uy": _boxed(15.0, "mm/(V s^2)", f"u_y to X acceleration, eq. (6), {SEED}", positive=False),
+        "H_wy_ux": _boxed(24.5, "mm/(V s^2)", f"u_x to Y acceleration, eq. (6), {SEED}", positive=False),
         "m_x": Parameter(25.0, "kg", "mass moved by X, Y carriage included (assumed)"),
         "m_y": Parameter(10.0, "kg", "mass moved by Y, workpiece included (assumed)"),
         "m_workpiece": Parameter(2.0, "kg", "workpiece mass (assumed)"),
@@ -65,5 +61,7 @@ class SabauXY(Machine):
     def plant(self, params, model):
         dx = [1.0, params["a_x"], 0.0]
         dy = [1.0, params["a_y"], 0.0]
-        return ((SisoTf((params["K_x"] * 1e-3,), dx), SisoTf((params["H_wx_uy"] * 1e-3,), dx)),
-                (SisoTf((params["H_wy_ux"] * 1e-3,), dy), SisoTf((params["K_y"] * 1e-3,), dy)))
+        return (
+            (SisoTf((params["K_x"] * 1e-3,), dx), SisoTf((params["H_wx_uy"] * 1e-3,), dx)),
+            (SisoTf((params["H_wy_ux"] * 1e-3,), dy), SisoTf((params["K_y"] * 1e-3,), dy)),
+        )

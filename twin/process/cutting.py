@@ -109,8 +109,9 @@ def flute_force_integral(k, axial_depth_mm, feed_per_tooth_mm, phi):  # pragma: 
     return qx, qy, qz
 
 
-def mean_tool_forces_N(k: CuttingCoefficients, n_flutes: int, axial_depth_mm: float,
-                       feed_per_tooth_mm: float, phi_st: float, phi_ex: float) -> np.ndarray:
+def mean_tool_forces_N(
+    k: CuttingCoefficients, n_flutes: int, axial_depth_mm: float, feed_per_tooth_mm: float, phi_st: float, phi_ex: float
+) -> np.ndarray:
     """Closed-form average force on the tool over a tooth period, feed frame (N), shape (3,).
 
     ``N/(2 pi) [Q(phi_ex) - Q(phi_st)]`` with :func:`flute_force_integral` (Altintas eq. 2.64).
@@ -121,8 +122,9 @@ def mean_tool_forces_N(k: CuttingCoefficients, n_flutes: int, axial_depth_mm: fl
 
 
 @njit(cache=True)
-def step_tool_forces_N(k, n_flutes, axial_depth_mm, feed_per_tooth_mm, phi_st, phi_ex,
-                       spindle_angle_rad, step_angle_rad):  # pragma: no cover - compiled
+def step_tool_forces_N(
+    k, n_flutes, axial_depth_mm, feed_per_tooth_mm, phi_st, phi_ex, spindle_angle_rad, step_angle_rad
+):  # pragma: no cover - compiled
     """Force on the tool, feed frame (N), averaged over one physics step, summed over the flutes.
 
     ``k`` is :meth:`CuttingCoefficients.as_array`.  Flute 0 turns from ``spindle_angle_rad``
@@ -248,12 +250,25 @@ class EndMilling:
         lag_steps = 1.0 / self.tooth_frequency_hz / dt
         lag_lo = int(lag_steps)
         n_hist = lag_lo + 2
-        params = np.concatenate([
-            self.coefficients.as_array(),
-            [int(self.n_flutes), self.axial_depth_mm, phi_st, phi_ex, 2.0 * math.pi * self.spindle_rpm / 60.0,
-             _spindle_phase(self.spindle_phase_rad, self.seed), dt, lag_lo, lag_steps - lag_lo,
-             *_window(self.start_s, self.stop_s, dt), n_hist],
-            machine.workpiece_jacobian().ravel()])
+        params = np.concatenate(
+            [
+                self.coefficients.as_array(),
+                [
+                    int(self.n_flutes),
+                    self.axial_depth_mm,
+                    phi_st,
+                    phi_ex,
+                    2.0 * math.pi * self.spindle_rpm / 60.0,
+                    _spindle_phase(self.spindle_phase_rad, self.seed),
+                    dt,
+                    lag_lo,
+                    lag_steps - lag_lo,
+                    *_window(self.start_s, self.stop_s, dt),
+                    n_hist,
+                ],
+                machine.workpiece_jacobian().ravel(),
+            ]
+        )
         state = np.zeros(3 + 2 * n_hist)
         state[1] = 1.0  # feed direction +x until the workpiece first moves
         return END_MILLING, params, state
@@ -293,19 +308,29 @@ class AverageForce:
             if not math.isfinite(getattr(self, name)):
                 raise TwinInputError(name, getattr(self, name), "must be finite")
         if not 0 <= self.harmonic_fraction <= 0.2:
-            raise TwinInputError("harmonic_fraction", self.harmonic_fraction,
-                                 "must be in [0, 0.2]: seed 004 bounds the cyclic part at 20 % of the average")
+            raise TwinInputError(
+                "harmonic_fraction",
+                self.harmonic_fraction,
+                "must be in [0, 0.2]: seed 004 bounds the cyclic part at 20 % of the average",
+            )
         _check_cutter(self.spindle_rpm, self.n_flutes)
         _window(self.start_s, self.stop_s)
 
     def kernel_arrays(self, machine) -> tuple[int, np.ndarray, np.ndarray]:
         """``(AVERAGE_FORCE, params, state)`` for :func:`workpiece_forces`."""
-        params = np.concatenate([
-            [self.k_il_N_s_per_m, self.k_c_N_s_per_m, self.harmonic_fraction,
-             2.0 * math.pi * _tooth_frequency_hz(self.spindle_rpm, self.n_flutes),
-             _spindle_phase(self.harmonic_phase_rad, self.seed),
-             *_window(self.start_s, self.stop_s, machine.model.opt.timestep)],
-            machine.workpiece_jacobian().ravel()])
+        params = np.concatenate(
+            [
+                [
+                    self.k_il_N_s_per_m,
+                    self.k_c_N_s_per_m,
+                    self.harmonic_fraction,
+                    2.0 * math.pi * _tooth_frequency_hz(self.spindle_rpm, self.n_flutes),
+                    _spindle_phase(self.harmonic_phase_rad, self.seed),
+                    *_window(self.start_s, self.stop_s, machine.model.opt.timestep),
+                ],
+                machine.workpiece_jacobian().ravel(),
+            ]
+        )
         return AVERAGE_FORCE, params, np.zeros(0)
 
 
@@ -373,9 +398,9 @@ def workpiece_forces(fops, fpar, fstate, qpos, qvel, t, xfrc, body, f_sum):  # p
     for m in range(fops.shape[0]):
         kind, p0, pn, s0, sn = fops[m, 0], fops[m, 1], fops[m, 2], fops[m, 3], fops[m, 4]
         if kind == END_MILLING:
-            _end_milling(fpar[p0:p0 + pn], fstate[s0:s0 + sn], qpos, t, out)
+            _end_milling(fpar[p0 : p0 + pn], fstate[s0 : s0 + sn], qpos, t, out)
         else:
-            _average_force(fpar[p0:p0 + pn], qvel, t, out)
+            _average_force(fpar[p0 : p0 + pn], qvel, t, out)
     for i in range(3):
         xfrc[body, i] = out[i]
         f_sum[i] += out[i]

@@ -92,11 +92,13 @@ class HarmonicInput:
 
     def __post_init__(self):
         if len(self.amplitudes_V) != len(self.frequencies_hz) or not self.amplitudes_V:
-            raise TwinInputError("disturbance.frequencies_hz", list(self.frequencies_hz),
-                                 "needs one entry per amplitude (at least one)")
+            raise TwinInputError(
+                "disturbance.frequencies_hz", list(self.frequencies_hz), "needs one entry per amplitude (at least one)"
+            )
         if len(self.amplitudes_V) > MAX_INPUT_HARMONICS:
-            raise TwinInputError("disturbance.amplitudes_V", list(self.amplitudes_V),
-                                 f"at most {MAX_INPUT_HARMONICS} harmonics")
+            raise TwinInputError(
+                "disturbance.amplitudes_V", list(self.amplitudes_V), f"at most {MAX_INPUT_HARMONICS} harmonics"
+            )
         if not all(math.isfinite(a) for a in self.amplitudes_V):
             raise TwinInputError("disturbance.amplitudes_V", list(self.amplitudes_V), "must be finite")
         if not all(f > 0 and math.isfinite(f) for f in self.frequencies_hz):
@@ -115,7 +117,8 @@ class HarmonicInput:
     def input_V(self, t_s: np.ndarray) -> np.ndarray:
         """Disturbance (V), shape (len(t_s), n_axes)."""
         t = np.asarray(t_s, float)[:, None]
-        wave = (np.asarray(self.amplitudes_V) * np.sin(2 * math.pi * np.asarray(self.frequencies_hz) * t
-                                                         + self.phases())).sum(axis=1)
+        wave = (
+            np.asarray(self.amplitudes_V) * np.sin(2 * math.pi * np.asarray(self.frequencies_hz) * t + self.phases())
+        ).sum(axis=1)
         wave = np.where(t[:, 0] >= self.start_s, wave, 0.0)
         return wave[:, None] * _axis_mask(self.axes, self.n_axes)

@@ -59,8 +59,9 @@ def record(result, path: str | Path, max_points: int = 20_000, application_id: s
     return record_runs({"": result}, path, max_points, application_id)
 
 
-def record_runs(results: dict, path: str | Path, max_points: int = 20_000,
-                application_id: str = "cnc_feed_drive_twin") -> Path:
+def record_runs(
+    results: dict, path: str | Path, max_points: int = 20_000, application_id: str = "cnc_feed_drive_twin"
+) -> Path:
     """Write several runs to one ``.rrd`` file, each under its name (``<name>/machine/...``).
 
     A single run under the name ``""`` keeps the plain entity paths of the module docstring.
@@ -77,8 +78,10 @@ def record_runs(results: dict, path: str | Path, max_points: int = 20_000,
     rec = rr.RecordingStream(application_id)
     rec.save(str(path))
     gains = {name: contour_gain(r) if len(r.axis_names) == 2 else None for name, r in results.items()}
-    scales = {name: arrow_scale_N_per_mm(r.workpiece_force_N) if r.has_workpiece_force else None
-              for name, r in results.items()}
+    scales = {
+        name: arrow_scale_N_per_mm(r.workpiece_force_N) if r.has_workpiece_force else None
+        for name, r in results.items()
+    }
     rec.send_blueprint(blueprint(results, gains, scales))
     for name, result in results.items():
         _log_run(rec, result, f"{name}/" if name else "", max_points, gains[name], scales[name])

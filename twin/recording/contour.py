@@ -22,11 +22,16 @@ def log_contour(rec, result, prefix: str, rows: slice, gain: int) -> None:
     act = result.table_position_m()[rows] * 1e3
     root = f"{prefix}contour"
     rec.log(root, rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
-    rec.log(f"{root}/reference", rr.LineStrips3D([_xyz(ref)], colors=[REFERENCE_COLOR], radii=[-1.0]),
-            static=True)
+    rec.log(f"{root}/reference", rr.LineStrips3D([_xyz(ref)], colors=[REFERENCE_COLOR], radii=[-1.0]), static=True)
     rec.log(f"{root}/actual", rr.LineStrips3D([_xyz(act)], colors=[ACTUAL_COLOR], radii=[-3.0]), static=True)
-    rec.log(f"{root}/error_x{gain}", rr.LineStrips3D([_xyz(ref + gain * (act - ref))], colors=[ERROR_COLOR],
-                                                     radii=[-1.5]), static=True)
+    rec.log(
+        f"{root}/error_x{gain}",
+        rr.LineStrips3D([_xyz(ref + gain * (act - ref))], colors=[ERROR_COLOR], radii=[-1.5]),
+        static=True,
+    )
     rec.log(f"{root}/tool", rr.Points3D.from_fields(colors=[TOOL_COLOR], radii=[-8.0]), static=True)
-    rec.send_columns(f"{root}/tool", indexes=[rr.TimeColumn("sim_time", duration=result.t_s[rows])],
-                     columns=rr.Points3D.columns(positions=_xyz(act)))
+    rec.send_columns(
+        f"{root}/tool",
+        indexes=[rr.TimeColumn("sim_time", duration=result.t_s[rows])],
+        columns=rr.Points3D.columns(positions=_xyz(act)),
+    )

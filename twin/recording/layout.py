@@ -21,9 +21,13 @@ def _machine_view(model, prefix: str, n_per_mm: float | None) -> rrb.Spatial3DVi
     name = "machine (3-D, m): bodies move with the time cursor"
     if n_per_mm is not None:
         name += f"; red arrow: cutting force on the workpiece, {n_per_mm:g} N per mm"
-    return rrb.Spatial3DView(name=name, origin=f"{prefix}machine",
-                             eye_controls=rrb.EyeControls3D(position=target + reach * np.array([0.55, -0.8, 0.6]),
-                                                            look_target=target, eye_up=[0.0, 0.0, 1.0]))
+    return rrb.Spatial3DView(
+        name=name,
+        origin=f"{prefix}machine",
+        eye_controls=rrb.EyeControls3D(
+            position=target + reach * np.array([0.55, -0.8, 0.6]), look_target=target, eye_up=[0.0, 0.0, 1.0]
+        ),
+    )
 
 
 def _contour_view(result, prefix: str, gain: int) -> rrb.Spatial3DView:
@@ -34,8 +38,10 @@ def _contour_view(result, prefix: str, gain: int) -> rrb.Spatial3DView:
     return rrb.Spatial3DView(
         name=f"contour (mm, seen from above): reference grey, actual blue, error x{gain} red, tool yellow",
         origin=f"{prefix}contour",
-        eye_controls=rrb.EyeControls3D(position=[centre[0], centre[1], height], look_target=[centre[0], centre[1], 0.0],
-                                       eye_up=[0.0, 1.0, 0.0]))
+        eye_controls=rrb.EyeControls3D(
+            position=[centre[0], centre[1], height], look_target=[centre[0], centre[1], 0.0], eye_up=[0.0, 1.0, 0.0]
+        ),
+    )
 
 
 def readable_y_axis(values) -> rrb.ScalarAxis | None:
@@ -64,41 +70,68 @@ def series_views(result, prefix: str = "") -> list:
     machine = result.machine
     quantity, unit = machine.drive_quantity(machine.axes[0])
     drive = result.actuator_force[:, [machine.model.actuator(a.actuator).id for a in machine.axes]]
-    parts = [(a.name, part) for a in machine.axes for part, joint in (("motor", a.motor_joint), ("screw", a.screw_joint))
-             if joint]
+    parts = [
+        (a.name, part)
+        for a in machine.axes
+        for part, joint in (("motor", a.motor_joint), ("screw", a.screw_joint))
+        if joint
+    ]
     tables = [f"{prefix}joints/{a.name}/table/velocity" for a in machine.axes]
-    joints = [rrb.TimeSeriesView(name="joint angles (rad)",
-                                 contents=[f"{prefix}joints/{a}/{part}/angle" for a, part in parts]),
-              rrb.TimeSeriesView(name="joint speeds (rad/s), table velocity (mm/s)",
-                                 contents=[f"{prefix}joints/{a}/{part}/velocity" for a, part in parts] + tables)]
+    joints = [
+        rrb.TimeSeriesView(
+            name="joint angles (rad)", contents=[f"{prefix}joints/{a}/{part}/angle" for a, part in parts]
+        ),
+        rrb.TimeSeriesView(
+            name="joint speeds (rad/s), table velocity (mm/s)",
+            contents=[f"{prefix}joints/{a}/{part}/velocity" for a, part in parts] + tables,
+        ),
+    ]
     if not parts:  # linear motors: no rotating joints
         joints = [rrb.TimeSeriesView(name="table velocity (mm/s)", contents=tables)]
     position_mm = np.concatenate([result.ref[:, :, 0], result.table_position_m()]) * 1e3
-    views = [rrb.TimeSeriesView(name="position (mm): reference and actual",
-                                contents=[f"{prefix}reference/**", f"{prefix}actual/**"],
-                                axis_y=readable_y_axis(position_mm)),
-             rrb.TimeSeriesView(name="tracking error = reference - actual (µm)", origin=f"{prefix}error",
-                                axis_y=readable_y_axis(result.error_m() * 1e6)),
-             rrb.TimeSeriesView(name="control input (V)", origin=f"{prefix}control", axis_y=readable_y_axis(result.u_V)),
-             rrb.TimeSeriesView(name=f"drive {quantity} ({unit})", origin=f"{prefix}{quantity}/drive",
-                                axis_y=readable_y_axis(drive))]
+    views = [
+        rrb.TimeSeriesView(
+            name="position (mm): reference and actual",
+            contents=[f"{prefix}reference/**", f"{prefix}actual/**"],
+            axis_y=readable_y_axis(position_mm),
+        ),
+        rrb.TimeSeriesView(
+            name="tracking error = reference - actual (µm)",
+            origin=f"{prefix}error",
+            axis_y=readable_y_axis(result.error_m() * 1e6),
+        ),
+        rrb.TimeSeriesView(name="control input (V)", origin=f"{prefix}control", axis_y=readable_y_axis(result.u_V)),
+        rrb.TimeSeriesView(
+            name=f"drive {quantity} ({unit})", origin=f"{prefix}{quantity}/drive", axis_y=readable_y_axis(drive)
+        ),
+    ]
     if result.has_workpiece_force:
-        views.append(rrb.TimeSeriesView(name="cutting force on the workpiece (N)", origin=f"{prefix}force/cutting",
-                                        axis_y=readable_y_axis(result.workpiece_force_N[:, :len(machine.axes)])))
+        views.append(
+            rrb.TimeSeriesView(
+                name="cutting force on the workpiece (N)",
+                origin=f"{prefix}force/cutting",
+                axis_y=readable_y_axis(result.workpiece_force_N[:, : len(machine.axes)]),
+            )
+        )
     if len(views) % 2:
-        return views + [rrb.Tabs(*joints)]
+        return [*views, rrb.Tabs(*joints)]
     return [rrb.Tabs(views[0], *joints, active_tab=0), *views[1:]]
 
 
-def run_layout(result, prefix: str, gain: int | None, n_per_mm: float | None,
-               name: str | None = None) -> rrb.Horizontal:
+def run_layout(
+    result, prefix: str, gain: int | None, n_per_mm: float | None, name: str | None = None
+) -> rrb.Horizontal:
     """One run: series left; machine (and the contour when ``gain`` is given) right."""
     right = [_machine_view(result.machine.model, prefix, n_per_mm)]
     if gain is not None:
         right.append(_contour_view(result, prefix, gain))
     # two columns of series: panels tall enough for Rerun to label their grid lines
-    return rrb.Horizontal(rrb.Grid(*series_views(result, prefix), grid_columns=2), rrb.Vertical(*right),
-                          column_shares=[0.45, 0.55], name=name)
+    return rrb.Horizontal(
+        rrb.Grid(*series_views(result, prefix), grid_columns=2),
+        rrb.Vertical(*right),
+        column_shares=[0.45, 0.55],
+        name=name,
+    )
 
 
 def blueprint(results: dict, gains: dict, arrow_scales: dict) -> rrb.Blueprint:
@@ -107,5 +140,7 @@ def blueprint(results: dict, gains: dict, arrow_scales: dict) -> rrb.Blueprint:
     (None where there is no contour or no cutting force)."""
     if list(results) == [""]:
         return rrb.Blueprint(run_layout(results[""], "", gains[""], arrow_scales[""]), collapse_panels=True)
-    return rrb.Blueprint(rrb.Tabs(*[run_layout(r, f"{name}/", gains[name], arrow_scales[name], name)
-                                    for name, r in results.items()]), collapse_panels=True)
+    return rrb.Blueprint(
+        rrb.Tabs(*[run_layout(r, f"{name}/", gains[name], arrow_scales[name], name) for name, r in results.items()]),
+        collapse_panels=True,
+    )

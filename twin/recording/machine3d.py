@@ -33,8 +33,9 @@ def geom_shape(model, g: int):
     if kind == mujoco.mjtGeom.mjGEOM_CYLINDER:
         return rr.Cylinders3D(lengths=[2 * size[1]], radii=[size[0]], colors=[color], fill_mode=solid)
     if kind == mujoco.mjtGeom.mjGEOM_CAPSULE:
-        return rr.Capsules3D(lengths=[2 * size[1]], radii=[size[0]], translations=[[0.0, 0.0, -size[1]]],
-                             colors=[color])
+        return rr.Capsules3D(
+            lengths=[2 * size[1]], radii=[size[0]], translations=[[0.0, 0.0, -size[1]]], colors=[color]
+        )
     if kind == mujoco.mjtGeom.mjGEOM_SPHERE:
         return rr.Ellipsoids3D(half_sizes=[[size[0]] * 3], colors=[color], fill_mode=solid)
     if kind == mujoco.mjtGeom.mjGEOM_ELLIPSOID:
@@ -45,8 +46,11 @@ def geom_shape(model, g: int):
         m = model.geom_dataid[g]
         v0, nv = model.mesh_vertadr[m], model.mesh_vertnum[m]
         f0, nf = model.mesh_faceadr[m], model.mesh_facenum[m]
-        return rr.Mesh3D(vertex_positions=model.mesh_vert[v0:v0 + nv], triangle_indices=model.mesh_face[f0:f0 + nf],
-                         albedo_factor=color)
+        return rr.Mesh3D(
+            vertex_positions=model.mesh_vert[v0 : v0 + nv],
+            triangle_indices=model.mesh_face[f0 : f0 + nf],
+            albedo_factor=color,
+        )
     return None
 
 
@@ -58,7 +62,9 @@ def log_geometry(rec, model, prefix: str) -> None:
         if shape is None:
             continue
         b = model.geom_bodyid[g]
-        path = f"{prefix}machine/{_name(model, mujoco.mjtObj.mjOBJ_BODY, b)}/{_name(model, mujoco.mjtObj.mjOBJ_GEOM, g)}"
+        path = (
+            f"{prefix}machine/{_name(model, mujoco.mjtObj.mjOBJ_BODY, b)}/{_name(model, mujoco.mjtObj.mjOBJ_GEOM, g)}"
+        )
         rec.log(path, rr.Transform3D(translation=model.geom_pos[g], quaternion=_xyzw(model.geom_quat[g])), static=True)
         rec.log(path, shape, static=True)
 
@@ -84,8 +90,11 @@ def log_poses(rec, model, t, qpos, prefix: str) -> None:
         if model.body_weldid[b] == 0:
             rec.log(path, rr.Transform3D(translation=xpos[0, b], quaternion=_xyzw(xquat[0, b])), static=True)
         else:
-            rec.send_columns(path, indexes=[rr.TimeColumn("sim_time", duration=t)],
-                             columns=rr.Transform3D.columns(translation=xpos[:, b], quaternion=_xyzw(xquat[:, b])))
+            rec.send_columns(
+                path,
+                indexes=[rr.TimeColumn("sim_time", duration=t)],
+                columns=rr.Transform3D.columns(translation=xpos[:, b], quaternion=_xyzw(xquat[:, b])),
+            )
 
 
 def arrow_scale_N_per_mm(force_N: np.ndarray) -> float:
@@ -104,6 +113,8 @@ def log_cutting_force(rec, model, t, force_N, n_per_mm: float, prefix: str) -> N
     tip = (data.site_xpos[site] if site >= 0 else data.xpos[model.body("workpiece").id]) + [0.0, 0.0, ARROW_LIFT_M]
     path = f"{prefix}machine/cutting_force"
     rec.log(path, rr.Arrows3D.from_fields(colors=[(230, 30, 30)], radii=[0.002]), static=True)
-    rec.send_columns(path, indexes=[rr.TimeColumn("sim_time", duration=t)],
-                     columns=rr.Arrows3D.columns(vectors=force_N * 1e-3 / n_per_mm,
-                                                 origins=np.broadcast_to(tip, force_N.shape)))
+    rec.send_columns(
+        path,
+        indexes=[rr.TimeColumn("sim_time", duration=t)],
+        columns=rr.Arrows3D.columns(vectors=force_N * 1e-3 / n_per_mm, origins=np.broadcast_to(tip, force_N.shape)),
+    )

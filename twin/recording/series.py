@@ -14,7 +14,13 @@ def log_series(rec, result, prefix: str, rows: slice) -> None:
     t = result.t_s[rows]
     for series in named_series(result, rows):
         path = f"{prefix}{series.path}"
-        rec.log(path, rr.SeriesLines(names=f"{series.name} ({series.unit})", colors=series.color,
-                                     widths=series.width), static=True)
-        rec.send_columns(path, indexes=[rr.TimeColumn("sim_time", duration=t)],
-                         columns=rr.Scalars.columns(scalars=np.ascontiguousarray(series.values, float)))
+        rec.log(
+            path,
+            rr.SeriesLines(names=f"{series.name} ({series.unit})", colors=series.color, widths=series.width),
+            static=True,
+        )
+        rec.send_columns(
+            path,
+            indexes=[rr.TimeColumn("sim_time", duration=t)],
+            columns=rr.Scalars.columns(scalars=np.ascontiguousarray(series.values, float)),
+        )

@@ -34,8 +34,10 @@ _BLOCK = re.compile(r"(<!-- generated: (\w+)\.(\w+) -->\n)(.*?)(<!-- end generat
 def markdown_table(header: list[str], rows: list[list[str]]) -> str:
     """A GitHub-flavoured Markdown table (cells already formatted; a ``|`` inside one is escaped),
     ending in a newline."""
+
     def line(cells):
         return "| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |"
+
     return "\n".join([line(header), "|" + "---|" * len(header), *(line(row) for row in rows)]) + "\n"
 
 
@@ -112,8 +114,12 @@ def main(argv: list[str] | None = None) -> int:
     mode = parser.add_mutually_exclusive_group(required=True)
     mode.add_argument("--write", action="store_true", help="rewrite the generated blocks of the pages")
     mode.add_argument("--check", action="store_true", help="exit 1 if a page's block differs from its JSON")
-    parser.add_argument("--rerun", metavar="DIR", type=Path,
-                        help="first run every reproduction and write its JSON into DIR (docs/results to update them)")
+    parser.add_argument(
+        "--rerun",
+        metavar="DIR",
+        type=Path,
+        help="first run every reproduction and write its JSON into DIR (docs/results to update them)",
+    )
     args = parser.parse_args(argv)
     folder = None
     if args.rerun:
@@ -129,8 +135,10 @@ def main(argv: list[str] | None = None) -> int:
     if args.check and stale:
         print("generated tables differ from the reproductions' JSON:\n  " + "\n  ".join(stale), file=sys.stderr)
         return 1
-    print(("rewrote" if args.write else "checked") + f" {sum(len(blocks(p.read_text())) for p in pages())} tables "
-          f"on {len(pages())} pages" + (f"; {len(stale)} changed" if stale else ""))
+    print(
+        ("rewrote" if args.write else "checked") + f" {sum(len(blocks(p.read_text())) for p in pages())} tables "
+        f"on {len(pages())} pages" + (f"; {len(stale)} changed" if stale else "")
+    )
     return 0
 
 

@@ -51,12 +51,18 @@ class Drive:
 
     def __post_init__(self):
         steps = self.delay_s / self.timestep_s
-        if not (0 <= self.delay_s <= 10.0 and math.isfinite(steps)) or abs(steps - round(steps)) * self.timestep_s > 1e-9:
-            raise TwinInputError("drive.delay_s", self.delay_s,
-                                 f"must be in [0, 10] s and a whole multiple of the timestep {self.timestep_s:g} s")
+        if (
+            not (0 <= self.delay_s <= 10.0 and math.isfinite(steps))
+            or abs(steps - round(steps)) * self.timestep_s > 1e-9
+        ):
+            raise TwinInputError(
+                "drive.delay_s",
+                self.delay_s,
+                f"must be in [0, 10] s and a whole multiple of the timestep {self.timestep_s:g} s",
+            )
         if self.saturation_V is not None and self.saturation_V <= 0:
             raise TwinInputError("drive.saturation_V", self.saturation_V, "must be > 0")
-        self.delay_steps = int(round(steps))
+        self.delay_steps = round(steps)
         self.delay_ticks = self.delay_steps // self.substeps
 
     @property
@@ -125,12 +131,16 @@ def substeps_per_tick(control_period_s: float, timestep_s: float) -> int:
         raise TwinInputError("timestep_s", timestep_s, "must be > 0")
     ratio = control_period_s / timestep_s
     if not ratio <= MAX_SUBSTEPS:
-        raise TwinInputError("control_period_s", control_period_s, f"more than {MAX_SUBSTEPS:,} physics steps of "
-                             f"{timestep_s:g} s per control period")
+        raise TwinInputError(
+            "control_period_s",
+            control_period_s,
+            f"more than {MAX_SUBSTEPS:,} physics steps of {timestep_s:g} s per control period",
+        )
     n = round(ratio)
     if n < 1 or abs(ratio - n) > 1e-6:
-        raise TwinInputError("control_period_s", control_period_s,
-                             f"must be a whole multiple of timestep_s = {timestep_s:g} s")
+        raise TwinInputError(
+            "control_period_s", control_period_s, f"must be a whole multiple of timestep_s = {timestep_s:g} s"
+        )
     return int(n)
 
 
@@ -150,8 +160,24 @@ def table_in_bounds(qpos, q_idx, runaway_m):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def sense(k, row, qpos, qvel, q_idx, v_idx, gains, resolution, noise, ref, tachometer, period_s,
-          meas_prev, u_prev, preview, bus):  # pragma: no cover - compiled
+def sense(
+    k,
+    row,
+    qpos,
+    qvel,
+    q_idx,
+    v_idx,
+    gains,
+    resolution,
+    noise,
+    ref,
+    tachometer,
+    period_s,
+    meas_prev,
+    u_prev,
+    preview,
+    bus,
+):  # pragma: no cover - compiled
     """Write tick ``k``'s loop signals onto the bus (layout of ``standard_signals``).
 
     ``row`` is tick k's row in the chunk arrays ``noise`` (n, n_axes) and ``ref``

@@ -50,8 +50,9 @@ OK, RUNAWAY, BAD_CONTROL, BAD_QACC = 0, 1, 2, 3
 
 
 @njit(cache=True, inline="always")
-def start_tick(k, row, every, qpos, qvel, act, q_idx, runaway_m, ref, error, rec_qpos, rec_qvel, rec_act,
-               rec_ref):  # pragma: no cover - compiled
+def start_tick(
+    k, row, every, qpos, qvel, act, q_idx, runaway_m, ref, error, rec_qpos, rec_qvel, rec_act, rec_ref
+):  # pragma: no cover - compiled
     """Tick k's error metrics and state recording; False if the table ran away."""
     if not table_in_bounds(qpos, q_idx, runaway_m):
         return False
@@ -74,8 +75,9 @@ def start_tick(k, row, every, qpos, qvel, act, q_idx, runaway_m, ref, error, rec
 
 
 @njit(cache=True, inline="always")
-def end_tick(k, every, substeps, u, ua, f_sum, force_max, bus, rec_meas, rec_u, rec_ua,
-             rec_force):  # pragma: no cover - compiled
+def end_tick(
+    k, every, substeps, u, ua, f_sum, force_max, bus, rec_meas, rec_u, rec_ua, rec_force
+):  # pragma: no cover - compiled
     """Record tick k's measurement, inputs and mean workpiece force; update the force maxima."""
     for a in range(u.shape[0]):
         force_max[a] = max(force_max[a], abs(f_sum[a] / substeps))
@@ -90,8 +92,9 @@ def end_tick(k, every, substeps, u, ua, f_sum, force_max, bus, rec_meas, rec_u, 
 
 
 @njit(cache=True)
-def compiled_ticks(k0, k1, mj_step, m_addr, d_addr, mj, sensor, drive, prog, force, chunk, rec,
-                   acc):  # pragma: no cover - compiled
+def compiled_ticks(
+    k0, k1, mj_step, m_addr, d_addr, mj, sensor, drive, prog, force, chunk, rec, acc
+):  # pragma: no cover - compiled
     """Ticks ``k0 <= k < k1``, compiled; ``mj_step`` is :data:`twin.sim.mujoco_c.MJ_STEP`
     (an argument, so numba can cache the loop), ``m_addr``/``d_addr`` the struct addresses.
     The groups are unpacked once, before the loop (numba reference-counts every array taken
@@ -107,11 +110,28 @@ def compiled_ticks(k0, k1, mj_step, m_addr, d_addr, mj, sensor, drive, prog, for
     n_blocks = ops.shape[0]
     for k in range(k0, k1):
         row = k - k0
-        if not start_tick(k, row, every, qpos, qvel, act, q_idx, runaway_m, ref, error, rec_qpos, rec_qvel,
-                          rec_act, rec_ref):
+        if not start_tick(
+            k, row, every, qpos, qvel, act, q_idx, runaway_m, ref, error, rec_qpos, rec_qvel, rec_act, rec_ref
+        ):
             return RUNAWAY, k, 0
-        sense(k, row, qpos, qvel, q_idx, v_idx, gains, resolution, noise, ref, tachometer, period_s,
-              meas_prev, u_sat, preview, bus)
+        sense(
+            k,
+            row,
+            qpos,
+            qvel,
+            q_idx,
+            v_idx,
+            gains,
+            resolution,
+            noise,
+            ref,
+            tachometer,
+            period_s,
+            meas_prev,
+            u_sat,
+            preview,
+            bus,
+        )
         run_blocks(0, n_blocks, ops, io, par, state, scratch, bus)
         if not drive_command(k, row, bus, u_idx, u_dist, limit, u, ua, u_sat, delay_line):
             return BAD_CONTROL, k, 0
@@ -134,18 +154,35 @@ def python_ticks(k0, k1, model, data, program, mj, sensor, drive, force, chunk, 
     qpos, qvel, qacc, ctrl, act, xfrc = mj
     q_idx, v_idx, gains, resolution, tachometer, period_s, runaway_m, meas_prev, preview = sensor
     u_idx, act_idx, limit, substeps, delay_steps, delay_line, u, ua, u_sat = drive
-    fops, fpar, fstate, wp, dt, clock, f_sum = force
+    fops, fpar, fstate, wp, _dt, _clock, f_sum = force
     ref, noise, u_dist = chunk
     every, rec_qpos, rec_qvel, rec_act, rec_ref, rec_meas, rec_u, rec_ua, rec_force = rec
     error, force_max = acc
     bus = program.bus
     for k in range(k0, k1):
         row = k - k0
-        if not start_tick(k, row, every, qpos, qvel, act, q_idx, runaway_m, ref, error, rec_qpos, rec_qvel,
-                          rec_act, rec_ref):
+        if not start_tick(
+            k, row, every, qpos, qvel, act, q_idx, runaway_m, ref, error, rec_qpos, rec_qvel, rec_act, rec_ref
+        ):
             return RUNAWAY, k, 0
-        sense(k, row, qpos, qvel, q_idx, v_idx, gains, resolution, noise, ref, tachometer, period_s,
-              meas_prev, u_sat, preview, bus)
+        sense(
+            k,
+            row,
+            qpos,
+            qvel,
+            q_idx,
+            v_idx,
+            gains,
+            resolution,
+            noise,
+            ref,
+            tachometer,
+            period_s,
+            meas_prev,
+            u_sat,
+            preview,
+            bus,
+        )
         program.run()
         if not drive_command(k, row, bus, u_idx, u_dist, limit, u, ua, u_sat, delay_line):
             return BAD_CONTROL, k, 0

@@ -50,5 +50,6 @@ def struct_addresses(model: mujoco.MjModel, data: mujoco.MjData) -> tuple[int, i
     try:
         return int(model._address), int(data._address)
     except AttributeError:
-        raise RuntimeError(f"mujoco {mujoco.__version__}: MjModel/MjData have no _address; "
-                           "twin.sim.mujoco_c needs updating") from None
+        raise RuntimeError(
+            f"mujoco {mujoco.__version__}: MjModel/MjData have no _address; twin.sim.mujoco_c needs updating"
+        ) from None

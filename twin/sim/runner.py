@@ -18,9 +18,10 @@ force, recorded as the mean of the forces applied over that interval.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Protocol, Sequence
+from typing import Protocol
 
 import mujoco
 import numpy as np
@@ -47,8 +48,12 @@ MAX_PHYSICS_STEPS = 100_000_000
 #: so memory stays bounded whatever the duration (about 25 MB for a two-axis machine).
 MAX_RECORDED_TICKS = 100_000
 #: MuJoCo warnings that mean the simulation is no longer valid.
-FATAL_WARNINGS = (mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQVEL,
-                  mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADCTRL)
+FATAL_WARNINGS = (
+    mujoco.mjtWarning.mjWARN_BADQACC,
+    mujoco.mjtWarning.mjWARN_BADQVEL,
+    mujoco.mjtWarning.mjWARN_BADQPOS,
+    mujoco.mjtWarning.mjWARN_BADCTRL,
+)
 
 
 class Disturbance(Protocol):
@@ -137,8 +142,11 @@ def _program(machine: BuiltMachine, controllers: Sequence[Controller], control_p
             raise TwinInputError(f"controller {c.name}.dt", c.dt, f"differs from control_period_s = {control_period_s}")
         driven += c.drives
     if sorted(driven) != sorted(names):
-        raise TwinInputError("controller", [c.name for c in controllers],
-                             f"drive axes {driven}; machine '{machine.name}' needs each of {names} once")
+        raise TwinInputError(
+            "controller",
+            [c.name for c in controllers],
+            f"drive axes {driven}; machine '{machine.name}' needs each of {names} once",
+        )
     try:
         preview = preview_ticks_needed(s for c in controllers for s in c.inputs)
         return Program(controllers, standard_signals(names, preview)), preview
@@ -148,11 +156,21 @@ def _program(machine: BuiltMachine, controllers: Sequence[Controller], control_p
         raise TwinInputError("controller", [c.name for c in controllers], str(exc)) from None
 
 
-def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controller, reference,
-             duration_s: float, control_period_s: float, *, drive: Drive | None = None,
-             encoder: Encoder | None = None, disturbances: Sequence[Disturbance] = (),
-             record_every: int | None = None, progress: bool | None = None,
-             compiled: bool | None = None, max_physics_steps: int = MAX_PHYSICS_STEPS) -> RunResult:
+def simulate(
+    machine: BuiltMachine,
+    controllers: Sequence[Controller] | Controller,
+    reference,
+    duration_s: float,
+    control_period_s: float,
+    *,
+    drive: Drive | None = None,
+    encoder: Encoder | None = None,
+    disturbances: Sequence[Disturbance] = (),
+    record_every: int | None = None,
+    progress: bool | None = None,
+    compiled: bool | None = None,
+    max_physics_steps: int = MAX_PHYSICS_STEPS,
+) -> RunResult:
     """Run the closed loop for ``duration_s`` and return its time series and metrics.
 
     Parameters
@@ -200,11 +218,16 @@ def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controll
     if not (duration_s > 0 and math.isfinite(duration_s)):
         raise TwinInputError("duration_s", duration_s, "must be > 0")
     if not duration_s / dt <= max_physics_steps:
-        raise TwinInputError("duration_s", duration_s, f"needs {duration_s / dt:.3g} physics steps of {dt:g} s, more "
-                             f"than the {max_physics_steps:,} allowed (twin run --max-steps)")
+        raise TwinInputError(
+            "duration_s",
+            duration_s,
+            f"needs {duration_s / dt:.3g} physics steps of {dt:g} s, more "
+            f"than the {max_physics_steps:,} allowed (twin run --max-steps)",
+        )
     if reference.n_axes != n_axes:
-        raise TwinInputError("reference", type(reference).__name__,
-                             f"has {reference.n_axes} axes, machine '{machine.name}' has {n_axes}")
+        raise TwinInputError(
+            "reference", type(reference).__name__, f"has {reference.n_axes} axes, machine '{machine.name}' has {n_axes}"
+        )
     if record_every is not None and (int(record_every) != record_every or record_every < 0):
         raise TwinInputError("record_every", record_every, "must be a whole number >= 0")
     controllers = [controllers] if isinstance(controllers, Controller) else list(controllers)
@@ -212,43 +235,68 @@ def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controll
     program.reset()
     can_compile = mujoco_c.available() and program.compiled
     if compiled and not can_compile:
-        raise TwinInputError("compiled", True, "needs compiled blocks only (no Python block) and MuJoCo's "
-                             "shared library")
+        raise TwinInputError(
+            "compiled", True, "needs compiled blocks only (no Python block) and MuJoCo's shared library"
+        )
     use_compiled = can_compile if compiled is None else compiled
     drive = drive or Drive(n_axes, substeps, dt, machine.delay_s)
     encoder = encoder or Encoder(np.zeros(n_axes), np.zeros(n_axes), np.array(machine.sensor_gains))
     if drive.n_axes != n_axes or drive.substeps != substeps:
-        raise TwinInputError("drive", (drive.n_axes, drive.substeps), f"needs {n_axes} axes and {substeps} "
-                             "physics steps per tick")
+        raise TwinInputError(
+            "drive", (drive.n_axes, drive.substeps), f"needs {n_axes} axes and {substeps} physics steps per tick"
+        )
     for name in ("gains", "resolution_m", "noise_std_m"):
         if getattr(encoder, name).shape != (n_axes,):
-            raise TwinInputError(f"encoder.{name}", getattr(encoder, name).tolist(), f"needs one value per axis "
-                                 f"({n_axes})")
+            raise TwinInputError(
+                f"encoder.{name}", getattr(encoder, name).tolist(), f"needs one value per axis ({n_axes})"
+            )
     input_disturbances = [d for d in disturbances if hasattr(d, "input_V")]
     forces = ForceModels([d for d in disturbances if hasattr(d, "kernel_arrays")], machine)
 
-    n = int(round(duration_s / control_period_s))
+    n = round(duration_s / control_period_s)
     if n < 1:
         raise TwinInputError("duration_s", duration_s, f"shorter than one control period ({control_period_s:g} s)")
     if record_every is None:
         record_every = -(-n // MAX_RECORDED_TICKS)
     data = mujoco.MjData(model)
     n_rec = 0 if record_every == 0 else -(-n // record_every)
-    rec = (int(record_every), np.empty((n_rec, model.nq)), np.empty((n_rec, model.nv)),
-           np.empty((n_rec, model.nu)), np.empty((n_rec, n_axes, 3)), np.empty((n_rec, n_axes)),
-           np.empty((n_rec, n_axes)), np.empty((n_rec, n_axes)), np.empty((n_rec, 3)))
+    rec = (
+        int(record_every),
+        np.empty((n_rec, model.nq)),
+        np.empty((n_rec, model.nv)),
+        np.empty((n_rec, model.nu)),
+        np.empty((n_rec, n_axes, 3)),
+        np.empty((n_rec, n_axes)),
+        np.empty((n_rec, n_axes)),
+        np.empty((n_rec, n_axes)),
+        np.empty((n_rec, 3)),
+    )
     acc = (np.zeros((n_axes, 2)), np.zeros(n_axes))
     mj = (data.qpos, data.qvel, data.qacc, data.ctrl, data.actuator_force, data.xfrc_applied)
-    sensor = (machine.table_qpos_indices(),
-              np.array([machine.joint_dof_index(a.table_joint) for a in machine.axes]),
-              encoder.gains, encoder.resolution_m, encoder.velocity == "tachometer", float(control_period_s),
-              RUNAWAY_M, np.zeros(n_axes), preview)
+    sensor = (
+        machine.table_qpos_indices(),
+        np.array([machine.joint_dof_index(a.table_joint) for a in machine.axes]),
+        encoder.gains,
+        encoder.resolution_m,
+        encoder.velocity == "tachometer",
+        float(control_period_s),
+        RUNAWAY_M,
+        np.zeros(n_axes),
+        preview,
+    )
     u_applied = np.zeros(n_axes)  # the drive input of the last tick (V), reported on divergence
-    drive_args = (np.array([program.index(f"u.{a}") for a in names]),
-                  np.array([model.actuator(a.actuator).id for a in machine.axes]), drive.limit_V, substeps,
-                  drive.delay_steps, drive.delay_line(), np.zeros(n_axes), u_applied, np.zeros(n_axes))
-    force = (forces.fops, forces.fpar, forces.fstate, machine.workpiece_body_id, dt,
-             np.array([data.time]), np.zeros(3))
+    drive_args = (
+        np.array([program.index(f"u.{a}") for a in names]),
+        np.array([model.actuator(a.actuator).id for a in machine.axes]),
+        drive.limit_V,
+        substeps,
+        drive.delay_steps,
+        drive.delay_line(),
+        np.zeros(n_axes),
+        u_applied,
+        np.zeros(n_axes),
+    )
+    force = (forces.fops, forces.fpar, forces.fstate, machine.workpiece_body_id, dt, np.array([data.time]), np.zeros(3))
     draw_noise = encoder.noise_source()
     if use_compiled:
         addresses = mujoco_c.struct_addresses(model, data)
@@ -256,8 +304,9 @@ def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controll
 
     def run_chunk(k0, k1, chunk):
         if use_compiled:
-            return loop.compiled_ticks(k0, k1, mujoco_c.MJ_STEP, *addresses, mj, sensor, drive_args, prog,
-                                       force, chunk, rec, acc)
+            return loop.compiled_ticks(
+                k0, k1, mujoco_c.MJ_STEP, *addresses, mj, sensor, drive_args, prog, force, chunk, rec, acc
+            )
         return loop.python_ticks(k0, k1, model, data, program, mj, sensor, drive_args, force, chunk, rec, acc)
 
     def result(ticks: int, accumulated: int) -> RunResult:
@@ -265,30 +314,51 @@ def simulate(machine: BuiltMachine, controllers: Sequence[Controller] | Controll
         rows = 0 if record_every == 0 else -(-ticks // record_every)
         qpos, qvel, act, ref, meas, u, ua, force_N = (a[:rows] for a in rec[1:])
         error, force_max = acc
-        return RunResult(machine, np.arange(rows) * record_every * control_period_s, ref, meas, u, ua, qpos, qvel,
-                         act, force_N, control_period_s, error[:, 0].copy(), np.sqrt(error[:, 1] / max(accumulated, 1)),
-                         force_max.copy(), info={"loop": "compiled" if use_compiled else "python",
-                                                 "record_every": int(record_every), "completed_ticks": ticks})
+        return RunResult(
+            machine,
+            np.arange(rows) * record_every * control_period_s,
+            ref,
+            meas,
+            u,
+            ua,
+            qpos,
+            qvel,
+            act,
+            force_N,
+            control_period_s,
+            error[:, 0].copy(),
+            np.sqrt(error[:, 1] / max(accumulated, 1)),
+            force_max.copy(),
+            info={
+                "loop": "compiled" if use_compiled else "python",
+                "record_every": int(record_every),
+                "completed_ticks": ticks,
+            },
+        )
 
     show = progress if progress is not None else n * substeps > PROGRESS_STEPS
     size = max(1, min(CHUNK_TICKS, CHUNK_STEPS // substeps, n))
     warnings0 = [data.warning[w].number for w in FATAL_WARNINGS]
     messages, done = [], 0
     try:
-        with _mujoco_warnings_into(messages), tqdm(total=n, desc=f"{machine.name}", unit="tick", disable=not show,
-                                                   mininterval=0.5, leave=False) as bar:
+        with (
+            _mujoco_warnings_into(messages),
+            tqdm(total=n, desc=f"{machine.name}", unit="tick", disable=not show, mininterval=0.5, leave=False) as bar,
+        ):
             for k0 in range(0, n, size):
                 k1 = min(n, k0 + size)
                 t = np.arange(k0, k1 + preview) * control_period_s
                 u_dist = np.zeros((k1 - k0, n_axes))
                 with np.errstate(all="ignore"):  # overflow shows as non-finite values, reported below
                     for dist in input_disturbances:
-                        u_dist += dist.input_V(t[:k1 - k0])
+                        u_dist += dist.input_V(t[: k1 - k0])
                     ref = np.ascontiguousarray(reference.sample(t))
                 bad = ~np.isfinite(ref).all(axis=(1, 2))
                 if bad.any():  # the ticks before this chunk are kept
-                    exc = SimulationDiverged((k0 + int(np.argmax(bad))) * control_period_s, "the reference "
-                                             "(position, velocity or acceleration) is not finite here: it overflows")
+                    exc = SimulationDiverged(
+                        (k0 + int(np.argmax(bad))) * control_period_s,
+                        "the reference (position, velocity or acceleration) is not finite here: it overflows",
+                    )
                     exc.result = result(k0, k0)
                     raise exc
                 chunk = (ref, draw_noise(k1 - k0), u_dist)

@@ -26,8 +26,9 @@ from controllers.lti import SisoTf, discretize, tf_to_ss
 
 
 @njit(cache=True)
-def _ticks(Ad, Bd, Cd, delay, ops, io, par, state, scratch, bus, sig, preview_at, ref, u_dist, plant_dist, limit,
-           dt, pos, u):  # pragma: no cover - compiled
+def _ticks(
+    Ad, Bd, Cd, delay, ops, io, par, state, scratch, bus, sig, preview_at, ref, u_dist, plant_dist, limit, dt, pos, u
+):  # pragma: no cover - compiled
     n, n_axes = pos.shape
     n_preview = preview_at.shape[1]
     x = np.zeros(Ad.shape[0])
@@ -63,9 +64,17 @@ def _ticks(Ad, Bd, Cd, delay, ops, io, par, state, scratch, bus, sig, preview_at
         y_prev[:] = y
 
 
-def tf_loop(plant, controller, ref: np.ndarray, dt: float, delay_s: float = 0.0,
-            u_dist_V: np.ndarray | None = None, plant_dist_V: np.ndarray | None = None,
-            saturation_V: float = np.inf, axes=("x",)) -> tuple[np.ndarray, np.ndarray]:
+def tf_loop(
+    plant,
+    controller,
+    ref: np.ndarray,
+    dt: float,
+    delay_s: float = 0.0,
+    u_dist_V: np.ndarray | None = None,
+    plant_dist_V: np.ndarray | None = None,
+    saturation_V: float = np.inf,
+    axes=("x",),
+) -> tuple[np.ndarray, np.ndarray]:
     """Simulate the loop; returns the position (m) and the controller output (V) per tick.
 
     Parameters
@@ -104,20 +113,41 @@ def tf_loop(plant, controller, ref: np.ndarray, dt: float, delay_s: float = 0.0,
     preview = preview_ticks_needed(controller.inputs)
     program = Program([controller], standard_signals(axes, preview))
     if not program.compiled:
-        raise ValueError(f"controller {controller.name!r} has Python blocks: the transfer-function loop runs "
-                         "compiled blocks only")
+        raise ValueError(
+            f"controller {controller.name!r} has Python blocks: the transfer-function loop runs compiled blocks only"
+        )
     n = len(ref) - preview
     if n < 1:
         raise ValueError(f"the reference has {len(ref)} rows: the controller previews {preview} ticks")
     names = ("ref", "ref_vel", "ref_acc", "pos", "vel", "error", "u_prev", "u")
     sig = np.array([[program.index("tick")] + [program.index(f"{s}.{a}") for s in names] for a in axes], np.int64)
-    preview_at = np.array([[program.index(f"preview.{a}.{i}") for i in range(1, preview + 1)] for a in axes],
-                          np.int64).reshape(len(axes), preview)
+    preview_at = np.array(
+        [[program.index(f"preview.{a}.{i}") for i in range(1, preview + 1)] for a in axes], np.int64
+    ).reshape(len(axes), preview)
 
     def per_axis(v):
         return np.zeros((n, len(axes))) if v is None else np.asarray(v, float).reshape(n, len(axes))
+
     pos, u = np.zeros((n, len(axes))), np.zeros((n, len(axes)))
-    _ticks(Ad, Bd, Cd, int(round(delay_s / dt)), program.ops, program.io, program.par, program.state,
-           program.scratch, program.bus, sig, preview_at, ref, per_axis(u_dist_V), per_axis(plant_dist_V),
-           float(saturation_V), dt, pos, u)
+    _ticks(
+        Ad,
+        Bd,
+        Cd,
+        round(delay_s / dt),
+        program.ops,
+        program.io,
+        program.par,
+        program.state,
+        program.scratch,
+        program.bus,
+        sig,
+        preview_at,
+        ref,
+        per_axis(u_dist_V),
+        per_axis(plant_dist_V),
+        float(saturation_V),
+        dt,
+        pos,
+        u,
+    )
     return (pos[:, 0], u[:, 0]) if single else (pos, u)

@@ -43,7 +43,7 @@ def sweep_spec(target: str) -> SweepFile:
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError):
-        return SweepFile(scenario=target, vary={})   # the scenario loader reports what is wrong with it
+        return SweepFile(scenario=target, vary={})  # the scenario loader reports what is wrong with it
     if "vary" not in data:
         return SweepFile(scenario=target, vary={})
     try:
@@ -70,8 +70,9 @@ class Sweep:
     plan: Plan
 
 
-def prepare_sweep(scenario: str, settings: dict, vary: list[str], samples: int, seed: int,
-                  latin_hypercube: bool) -> Sweep:
+def prepare_sweep(
+    scenario: str, settings: dict, vary: list[str], samples: int, seed: int, latin_hypercube: bool
+) -> Sweep:
     """Load and check the scenario with ``settings`` (``{dotted path: value}``, once, before any
     sample runs) and build the plan.
 

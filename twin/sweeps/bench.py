@@ -33,8 +33,9 @@ def _rss_mb() -> float:
     return psutil.Process().memory_info().rss / 2**20
 
 
-def run_sweep_bench(samples: int = 1000, repeats: int = 1, memory_samples: int = 10_000,
-                    loop_samples: int = 10, progress: bool = True) -> dict:
+def run_sweep_bench(
+    samples: int = 1000, repeats: int = 1, memory_samples: int = 10_000, loop_samples: int = 10, progress: bool = True
+) -> dict:
     """The figures of ``twin bench --sweep`` (see the module docstring)."""
     from twin.sweeps import prepare_sweep
     from twin.sweeps.run import make_client, run_sweep
@@ -49,8 +50,9 @@ def run_sweep_bench(samples: int = 1000, repeats: int = 1, memory_samples: int =
                 run_sweep(warm.scenario, warm.plan, warm.axes, Path(tmp) / f"warm{n}", client, 1, progress=False)
             for r in range(repeats):
                 for n, client in clients.items():
-                    done = run_sweep(sw.scenario, sw.plan, sw.axes, Path(tmp) / f"s{n}_{r}", client, 10,
-                                     progress=progress)
+                    done = run_sweep(
+                        sw.scenario, sw.plan, sw.axes, Path(tmp) / f"s{n}_{r}", client, 10, progress=progress
+                    )
                     times[n].append(done.wall_s)
             tiny = prepare_sweep(SCENARIO, {"duration_s": 0.0005}, VARY, memory_samples, 0, False)
             before = _rss_mb()
@@ -70,9 +72,21 @@ def run_sweep_bench(samples: int = 1000, repeats: int = 1, memory_samples: int =
         loop.append(time.perf_counter() - start)
     t1, t2 = statistics.median(times[1]), statistics.median(times[2])
     per_sample = statistics.mean(loop)
-    return {"scenario": SCENARIO, "settings": SETTINGS, "vary": VARY, "samples": samples, "repeats": repeats,
-            "wall_s_1_worker": t1, "wall_s_2_workers": t2, "samples_per_s_2_workers": samples / t2,
-            "parallel_efficiency": t1 / (2 * t2), "target_wall_s": 60.0, "target_efficiency": 0.85,
-            "memory_samples": memory_samples, "client_memory_growth_MB": growth,
-            "twin_run_loop_s_per_sample": per_sample, "twin_run_loop_samples": loop_samples,
-            "twin_run_loop_extrapolated_s": per_sample * samples}
+    return {
+        "scenario": SCENARIO,
+        "settings": SETTINGS,
+        "vary": VARY,
+        "samples": samples,
+        "repeats": repeats,
+        "wall_s_1_worker": t1,
+        "wall_s_2_workers": t2,
+        "samples_per_s_2_workers": samples / t2,
+        "parallel_efficiency": t1 / (2 * t2),
+        "target_wall_s": 60.0,
+        "target_efficiency": 0.85,
+        "memory_samples": memory_samples,
+        "client_memory_growth_MB": growth,
+        "twin_run_loop_s_per_sample": per_sample,
+        "twin_run_loop_samples": loop_samples,
+        "twin_run_loop_extrapolated_s": per_sample * samples,
+    }

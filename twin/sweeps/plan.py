@@ -99,8 +99,9 @@ def parse_variation(text: str, parameters: dict) -> Variation:
     field_ = f"--vary {path}" if path else "--vary"
     match = _SPEC.match(spec)
     if not sep or not path or not match:
-        raise TwinInputError("--vary", text, "use PATH=SPEC, e.g. overrides.m_x=box or "
-                                             "disturbances.0.spindle_rpm=uniform(5000,12000)")
+        raise TwinInputError(
+            "--vary", text, "use PATH=SPEC, e.g. overrides.m_x=box or disturbances.0.spindle_rpm=uniform(5000,12000)"
+        )
     kind, inner = match.group(1), match.group(2)
     args = [a.strip() for a in inner.split(",")] if inner not in (None, "") else []
     if kind not in RANDOM_KINDS + STRUCTURED_KINDS:
@@ -112,13 +113,17 @@ def parse_variation(text: str, parameters: dict) -> Variation:
     if kind in ("box", "corners", "line"):
         symbol = path.removeprefix("overrides.")
         if not path.startswith("overrides.") or symbol not in parameters:
-            raise TwinInputError(field_, spec, f"{kind} needs a machine parameter, overrides.<symbol> "
-                                               f"(this machine's: {', '.join(parameters)})")
+            raise TwinInputError(
+                field_,
+                spec,
+                f"{kind} needs a machine parameter, overrides.<symbol> (this machine's: {', '.join(parameters)})",
+            )
         box = parameters[symbol].box
         if box is None:
             boxed = [k for k, p in parameters.items() if p.box is not None]
-            raise TwinInputError(field_, spec, f"the machine documents no box for {symbol} (boxed: "
-                                               f"{', '.join(boxed) or 'none'})")
+            raise TwinInputError(
+                field_, spec, f"the machine documents no box for {symbol} (boxed: {', '.join(boxed) or 'none'})"
+            )
         box = (float(box[0]), float(box[1]))
     if kind == "choice":
         if not args:
@@ -174,8 +179,9 @@ class Plan:
         self.counts = counts
         self.draws = self.samples if self.random else 1
         if self.structured * self.draws > MAX_SAMPLES:
-            raise TwinInputError("--samples", self.structured * self.draws, f"the sweep would hold more than "
-                                                                            f"{MAX_SAMPLES} samples")
+            raise TwinInputError(
+                "--samples", self.structured * self.draws, f"the sweep would hold more than {MAX_SAMPLES} samples"
+            )
         if self.latin_hypercube and self.random:
             from scipy.stats import qmc
 
@@ -203,8 +209,11 @@ class Plan:
                 for v in self.line:
                     out[v.path] = v.box[0] + t * (v.box[1] - v.box[0])
         if self.random:
-            u = (self._unit[index] if self._unit is not None
-                 else np.random.default_rng(np.random.SeedSequence([self.seed, index, 1])).random(len(self.random)))
+            u = (
+                self._unit[index]
+                if self._unit is not None
+                else np.random.default_rng(np.random.SeedSequence([self.seed, index, 1])).random(len(self.random))
+            )
             for v, ui in zip(self.random, u):
                 out[v.path] = v.from_unit(float(ui))
         return {v.path: out[v.path] for v in self.variations}

@@ -46,8 +46,16 @@ def run_sample(base: dict, index: int, values: dict, seed: int, axes) -> dict:
     """
     from twin.scenario import run_scenario, scenario_from_dict, set_fields
 
-    row = {"index": index, "seed": seed, **values, "status": "ok", "error": "", "sim_time_s": math.nan,
-           "completed_ticks": 0, **{c: math.nan for c in metric_columns(axes)}}
+    row = {
+        "index": index,
+        "seed": seed,
+        **values,
+        "status": "ok",
+        "error": "",
+        "sim_time_s": math.nan,
+        "completed_ticks": 0,
+        **{c: math.nan for c in metric_columns(axes)},
+    }
     start = time.perf_counter()
     result = None
     try:
@@ -60,7 +68,7 @@ def run_sample(base: dict, index: int, values: dict, seed: int, axes) -> dict:
         result = exc.result
     except TwinInputError as exc:
         row.update(status="error", error=str(exc))
-    except Exception as exc:  # noqa: BLE001 - a sample's failure is a row, never a crash of the sweep
+    except Exception as exc:
         row.update(status="error", error=f"{type(exc).__name__}: {exc}")
     if result is not None and row["status"] == "ok":
         row["completed_ticks"] = int(result.info["completed_ticks"])
@@ -86,8 +94,12 @@ def _schema(plan: Plan, axes):
     for v in plan.variations:
         text = v.kind == "choice" and any(isinstance(a, str) for a in v.args)
         fields.append(pa.field(v.path, pa.string() if text else pa.float64()))
-    fields += [pa.field("status", pa.string()), pa.field("error", pa.string()), pa.field("sim_time_s", pa.float64()),
-               pa.field("completed_ticks", pa.int64())]
+    fields += [
+        pa.field("status", pa.string()),
+        pa.field("error", pa.string()),
+        pa.field("sim_time_s", pa.float64()),
+        pa.field("completed_ticks", pa.int64()),
+    ]
     fields += [pa.field(c, pa.float64()) for c in metric_columns(axes)] + [pa.field("wall_s", pa.float64())]
     return pa.schema(fields)
 
@@ -103,11 +115,10 @@ def done_indices(out: Path) -> set[int]:
 
 
 def _write_part(out: Path, rows: list[dict], schema) -> None:
+    import pyarrow as pa
     import pyarrow.parquet as pq
 
-    import pyarrow as pa
-
-    text = [f.name for f in schema if f.type == pa.string()]   # a choice of mixed values is stored as text
+    text = [f.name for f in schema if f.type == pa.string()]  # a choice of mixed values is stored as text
     rows = [r | {k: str(r[k]) for k in text} for r in sorted(rows, key=lambda r: r["index"])]
     name = f"part-{rows[0]['index']:07d}.parquet"
     tmp = out / f".{name}.tmp"
@@ -146,13 +157,23 @@ def make_client(workers: int | None = None, scheduler: str | None = None):
             raise TwinInputError("--scheduler", scheduler, f"no Dask scheduler answers there ({exc})") from None
     n = workers or os.cpu_count() or 1
     logging.getLogger("distributed").setLevel(logging.ERROR)  # its INFO lines would bury the progress bar
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
-                           silence_logs=logging.ERROR)
+    cluster = LocalCluster(
+        n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.ERROR
+    )
     return Client(cluster)
 
 
-def run_sweep(base: dict, plan: Plan, axes, out: Path, client, batch_size: int = 10, resume: bool = False,
-              progress: bool = True, in_flight_per_worker: int = 2) -> SweepRun:
+def run_sweep(
+    base: dict,
+    plan: Plan,
+    axes,
+    out: Path,
+    client,
+    batch_size: int = 10,
+    resume: bool = False,
+    progress: bool = True,
+    in_flight_per_worker: int = 2,
+) -> SweepRun:
     """Run every sample of ``plan`` not yet in ``out`` on ``client``; parts stream to ``out``.
 
     Parameters

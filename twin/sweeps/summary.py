@@ -28,8 +28,13 @@ def summarize(table, plan: Plan, axes) -> dict:
     """Counts by status, bands (min, 5 %, median, 95 %, max) of each metric over the ``ok``
     rows, and the worst sample by :data:`WORST_BY` (over the axes) with its values."""
     status = np.array(table.column("status").to_pylist())
-    out = {"samples": len(status), "planned": len(plan), "status": {s: int((status == s).sum()) for s in set(status)},
-           "bands": {}, "worst": None}
+    out = {
+        "samples": len(status),
+        "planned": len(plan),
+        "status": {s: int((status == s).sum()) for s in set(status)},
+        "bands": {},
+        "worst": None,
+    }
     ok = status == "ok"
     for c in metric_columns(axes):
         v = _column(table, c)[ok]
@@ -39,63 +44,64 @@ def summarize(table, plan: Plan, axes) -> dict:
     if ok.any():
         worst = np.where(ok, _worst_axis(table, axes), -np.inf)
         i = int(np.argmax(worst))
-        out["worst"] = {"by": WORST_BY, "value": float(worst[i]), "index": int(table.column("index")[i].as_py()),
-                        "seed": int(table.column("seed")[i].as_py()),
-                        "values": {v.path: table.column(v.path)[i].as_py() for v in plan.variations}}
-    bad = [(table.column("index")[i].as_py(), status[i], table.column("error")[i].as_py())
-           for i in np.flatnonzero(~ok)[:5]]
+        out["worst"] = {
+            "by": WORST_BY,
+            "value": float(worst[i]),
+            "index": int(table.column("index")[i].as_py()),
+            "seed": int(table.column("seed")[i].as_py()),
+            "values": {v.path: table.column(v.path)[i].as_py() for v in plan.variations},
+        }
+    bad = [
+        (table.column("index")[i].as_py(), status[i], table.column("error")[i].as_py()) for i in np.flatnonzero(~ok)[:5]
+    ]
     out["first_failures"] = [{"index": int(i), "status": s, "error": e} for i, s, e in bad]
     return out
 
 
 def certificates(machine: str, controller: str | None, plan: Plan) -> list[dict]:
     """The robustness certificates of ``controller`` on ``machine`` over a box containing the
-    sweep's, if the project has one: seed 000's Kharitonov verdict and stability margin
-    (cncmt, Table 1's box of K1, K2, m, Im), seed 004's mu upper bounds (linear_motor_xy,
-    Table 1's box with the amplifier weight).  Empty when none applies."""
+    sweep's, from every reproduction that offers one (:func:`twin.reproductions.certificates`):
+    seed 000's Kharitonov verdict over Table 1's box, seed 004's mu upper bounds.  Empty when
+    none applies."""
+    from twin.reproductions import certificates as offered
+
     symbols = {v.path.removeprefix("overrides.") for v in plan.variations if v.path.startswith("overrides.")}
     others = [v.path for v in plan.variations if not v.path.startswith("overrides.")]
-    seed000 = {"seed000_robust_pi": "robust_pi", "seed000_imc": "imc", "seed000_hinf_reduced": "hinf"}
-    if machine == "cncmt" and controller in seed000 and symbols <= {"K1", "K2", "m", "Im"} and not others:
-        from twin.reproductions.seed000.procedure import interval_table
-
-        row = next(r for r in interval_table() if r["controller"] == seed000[controller])
-        return [{"source": "seed 000, Kharitonov over Table 1's box (K1, K2, m, Im)",
-                 "kharitonov_robustly_stable": bool(row["kharitonov_stable"]), "stability_margin": float(row["sm"]),
-                 "family_stable": bool(row["family_stable"]),
-                 "note": "SM < 0: Kharitonov cannot prove stability; family_stable: every member checked"}]
-    if machine == "linear_motor_xy" and controller in ("seed004_mimo", "seed004_pid"):
-        from twin.reproductions.seed004.procedure import OMEGA, mu_curves
-
-        rs, rp = mu_curves(controller.removeprefix("seed004_"))
-        return [{"source": "seed 004, mu (AB13MD upper bound) over Table 1's box of m, b, k_il, k_c with the "
-                           "amplifier weight; robustly stable where the peak is below 1",
-                 "rs_peak": float(rs.max()), "rs_peak_rad_s": float(OMEGA[int(np.argmax(rs))]),
-                 "rp_peak": float(rp.max()), "robustly_stable": bool(rs.max() < 1.0),
-                 "note": "covers the sweep only where its draws lie inside that box"}]
-    return []
+    return offered(machine, controller, symbols, others)
 
 
 def format_summary(summary: dict, certs: list[dict], axes) -> str:
     """The printed summary: counts, bands, worst case, certificates."""
     counts = ", ".join(f"{k} {v}" for k, v in sorted(summary["status"].items()))
-    out = [f"sweep: {summary['samples']} of {summary['planned']} samples ({counts})", "",
-           f"  {'metric':<28} {'min':>10} {'5 %':>10} {'median':>10} {'95 %':>10} {'max':>10}"]
+    out = [
+        f"sweep: {summary['samples']} of {summary['planned']} samples ({counts})",
+        "",
+        f"  {'metric':<28} {'min':>10} {'5 %':>10} {'median':>10} {'95 %':>10} {'max':>10}",
+    ]
     for c, b in summary["bands"].items():
         out.append(f"  {c:<28} " + " ".join(f"{b[k]:10.3f}" for k in ("min", "p5", "median", "p95", "max")))
     w = summary["worst"]
     if w:
-        out += ["", f"  worst case ({w['by']}, largest axis): {w['value']:.3f} at sample {w['index']} "
-                f"(seed {w['seed']}): " + ", ".join(f"{k} = {v:.6g}" if isinstance(v, float) else f"{k} = {v}"
-                                                   for k, v in w["values"].items())]
+        out += [
+            "",
+            f"  worst case ({w['by']}, largest axis): {w['value']:.3f} at sample {w['index']} "
+            f"(seed {w['seed']}): "
+            + ", ".join(f"{k} = {v:.6g}" if isinstance(v, float) else f"{k} = {v}" for k, v in w["values"].items()),
+        ]
     for f in summary["first_failures"]:
         out.append(f"  sample {f['index']} {f['status']}: {f['error']}")
     if certs:
         out.append("")
         for c in certs:
             out.append(f"  certificate ({c['source']}):")
-            out.append("    " + ", ".join(f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}"
-                                          for k, v in c.items() if k not in ("source", "note")))
+            out.append(
+                "    "
+                + ", ".join(
+                    f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}"
+                    for k, v in c.items()
+                    if k not in ("source", "note")
+                )
+            )
             out.append(f"    ({c['note']})")
     else:
         out += ["", "  no robustness certificate covers this machine, controller and box"]
@@ -111,8 +117,9 @@ def write_sweep_plots(table, plan: Plan, axes, folder) -> list:
     ok = np.array(table.column("status").to_pylist()) == "ok"
     columns = [c for c in metric_columns(axes) if np.isfinite(_column(table, c)[ok]).any()]
     n = len(columns)
-    fig, grid = plt.subplots(math.ceil(n / len(axes)), len(axes), figsize=(5 * len(axes), 3 * math.ceil(n / len(axes))),
-                             squeeze=False)
+    fig, grid = plt.subplots(
+        math.ceil(n / len(axes)), len(axes), figsize=(5 * len(axes), 3 * math.ceil(n / len(axes))), squeeze=False
+    )
     for ax, c in zip(grid.ravel(), columns):
         ax.hist(_column(table, c)[ok], bins=40)
         ax.set(xlabel=c.replace("_um", " (um)").replace("_N", " (N)"), ylabel="samples")

@@ -49,3 +49,26 @@ def record(path: Path) -> None:
 def failed(results: dict) -> bool:
     """Whether a twin number departs from its transfer-function number by more than 2 %."""
     return bool(results["twin_vs_tf_mismatches"])
+
+
+#: The scenario controller kinds whose certificate this reproduction computes, by Table 2 name.
+CERTIFIED = {"seed000_robust_pi": "robust_pi", "seed000_imc": "imc", "seed000_hinf_reduced": "hinf"}
+
+
+def certificates(machine: str, controller: str | None, symbols: set[str], others: list[str]) -> list[dict]:
+    """Seed 000's Kharitonov verdict and stability margin over Table 1's box (K1, K2, m, Im) for
+    its three controllers on ``cncmt``, when a sweep varies nothing else."""
+    if not (machine == "cncmt" and controller in CERTIFIED and symbols <= {"K1", "K2", "m", "Im"} and not others):
+        return []
+    from twin.reproductions.seed000.procedure import interval_table
+
+    row = next(r for r in interval_table() if r["controller"] == CERTIFIED[controller])
+    return [
+        {
+            "source": "seed 000, Kharitonov over Table 1's box (K1, K2, m, Im)",
+            "kharitonov_robustly_stable": bool(row["kharitonov_stable"]),
+            "stability_margin": float(row["sm"]),
+            "family_stable": bool(row["family_stable"]),
+            "note": "SM < 0: Kharitonov cannot prove stability; family_stable: every member checked",
+        }
+    ]

@@ -27,18 +27,23 @@ import numpy as np
 from tqdm import tqdm
 
 from controllers.blocks import error_feedback
-from controllers.papers import seed000
-from controllers.design.hinf import (central_controller, gamma_iteration, mixed_sensitivity_plant, reduce_balanced,
-                              shift_integrators)
+from controllers.design.hinf import (
+    central_controller,
+    gamma_iteration,
+    mixed_sensitivity_plant,
+    reduce_balanced,
+    shift_integrators,
+)
 from controllers.design.imc import imc_controller
 from controllers.design.kharitonov import kharitonov_polynomials, robustly_stable, stability_margin_third_order
 from controllers.design.robust_pi import design_robust_pi, worst_case_margins
-from twin.process.disturbances import VoltageStep
-from twin.sim.drive import Encoder
+from controllers.papers import seed000
 from twin.machines import build, get_machine
 from twin.machines.cncmt import leadscrew_tf
 from twin.metrics import step_metrics
+from twin.process.disturbances import VoltageStep
 from twin.references import Step
+from twin.sim.drive import Encoder
 from twin.sim.runner import simulate
 
 #: The paper's published numbers, for side-by-side tables only.
@@ -54,8 +59,11 @@ PAPER = {
         "imc": {"nominal": (0.57, 5.84, 3.36), "band": ((0.12, 1.27), (4.1, 7.08), (2.56, 3.98))},
         "hinf": {"nominal": (6.3, 2.09, 1.12), "band": ((0.598, 10.9), (1.34, 2.32), (1.02, 1.74))},
     },
-    "table3": [(0.1, 1.0, 10.0, -10.0, 0.4, 0.0), (1.0, 1.0, 1.0, -1.0, 4.0, 0.0),
-               (10.0, 1.0, 0.1, -0.1, 40.0, 0.0)],  # mu, xi, wn, pole, ST = 4/(xi wn), OS
+    "table3": [
+        (0.1, 1.0, 10.0, -10.0, 0.4, 0.0),
+        (1.0, 1.0, 1.0, -1.0, 4.0, 0.0),
+        (10.0, 1.0, 0.1, -0.1, 40.0, 0.0),
+    ],  # mu, xi, wn, pole, ST = 4/(xi wn), OS
 }
 
 #: The three controllers of Table 2, as published (Table 2's H-infinity row is the reduced eq. 29:
@@ -73,9 +81,12 @@ TWIN_TOL_REL, TWIN_TOL_OS_PP = 0.02, 0.1
 
 # ---------------------------------------------------------------- interval model, Kharitonov
 
+
 def plant_gain(params: dict[str, float]) -> float:
     """a = K1 K2 n / (p^2 m + n^2 Im) (1/(V s^2) on the screw angle; a p is in m/(V s^2))."""
-    return params["K1"] * params["K2"] * params["n"] / (params["p"] ** 2 * params["m"] + params["n"] ** 2 * params["Im"])
+    return (
+        params["K1"] * params["K2"] * params["n"] / (params["p"] ** 2 * params["m"] + params["n"] ** 2 * params["Im"])
+    )
 
 
 def box_vertices(params: dict[str, float]) -> list[dict[str, float]]:
@@ -99,8 +110,7 @@ def gain_range(params: dict[str, float] | None = None) -> tuple[float, float]:
     return min(a), max(a)
 
 
-def characteristic_coefficients(controller: control.TransferFunction, a: float,
-                                params: dict[str, float]) -> np.ndarray:
+def characteristic_coefficients(controller: control.TransferFunction, a: float, params: dict[str, float]) -> np.ndarray:
     """Closed-loop characteristic polynomial s^2 Dc + a (H2 s Dc + p N), highest power first."""
     num, den = (np.atleast_1d(np.squeeze(c)) for c in control.tfdata(controller))
     num, den = num / den[0], den / den[0]
@@ -120,8 +130,9 @@ def family_stable(controller, params=None, n: int = 2001) -> bool:
     """Whether every member of the actual one-parameter family (a over its range) is stable."""
     params = params or nominal_params()
     lo, hi = gain_range(params)
-    return all(np.roots(characteristic_coefficients(controller, a, params)).real.max() < 0
-               for a in np.linspace(lo, hi, n))
+    return all(
+        np.roots(characteristic_coefficients(controller, a, params)).real.max() < 0 for a in np.linspace(lo, hi, n)
+    )
 
 
 def interval_table() -> list[dict]:
@@ -129,9 +140,14 @@ def interval_table() -> list[dict]:
     rows = []
     for name, ctrl in {**TABLE2_CONTROLLERS, **our_controllers()}.items():
         lo, hi = coefficient_interval(ctrl)
-        row = {"controller": name, "lower": lo.tolist(), "upper": hi.tolist(),
-               "kharitonov_stable": robustly_stable(lo, hi), "family_stable": family_stable(ctrl),
-               "kharitonov": {k: v.tolist() for k, v in kharitonov_polynomials(lo, hi).items()}}
+        row = {
+            "controller": name,
+            "lower": lo.tolist(),
+            "upper": hi.tolist(),
+            "kharitonov_stable": robustly_stable(lo, hi),
+            "family_stable": family_stable(ctrl),
+            "kharitonov": {k: v.tolist() for k, v in kharitonov_polynomials(lo, hi).items()},
+        }
         if len(lo) == 4:
             row.update(alpha1=lo[1], alpha2=lo[2], beta3=hi[3], sm=stability_margin_third_order(lo, hi))
         published = OURS_BESIDE.get(name, name)
@@ -143,22 +159,31 @@ def interval_table() -> list[dict]:
 
 # ---------------------------------------------------------------- designs
 
+
 def robust_pi_designs() -> dict:
     """Part 3: eqs. (18)-(19) solved on the paper's eq. (17) coefficients and on the box's."""
     p = nominal_params()
     lo_a, hi_a = gain_range(p)
     eq17 = PAPER["eq17"]
     out = {}
-    for label, (a1, c2, c3) in {"eq17_coefficients": (eq17["alpha1"], eq17["c2_min"], eq17["c3_max"]),
-                                "box_coefficients": (lo_a * p["H2"], lo_a * p["p"], hi_a * p["p"])}.items():
+    for label, (a1, c2, c3) in {
+        "eq17_coefficients": (eq17["alpha1"], eq17["c2_min"], eq17["c3_max"]),
+        "box_coefficients": (lo_a * p["H2"], lo_a * p["p"], hi_a * p["p"]),
+    }.items():
         d = design_robust_pi(a1, c2, c3, 10.0, 60.0)
         # the true margins of the designed PI on the nominal plant (eq. 14 is empirical)
         gm, pm, _, _ = control.margin(_plant(p) * control.tf([d.kp, d.ki], [1.0, 0.0]))
-        out[label] = {"alpha1": a1, "c2_min": c2, "c3_max": c3, "kp": d.kp, "ki": d.ki,
-                      "kp_per_ki": d.kp_per_ki,
-                      "eq11_15_margins": worst_case_margins(a1, c2 * d.kp, c3 * d.ki),
-                      "nominal_gm_db": float(20 * np.log10(gm)) if np.isfinite(gm) else float("inf"),
-                      "nominal_pm_deg": float(pm)}
+        out[label] = {
+            "alpha1": a1,
+            "c2_min": c2,
+            "c3_max": c3,
+            "kp": d.kp,
+            "ki": d.ki,
+            "kp_per_ki": d.kp_per_ki,
+            "eq11_15_margins": worst_case_margins(a1, c2 * d.kp, c3 * d.ki),
+            "nominal_gm_db": float(20 * np.log10(gm)) if np.isfinite(gm) else float("inf"),
+            "nominal_pm_deg": float(pm),
+        }
     out["paper"] = PAPER["pi"]
     return out
 
@@ -175,13 +200,27 @@ def imc_design() -> dict:
         wn, zeta, poles = control.damp(T, doprint=False)
         t = np.linspace(0.0, 20.0 * mu, 20001)
         m = step_metrics(t, control.step_response(T, T=t).outputs, final=1.0)
-        table3.append({"mu_s": mu, "damping": float(zeta[0]), "wn_rad_s": float(wn[0]),
-                       "pole": float(poles[0].real), "st_4_over_xi_wn_s": float(4.0 / (zeta[0] * wn[0])),
-                       "st_2pct_s": m["settling_time_s"], "overshoot_pct": m["overshoot_pct"]})
-    return {"num": num.tolist(), "den": den.tolist(), "paper_num": [0.21, 2.0], "paper_den": [1.0, 2.0],
-            "reduction": "C = G^-1/((s+1)^2 - 1) = s(s+9.7)/(4.85 s(s+2)): the s at the origin cancels "
-                         "and 1/4.85 = 0.2062 is printed as 0.21",
-            "table3": table3, "paper_table3": PAPER["table3"]}
+        table3.append(
+            {
+                "mu_s": mu,
+                "damping": float(zeta[0]),
+                "wn_rad_s": float(wn[0]),
+                "pole": float(poles[0].real),
+                "st_4_over_xi_wn_s": float(4.0 / (zeta[0] * wn[0])),
+                "st_2pct_s": m["settling_time_s"],
+                "overshoot_pct": m["overshoot_pct"],
+            }
+        )
+    return {
+        "num": num.tolist(),
+        "den": den.tolist(),
+        "paper_num": [0.21, 2.0],
+        "paper_den": [1.0, 2.0],
+        "reduction": "C = G^-1/((s+1)^2 - 1) = s(s+9.7)/(4.85 s(s+2)): the s at the origin cancels "
+        "and 1/4.85 = 0.2062 is printed as 0.21",
+        "table3": table3,
+        "paper_table3": PAPER["table3"],
+    }
 
 
 def hinf_design(eps: float = 1e-6) -> dict:
@@ -208,18 +247,27 @@ def hinf_design(eps: float = 1e-6) -> dict:
         return {"num": (num / den[0]).tolist(), "den": (den / den[0]).tolist()}
 
     gap_db, gap_at_rad_s = sv_gap_db(HINF_EQ28, HINF_EQ29)
-    return {"integrator_shift_eps": eps, "gamma_opt": opt.gamma, "theta_opt": opt.theta,
-            "iterations": opt.iterations, "gamma_bracket": [GAMMA_LO, GAMMA_HI], "gamma_rel_tol": GAMMA_TOL,
-            "paper_theta": PAPER["hinf_theta"],
-            "gamma_floor_W3T_at_dc": float(abs(w3(0) * t_dc)),
-            "controller_opt": coeffs(control.tf(opt.controller)),
-            "controller_at_paper_gamma": coeffs(at_paper), "paper_eq28": coeffs(HINF_EQ28),
-            "reduced_opt": coeffs(reduced_opt), "reduced_at_paper_gamma": coeffs(reduced_at_paper),
-            "reduced_eq28": coeffs(reduced_eq28), "paper_eq29": coeffs(HINF_EQ29),
-            "sv_gap_eq28_vs_eq29_db": gap_db, "sv_gap_eq28_vs_eq29_at_rad_s": gap_at_rad_s,
-            "sv_gap_eq28_vs_eq29_above_0p1_db": sv_gap_db(HINF_EQ28, HINF_EQ29,
-                                                          np.logspace(-1, 3, 400))[0],
-            "sv_gap_opt_vs_reduced_db": sv_gap_db(control.tf(opt.controller), reduced_opt)[0]}
+    return {
+        "integrator_shift_eps": eps,
+        "gamma_opt": opt.gamma,
+        "theta_opt": opt.theta,
+        "iterations": opt.iterations,
+        "gamma_bracket": [GAMMA_LO, GAMMA_HI],
+        "gamma_rel_tol": GAMMA_TOL,
+        "paper_theta": PAPER["hinf_theta"],
+        "gamma_floor_W3T_at_dc": float(abs(w3(0) * t_dc)),
+        "controller_opt": coeffs(control.tf(opt.controller)),
+        "controller_at_paper_gamma": coeffs(at_paper),
+        "paper_eq28": coeffs(HINF_EQ28),
+        "reduced_opt": coeffs(reduced_opt),
+        "reduced_at_paper_gamma": coeffs(reduced_at_paper),
+        "reduced_eq28": coeffs(reduced_eq28),
+        "paper_eq29": coeffs(HINF_EQ29),
+        "sv_gap_eq28_vs_eq29_db": gap_db,
+        "sv_gap_eq28_vs_eq29_at_rad_s": gap_at_rad_s,
+        "sv_gap_eq28_vs_eq29_above_0p1_db": sv_gap_db(HINF_EQ28, HINF_EQ29, np.logspace(-1, 3, 400))[0],
+        "sv_gap_opt_vs_reduced_db": sv_gap_db(control.tf(opt.controller), reduced_opt)[0],
+    }
 
 
 # ---------------------------------------------------------------- our designs as controllers
@@ -228,9 +276,14 @@ def hinf_design(eps: float = 1e-6) -> dict:
 #: (ceil(log2(ln(GAMMA_HI / GAMMA_LO) / ln(1 + GAMMA_TOL))) = 14), not from the paper's text.
 GAMMA_HI, GAMMA_LO, GAMMA_TOL = 1e4, 1e-3, 1e-3
 #: Which published controller each of ours stands beside in Table 2.
-OURS_BESIDE = {"robust_pi_ours": "robust_pi", "imc_ours": "imc", "hinf_ours_paper_gamma": "hinf",
-               "hinf_ours_paper_gamma_reduced": "hinf", "hinf_ours_optimal": "hinf",
-               "hinf_ours_optimal_reduced": "hinf"}
+OURS_BESIDE = {
+    "robust_pi_ours": "robust_pi",
+    "imc_ours": "imc",
+    "hinf_ours_paper_gamma": "hinf",
+    "hinf_ours_paper_gamma_reduced": "hinf",
+    "hinf_ours_optimal": "hinf",
+    "hinf_ours_optimal_reduced": "hinf",
+}
 
 
 @lru_cache(maxsize=1)
@@ -256,13 +309,18 @@ def our_controllers() -> dict:
     pi = design_robust_pi(eq17["alpha1"], eq17["c2_min"], eq17["c3_max"], 10.0, 60.0)
     _, _, opt, at_paper = _hinf_problem()
     optimal = control.tf(opt.controller)
-    return {"robust_pi_ours": control.tf([pi.kp, pi.ki], [1.0, 0.0]),
-            "imc_ours": control.tf(imc_controller(_plant(nominal_params()), 1.0, 2)),
-            "hinf_ours_paper_gamma": at_paper, "hinf_ours_paper_gamma_reduced": reduce_balanced(at_paper, 1),
-            "hinf_ours_optimal": optimal, "hinf_ours_optimal_reduced": reduce_balanced(optimal, 1)}
+    return {
+        "robust_pi_ours": control.tf([pi.kp, pi.ki], [1.0, 0.0]),
+        "imc_ours": control.tf(imc_controller(_plant(nominal_params()), 1.0, 2)),
+        "hinf_ours_paper_gamma": at_paper,
+        "hinf_ours_paper_gamma_reduced": reduce_balanced(at_paper, 1),
+        "hinf_ours_optimal": optimal,
+        "hinf_ours_optimal_reduced": reduce_balanced(optimal, 1),
+    }
 
 
 # ---------------------------------------------------------------- Table 2
+
 
 def _plant(params: dict[str, float]) -> control.TransferFunction:
     """Eq. (1) without the delay, as the cncmt machine builds it."""
@@ -278,13 +336,12 @@ def _loop(controller, params: dict[str, float], delay_s: float):
         loop = control.feedback(control.ss(G) * control.ss(controller), 1)
         return control.c2d(loop, DT_S, "zoh"), DT_S, HORIZON_S
     dt = 1e-3
-    delay = control.ss(control.tf([1.0], [1.0] + [0.0] * int(round(delay_s / dt)), dt))
+    delay = control.ss(control.tf([1.0], [1.0] + [0.0] * round(delay_s / dt), dt))
     open_loop = control.c2d(control.ss(G), dt, "zoh") * delay * control.c2d(control.ss(controller), dt, "tustin")
     return control.feedback(open_loop, 1), dt, 4 * HORIZON_S
 
 
-def tf_step_series(controller, params: dict[str, float],
-                   delay_s: float = 0.0) -> tuple[np.ndarray, np.ndarray] | None:
+def tf_step_series(controller, params: dict[str, float], delay_s: float = 0.0) -> tuple[np.ndarray, np.ndarray] | None:
     """Unit-step response ``(t_s, y_m)`` of the transfer-function loop; None when unstable.
 
     Without delay the continuous loop is sampled exactly every ``DT_S`` (ZOH of a step input is
@@ -294,14 +351,13 @@ def tf_step_series(controller, params: dict[str, float],
     (an H-infinity controller's zero beside the shifted integrator) sits within rounding of
     |z| = 1.
     """
-    if delay_s == 0.0:
-        if np.roots(characteristic_coefficients(controller, plant_gain(params), params)).real.max() >= 0.0:
-            return None
+    if delay_s == 0.0 and np.roots(characteristic_coefficients(controller, plant_gain(params), params)).real.max() >= 0:
+        return None
     loop, dt, horizon = _loop(controller, params, delay_s)
     ss = control.ss(loop)
     if delay_s > 0.0 and np.abs(np.linalg.eigvals(ss.A)).max() >= 1.0:
         return None
-    t = np.arange(int(round(horizon / dt))) * dt
+    t = np.arange(round(horizon / dt)) * dt
     return t, sampled_step_response(ss.A, ss.B, ss.C, ss.D, len(t))
 
 
@@ -326,7 +382,7 @@ def sampled_step_response(A, B, C, D, n: int, block: int = 1024) -> np.ndarray:
     y, x = np.empty(n), np.zeros((nx, 1))
     for start in range(0, n, block):
         stop = min(start + block, n)
-        y[start:stop] = free[:stop - start] @ x[:, 0] + forced[:stop - start]
+        y[start:stop] = free[: stop - start] @ x[:, 0] + forced[: stop - start]
         x = step_block @ x + carried
     return y
 
@@ -340,8 +396,9 @@ def tf_step(controller, params: dict[str, float], delay_s: float = 0.0) -> dict 
 def twin_step_result(controller, params: dict[str, float]):
     """The MuJoCo cncmt twin closed by the controller at 10 kHz (Tustin), unit step."""
     machine = build("cncmt", {k: params[k] for k in BOX_SYMBOLS})
-    return simulate(machine, error_feedback(controller, DT_S), Step(1.0), HORIZON_S, DT_S, progress=False,
-                    record_every=1)
+    return simulate(
+        machine, error_feedback(controller, DT_S), Step(1.0), HORIZON_S, DT_S, progress=False, record_every=1
+    )
 
 
 def twin_step(controller, params: dict[str, float]) -> dict:
@@ -436,18 +493,23 @@ def table2(mc_samples: int = 1000, twin_random: int = 20, seed: int = 0, progres
                 tw_pts.append(twin_step(ctrl, p))
                 bar.update()
             for label, a, b in [("nominal", tf_nom, twin_nom)] + [
-                    (f"sample {i}", x, y) for i, (x, y) in enumerate(zip(tf_pts, tw_pts))]:
+                (f"sample {i}", x, y) for i, (x, y) in enumerate(zip(tf_pts, tw_pts))
+            ]:
                 if a is not None:
                     mismatches += _twin_vs_tf_step(f"{name} {label}", b, a)
             rows[name] = {
-                "source": "ours" if ours else "paper", "beside": OURS_BESIDE.get(name, name),
+                "source": "ours" if ours else "paper",
+                "beside": OURS_BESIDE.get(name, name),
                 "paper": PAPER["table2"][OURS_BESIDE.get(name, name)],
-                "tf_nominal": tf_nom, "twin_nominal": twin_nom, "tf_nominal_with_0.1s_delay": tf_delay,
-                "tf_paper_samples": band(tf_pts[:len(paper_pts)]),
-                "twin_paper_samples": None if ours else band(tw_pts[:len(paper_pts)]),
+                "tf_nominal": tf_nom,
+                "twin_nominal": twin_nom,
+                "tf_nominal_with_0.1s_delay": tf_delay,
+                "tf_paper_samples": band(tf_pts[: len(paper_pts)]),
+                "twin_paper_samples": None if ours else band(tw_pts[: len(paper_pts)]),
                 "tf_monte_carlo": band([tf_step(ctrl, p) for p in mc]),
-                "twin_random_samples": band(tw_pts[len(paper_pts):]) if twin_random and not ours else None,
-                "mc_samples": mc_samples, "twin_random": 0 if ours else twin_random,
+                "twin_random_samples": band(tw_pts[len(paper_pts) :]) if twin_random and not ours else None,
+                "mc_samples": mc_samples,
+                "twin_random": 0 if ours else twin_random,
             }
     return Table2(rows, mismatches)
 
@@ -480,9 +542,12 @@ def disturbance_and_noise() -> dict:
     machine = build("cncmt")
     out = {}
     for name, ctrl in TABLE2_CONTROLLERS.items():
-        def run(**kw):
-            return simulate(machine, error_feedback(ctrl, DT_S), Step(1.0), HORIZON_S, DT_S, progress=False,
-                            record_every=1, **kw)
+
+        def run(ctrl=ctrl, **kw):
+            return simulate(
+                machine, error_feedback(ctrl, DT_S), Step(1.0), HORIZON_S, DT_S, progress=False, record_every=1, **kw
+            )
+
         clean = run()
         dist = run(disturbances=[VoltageStep(DISTURBANCE_V, DISTURBANCE_START_S)])
         noisy = run(encoder=Encoder(np.zeros(1), np.full(1, NOISE_STD_M), np.ones(1), NOISE_SEED))
@@ -491,7 +556,8 @@ def disturbance_and_noise() -> dict:
         dev_d = dist.table_position_m()[:, 0] - y0
         dev_n = noisy.table_position_m()[:, 0] - y0
         out[name] = {
-            "u_peak_V": float(np.abs(clean.u_V).max()), "u_rms_V": float(np.sqrt(np.mean(clean.u_V**2))),
+            "u_peak_V": float(np.abs(clean.u_V).max()),
+            "u_rms_V": float(np.sqrt(np.mean(clean.u_V**2))),
             "disturbance_dev_rms_m": float(np.sqrt(np.mean(dev_d[after] ** 2))),
             "disturbance_dev_peak_m": float(np.abs(dev_d[after]).max()),
             "disturbance_dev_final_m": float(dev_d[-1]),

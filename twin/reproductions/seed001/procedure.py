@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 import tomllib
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 
@@ -41,8 +41,12 @@ DISTURBANCE_V, DISTURBANCE_AT_S = 1.0, 1.0
 RELAY_SETTLED_S = 1.0
 #: Feed of the trajectories (not in the text).
 FEED_MM_PER_MIN = 1000.0
-TRAJECTORIES = {"square L 3 cm": ("square", 30.0), "square L 5 cm": ("square", 50.0),
-                "circle R 1 cm": ("circle", 10.0), "circle R 5 cm": ("circle", 50.0)}
+TRAJECTORIES = {
+    "square L 3 cm": ("square", 30.0),
+    "square L 5 cm": ("square", 50.0),
+    "circle R 1 cm": ("circle", 10.0),
+    "circle R 5 cm": ("circle", 50.0),
+}
 #: Table 2's three experiments as run here.
 EXPERIMENTS = ("modified_p", "pole_placement", "pi_p_pole_placement")
 
@@ -78,26 +82,55 @@ def _disturbance_V(n: int, dt: float) -> np.ndarray:
     return np.where(np.arange(n)[:, None] * dt >= DISTURBANCE_AT_S, DISTURBANCE_V, 0.0) * np.ones((1, 2))
 
 
-def tf_run(ctrl: Controller, duration_s: float, coupled: bool = False, disturbance: bool = False,
-           scale: dict | None = None, ref: np.ndarray | None = None, delay_s: float = 0.0):
+def tf_run(
+    ctrl: Controller,
+    duration_s: float,
+    coupled: bool = False,
+    disturbance: bool = False,
+    scale: dict | None = None,
+    ref: np.ndarray | None = None,
+    delay_s: float = 0.0,
+):
     """``(t_s, pos m (n, 2), u V (n, 2))`` of the TF loop at the controller's period (steps on
     both axes by default)."""
     dt = ctrl.dt
-    n = int(round(duration_s / dt))
+    n = round(duration_s / dt)
     ref = _step_ref(n) if ref is None else ref
-    pos, u = tf_loop(plant_si(coupled, scale), ctrl, ref, dt, delay_s,
-                     u_dist_V=_disturbance_V(n, dt) if disturbance else None, axes=("x", "y"))
+    pos, u = tf_loop(
+        plant_si(coupled, scale),
+        ctrl,
+        ref,
+        dt,
+        delay_s,
+        u_dist_V=_disturbance_V(n, dt) if disturbance else None,
+        axes=("x", "y"),
+    )
     return np.arange(n) * dt, pos, u
 
 
-def twin_run(ctrl: Controller, duration_s: float, coupled: bool = False, disturbance: bool = False,
-             scale: dict | None = None, reference=None, delay_s: float = 0.0):
+def twin_run(
+    ctrl: Controller,
+    duration_s: float,
+    coupled: bool = False,
+    disturbance: bool = False,
+    scale: dict | None = None,
+    reference=None,
+    delay_s: float = 0.0,
+):
     """The same on the twin: :class:`~twin.sim.runner.RunResult`."""
     machine = build("sabau_xy", _overrides(coupled, scale))
-    substeps = int(round(ctrl.dt / machine.model.opt.timestep))
+    substeps = round(ctrl.dt / machine.model.opt.timestep)
     dist = [VoltageStep(DISTURBANCE_V, DISTURBANCE_AT_S, 2)] if disturbance else []
-    return simulate(machine, ctrl, reference or Step(STEP_M, n_axes=2), duration_s, ctrl.dt, progress=False,
-                    drive=Drive(2, substeps, machine.model.opt.timestep, delay_s), disturbances=dist)
+    return simulate(
+        machine,
+        ctrl,
+        reference or Step(STEP_M, n_axes=2),
+        duration_s,
+        ctrl.dt,
+        progress=False,
+        drive=Drive(2, substeps, machine.model.opt.timestep, delay_s),
+        disturbances=dist,
+    )
 
 
 def step_table(t_s, pos) -> list[dict]:
@@ -111,11 +144,18 @@ def step_table(t_s, pos) -> list[dict]:
     return out
 
 
-def responses(ctrl: Controller, duration_s: float, twin: bool, coupled: bool = False, disturbance: bool = False,
-              scale: dict | None = None, axes=(0, 1)) -> dict:
+def responses(
+    ctrl: Controller,
+    duration_s: float,
+    twin: bool,
+    coupled: bool = False,
+    disturbance: bool = False,
+    scale: dict | None = None,
+    axes=(0, 1),
+) -> dict:
     """``side -> (t_s, pos m (n, 2))`` of 1 mm steps on ``axes``: the TF loop (``"tf"``) and,
     with ``twin``, the twin (``"twin"``), the same loop on both."""
-    n = int(round(duration_s / ctrl.dt))
+    n = round(duration_s / ctrl.dt)
     out = {"tf": tf_run(ctrl, duration_s, coupled, disturbance, scale, _step_ref(n, axes))[:2]}
     if twin:
         res = twin_run(ctrl, duration_s, coupled, disturbance, scale, Step(STEP_M, n_axes=2, axes=tuple(axes)))
@@ -152,20 +192,30 @@ def relay_test(delay_s: float, twin: bool) -> dict:
     params = data["controller"]["params"]
     kw = prepare(scenario_from_dict(data))
     dt, duration = kw["control_period_s"], kw["duration_s"]
-    zero = np.zeros((int(round(duration / dt)), 2, 3))
+    zero = np.zeros((round(duration / dt), 2, 3))
     runs = {"tf": tf_run(kw["controllers"][0], duration, ref=zero, delay_s=delay_s)[:2]}
     if twin:
         res = run_scenario(scenario_from_dict(data), progress=False)
         runs["twin"] = (res.t_s, res.table_position_m())
-    out = {"delay_s": delay_s, "control_period_s": dt, "amplitude_V": params["amplitude_V"],
-           "hysteresis_mm": params["hysteresis_m"] * 1e3}
+    out = {
+        "delay_s": delay_s,
+        "control_period_s": dt,
+        "amplitude_V": params["amplitude_V"],
+        "hysteresis_mm": params["hysteresis_m"] * 1e3,
+    }
     for side, (t, pos) in runs.items():
         late = t >= RELAY_SETTLED_S
         cycles = [limit_cycle(t[late], pos[late, i] * 1e3) for i in range(2)]
-        out[side] = [{"amplitude_mm": c.amplitude, "pu_s": c.period_s, "periods": c.periods,
-                      "ku_V_per_mm": relay_ultimate_gain(params["amplitude_V"], c.amplitude),
-                      "hysteresis_phase_deg": math.degrees(math.asin(min(1.0, out["hysteresis_mm"] / c.amplitude)))}
-                     for c in cycles]
+        out[side] = [
+            {
+                "amplitude_mm": c.amplitude,
+                "pu_s": c.period_s,
+                "periods": c.periods,
+                "ku_V_per_mm": relay_ultimate_gain(params["amplitude_V"], c.amplitude),
+                "hysteresis_phase_deg": math.degrees(math.asin(min(1.0, out["hysteresis_mm"] / c.amplitude))),
+            }
+            for c in cycles
+        ]
     out["exact"] = [dict(zip(("ku_V_per_mm", "pu_s"), s1.ultimate_point(a, delay_s, dt))) for a in s1.AXES]
     return out
 
@@ -181,8 +231,11 @@ def table1(ku_pu: list[tuple[float, float]], twin: bool) -> dict:
     out = {}
     for kind in s1.TABLE1_ROWS:
         gains = [s1.design_gains(a, kind, *ku_pu[i]) for i, a in enumerate(s1.AXES)]
-        out[kind] = {"gains": [{k: g[k] for k in ("kp", "ki", "kd")} for g in gains],
-                     "agreement": s1.TABLE1_AGREEMENT[kind], **steps(zn_controller(kind, ku_pu), 3.0, twin)}
+        out[kind] = {
+            "gains": [{k: g[k] for k in ("kp", "ki", "kd")} for g in gains],
+            "agreement": s1.TABLE1_AGREEMENT[kind],
+            **steps(zn_controller(kind, ku_pu), 3.0, twin),
+        }
     return out
 
 
@@ -198,8 +251,11 @@ def disturbance_response(design: str, twin: bool) -> dict:
         after = t >= DISTURBANCE_AT_S
         base = pos[np.argmax(after) - 1]
         dev = pos[after] - STEP_M
-        out[side] = {"peak_um": (np.abs(dev).max(axis=0) * 1e6).tolist(), "final_um": (dev[-1] * 1e6).tolist(),
-                     "before_um": ((base - STEP_M) * 1e6).tolist()}
+        out[side] = {
+            "peak_um": (np.abs(dev).max(axis=0) * 1e6).tolist(),
+            "final_um": (dev[-1] * 1e6).tolist(),
+            "before_um": ((base - STEP_M) * 1e6).tolist(),
+        }
     return out
 
 
@@ -207,15 +263,23 @@ def coupling_response(design: str, twin: bool) -> dict:
     """The coupled machine: Y steps 1 mm while X holds 0: X's largest excursion and final
     offset (um), the coupling of eq. (6) as X's disturbance."""
     runs = responses(controller(design), 2.0, twin, coupled=True, axes=(1,))
-    return {side: {"x_peak_um": float(np.abs(pos[:, 0]).max() * 1e6), "x_final_um": float(pos[-1, 0] * 1e6)}
-            for side, (t, pos) in runs.items()}
+    return {
+        side: {"x_peak_um": float(np.abs(pos[:, 0]).max() * 1e6), "x_final_um": float(pos[-1, 0] * 1e6)}
+        for side, (t, pos) in runs.items()
+    }
 
 
 def cascades(twin: bool) -> dict:
     """Part 2: P-P, PI-P and P-PID with part 2's rules."""
-    return {d: {"gains": [s1.design_gains(a, d) for a in s1.AXES], "step": _step_pair(d, 2.0, twin),
-                "disturbance": disturbance_response(d, twin), "coupling": coupling_response(d, twin)}
-            for d in ("p_p", "pi_p", "p_pid")}
+    return {
+        d: {
+            "gains": [s1.design_gains(a, d) for a in s1.AXES],
+            "step": _step_pair(d, 2.0, twin),
+            "disturbance": disturbance_response(d, twin),
+            "coupling": coupling_response(d, twin),
+        }
+        for d in ("p_p", "pi_p", "p_pid")
+    }
 
 
 def _poles(design: str, axis: str) -> list:
@@ -231,8 +295,12 @@ def state_feedback_part(designs, twin: bool) -> dict:
     out = {}
     for d in designs:
         g = [s1.state_feedback(a, d) for a in s1.AXES]
-        out[d] = {"gains": [vars(x) for x in g], "poles": [[[p.real, p.imag] for p in _poles(d, a)] for a in s1.AXES],
-                  "step": _step_pair(d, 2.0, twin), "disturbance": disturbance_response(d, twin)}
+        out[d] = {
+            "gains": [vars(x) for x in g],
+            "poles": [[[p.real, p.imag] for p in _poles(d, a)] for a in s1.AXES],
+            "step": _step_pair(d, 2.0, twin),
+            "disturbance": disturbance_response(d, twin),
+        }
         if g[0].ki:
             out[d]["step_without_ff"] = _step_pair(d, 2.0, twin, feedforward=False)
     return out
@@ -253,8 +321,12 @@ def improvement(sf: dict, t1: dict, casc: dict) -> dict:
     against the ZN PID (Table 1) and the P-P cascade (part 2), TF loop, per axis (%)."""
     ts = [m["settling_time_s"] for m in sf["pole_placement"]["step"]["tf"]]
     out = {}
-    for name, ref in (("ZN PID", t1["pid"]["tf"]), ("modified PID", t1["modified_pid"]["tf"]),
-                      ("P-P cascade", casc["p_p"]["step"]["tf"]), ("PI-P cascade", casc["pi_p"]["step"]["tf"])):
+    for name, ref in (
+        ("ZN PID", t1["pid"]["tf"]),
+        ("modified PID", t1["modified_pid"]["tf"]),
+        ("P-P cascade", casc["p_p"]["step"]["tf"]),
+        ("PI-P cascade", casc["pi_p"]["step"]["tf"]),
+    ):
         out[name] = [100.0 * (r["settling_time_s"] - t) / r["settling_time_s"] for r, t in zip(ref, ts)]
     return out
 
@@ -264,11 +336,18 @@ def improvement(sf: dict, t1: dict, casc: dict) -> dict:
 
 def box_corners() -> list[dict]:
     """The four corners of the +-10 % box of (K, a), the same signs on both axes."""
-    return [{f"K_{a}": 1 + sk * s1.BOX for a in s1.AXES} | {f"a_{a}": 1 + sa * s1.BOX for a in s1.AXES}
-            for sk in (-1, 1) for sa in (-1, 1)]
+    return [
+        {f"K_{a}": 1 + sk * s1.BOX for a in s1.AXES} | {f"a_{a}": 1 + sa * s1.BOX for a in s1.AXES}
+        for sk in (-1, 1)
+        for sa in (-1, 1)
+    ]
 
 
-def oustaloup_accuracy(w=np.logspace(-1, 2, 61)) -> dict:
+#: The band where the Oustaloup realization is compared with s^-lambda (rad/s).
+OUSTALOUP_CHECK_RAD_S = np.logspace(-1, 2, 61)
+
+
+def oustaloup_accuracy(w=OUSTALOUP_CHECK_RAD_S) -> dict:
     """Largest magnitude (dB) and phase (deg) error of the Oustaloup s^-lambda against the
     exact one over ``w`` (rad/s), per axis."""
     from controllers.design.fractional import oustaloup
@@ -277,19 +356,29 @@ def oustaloup_accuracy(w=np.logspace(-1, 2, 61)) -> dict:
     for a in s1.AXES:
         lam = s1.EQ14[a][2]
         ratio = oustaloup(-lam, *s1.OUSTALOUP_BAND, s1.OUSTALOUP_ORDER).response(w) / (1j * w) ** -lam
-        out.append({"mag_db": float(np.abs(20 * np.log10(np.abs(ratio))).max()),
-                    "phase_deg": float(np.abs(np.degrees(np.angle(ratio))).max())})
+        out.append(
+            {
+                "mag_db": float(np.abs(20 * np.log10(np.abs(ratio))).max()),
+                "phase_deg": float(np.abs(np.degrees(np.angle(ratio))).max()),
+            }
+        )
     return {"w_rad_s": [float(w[0]), float(w[-1])], "axes": out}
 
 
 #: Ways of reading eq. (14)'s loop (section 5.3), computed exactly by :func:`fractional_step`.
-ARRANGEMENTS = ("unity position loop, mm (the plain reading)", "2-DOF I-P (kp on the measurement only)",
-                "unity loop, position in cm (G/10)", "unity loop, position in m (G/1000)",
-                "around the speed P of eqs. (15)-(16)", "on the speed loop, r -> omega (no integrator)")
+ARRANGEMENTS = (
+    "unity position loop, mm (the plain reading)",
+    "2-DOF I-P (kp on the measurement only)",
+    "unity loop, position in cm (G/10)",
+    "unity loop, position in m (G/1000)",
+    "around the speed P of eqs. (15)-(16)",
+    "on the speed loop, r -> omega (no integrator)",
+)
 
 
-def fractional_step(axis: str, arrangement: str, scale=(1.0, 1.0), plant_gain: float = 1.0,
-                    t_max_s: float = 6.0) -> tuple[np.ndarray, np.ndarray]:
+def fractional_step(
+    axis: str, arrangement: str, scale=(1.0, 1.0), plant_gain: float = 1.0, t_max_s: float = 6.0
+) -> tuple[np.ndarray, np.ndarray]:
     """``(t_s, y)``: exact (Bromwich-integral) step response of eq. (14) on ``axis`` in ``arrangement`` (one of
     :data:`ARRANGEMENTS`, or ``"velocity plant, gain x g"`` with ``plant_gain``); ``scale``
     multiplies (K, a)."""
@@ -300,24 +389,28 @@ def fractional_step(axis: str, arrangement: str, scale=(1.0, 1.0), plant_gain: f
     K, a = K * scale[0], a * scale[1]
 
     def C(s):
-        return kp + ki * s ** -lam
+        return kp + ki * s**-lam
 
     def G(s):
         return K / (s * (s + a))
 
     if arrangement == "2-DOF I-P (kp on the measurement only)":
-        return step_response(lambda s: G(s) * ki * s ** -lam / (1 + G(s) * C(s)), t_max_s)
+        return step_response(lambda s: G(s) * ki * s**-lam / (1 + G(s) * C(s)), t_max_s)
     if arrangement == "around the speed P of eqs. (15)-(16)":
         kv = s1.EQ15_16[axis][2]
 
         def inner(s):
             return K * kv / (s + a + K * kv) / s
+
         return step_response(lambda s: C(s) * inner(s) / (1 + C(s) * inner(s)), t_max_s)
     if arrangement in ("on the speed loop, r -> omega (no integrator)", "velocity plant, gain x g"):
         g = plant_gain if arrangement == "velocity plant, gain x g" else 1.0
         return step_response(lambda s: C(s) * g * K / (s + a) / (1 + C(s) * g * K / (s + a)), t_max_s)
-    g = {"unity position loop, mm (the plain reading)": 1.0, "unity loop, position in cm (G/10)": 0.1,
-         "unity loop, position in m (G/1000)": 1e-3}[arrangement]
+    g = {
+        "unity position loop, mm (the plain reading)": 1.0,
+        "unity loop, position in cm (G/10)": 0.1,
+        "unity loop, position in m (G/1000)": 1e-3,
+    }[arrangement]
     return step_response(lambda s: C(s) * g * G(s) / (1 + C(s) * g * G(s)), t_max_s)
 
 
@@ -339,7 +432,9 @@ def fitted_velocity_gain(axis: str) -> dict:
     best = None
     for g in np.logspace(-2, 0, 41):
         m = _metrics(fractional_step(axis, "velocity plant, gain x g", plant_gain=g))
-        miss = abs(m["rise_time_10_90_s"] - s1.EQ14_RISE_S[axis][0]) + abs(m["settling_time_s"] - s1.EQ14_SETTLING_S[axis][0])
+        miss = abs(m["rise_time_10_90_s"] - s1.EQ14_RISE_S[axis][0]) + abs(
+            m["settling_time_s"] - s1.EQ14_SETTLING_S[axis][0]
+        )
         if np.isfinite(miss) and (best is None or miss < best[0]):
             best = (miss, g, m)
     return {"g": float(best[1]), "miss_s": float(best[0]), "metrics": best[2]}
@@ -364,8 +459,8 @@ def fractional_part(samples: int, seed: int, twin: bool) -> dict:
     out["exact_random"] = {"samples": samples, "bands": [_bands([m[i] for m in sampled + exact_box]) for i in range(2)]}
     for design, horizon in (("fo_pi", 4.0), ("mu_cascade", 20.0)):
         ctrl = controller(design)
-        points = [steps(ctrl, horizon, twin, scale=c) for c in [None] + box_corners()]
-        out[design] = {side: [p[side] for p in points] for side in points[0]}   # side -> nominal, corners
+        points = [steps(ctrl, horizon, twin, scale=c) for c in [None, *box_corners()]]
+        out[design] = {side: [p[side] for p in points] for side in points[0]}  # side -> nominal, corners
     return out
 
 
@@ -395,8 +490,10 @@ def lqr_step_metrics(axis: str, log10_q) -> dict:
 def abc_costs() -> dict:
     """The two cost functions of section 6 (s): ``minimize`` = settling + overshoot/100 (1 % of
     overshoot weighs like 10 ms); ``required`` = |settling - 0.2 s| + overshoot/100."""
-    return {"minimize": lambda m: m["settling_time_s"] + m["overshoot_pct"] / 100.0,
-            "required": lambda m: abs(m["settling_time_s"] - ABC_REQUIRED_SETTLING_S) + m["overshoot_pct"] / 100.0}
+    return {
+        "minimize": lambda m: m["settling_time_s"] + m["overshoot_pct"] / 100.0,
+        "required": lambda m: abs(m["settling_time_s"] - ABC_REQUIRED_SETTLING_S) + m["overshoot_pct"] / 100.0,
+    }
 
 
 def abc_part(seed: int, twin: bool) -> dict:
@@ -405,17 +502,25 @@ def abc_part(seed: int, twin: bool) -> dict:
 
     out = {"bounds_log10": ABC_LOG10_BOUNDS, "iterations": ABC_ITERATIONS, "population": ABC_POPULATION, "seed": seed}
     for name, cost in abc_costs().items():
+
         def evaluate(x, cost=cost):
             m = lqr_step_metrics("x", x)
             return cost(m) if np.isfinite(m["settling_time_s"]) else math.inf
-        res = bee_colony_minimize(evaluate, [ABC_LOG10_BOUNDS[0]] * 2, [ABC_LOG10_BOUNDS[1]] * 2, ABC_ITERATIONS, seed,
-                                  ABC_POPULATION)
+
+        res = bee_colony_minimize(
+            evaluate, [ABC_LOG10_BOUNDS[0]] * 2, [ABC_LOG10_BOUNDS[1]] * 2, ABC_ITERATIONS, seed, ABC_POPULATION
+        )
         best = lqr_step_metrics("x", res.x)
         history = [lqr_step_metrics("x", x) for x in res.best_x]
-        row = {"log10_q": res.x.tolist(), "cost": res.cost, "evaluations": res.evaluations, "metrics": best,
-               "settling_by_iteration_s": [h["settling_time_s"] for h in history],
-               "overshoot_by_iteration_pct": [h["overshoot_pct"] for h in history],
-               "log10_q_by_iteration": [x.tolist() for x in res.best_x]}
+        row = {
+            "log10_q": res.x.tolist(),
+            "cost": res.cost,
+            "evaluations": res.evaluations,
+            "metrics": best,
+            "settling_by_iteration_s": [h["settling_time_s"] for h in history],
+            "overshoot_by_iteration_pct": [h["overshoot_pct"] for h in history],
+            "log10_q_by_iteration": [x.tolist() for x in res.best_x],
+        }
         row["step"] = steps(_abc_controller(best), 2.0, twin)
         out[name] = row
     return out
@@ -452,6 +557,7 @@ def lmi_part(twin: bool) -> dict:
 def scenario_data(name: str) -> dict:
     """A bundled scenario as a dict (to vary)."""
     from twin.scenario import bundled_scenarios
+
     return tomllib.loads(bundled_scenarios()[name].read_text())
 
 
@@ -459,23 +565,28 @@ def trajectory_scenario(path: str, experiment: int) -> dict:
     """The bundled ``seed001_<square|circle>_<size>mm`` scenario for Table 2's ``experiment`` (1-3)."""
     kind, size = TRAJECTORIES[path]
     data = scenario_data(f"seed001_{kind}_{size:g}mm")
-    data["controller"]["params"] = {"design": EXPERIMENTS[experiment - 1], "feedforward": False,
-                                    "velocity_ff": experiment == 3}
+    data["controller"]["params"] = {
+        "design": EXPERIMENTS[experiment - 1],
+        "feedforward": False,
+        "velocity_ff": experiment == 3,
+    }
     return data
 
 
-@lru_cache(maxsize=None)
+@cache
 def trajectory_run(path: str, experiment: int):
     """The twin's run of one Table 2 cell (cached: tables, plots and recording share it)."""
     from twin.scenario import run_scenario, scenario_from_dict
+
     return run_scenario(scenario_from_dict(trajectory_scenario(path, experiment)), progress=False)
 
 
 def trajectory_tf(path: str, experiment: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(t_s, ref m (n, 2), pos m (n, 2))`` of the same cell on the TF loop (coupled eq. 6)."""
     from twin.scenario import prepare, scenario_from_dict
+
     kw = prepare(scenario_from_dict(trajectory_scenario(path, experiment)))
-    n = int(round(kw["duration_s"] / DT))
+    n = round(kw["duration_s"] / DT)
     t = np.arange(n) * DT
     ref = kw["reference"].sample(t)
     _, pos, _ = tf_run(kw["controllers"][0], kw["duration_s"], coupled=True, ref=ref)
@@ -485,6 +596,7 @@ def trajectory_tf(path: str, experiment: int) -> tuple[np.ndarray, np.ndarray, n
 def trajectories(twin: bool) -> dict:
     """Table 2: the fitting index per axis for every path and experiment, TF loop and twin."""
     from twin.metrics import fit_index
+
     out = {}
     for path in TRAJECTORIES:
         rows = []
@@ -502,6 +614,7 @@ def trajectories(twin: bool) -> dict:
 
 def _contour_max(res) -> float:
     from twin.metrics import contour_error
+
     return float(contour_error(res.table_position_m(), res.ref[:, :, 0]).max())
 
 
@@ -526,8 +639,10 @@ def _step_pairs(res: dict) -> list[tuple[str, dict]]:
     pairs += [(f"mimo {k}", res["mimo"][k]) for k in ("pole_placement", "state_feedback_mimo")]
     pairs += [(f"abc {k}", res["abc"][k]["step"]) for k in ("minimize", "required")]
     for design in ("fo_pi", "mu_cascade"):
-        pairs += [(f"{design} {'nominal' if i == 0 else f'corner {i}'}", {"twin": a, "tf": b})
-                  for i, (a, b) in enumerate(zip(res["fractional"][design]["twin"], res["fractional"][design]["tf"]))]
+        pairs += [
+            (f"{design} {'nominal' if i == 0 else f'corner {i}'}", {"twin": a, "tf": b})
+            for i, (a, b) in enumerate(zip(res["fractional"][design]["twin"], res["fractional"][design]["tf"]))
+        ]
     return pairs
 
 
@@ -536,9 +651,12 @@ def stability_differences(res: dict) -> list[str]:
     twin's semi-implicit Euler step and the exact ZOH model may fall on either side)."""
     if not res["settings"]["twin"]:
         return []
-    return [f"{prefix} {axis}: TF {'stable' if b['stable'] else 'unstable'}, twin {'stable' if a['stable'] else 'unstable'}"
-            for prefix, pair in _step_pairs(res) for axis, a, b in zip(s1.AXES, pair["twin"], pair["tf"])
-            if a["stable"] != b["stable"]]
+    return [
+        f"{prefix} {axis}: TF {'stable' if b['stable'] else 'unstable'}, twin {'stable' if a['stable'] else 'unstable'}"
+        for prefix, pair in _step_pairs(res)
+        for axis, a, b in zip(s1.AXES, pair["twin"], pair["tf"])
+        if a["stable"] != b["stable"]
+    ]
 
 
 def _departures(twin: dict, tf: dict) -> list[str]:

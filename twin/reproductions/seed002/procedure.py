@@ -42,20 +42,51 @@ from twin.sim.tf_loop import tf_loop
 
 #: The paper's numbers.  Table 1 is printed with its middle rows as given: (0.4 Hz, 20 mm) and
 #: (0.7 Hz, 10 mm) read as swapped against every linear loop (see the report).
-PAPER = {"gm_db": 9.94, "pm_deg": 61.4, "ms_db": 5.12, "bw_hz": 44.4, "popov_crossing": -0.3071,
-         "ke_max": 3.2563, "ke": 3.1075, "ko": 6.0, "e_max": 0.3,
-         "table1": {(0.4, 10): (0.0639, 0.0425), (0.4, 20): (0.1048, 0.0694), (0.7, 10): (0.1273, 0.0842),
-                    (0.7, 20): (0.2086, 0.1369)},
-         "table2": {(0.4, 10, 1500): (0.0757, 0.0507), (0.4, 10, 2500): (0.0746, 0.0500),
-                    (0.4, 10, 3500): (0.0727, 0.0484), (0.4, 20, 1500): (0.1172, 0.0777),
-                    (0.4, 20, 2500): (0.1155, 0.0762), (0.4, 20, 3500): (0.1141, 0.0761),
-                    (0.7, 10, 1500): (0.1398, 0.0924), (0.7, 10, 2500): (0.1386, 0.0918),
-                    (0.7, 10, 3500): (0.1367, 0.0906), (0.7, 20, 1500): (0.2217, 0.1459),
-                    (0.7, 20, 2500): (0.2197, 0.1449), (0.7, 20, 3500): (0.2193, 0.1444)},
-         "table3": {(0.4, 10, 1500): 33.03, (0.4, 10, 2500): 32.98, (0.4, 10, 3500): 33.43,
-                    (0.4, 20, 1500): 33.70, (0.4, 20, 2500): 34.03, (0.4, 20, 3500): 33.30,
-                    (0.7, 10, 1500): 33.91, (0.7, 10, 2500): 33.77, (0.7, 10, 3500): 33.72,
-                    (0.7, 20, 1500): 34.19, (0.7, 20, 2500): 34.05, (0.7, 20, 3500): 34.15}}
+PAPER = {
+    "gm_db": 9.94,
+    "pm_deg": 61.4,
+    "ms_db": 5.12,
+    "bw_hz": 44.4,
+    "popov_crossing": -0.3071,
+    "ke_max": 3.2563,
+    "ke": 3.1075,
+    "ko": 6.0,
+    "e_max": 0.3,
+    "table1": {
+        (0.4, 10): (0.0639, 0.0425),
+        (0.4, 20): (0.1048, 0.0694),
+        (0.7, 10): (0.1273, 0.0842),
+        (0.7, 20): (0.2086, 0.1369),
+    },
+    "table2": {
+        (0.4, 10, 1500): (0.0757, 0.0507),
+        (0.4, 10, 2500): (0.0746, 0.0500),
+        (0.4, 10, 3500): (0.0727, 0.0484),
+        (0.4, 20, 1500): (0.1172, 0.0777),
+        (0.4, 20, 2500): (0.1155, 0.0762),
+        (0.4, 20, 3500): (0.1141, 0.0761),
+        (0.7, 10, 1500): (0.1398, 0.0924),
+        (0.7, 10, 2500): (0.1386, 0.0918),
+        (0.7, 10, 3500): (0.1367, 0.0906),
+        (0.7, 20, 1500): (0.2217, 0.1459),
+        (0.7, 20, 2500): (0.2197, 0.1449),
+        (0.7, 20, 3500): (0.2193, 0.1444),
+    },
+    "table3": {
+        (0.4, 10, 1500): 33.03,
+        (0.4, 10, 2500): 32.98,
+        (0.4, 10, 3500): 33.43,
+        (0.4, 20, 1500): 33.70,
+        (0.4, 20, 2500): 34.03,
+        (0.4, 20, 3500): 33.30,
+        (0.7, 10, 1500): 33.91,
+        (0.7, 10, 2500): 33.77,
+        (0.7, 10, 3500): 33.72,
+        (0.7, 20, 1500): 34.19,
+        (0.7, 20, 2500): 34.05,
+        (0.7, 20, 3500): 34.15,
+    },
+}
 DT_S, DURATION_S, STEADY_FROM_S = 1e-4, 10.0, 2.5
 REFERENCES = ((0.4, 10), (0.4, 20), (0.7, 10), (0.7, 20))
 SPINDLES_RPM = (None, 1500.0, 2500.0, 3500.0)
@@ -83,8 +114,7 @@ def plant_mm() -> SisoTf:
 def pid_mm(tf_s: float = 0.0) -> SisoTf:
     """Eq. (6) in V/mm, derivative ideal (tf_s = 0, improper) or filtered."""
     if tf_s == 0.0:
-        return SisoTf((seed002.KD_V_S_PER_M * 1e-3, seed002.KP_V_PER_M * 1e-3, seed002.KI_V_PER_M_S * 1e-3),
-                      (1.0, 0.0))
+        return SisoTf((seed002.KD_V_S_PER_M * 1e-3, seed002.KP_V_PER_M * 1e-3, seed002.KI_V_PER_M_S * 1e-3), (1.0, 0.0))
     c = seed002.pid(tf_s)
     return SisoTf(np.asarray(c.num) * 1e-3, c.den)
 
@@ -103,12 +133,14 @@ def continuous_loop(delay: str = "exact", tf_s: float = 0.0):
     T = machine().delay_s
     if delay.startswith("pade"):
         pn, pd = _pade(T, int(delay[-1]))
+
     def L(w):
         s = 1j * np.asarray(w, float)
         d = {"exact": np.exp(-s * T), "none": 1.0}.get(delay)
         if d is None:
             d = np.polyval(pn, s) / np.polyval(pd, s)
         return c(s) * g(s) * d
+
     return L
 
 
@@ -117,7 +149,7 @@ def sampled_loop(dt: float = DT_S, tf_s: float = TF_S):
     bm = machine()
     A, B, C, D = discretize(*tf_to_ss(pid_mm(tf_s)), dt, "tustin")
     Ag, Bg, Cg, Dg = discretize(*tf_to_ss(plant_mm()), dt, "zoh")
-    n = int(round(bm.delay_s / dt))
+    n = round(bm.delay_s / dt)
 
     def response(A, B, C, D, z):
         out = np.empty(len(z), complex)
@@ -129,15 +161,23 @@ def sampled_loop(dt: float = DT_S, tf_s: float = TF_S):
         w = np.asarray(w, float)
         z = np.exp(1j * np.minimum(w, math.pi / dt * (1 - 1e-9)) * dt)
         return response(A, B, C, D, z) * response(Ag, Bg, Cg, Dg, z) * z ** (-n)
+
     return L
 
 
 def _summary(L, w_max: float = 1e5) -> dict:
     m = loop_margins(L, w_max=w_max, n=20_000 if w_max < 1e5 else 70_000)
-    crossing, w_c = popov_crossing(L, w_max=w_max, n=20_000 if w_max < 1e5 else 70_000)
-    return {"gm_db": m.gm_db, "gm_hz": m.w_gm / (2 * math.pi), "pm_deg": m.pm_deg, "pm_hz": m.w_pm / (2 * math.pi),
-            "ms_db": m.ms_db, "bw_hz": m.w_bw / (2 * math.pi), "popov_crossing": crossing,
-            "ke_max": 1.0 / abs(crossing)}
+    crossing, _w_c = popov_crossing(L, w_max=w_max, n=20_000 if w_max < 1e5 else 70_000)
+    return {
+        "gm_db": m.gm_db,
+        "gm_hz": m.w_gm / (2 * math.pi),
+        "pm_deg": m.pm_deg,
+        "pm_hz": m.w_pm / (2 * math.pi),
+        "ms_db": m.ms_db,
+        "bw_hz": m.w_bw / (2 * math.pi),
+        "popov_crossing": crossing,
+        "ke_max": 1.0 / abs(crossing),
+    }
 
 
 def margin_variants() -> list[dict]:
@@ -145,12 +185,24 @@ def margin_variants() -> list[dict]:
     rows = []
     for delay in ("exact", "pade2", "pade1", "none"):
         for tf_s in (0.0, TF_S):
-            rows.append({"loop": f"continuous, delay {delay}, derivative "
-                                 + ("ideal" if tf_s == 0 else f"filtered {tf_s:g} s"),
-                         "delay": delay, "tf_s": tf_s, **_summary(continuous_loop(delay, tf_s))})
-    rows.append({"loop": f"sampled {1 / DT_S:g} Hz as the twin (Tustin PID, tf {TF_S:g} s; ZOH plant; "
-                         f"{int(round(machine().delay_s / DT_S))}-tick delay)",
-                 "delay": "ticks", "tf_s": TF_S, **_summary(sampled_loop(), w_max=math.pi / DT_S * 0.999)})
+            rows.append(
+                {
+                    "loop": f"continuous, delay {delay}, derivative "
+                    + ("ideal" if tf_s == 0 else f"filtered {tf_s:g} s"),
+                    "delay": delay,
+                    "tf_s": tf_s,
+                    **_summary(continuous_loop(delay, tf_s)),
+                }
+            )
+    rows.append(
+        {
+            "loop": f"sampled {1 / DT_S:g} Hz as the twin (Tustin PID, tf {TF_S:g} s; ZOH plant; "
+            f"{round(machine().delay_s / DT_S)}-tick delay)",
+            "delay": "ticks",
+            "tf_s": TF_S,
+            **_summary(sampled_loop(), w_max=math.pi / DT_S * 0.999),
+        }
+    )
     return rows
 
 
@@ -169,7 +221,7 @@ def _grows(error: np.ndarray, dt: float) -> bool:
     if not np.isfinite(error).all():
         return True
     de = np.abs(np.diff(error))
-    early, late = (de[int(a / dt):int(b / dt)].max() for a, b in ((0.25, 0.35), (0.65, 0.75)))
+    early, late = (de[int(a / dt) : int(b / dt)].max() for a, b in ((0.25, 0.35), (0.65, 0.75)))
     return not (late <= early and np.isfinite(late))
 
 
@@ -204,8 +256,9 @@ def critical_gains(twin: bool = True) -> dict:
         from twin.references import Step
 
         try:
-            res = simulate(bm, [_scaled_pid(k, a) for a in ("x", "y")], Step(1e-4, n_axes=2, axes=(0,)), 0.8,
-                           DT_S, progress=False)
+            res = simulate(
+                bm, [_scaled_pid(k, a) for a in ("x", "y")], Step(1e-4, n_axes=2, axes=(0,)), 0.8, DT_S, progress=False
+            )
         except SimulationDiverged:
             return np.full(n, np.inf)
         return res.error_m()[:, 0]
@@ -223,29 +276,43 @@ def sine_reference(f_hz: float, a_mm: float, n: int) -> np.ndarray:
 
 def _metrics(error_m: np.ndarray) -> dict:
     """Max |e| and RMSE (mm) over the steady window; inf for a loop that diverged."""
-    e = error_m[int(STEADY_FROM_S / DT_S):]
+    e = error_m[int(STEADY_FROM_S / DT_S) :]
     with np.errstate(all="ignore"):
         return {"max_mm": float(np.abs(e).max() * 1e3), "rmse_mm": float(np.sqrt(np.mean(e**2)) * 1e3)}
 
 
-def table_case(f_hz: float, a_mm: float, rpm: float | None, controller: str, twin: bool,
-               duration_s: float = DURATION_S, npid_params: dict | None = None) -> dict:
+def table_case(
+    f_hz: float,
+    a_mm: float,
+    rpm: float | None,
+    controller: str,
+    twin: bool,
+    duration_s: float = DURATION_S,
+    npid_params: dict | None = None,
+) -> dict:
     """One cell of Tables 1-3: the transfer-function loop and (``twin``) the twin."""
     bm = machine()
-    n = int(round(duration_s / DT_S))
+    n = round(duration_s / DT_S)
     ref = sine_reference(f_hz, a_mm, n)
     params = npid_params if controller == "seed002_npid" and npid_params else {}
     out = {}
     force_V = None
     if twin:
         dist = () if rpm is None else (EndMilling(spindle_rpm=rpm, **CUT),)
-        res = simulate(bm, make_controller(controller, DT_S, params, axes=("x", "y")),
-                       SumOfSines((a_mm * 1e-3,), (f_hz,), n_axes=2, axes=(0,)), duration_s, DT_S,
-                       disturbances=dist, progress=False)
+        res = simulate(
+            bm,
+            make_controller(controller, DT_S, params, axes=("x", "y")),
+            SumOfSines((a_mm * 1e-3,), (f_hz,), n_axes=2, axes=(0,)),
+            duration_s,
+            DT_S,
+            disturbances=dist,
+            progress=False,
+        )
         out["twin"] = _metrics(res.error_m()[:, 0])
         force_V = res.workpiece_force_N[:, 0] * GoogolXY.volts_per_newton(bm.params, bm.model, "x")
-    pos, _ = tf_loop(bm.plant[0][0], make_controller(controller, DT_S, params), ref, DT_S, bm.delay_s,
-                     plant_dist_V=force_V)
+    pos, _ = tf_loop(
+        bm.plant[0][0], make_controller(controller, DT_S, params), ref, DT_S, bm.delay_s, plant_dist_V=force_V
+    )
     out["tf_loop"] = _metrics(ref[:, 0] - pos)
     return out
 
@@ -301,6 +368,16 @@ def mismatches(rows: list[dict]) -> list[str]:
     numbers.  The critical gain is reported beside its TF number but not held to 2 %: at the
     stability boundary it magnifies the twin's one difference in phase (MuJoCo's semi-implicit
     Euler step against the exact zero-order hold: 2.9 % in gain, 0.25 dB)."""
-    return [line for row in rows for ctrl in ("seed002_pid", "seed002_npid") if "twin" in row[ctrl]
-            for line in twin_vs_tf(f"{ctrl} {row['f_hz']} Hz {row['a_mm']} mm rpm {row['rpm']}", row[ctrl]["twin"],
-                                   row[ctrl]["tf_loop"], ("max_mm", "rmse_mm"), TWIN_TOL_REL)]
+    return [
+        line
+        for row in rows
+        for ctrl in ("seed002_pid", "seed002_npid")
+        if "twin" in row[ctrl]
+        for line in twin_vs_tf(
+            f"{ctrl} {row['f_hz']} Hz {row['a_mm']} mm rpm {row['rpm']}",
+            row[ctrl]["twin"],
+            row[ctrl]["tf_loop"],
+            ("max_mm", "rmse_mm"),
+            TWIN_TOL_REL,
+        )
+    ]

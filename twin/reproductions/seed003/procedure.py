@@ -52,8 +52,11 @@ FEEDFORWARDS = ("none", "velocity", "velocity_acceleration")
 #: on the assumed 0.01 V.
 AMPLITUDES_V = (0.001, 0.01, 0.1, 1.0)
 #: The thesis's headline reductions of IMBDO plus DFO against the cascade alone (%).
-THESIS = {"mte_pct": (97.52, 98.70, 99.13), "rmse_pct": (98.80, 97.75, 97.97),
-          "fft_pct": ((99.78,), (99.67, 99.53), (99.86, 99.81, 99.91))}
+THESIS = {
+    "mte_pct": (97.52, 98.70, 99.13),
+    "rmse_pct": (98.80, 97.75, 97.97),
+    "fft_pct": ((99.78,), (99.67, 99.53), (99.86, 99.81, 99.91)),
+}
 
 
 def design() -> dict:
@@ -65,13 +68,29 @@ def design() -> dict:
     def loop(m):
         return {"gm_db": m.gm_db, "gm_hz": m.w_gm / (2 * math.pi), "pm_deg": m.pm_deg, "pm_hz": m.w_pm / (2 * math.pi)}
 
-    return {"kp_pos": d["kp_pos"], "kp_vel": d["kp_vel"], "ki_vel": d["ki_vel"],
-            "velocity": loop(d["velocity"]), "position": loop(d["position"]),
-            "thesis_velocity": {"gm_db": seed003.VELOCITY_GM_DB, "gm_hz": seed003.VELOCITY_GM_HZ,
-                                "pm_deg": seed003.VELOCITY_PM_DEG, "pm_hz": seed003.VELOCITY_PM_HZ},
-            "thesis_position": {"gm_db": seed003.POSITION_GM_DB, "gm_hz": seed003.POSITION_GM_HZ,
-                                "pm_deg": seed003.POSITION_PM_DEG, "pm_hz": seed003.POSITION_PM_HZ},
-            "q_cutoff_hz": cutoff, "q_order": 2, "sup_q_delta": worst, "gain_error": GAIN_ERROR}
+    return {
+        "kp_pos": d["kp_pos"],
+        "kp_vel": d["kp_vel"],
+        "ki_vel": d["ki_vel"],
+        "velocity": loop(d["velocity"]),
+        "position": loop(d["position"]),
+        "thesis_velocity": {
+            "gm_db": seed003.VELOCITY_GM_DB,
+            "gm_hz": seed003.VELOCITY_GM_HZ,
+            "pm_deg": seed003.VELOCITY_PM_DEG,
+            "pm_hz": seed003.VELOCITY_PM_HZ,
+        },
+        "thesis_position": {
+            "gm_db": seed003.POSITION_GM_DB,
+            "gm_hz": seed003.POSITION_GM_HZ,
+            "pm_deg": seed003.POSITION_PM_DEG,
+            "pm_hz": seed003.POSITION_PM_HZ,
+        },
+        "q_cutoff_hz": cutoff,
+        "q_order": 2,
+        "sup_q_delta": worst,
+        "gain_error": GAIN_ERROR,
+    }
 
 
 def model_feedforward() -> dict:
@@ -81,12 +100,21 @@ def model_feedforward() -> dict:
     g = machine().plant[0][0]
     num, den = np.asarray(g.num, float), np.asarray(g.den, float)
     b0 = num[-1] / den[0]
-    return {"velocity_ref_ff": 1.0, "velocity_ff_V_s_per_m": float(den[1] / den[0] / b0),
-            "acceleration_ff_V_s2_per_m": float(1.0 / b0)}
+    return {
+        "velocity_ref_ff": 1.0,
+        "velocity_ff_V_s_per_m": float(den[1] / den[0] / b0),
+        "acceleration_ff_V_s2_per_m": float(1.0 / b0),
+    }
 
 
-def controller(config: str, harmonics, axes=("x",), bandwidth_hz: float = BANDWIDTH_HZ,
-               cutoff_hz: float | None = None, feedforward: str = "none"):
+def controller(
+    config: str,
+    harmonics,
+    axes=("x",),
+    bandwidth_hz: float = BANDWIDTH_HZ,
+    cutoff_hz: float | None = None,
+    feedforward: str = "none",
+):
     """The cascade for ``axes``, with the configuration's observer (DFO at ``harmonics`` with
     ``bandwidth_hz``; the inverse-model cutoff of :func:`q_filter` unless ``cutoff_hz``) and one
     of :data:`FEEDFORWARDS` (ours: the thesis states none)."""
@@ -96,8 +124,16 @@ def controller(config: str, harmonics, axes=("x",), bandwidth_hz: float = BANDWI
     velocity_ff = ff["velocity_ff_V_s_per_m"] if feedforward == "velocity_acceleration" else 0.0
     acceleration_ff = ff["acceleration_ff_V_s2_per_m"] if feedforward == "velocity_acceleration" else 0.0
     params = {} if feedforward == "none" else {"velocity_ref_ff": ff["velocity_ref_ff"]}
-    ctrl = make_controller("seed003_cascade", DT_S, params, velocity_ff=velocity_ff, acceleration_ff=acceleration_ff,
-                           axes=axes, plants=plants, delay_s=bm.delay_s)
+    ctrl = make_controller(
+        "seed003_cascade",
+        DT_S,
+        params,
+        velocity_ff=velocity_ff,
+        acceleration_ff=acceleration_ff,
+        axes=axes,
+        plants=plants,
+        delay_s=bm.delay_s,
+    )
     kind = CONFIGURATIONS[config]
     if kind is None:
         return ctrl
@@ -115,28 +151,41 @@ def q_filter() -> tuple[float, float]:
 
 
 def _disturbance(harmonics, seed: int = 0, amplitude_V: float = DISTURBANCE_V) -> HarmonicInput:
-    return HarmonicInput(amplitudes_V=(amplitude_V,) * len(harmonics), frequencies_hz=tuple(harmonics), n_axes=2,
-                         axes=(0,), seed=seed)
+    return HarmonicInput(
+        amplitudes_V=(amplitude_V,) * len(harmonics), frequencies_hz=tuple(harmonics), n_axes=2, axes=(0,), seed=seed
+    )
 
 
 def _metrics(error_m: np.ndarray, harmonics, search_hz: float = 0.0) -> dict:
     """MTE and RMSE (um) over t >= :data:`STEADY_FROM_S`, and the error's largest spectral line
     (um, Hann window) within ``search_hz`` of each harmonic (the nearest bin for 0)."""
-    e = error_m[int(STEADY_FROM_S / DT_S):]
+    e = error_m[int(STEADY_FROM_S / DT_S) :]
     window = np.hanning(len(e))
     spectrum = np.abs(np.fft.rfft(e * window)) * 2 / window.sum()
     freqs = np.fft.rfftfreq(len(e), DT_S)
-    lines = [float(max(spectrum[np.argmin(np.abs(freqs - f))], spectrum[np.abs(freqs - f) <= search_hz].max(initial=0.0))
-                   * 1e6) for f in harmonics]
+    lines = [
+        float(
+            max(spectrum[np.argmin(np.abs(freqs - f))], spectrum[np.abs(freqs - f) <= search_hz].max(initial=0.0)) * 1e6
+        )
+        for f in harmonics
+    ]
     return {"mte_um": float(np.abs(e).max() * 1e6), "rmse_um": float(np.sqrt(np.mean(e**2)) * 1e6), "fft_um": lines}
 
 
-def run_case(amplitude_mm: float, f_hz: float, harmonics, config: str, twin: bool, duration_s: float = DURATION_S,
-             feedforward: str = "none", amplitude_V: float = DISTURBANCE_V) -> dict:
+def run_case(
+    amplitude_mm: float,
+    f_hz: float,
+    harmonics,
+    config: str,
+    twin: bool,
+    duration_s: float = DURATION_S,
+    feedforward: str = "none",
+    amplitude_V: float = DISTURBANCE_V,
+) -> dict:
     """One configuration under one reference and disturbance: TF loop and (``twin``) the twin,
     the tracking error's metrics and those of the disturbance's share."""
     bm = machine()
-    n = int(round(duration_s / DT_S))
+    n = round(duration_s / DT_S)
     t = np.arange(n) * DT_S
     ref = sine_reference(f_hz, amplitude_mm, n)
     dist = _disturbance(harmonics, amplitude_V=amplitude_V)
@@ -144,18 +193,37 @@ def run_case(amplitude_mm: float, f_hz: float, harmonics, config: str, twin: boo
     out = {}
     errors = {}
     for label, u_dist in (("with", d), ("without", None)):
-        pos, _ = tf_loop(bm.plant[0][0], controller(config, harmonics, feedforward=feedforward), ref, DT_S,
-                         bm.delay_s, u_dist_V=u_dist)
+        pos, _ = tf_loop(
+            bm.plant[0][0],
+            controller(config, harmonics, feedforward=feedforward),
+            ref,
+            DT_S,
+            bm.delay_s,
+            u_dist_V=u_dist,
+        )
         errors[label] = ref[:, 0] - pos
-    out["tf_loop"] = {**_metrics(errors["with"], harmonics),
-                      "disturbance": _metrics(errors["with"] - errors["without"], harmonics)}
+    out["tf_loop"] = {
+        **_metrics(errors["with"], harmonics),
+        "disturbance": _metrics(errors["with"] - errors["without"], harmonics),
+    }
     if twin:
         reference = SumOfSines((amplitude_mm * 1e-3,), (f_hz,), n_axes=2, axes=(0,))
-        runs = {label: simulate(bm, controller(config, harmonics, ("x", "y"), feedforward=feedforward), reference,
-                                duration_s, DT_S, disturbances=ds, progress=False).error_m()[:, 0]
-                for label, ds in (("with", (dist,)), ("without", ()))}
-        out["twin"] = {**_metrics(runs["with"], harmonics),
-                       "disturbance": _metrics(runs["with"] - runs["without"], harmonics)}
+        runs = {
+            label: simulate(
+                bm,
+                controller(config, harmonics, ("x", "y"), feedforward=feedforward),
+                reference,
+                duration_s,
+                DT_S,
+                disturbances=ds,
+                progress=False,
+            ).error_m()[:, 0]
+            for label, ds in (("with", (dist,)), ("without", ()))
+        }
+        out["twin"] = {
+            **_metrics(runs["with"], harmonics),
+            "disturbance": _metrics(runs["with"] - runs["without"], harmonics),
+        }
     return out
 
 
@@ -186,10 +254,14 @@ def _reductions(row: dict, side: str) -> dict:
         if config == "cascade" or config not in row:
             continue
         m = row[config][side]
-        out[config] = {"mte": _reduction(base["mte_um"], m["mte_um"]), "rmse": _reduction(base["rmse_um"], m["rmse_um"]),
-                       "disturbance_mte": _reduction(base["disturbance"]["mte_um"], m["disturbance"]["mte_um"]),
-                       "disturbance_fft": [_reduction(a, b) for a, b in zip(base["disturbance"]["fft_um"],
-                                                                           m["disturbance"]["fft_um"])]}
+        out[config] = {
+            "mte": _reduction(base["mte_um"], m["mte_um"]),
+            "rmse": _reduction(base["rmse_um"], m["rmse_um"]),
+            "disturbance_mte": _reduction(base["disturbance"]["mte_um"], m["disturbance"]["mte_um"]),
+            "disturbance_fft": [
+                _reduction(a, b) for a, b in zip(base["disturbance"]["fft_um"], m["disturbance"]["fft_um"])
+            ],
+        }
     return out
 
 
@@ -225,7 +297,7 @@ def milling_case(rpm: float, config: str, duration_s: float = DURATION_S) -> dic
     bm = machine()
     tooth_hz = rpm / 60.0 * CUT["n_flutes"]
     harmonics = (tooth_hz, 2 * tooth_hz)
-    n = int(round(duration_s / DT_S))
+    n = round(duration_s / DT_S)
     ref = sine_reference(0.5, 10.0, n)
     reference = SumOfSines((0.01,), (0.5,), n_axes=2, axes=(0,))
 
@@ -241,9 +313,14 @@ def milling_case(rpm: float, config: str, duration_s: float = DURATION_S) -> dic
         tf[label] = ref[:, 0] - pos
     # the feed reverses with the 0.5 Hz sine, so the tooth force sits at f +- 0.5 Hz, not at f
     lines = {"harmonics": harmonics, "search_hz": 1.0}
-    return {"rpm": rpm, "harmonics_hz": list(harmonics),
-            **{side: {**_metrics(e["with"], **lines), "disturbance": _metrics(e["with"] - e["without"], **lines)}
-               for side, e in (("twin", twin), ("tf_loop", tf))}}
+    return {
+        "rpm": rpm,
+        "harmonics_hz": list(harmonics),
+        **{
+            side: {**_metrics(e["with"], **lines), "disturbance": _metrics(e["with"] - e["without"], **lines)}
+            for side, e in (("twin", twin), ("tf_loop", tf))
+        },
+    }
 
 
 def milling_cases(duration_s: float = DURATION_S, progress=None) -> list[dict]:
@@ -282,8 +359,12 @@ def disturbance_sensitivity(w: np.ndarray, harmonics) -> dict:
     lead = round(T / DT_S) * DT_S
     wh = 2 * math.pi * np.asarray(harmonics)
     H = harmonic_estimator(harmonics, BANDWIDTH_HZ, np.exp(1j * wh * lead) / q_response(cutoff, 2, wh))(s)
-    return {"cascade": base, "imbdo": base * np.abs(1 - q), "dfo": base * np.abs(1 - H * q),
-            "imbdo_dfo": base * np.abs((1 - q) * (1 - H * q))}
+    return {
+        "cascade": base,
+        "imbdo": base * np.abs(1 - q),
+        "dfo": base * np.abs(1 - H * q),
+        "imbdo_dfo": base * np.abs((1 - q) * (1 - H * q)),
+    }
 
 
 def reference_loops(w: np.ndarray) -> dict:
@@ -299,14 +380,27 @@ def reference_loops(w: np.ndarray) -> dict:
     m = backward_difference(DT_S)(w)
     velocity = (d["kp_vel"] + d["ki_vel"] / s) * s * g(s) * np.exp(-s * T) * m
     position = d["kp_pos"] * velocity / (1 + velocity) / m / s
-    return {"position |S|": np.abs(1 / (1 + position)), "position |T|": np.abs(position / (1 + position)),
-            "velocity |S|": np.abs(1 / (1 + velocity))}
+    return {
+        "position |S|": np.abs(1 / (1 + position)),
+        "position |T|": np.abs(position / (1 + position)),
+        "velocity |S|": np.abs(1 / (1 + velocity)),
+    }
 
 
 def mismatches(rows: list[dict]) -> list[str]:
     """Tracking-error MTE and RMSE of the twin more than 2 % from the TF loop's (the harmonic
     cases; in the milling cases the TF loop replays the twin's force, so they are reported,
     not checked)."""
-    return [line for row in rows for config in CONFIGURATIONS if "twin" in row[config]
-            for line in twin_vs_tf(f"{config} {row['amplitude_mm']} mm {row['f_hz']} Hz {row['harmonics_hz']}",
-                                   row[config]["twin"], row[config]["tf_loop"], ("mte_um", "rmse_um"), TWIN_TOL_REL)]
+    return [
+        line
+        for row in rows
+        for config in CONFIGURATIONS
+        if "twin" in row[config]
+        for line in twin_vs_tf(
+            f"{config} {row['amplitude_mm']} mm {row['f_hz']} Hz {row['harmonics_hz']}",
+            row[config]["twin"],
+            row[config]["tf_loop"],
+            ("mte_um", "rmse_um"),
+            TWIN_TOL_REL,
+        )
+    ]

@@ -6,6 +6,14 @@ prints and plots.  ``samples`` random plants per controller beside the 1024 corn
 ``twin_samples = 0`` leaves the twin out.
 """
 
-from twin.reproductions.seed004.report import failed, format_report, markdown_tables, record, run, write_plots
+from twin.reproductions.seed004.report import (
+    certificates,
+    failed,
+    format_report,
+    markdown_tables,
+    record,
+    run,
+    write_plots,
+)
 
-__all__ = ["failed", "format_report", "markdown_tables", "record", "run", "write_plots"]
+__all__ = ["certificates", "failed", "format_report", "markdown_tables", "record", "run", "write_plots"]

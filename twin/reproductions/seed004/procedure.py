@@ -20,13 +20,13 @@ import control
 import numpy as np
 
 from controllers import make_controller
+from controllers.blocks import preview_ticks_needed
 from controllers.design.hinf import gamma_iteration
 from controllers.design.mimo import frequency_response
-from controllers.blocks import preview_ticks_needed
 from controllers.design.mu import constant_upper_lft, destabilizing_scale, is_stable, mu_upper_bound
 from controllers.design.ncf import ncf_generalized_plant, ncf_robustness_norm
 from controllers.papers import seed004 as s4
-from twin.machines.linear_motor import cutting_coupled_plant
+from controllers.papers.seed004 import cutting_coupled_plant
 from twin.metrics import contour_error
 from twin.references import Circle
 from twin.reproductions import twin_vs_tf
@@ -47,8 +47,14 @@ CONTROLLER_VARIANTS = {
 }
 TWIN_TOL_REL = 0.02
 #: average-force gains for the circle cuts: the paper's estimate |k| = 1800 N s/m, up milling
-AVERAGE_FORCE = {"type": "average_force", "k_il_N_s_per_m": -1800.0, "k_c_N_s_per_m": 1800.0,
-                 "harmonic_fraction": 0.2, "spindle_rpm": 10000.0, "n_flutes": 2}
+AVERAGE_FORCE = {
+    "type": "average_force",
+    "k_il_N_s_per_m": -1800.0,
+    "k_c_N_s_per_m": 1800.0,
+    "harmonic_fraction": 0.2,
+    "spindle_rpm": 10000.0,
+    "n_flutes": 2,
+}
 
 
 def _controller_mm(kind: str):
@@ -72,27 +78,41 @@ def design() -> dict:
         cl = s4.closed_loop_discrete(k, s4.TABLE1["k_il"][0], s4.TABLE1["k_c"][0])
         # S = I - T for the unit feedback of the sampled loop
         peak = max(np.linalg.norm(np.eye(2) - cl(np.exp(1j * t)), 2) for t in theta[theta < math.pi])
-        loops[name] = {"max_pole_abs": float(np.max(np.abs(cl.poles()))), "sensitivity_peak": float(peak),
-                       "order": int(control.ss(k).nstates)}
+        loops[name] = {
+            "max_pole_abs": float(np.max(np.abs(cl.poles()))),
+            "sensitivity_peak": float(peak),
+            "order": int(control.ss(k).nstates),
+        }
     margins = s4.loop_margins_at_inputs(reduced)
-    return {"gamma_min": lsd.gamma_min, "gamma_min_sb10ad": independent,
-            "gamma_min_rel_diff": abs(independent - lsd.gamma_min) / lsd.gamma_min,
-            "gamma": lsd.gamma, "gamma_factor": s4.GAMMA_FACTOR, "margin": lsd.margin,
-            "achieved_norm": ncf_robustness_norm(A, B, C, lsd.K_inf, np.logspace(-1, 5, 600)),
-            "shaped_order": int(lsd.shaped.nstates), "k_inf_order": int(lsd.K_inf.nstates),
-            "order": loops["full"]["order"], "reduced_order": loops["reduced"]["order"],
-            "hankel_V_per_mm": d["hankel"].tolist(), "dropped_V_per_mm": d["dropped"].tolist(),
-            "truncation_bound_V_per_mm": float(2 * d["dropped"].sum()),
-            "reduction_rel_error_1_to_1e4_rad_s": float(rel), "loops": loops,
-            "loop_at_input": [{"pm_deg": m.pm_deg, "w_pm": m.w_pm, "gm_db": m.gm_db} for m in margins]}
+    return {
+        "gamma_min": lsd.gamma_min,
+        "gamma_min_sb10ad": independent,
+        "gamma_min_rel_diff": abs(independent - lsd.gamma_min) / lsd.gamma_min,
+        "gamma": lsd.gamma,
+        "gamma_factor": s4.GAMMA_FACTOR,
+        "margin": lsd.margin,
+        "achieved_norm": ncf_robustness_norm(A, B, C, lsd.K_inf, np.logspace(-1, 5, 600)),
+        "shaped_order": int(lsd.shaped.nstates),
+        "k_inf_order": int(lsd.K_inf.nstates),
+        "order": loops["full"]["order"],
+        "reduced_order": loops["reduced"]["order"],
+        "hankel_V_per_mm": d["hankel"].tolist(),
+        "dropped_V_per_mm": d["dropped"].tolist(),
+        "truncation_bound_V_per_mm": float(2 * d["dropped"].sum()),
+        "reduction_rel_error_1_to_1e4_rad_s": float(rel),
+        "loops": loops,
+        "loop_at_input": [{"pm_deg": m.pm_deg, "w_pm": m.w_pm, "gm_db": m.gm_db} for m in margins],
+    }
 
 
 def pid() -> dict:
     """Part 3: the PID pair, its targets and its own margins."""
     p = s4.pid_design()
-    return {"gains": [dict(zip(("kp", "ki", "kd", "tf_s"), g)) for g in p["gains"]],
-            "targets": [{"pm_deg": m.pm_deg, "w_pm": m.w_pm} for m in p["targets"]],
-            "margins": [{"pm_deg": m.pm_deg, "w_pm": m.w_pm, "gm_db": m.gm_db} for m in p["margins"]]}
+    return {
+        "gains": [dict(zip(("kp", "ki", "kd", "tf_s"), g)) for g in p["gains"]],
+        "targets": [{"pm_deg": m.pm_deg, "w_pm": m.w_pm} for m in p["targets"]],
+        "margins": [{"pm_deg": m.pm_deg, "w_pm": m.w_pm, "gm_db": m.gm_db} for m in p["margins"]],
+    }
 
 
 def _peak(values: np.ndarray, mask=None) -> dict:
@@ -119,8 +139,10 @@ def perturbation_loops(kind: str):
 def mu_curves(kind: str) -> tuple[np.ndarray, np.ndarray]:
     """AB13MD upper bounds over :data:`OMEGA` for robust stability and robust performance."""
     N_rs, N_rp = perturbation_loops(kind)
-    return (mu_upper_bound(N_rs, OMEGA, *s4.robust_stability_structure()),
-            mu_upper_bound(N_rp, OMEGA, *s4.robust_performance_structure()))
+    return (
+        mu_upper_bound(N_rs, OMEGA, *s4.robust_stability_structure()),
+        mu_upper_bound(N_rp, OMEGA, *s4.robust_performance_structure()),
+    )
 
 
 def mu_analysis(samples: int, seed: int) -> dict:
@@ -142,14 +164,23 @@ def mu_analysis(samples: int, seed: int) -> dict:
         scales = [destabilizing_scale(N_rs, d, 3.0) for d in directions]
         k_min = float(min(scales))
         nominal_wps = _performance_norm(N_rp, np.zeros(10), coarse)
-        out[kind] = {"rs": rs.tolist(), "rp": rp.tolist(), "rs_peak": _peak(rs),
-                     "rs_peak_below_80": _peak(rs, OMEGA <= s4.PAPER["robust_frequency_rad_s"]),
-                     "rp_peak": _peak(rp), "rp_peak_below_5": _peak(rp, OMEGA <= s4.PAPER["performance_frequency_rad_s"]),
-                     "corners": len(corners), "corners_stable": int(sum(stable_corners)),
-                     "unstable_corners": [c.tolist() for c, ok in zip(corners, stable_corners) if not ok][:5],
-                     "random": samples, "random_stable": int(sum(stable_random)),
-                     "worst_wps_sampled": worst_wps, "nominal_wps": nominal_wps,
-                     "min_destabilizing_scale": k_min, "mu_lower_from_samples": 1.0 / k_min if k_min > 0 else math.inf}
+        out[kind] = {
+            "rs": rs.tolist(),
+            "rp": rp.tolist(),
+            "rs_peak": _peak(rs),
+            "rs_peak_below_80": _peak(rs, s4.PAPER["robust_frequency_rad_s"] >= OMEGA),
+            "rp_peak": _peak(rp),
+            "rp_peak_below_5": _peak(rp, s4.PAPER["performance_frequency_rad_s"] >= OMEGA),
+            "corners": len(corners),
+            "corners_stable": int(sum(stable_corners)),
+            "unstable_corners": [c.tolist() for c, ok in zip(corners, stable_corners) if not ok][:5],
+            "random": samples,
+            "random_stable": int(sum(stable_random)),
+            "worst_wps_sampled": worst_wps,
+            "nominal_wps": nominal_wps,
+            "min_destabilizing_scale": k_min,
+            "mu_lower_from_samples": 1.0 / k_min if k_min > 0 else math.inf,
+        }
     out["omega_rad_s"] = OMEGA.tolist()
     out["claim"] = s4.stable_range_claim()
     out["claim_grid"] = _claim_grid()
@@ -178,7 +209,7 @@ def _claim_grid(n: int = 11) -> dict:
 
 def circle_reference(radius_mm: float, feed_mm_per_min: float, duration_s: float, preview: int) -> np.ndarray:
     """The circle sampled at the control period, ``preview`` rows beyond the run."""
-    n = int(round(duration_s / s4.DT_S))
+    n = round(duration_s / s4.DT_S)
     return Circle(radius_mm, feed_mm_per_min).sample(np.arange(n + preview) * s4.DT_S)
 
 
@@ -191,10 +222,13 @@ def _errors(t_s, ref_xy, pos_xy, u_V, ref_vel_xy=None) -> dict:
     late = t_s >= SETTLED_S
     path = contour_error(pos_xy, ref_xy)
     point = np.linalg.norm(ref_xy - pos_xy, axis=1)
-    out = {"max_tracking_um": (err.max(axis=0) * 1e6).tolist(),
-           "max_tracking_settled_um": (err[late].max(axis=0) * 1e6).tolist(),
-           "max_contour_path_um": float(path[late].max() * 1e6),
-           "max_contour_point_um": float(point[late].max() * 1e6), "max_u_V": np.abs(u_V).max(axis=0).tolist()}
+    out = {
+        "max_tracking_um": (err.max(axis=0) * 1e6).tolist(),
+        "max_tracking_settled_um": (err[late].max(axis=0) * 1e6).tolist(),
+        "max_contour_path_um": float(path[late].max() * 1e6),
+        "max_contour_point_um": float(point[late].max() * 1e6),
+        "max_u_V": np.abs(u_V).max(axis=0).tolist(),
+    }
     if ref_vel_xy is not None:
         out["max_at_reversal_um"] = [_max_near_reversals(t_s, ref_vel_xy[:, i], err[:, i]) * 1e6 for i in range(2)]
     return out
@@ -210,8 +244,9 @@ def _max_near_reversals(t_s, velocity, error) -> float:
     return float(error[near].max())
 
 
-def tf_circle(kind: str, zpetc: bool, radius_mm: float, feed: float, duration_s: float,
-              k_il: float = 0.0, k_c: float = 0.0) -> dict:
+def tf_circle(
+    kind: str, zpetc: bool, radius_mm: float, feed: float, duration_s: float, k_il: float = 0.0, k_c: float = 0.0
+) -> dict:
     """The circle on the transfer functions (eq. 11 with the cutting gains), saturation 10 V."""
     ctrl = make_controller(f"seed004_{kind}", s4.DT_S, {"zpetc": zpetc}, axes=("x", "y"))
     ref = circle_reference(radius_mm, feed, duration_s, preview_ticks_needed(ctrl.inputs))
@@ -223,6 +258,7 @@ def tf_circle(kind: str, zpetc: bool, radius_mm: float, feed: float, duration_s:
 def tf_loop_xy(plant, ctrl, ref):
     """:func:`twin.sim.tf_loop.tf_loop` on axes x, y with the drive's 10 V saturation."""
     from twin.sim.tf_loop import tf_loop
+
     return tf_loop(plant, ctrl, ref, s4.DT_S, saturation_V=10.0, axes=("x", "y"))
 
 
@@ -231,20 +267,26 @@ def zpetc_part() -> dict:
     out = {}
     for kind in KINDS:
         filters = s4.zpetc_filters(kind)
-        out[kind] = {"preview_ticks": [f.preview for f, _ in filters], "delay_ticks": [f.delay for f, _ in filters],
-                     "unacceptable_zeros": [[[z.real, z.imag] for z in f.unacceptable] for f, _ in filters],
-                     "with": tf_circle(kind, True, 20.0, 2400.0, 3.2), "without": tf_circle(kind, False, 20.0, 2400.0, 3.2)}
+        out[kind] = {
+            "preview_ticks": [f.preview for f, _ in filters],
+            "delay_ticks": [f.delay for f, _ in filters],
+            "unacceptable_zeros": [[[z.real, z.imag] for z in f.unacceptable] for f, _ in filters],
+            "with": tf_circle(kind, True, 20.0, 2400.0, 3.2),
+            "without": tf_circle(kind, False, 20.0, 2400.0, 3.2),
+        }
     return out
 
 
 def scenario_data(name: str) -> dict:
     """A bundled scenario as a dict (to vary)."""
     from twin.scenario import bundled_scenarios
+
     return tomllib.loads(bundled_scenarios()[name].read_text())
 
 
 def run_twin(data: dict):
     from twin.scenario import run_scenario, scenario_from_dict
+
     return run_scenario(scenario_from_dict(data), progress=False)
 
 
@@ -263,15 +305,19 @@ def static_gains() -> dict:
     """What sets the steady cutting deflection: K(0) of the full and reduced MIMO controllers
     (2 x 2) and each PID's proportional gain per axis, V/mm."""
     mm = s4.POSITION_UNIT_PER_M
-    out = {f"mimo_{order}_K0_V_per_mm": (s4.mimo_static_gain_V_per_m(order) / mm).tolist() for order in ("full", "reduced")}
+    out = {
+        f"mimo_{order}_K0_V_per_mm": (s4.mimo_static_gain_V_per_m(order) / mm).tolist() for order in ("full", "reduced")
+    }
     for name, (kind, params) in CONTROLLER_VARIANTS.items():
         if kind == "pid":
             design = s4.pid_design(params.get("tuning", "loop_at_input"), params.get("ki_scale", 1.0))
-            out[name] = {"kp_V_per_mm": [g[0] / mm for g in design["gains"]],
-                         "ki_V_per_mm_s": [g[1] / mm for g in design["gains"]],
-                         "kd_V_s_per_mm": [g[2] / mm for g in design["gains"]],
-                         "pm_deg": [m.pm_deg for m in design["margins"]],
-                         "crossover_rad_s": [m.w_pm for m in design["margins"]]}
+            out[name] = {
+                "kp_V_per_mm": [g[0] / mm for g in design["gains"]],
+                "ki_V_per_mm_s": [g[1] / mm for g in design["gains"]],
+                "kd_V_s_per_mm": [g[2] / mm for g in design["gains"]],
+                "pm_deg": [m.pm_deg for m in design["margins"]],
+                "crossover_rad_s": [m.w_pm for m in design["margins"]],
+            }
     out["mimo_diagonal_crossover_rad_s"] = [m.w_pm for m in s4.mimo_diagonal_margins()]
     return out
 
@@ -299,12 +345,18 @@ def circle_cases() -> dict:
         cut = scenario_data(f"seed004_{kind}_cutting")
         average = copy.deepcopy(cut)
         average["disturbances"] = [dict(AVERAGE_FORCE)]
-        out[kind] = {"air_cut": twin_errors(run_twin(air)), "cutting_mechanistic": twin_errors(cutting_run(kind)),
-                     "cutting_average_force": twin_errors(run_twin(average)),
-                     "cutting_radius_mm": cut["reference"]["radius_mm"]}
+        out[kind] = {
+            "air_cut": twin_errors(run_twin(air)),
+            "cutting_mechanistic": twin_errors(cutting_run(kind)),
+            "cutting_average_force": twin_errors(run_twin(average)),
+            "cutting_radius_mm": cut["reference"]["radius_mm"],
+        }
         # the same loop on both models: no friction, ideal encoders, no tooth harmonic
         linear = []
-        for data, k_il, k_c in ((air, 0.0, 0.0), (average, AVERAGE_FORCE["k_il_N_s_per_m"], AVERAGE_FORCE["k_c_N_s_per_m"])):
+        for data, k_il, k_c in (
+            (air, 0.0, 0.0),
+            (average, AVERAGE_FORCE["k_il_N_s_per_m"], AVERAGE_FORCE["k_c_N_s_per_m"]),
+        ):
             data = copy.deepcopy(data)
             data.pop("overrides", None)
             data.pop("sensors", None)
@@ -327,7 +379,10 @@ def mismatches(circles: dict) -> list[str]:
             flat = {}
             for side in ("twin", "tf"):
                 m = case[side]
-                flat[side] = {"x_um": m["max_tracking_settled_um"][0], "y_um": m["max_tracking_settled_um"][1],
-                              "contour_um": m["max_contour_path_um"]}
+                flat[side] = {
+                    "x_um": m["max_tracking_settled_um"][0],
+                    "y_um": m["max_tracking_settled_um"][1],
+                    "contour_um": m["max_contour_path_um"],
+                }
             lines += twin_vs_tf(f"{kind} {case['case']}", flat["twin"], flat["tf"], flat["twin"].keys(), TWIN_TOL_REL)
     return lines
