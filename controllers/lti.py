@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 #: Largest degree of a transfer function's denominator: a realization of order n is an n x n
 #: matrix run every tick, and canonical forms of higher order lose all precision anyway.
@@ -27,7 +28,7 @@ def _listing(coefficients, most: int = 6) -> str:
     return "[" + ", ".join(shown) + "]"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class SisoTf:
     """Continuous-time SISO transfer function ``num(s)/den(s)``.
 
@@ -48,9 +49,9 @@ class SisoTf:
     num: tuple[float, ...]
     den: tuple[float, ...]
 
-    def __post_init__(self):
+    def __init__(self, num: ArrayLike, den: ArrayLike) -> None:
         try:
-            num, den = (np.atleast_1d(np.asarray(c, float)) for c in (self.num, self.den))
+            num, den = (np.atleast_1d(np.asarray(c, float)) for c in (num, den))
         except (TypeError, ValueError):
             raise ValueError("transfer function coefficients must be numbers") from None
         if num.ndim != 1 or den.ndim != 1 or num.size == 0:
@@ -128,7 +129,8 @@ def discretize(A, B, C, D, dt: float, method: str = "tustin"):
         Unknown method, or a Tustin map that is singular (a pole at ``s = 2/dt``).
     """
     with np.errstate(over="ignore", invalid="ignore"):  # non-finite results are the caller's to report
-        return _discretize(*(np.atleast_2d(np.asarray(m, float)) for m in (A, B, C, D)), dt, method)
+        A2, B2, C2, D2 = (np.atleast_2d(np.asarray(m, float)) for m in (A, B, C, D))
+        return _discretize(A2, B2, C2, D2, dt, method)
 
 
 def _discretize(A, B, C, D, dt, method):

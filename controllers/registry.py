@@ -434,7 +434,7 @@ def make_observers(name: str, params: dict, ctx: Context) -> list:
     for key in ("cutoff_hz", "order", "bandwidth_hz", "delay_s"):
         if key in params and not isinstance(params[key], (int, float)):
             raise ValueError(f"{key} = {params[key]!r}: must be a number")
-    out = []
+    out: list = []
     for a in ctx.axes:
         plant = SisoTf(params["num"], params["den"]) if "num" in params else ctx.plants.get(a)
         if plant is None:
@@ -466,10 +466,10 @@ def make_observers(name: str, params: dict, ctx: Context) -> list:
             previous, residual = f"harmonic.{a}:imbdo_prev.{a}", f"harmonic.{a}:u_residual.{a}"
             out += [
                 Linear(
-                    [[0.0]],
-                    [[1.0]],
-                    [[1.0]],
-                    [[0.0]],
+                    np.zeros((1, 1)),
+                    np.ones((1, 1)),
+                    np.ones((1, 1)),
+                    np.zeros((1, 1)),
                     (f"observer.{a}:d_hat.{a}",),
                     (previous,),
                     name=f"imbdo_prev.{a}",

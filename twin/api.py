@@ -18,9 +18,18 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from twin.errors import TwinInputError
 from twin.reproductions import DEFAULT_SAMPLES, DEFAULT_SEED, DEFAULT_TWIN_SAMPLES
+
+if TYPE_CHECKING:  # the heavy modules load on first use, not with `import twin`
+    import pandas as pd
+    import pyarrow as pa
+
+    from twin.scenario import Scenario
+    from twin.sim.runner import RunResult
+    from twin.sweeps.plan import Plan
 
 
 def _paths(settings: dict) -> dict:
@@ -28,7 +37,7 @@ def _paths(settings: dict) -> dict:
     return {key.replace("__", "."): value for key, value in settings.items()}
 
 
-def load(source: str | Path, **settings):
+def load(source: str | Path, **settings: Any) -> Scenario:
     """A validated scenario: a bundled name or a TOML file, with ``settings`` applied.
 
     Returns
@@ -60,8 +69,8 @@ class Run:
         :func:`run`'s ``keep_partial``).
     """
 
-    scenario: object
-    result: object
+    scenario: Scenario
+    result: RunResult
     status: str = "ok"
     extra: dict = field(default_factory=dict)
 
@@ -83,7 +92,7 @@ class Run:
             "loop": self.result.info["loop"],
         }
 
-    def to_pandas(self):
+    def to_pandas(self) -> pd.DataFrame:
         """The run's named series as a ``pandas.DataFrame`` indexed by simulated time (s), one
         column per series of the recording, named ``<path> (<unit>)``: ``reference/x (mm)``,
         ``actual/x (mm)``, ``error/x (µm)``, ``control/x (V)``, ``force/drive/x (N)`` or
@@ -155,7 +164,7 @@ def run(
     return Run(scn, result)
 
 
-def load_from_model(scenario, settings: dict):
+def load_from_model(scenario: Scenario, settings: dict) -> Scenario:
     """A scenario model with ``settings`` applied (validated again)."""
     from twin.scenario import scenario_from_dict, set_fields
 
@@ -176,7 +185,7 @@ class Sweep:
         Its rows, as read back.
     plan : twin.sweeps.plan.Plan
         The samples' plan.
-    axes : list of str
+    axes : tuple of str
         The machine's axes.
     interrupted : bool
         Whether Ctrl-C stopped it (``resume=True`` with the same ``out`` completes it).
@@ -184,12 +193,12 @@ class Sweep:
 
     summary: dict
     out: Path
-    table: object
-    plan: object
-    axes: list
+    table: pa.Table
+    plan: Plan
+    axes: tuple[str, ...]
     interrupted: bool = False
 
-    def to_pandas(self):
+    def to_pandas(self) -> pd.DataFrame:
         """Every sample's row (its parameters, status and metrics) as a ``pandas.DataFrame``."""
         return self.table.to_pandas()
 

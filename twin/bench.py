@@ -29,6 +29,7 @@ import statistics
 import subprocess
 import sys
 import time
+from typing import Any
 
 import mujoco
 
@@ -118,7 +119,7 @@ def run_bench(seconds: float = 2.0, repeats: int = 5) -> dict:
         timestep_s}``, ``startup.{scenario, run_process_s, run_in_process_s, overhead_s,
         help_process_s}``, ``simulated_s``, ``repeats``.
     """
-    out = {"simulated_s": seconds, "repeats": repeats, "cases": {}, "startup": startup(repeats)}
+    out: dict[str, Any] = {"simulated_s": seconds, "repeats": repeats, "cases": {}, "startup": startup(repeats)}
     for name, (bm, run) in _cases().items():
         dt = bm.model.opt.timestep
         n = round(seconds / dt)

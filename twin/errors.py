@@ -1,5 +1,12 @@
 """Errors the twin raises for bad input and for simulations that go wrong."""
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from twin.sim.runner import RunResult
+
 
 class TwinInputError(ValueError):
     """Bad user input: names the field and the offending value.
@@ -34,7 +41,7 @@ class SimulationDiverged(RuntimeError):
     def __init__(self, sim_time_s: float, reason: str):
         self.sim_time_s = sim_time_s
         self.reason = reason
-        self.result = None  # the run up to the divergence, where the runner attaches it
+        self.result: RunResult | None = None  # the run up to the divergence, where the runner attaches it
         super().__init__(f"simulation diverged at t = {sim_time_s:.6f} s: {_short(reason, 300)}")
 
 

@@ -26,6 +26,7 @@ coupled 4-state model of eq. (11) (:func:`controllers.papers.seed004.cutting_cou
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import control
 import numpy as np
@@ -206,11 +207,12 @@ def fidelity(case: str, overrides: dict | None = None, *, frf_period_s: float = 
     spec = get_machine(machine)
     forced = {s: 0.0 for s in FRICTION_SYMBOLS if s in spec.parameters}
     bm = build(machine, {**overrides, **forced})
-    reference, disturbances = bm.plant_lti(), ()
+    reference = bm.plant_lti()
+    disturbances: tuple = ()
     if cutting is not None:
         reference = control.ss(*cutting_coupled_plant(bm.params, cutting.k_il_N_s_per_m, cutting.k_c_N_s_per_m))
         disturbances = (cutting,)
-    out = {
+    out: dict[str, Any] = {
         "machine": machine,
         "case": case,
         "overrides": overrides,

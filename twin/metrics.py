@@ -8,6 +8,7 @@ response reaches its final value), which some papers call rise time.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -144,7 +145,7 @@ def tracking_summary(result) -> dict:
     """Max and RMS tracking error per axis (um) and the largest cutting force per axis (N,
     tick means, when there is one), all over every tick of the run; for 2-D paths, max and RMS
     contour error (um) over the recorded ticks (none when only metrics were kept)."""
-    out = {
+    out: dict[str, Any] = {
         "max_tracking_error_um": dict(zip(result.axis_names, (result.error_max_m * 1e6).round(3).tolist())),
         "rmse_um": dict(zip(result.axis_names, (result.error_rms_m * 1e6).round(3).tolist())),
     }

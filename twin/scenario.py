@@ -144,7 +144,8 @@ class EndMillingSpec(_Strict):
     axial_depth_mm: PositiveFloat
     radial_depth_mm: PositiveFloat
     mode: Literal["up", "down"] = "up"
-    material: Literal[tuple(MATERIALS)] = "aluminium_7075_t6"
+    # the names of the materials table (pydantic evaluates the Literal at run time; mypy cannot)
+    material: Literal[tuple(MATERIALS)] = "aluminium_7075_t6"  # type: ignore[valid-type]
     coefficients: CoefficientsSpec = CoefficientsSpec()
     start_s: float = Field(0.0, ge=0)
     stop_s: PositiveFloat | None = None
@@ -534,7 +535,7 @@ def prepare(scn: Scenario):
         if unknown or missing:
             raise TwinInputError("controllers", sorted(scn.controllers), f"need exactly the axes {names}")
         ctrls = [_controller(scn.controllers[a], f"controllers.{a}", replace(base, axes=(a,))) for a in names]
-    else:
+    elif scn.controller is not None:
         ctrls = [_controller(scn.controller, "controller", base)]
     drive = Drive(len(names), substeps, scn.timestep_s, delay, scn.drive.saturation_V)
     encoder = Encoder(

@@ -111,7 +111,8 @@ def cascade(
         cascade into its integral state feedback, seed 001).
     """
     v_ref, v_err = f"{name}:v_ref.{axis}", f"{name}:v_error.{axis}"
-    weights, signals = (1.0, velocity_ref_ff, -1.0), (v_ref, f"ref_vel.{axis}", f"vel.{axis}")
+    weights: tuple[float, ...] = (1.0, velocity_ref_ff, -1.0)
+    signals: tuple[str, ...] = (v_ref, f"ref_vel.{axis}", f"vel.{axis}")
     if position_ref_ff:
         weights, signals = (*weights, position_ref_ff), (*signals, f"ref.{axis}")
     blocks = [
@@ -225,9 +226,8 @@ def inverse_model_observer(
     lag = max(round(delay_s / dt) - 1, 0)
     from_pos = discretize(*tf_to_ss(SisoTf(plant.den, np.polymul(plant.num, q_den))), dt, method)
     from_u = series(delay_ticks(lag), discretize(*tf_to_ss(SisoTf((-1.0,), q_den)), dt, method))
-    return Linear(
-        *summed_inputs(from_pos, from_u), (f"pos.{axis}", f"u_prev.{axis}"), (f"{name}:d_hat.{axis}",), name=name
-    )
+    A, B, C, D = summed_inputs(from_pos, from_u)
+    return Linear(A, B, C, D, (f"pos.{axis}", f"u_prev.{axis}"), (f"{name}:d_hat.{axis}",), name=name)
 
 
 def with_correction(ctrl: Controller, observers) -> Controller:
@@ -237,7 +237,7 @@ def with_correction(ctrl: Controller, observers) -> Controller:
     :func:`inverse_model_observer` or :func:`harmonic_observer`, are estimates, the others
     (delays, sums between observers) internal signals.  They run after the controller.
     """
-    estimates = {}
+    estimates: dict[str, list[str]] = {}
     for obs in observers:
         for out in getattr(obs, "outputs", None) or (obs.output,):
             if ":d_hat." in out:
@@ -326,7 +326,8 @@ def sum_of(parts, name: str = "sum") -> Controller:
     dts = {p.dt for p in parts}
     if len(dts) != 1:
         raise ValueError(f"controller {name!r}: parts run at different periods {sorted(dts)}")
-    blocks, terms = [], {}
+    blocks: list = []
+    terms: dict[str, list[str]] = {}
     for i, p in enumerate(parts):
         mapping = {f"u.{a}": f"{name}:part{i}.{a}" for a in p.drives}
         blocks += rename(p, mapping).blocks
@@ -347,7 +348,7 @@ def rename(ctrl: Controller, mapping: dict[str, str]) -> Controller:
     def names(seq):
         return tuple(mapping.get(s, s) for s in seq)
 
-    blocks = []
+    blocks: list = []
     for b in ctrl.blocks:
         if isinstance(b, Sum):
             blocks.append(replace(b, inputs=names(b.inputs), output=mapping.get(b.output, b.output)))

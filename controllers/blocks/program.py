@@ -53,7 +53,10 @@ class Program:
         self.names = list(loop_signals)
         index = {s: i for i, s in enumerate(self.names)}
         self.blocks = []
-        ops, io, pars, n_par, n_state, scratch = [], [], [], 0, 0, 0
+        ops: list[list[int]] = []
+        io: list[int] = []
+        pars: list[np.ndarray] = []
+        n_par, n_state, scratch = 0, 0, 0
         for ctrl in controllers:
             for b in ctrl.blocks:
                 label = f"{ctrl.name}/{b.name}"

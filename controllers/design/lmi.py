@@ -76,6 +76,8 @@ def region_state_feedback(A: np.ndarray, B: np.ndarray, region: PoleRegion, marg
         problem.solve(solver=cp.CLARABEL)
     if problem.status not in ("optimal", "optimal_inaccurate"):
         raise ValueError(f"pole region {region}: the LMIs are {problem.status}")
+    if Y.value is None or P.value is None:
+        raise ValueError(f"pole region {region}: the solver returned no solution ({problem.status})")
     K = np.asarray(Y.value @ np.linalg.inv(P.value), float)
     if not region.contains(np.linalg.eigvals(A - B @ K), tol=1e-6):
         raise ValueError(f"pole region {region}: the solver's gain misses the region")

@@ -306,7 +306,8 @@ def mimo_pole_placement() -> tuple[np.ndarray, np.ndarray]:
     """Part 3, MIMO: ``K`` (2 x 4, V per mm/s and mm) placing eq. (6)'s poles at
     :data:`POLES` on both axes, and the reference gain ``N = -(C (A - B K)^-1 B)^-1`` for unit
     static gain: ``u = N r - K x``."""
-    A, B, C = mimo_model(*zip(MODEL["x"], MODEL["y"]), CROSS)
+    (kx, ax), (ky, ay) = MODEL["x"], MODEL["y"]
+    A, B, C = mimo_model((kx, ky), (ax, ay), CROSS)
     K = place(A, B, POLES + POLES)
     N = -np.linalg.inv(C @ np.linalg.solve(A - B @ K, B))
     return K, N

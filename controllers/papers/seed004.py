@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 
@@ -51,7 +52,7 @@ AMPLIFIER_WEIGHT = ((1.0, 600.0), (1.0, 2000.0))  # (s + 600)/(s + 2000)
 PERFORMANCE_WEIGHT = ((2.0, 200.0), (1.0, 5.0))  # 2 (s + 100)/(s + 5)
 GAMMA_FACTOR, REDUCED_ORDER, DT_S = 1.1, 4, 5e-4
 #: The paper's statements this reproduction compares with.
-PAPER = {
+PAPER: dict[str, Any] = {
     "controller_order": 8,
     "reduced_order": 4,
     "k_il_range": (-5250.0, 250.0),

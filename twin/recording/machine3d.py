@@ -65,7 +65,11 @@ def log_geometry(rec, model, prefix: str) -> None:
         path = (
             f"{prefix}machine/{_name(model, mujoco.mjtObj.mjOBJ_BODY, b)}/{_name(model, mujoco.mjtObj.mjOBJ_GEOM, g)}"
         )
-        rec.log(path, rr.Transform3D(translation=model.geom_pos[g], quaternion=_xyzw(model.geom_quat[g])), static=True)
+        rec.log(
+            path,
+            rr.Transform3D(translation=model.geom_pos[g], quaternion=rr.Quaternion(xyzw=_xyzw(model.geom_quat[g]))),
+            static=True,
+        )
         rec.log(path, shape, static=True)
 
 
@@ -88,7 +92,11 @@ def log_poses(rec, model, t, qpos, prefix: str) -> None:
     for b in range(1, model.nbody):
         path = f"{prefix}machine/{_name(model, mujoco.mjtObj.mjOBJ_BODY, b)}"
         if model.body_weldid[b] == 0:
-            rec.log(path, rr.Transform3D(translation=xpos[0, b], quaternion=_xyzw(xquat[0, b])), static=True)
+            rec.log(
+                path,
+                rr.Transform3D(translation=xpos[0, b], quaternion=rr.Quaternion(xyzw=_xyzw(xquat[0, b]))),
+                static=True,
+            )
         else:
             rec.send_columns(
                 path,

@@ -1,6 +1,6 @@
 """Markdown tables of the reproductions, generated from ``twin reproduce SEED --json`` output.
 
-The paper pages (``docs/papers/seedNNN.md``) hold blocks
+The paper pages (``docs/pages/papers/seedNNN.md``) hold blocks
 
     <!-- generated: seed002.tables_1_3 -->
     | ... the table ... |
@@ -96,7 +96,7 @@ def load_tables(folder: Path | None = None) -> dict[str, dict[str, str]]:
 
 def pages() -> list[Path]:
     """The pages that hold generated blocks."""
-    return sorted((DOCS / "papers").glob("*.md"))
+    return sorted((DOCS / "pages" / "papers").glob("seed*.md"))
 
 
 def _rerun(folder: Path) -> None:

@@ -339,7 +339,8 @@ def simulate(
     show = progress if progress is not None else n * substeps > PROGRESS_STEPS
     size = max(1, min(CHUNK_TICKS, CHUNK_STEPS // substeps, n))
     warnings0 = [data.warning[w].number for w in FATAL_WARNINGS]
-    messages, done = [], 0
+    messages: list[str] = []
+    done = 0
     try:
         with (
             _mujoco_warnings_into(messages),

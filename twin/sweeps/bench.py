@@ -41,7 +41,7 @@ def run_sweep_bench(
     from twin.sweeps.run import make_client, run_sweep
 
     sw = prepare_sweep(SCENARIO, SETTINGS, VARY, samples, 0, False)
-    times = {1: [], 2: []}
+    times: dict[int, list[float]] = {1: [], 2: []}
     with tempfile.TemporaryDirectory() as tmp:
         clients = {n: make_client(n) for n in (1, 2)}
         try:
@@ -65,7 +65,7 @@ def run_sweep_bench(
     for i in range(loop_samples):
         values = sw.plan.values(i)
         cmd = [sys.executable, "-m", "twin.cli", "run", SCENARIO, "--json"]
-        for s in SETTINGS + [f"{p}={v!r}" for p, v in values.items()]:
+        for s in [f"{p}={v!r}" for p, v in {**SETTINGS, **values}.items()]:
             cmd += ["--set", s]
         start = time.perf_counter()
         subprocess.run(cmd, check=True, capture_output=True)

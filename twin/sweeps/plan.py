@@ -49,19 +49,26 @@ class Variation:
     def random(self) -> bool:
         return self.kind in RANDOM_KINDS
 
+    @property
+    def range(self) -> tuple[float, float]:
+        """``box`` of the specs that need it (box, corners, line)."""
+        if self.box is None:
+            raise ValueError(f"{self.path}: {self.kind} needs the parameter's box")
+        return self.box
+
     def levels(self) -> list:
         """The values of a structured spec, in order."""
         if self.kind == "grid":
             a, b, n = self.args
             return np.linspace(a, b, int(n)).tolist()
         if self.kind == "corners":
-            return list(self.box)
+            return list(self.range)
         raise ValueError(f"{self.kind} has no levels")
 
     def from_unit(self, u: float):
         """The random value whose cumulative probability is ``u`` (0 <= u < 1)."""
         if self.kind == "box":
-            lo, hi = self.box
+            lo, hi = self.range
             return lo + u * (hi - lo)
         if self.kind == "uniform":
             a, b = self.args
@@ -128,7 +135,7 @@ def parse_variation(text: str, parameters: dict) -> Variation:
     if kind == "choice":
         if not args:
             raise TwinInputError(field_, spec, "choice needs at least one value")
-        values = []
+        values: list[float | str] = []
         for a in args:
             try:
                 values.append(float(a))
@@ -207,7 +214,8 @@ class Plan:
             if self.line:
                 t = position[-1] / (self.counts[-1] - 1)
                 for v in self.line:
-                    out[v.path] = v.box[0] + t * (v.box[1] - v.box[0])
+                    lo, hi = v.range
+                    out[v.path] = lo + t * (hi - lo)
         if self.random:
             u = (
                 self._unit[index]

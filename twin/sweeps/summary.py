@@ -4,6 +4,7 @@ the robustness certificates that cover the same box, printed beside the sampled 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -28,7 +29,7 @@ def summarize(table, plan: Plan, axes) -> dict:
     """Counts by status, bands (min, 5 %, median, 95 %, max) of each metric over the ``ok``
     rows, and the worst sample by :data:`WORST_BY` (over the axes) with its values."""
     status = np.array(table.column("status").to_pylist())
-    out = {
+    out: dict[str, Any] = {
         "samples": len(status),
         "planned": len(plan),
         "status": {s: int((status == s).sum()) for s in set(status)},

@@ -349,6 +349,14 @@ def _poly(c: dict) -> str:
     return f"{side(c['num'])}/{side(c['den'])}"
 
 
+def _stable_series(ctrl, params) -> tuple[np.ndarray, np.ndarray]:
+    """The step response of a loop the paper's controllers keep stable (Figs. 7-9)."""
+    series = r.tf_step_series(ctrl, params)
+    if series is None:
+        raise ValueError(f"the loop is unstable at {params}")
+    return series
+
+
 def write_plots(directory: Path) -> list[Path]:
     """PNG step responses as Figs. 7-10: per controller the nominal response with the band of
     the paper's 10 samples (transfer functions) and the nominal twin, then all three nominal."""
@@ -361,8 +369,8 @@ def write_plots(directory: Path) -> list[Path]:
     nominal = r.nominal_params()
     written, nominal_curves = [], {}
     for fig_no, (name, ctrl) in zip((7, 8, 9), r.TABLE2_CONTROLLERS.items()):
-        samples = np.array([r.tf_step_series(ctrl, p)[1] for p in r.paper_samples()])
-        t, y_tf = r.tf_step_series(ctrl, nominal)
+        samples = np.array([_stable_series(ctrl, p)[1] for p in r.paper_samples()])
+        t, y_tf = _stable_series(ctrl, nominal)
         twin = r.twin_step_result(ctrl, nominal)
         nominal_curves[name] = (t, y_tf)
         fig, ax = plt.subplots(figsize=(7, 4))

@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 import tomllib
 from functools import cache
+from typing import Any
 
 import numpy as np
 
@@ -68,7 +69,7 @@ def plant_si(coupled: bool, scale: dict | None = None):
 
 
 def _overrides(coupled: bool, scale: dict | None) -> dict:
-    out = {} if coupled else dict(UNCOUPLED)
+    out: dict[str, Any] = {} if coupled else dict(UNCOUPLED)
     for key, f in (scale or {}).items():
         out[key] = get_machine("sabau_xy").parameters[key].value * f
     return out
@@ -156,7 +157,7 @@ def responses(
     """``side -> (t_s, pos m (n, 2))`` of 1 mm steps on ``axes``: the TF loop (``"tf"``) and,
     with ``twin``, the twin (``"twin"``), the same loop on both."""
     n = round(duration_s / ctrl.dt)
-    out = {"tf": tf_run(ctrl, duration_s, coupled, disturbance, scale, _step_ref(n, axes))[:2]}
+    out: dict[str, Any] = {"tf": tf_run(ctrl, duration_s, coupled, disturbance, scale, _step_ref(n, axes))[:2]}
     if twin:
         res = twin_run(ctrl, duration_s, coupled, disturbance, scale, Step(STEP_M, n_axes=2, axes=tuple(axes)))
         out["twin"] = (res.t_s, res.table_position_m())
@@ -193,11 +194,11 @@ def relay_test(delay_s: float, twin: bool) -> dict:
     kw = prepare(scenario_from_dict(data))
     dt, duration = kw["control_period_s"], kw["duration_s"]
     zero = np.zeros((round(duration / dt), 2, 3))
-    runs = {"tf": tf_run(kw["controllers"][0], duration, ref=zero, delay_s=delay_s)[:2]}
+    runs: dict[str, Any] = {"tf": tf_run(kw["controllers"][0], duration, ref=zero, delay_s=delay_s)[:2]}
     if twin:
         res = run_scenario(scenario_from_dict(data), progress=False)
         runs["twin"] = (res.t_s, res.table_position_m())
-    out = {
+    out: dict[str, Any] = {
         "delay_s": delay_s,
         "control_period_s": dt,
         "amplitude_V": params["amplitude_V"],
@@ -228,7 +229,7 @@ def zn_controller(kind: str, ku_pu: list[tuple[float, float]]) -> Controller:
 
 def table1(ku_pu: list[tuple[float, float]], twin: bool) -> dict:
     """ZN and modified P/PI/PID from the relay's (Ku, Pu) per axis; steps on the delay-free loop."""
-    out = {}
+    out: dict[str, Any] = {}
     for kind in s1.TABLE1_ROWS:
         gains = [s1.design_gains(a, kind, *ku_pu[i]) for i, a in enumerate(s1.AXES)]
         out[kind] = {
@@ -246,7 +247,7 @@ def disturbance_response(design: str, twin: bool) -> dict:
     """1 mm steps, then a 1 V input step at 1 s (a step on the speed equation: the coupling
     from the other axis enters the same way): the largest deviation after it and the offset
     left at 2 s (um), per axis."""
-    out = {}
+    out: dict[str, Any] = {}
     for side, (t, pos) in responses(controller(design), 2.0, twin, disturbance=True).items():
         after = t >= DISTURBANCE_AT_S
         base = pos[np.argmax(after) - 1]
@@ -292,7 +293,7 @@ def _poles(design: str, axis: str) -> list:
 
 def state_feedback_part(designs, twin: bool) -> dict:
     """Parts 3-5 and 8: each design's gains, closed-loop poles, steps and disturbance response."""
-    out = {}
+    out: dict[str, Any] = {}
     for d in designs:
         g = [s1.state_feedback(a, d) for a in s1.AXES]
         out[d] = {
@@ -310,7 +311,7 @@ def mimo_part(twin: bool) -> dict:
     """Part 3, MIMO: eq. (6)'s state feedback against the SISO designs on the coupled machine
     (both axes step together)."""
     K, N = s1.mimo_pole_placement()
-    out = {"K": K.tolist(), "N": N.tolist()}
+    out: dict[str, Any] = {"K": K.tolist(), "N": N.tolist()}
     for d in ("pole_placement", "state_feedback_mimo"):
         out[d] = steps(controller(d), 2.0, twin, coupled=True)
     return out
@@ -320,7 +321,7 @@ def improvement(sf: dict, t1: dict, casc: dict) -> dict:
     """The text's "up to 20 %" for SISO state feedback: the pole placement's settling time
     against the ZN PID (Table 1) and the P-P cascade (part 2), TF loop, per axis (%)."""
     ts = [m["settling_time_s"] for m in sf["pole_placement"]["step"]["tf"]]
-    out = {}
+    out: dict[str, Any] = {}
     for name, ref in (
         ("ZN PID", t1["pid"]["tf"]),
         ("modified PID", t1["modified_pid"]["tf"]),
@@ -415,7 +416,8 @@ def fractional_step(
 
 
 def _metrics(response) -> dict:
-    return step_metrics(*response, final=1.0)
+    t_s, y = response
+    return step_metrics(t_s, y, final=1.0)
 
 
 def _bands(metrics: list[dict]) -> dict:
@@ -437,6 +439,8 @@ def fitted_velocity_gain(axis: str) -> dict:
         )
         if np.isfinite(miss) and (best is None or miss < best[0]):
             best = (miss, g, m)
+    if best is None:
+        raise ValueError(f"axis {axis}: no speed-loop scale gives a finite rise and settling time")
     return {"g": float(best[1]), "miss_s": float(best[0]), "metrics": best[2]}
 
 
@@ -445,7 +449,11 @@ def fractional_part(samples: int, seed: int, twin: bool) -> dict:
     reading at the box corners and ``samples`` random points of the box, the Oustaloup
     realization on the TF loop and the twin (plain reading) at the nominal point and the
     corners, and eqs. (15)-(16) likewise."""
-    out = {"oustaloup": oustaloup_accuracy(), "arrangements": {}, "fit": {a: fitted_velocity_gain(a) for a in s1.AXES}}
+    out: dict[str, Any] = {
+        "oustaloup": oustaloup_accuracy(),
+        "arrangements": {},
+        "fit": {a: fitted_velocity_gain(a) for a in s1.AXES},
+    }
     for name in ARRANGEMENTS:
         out["arrangements"][name] = [_metrics(fractional_step(a, name)) for a in s1.AXES]
     exact_box = []
@@ -500,7 +508,12 @@ def abc_part(seed: int, twin: bool) -> dict:
     """Part 7: ABC over log10 of Q's diagonal (R = 1) for both costs, X axis as Fig. 14."""
     from controllers.design.tuning import bee_colony_minimize
 
-    out = {"bounds_log10": ABC_LOG10_BOUNDS, "iterations": ABC_ITERATIONS, "population": ABC_POPULATION, "seed": seed}
+    out: dict[str, Any] = {
+        "bounds_log10": ABC_LOG10_BOUNDS,
+        "iterations": ABC_ITERATIONS,
+        "population": ABC_POPULATION,
+        "seed": seed,
+    }
     for name, cost in abc_costs().items():
 
         def evaluate(x, cost=cost):
@@ -512,7 +525,7 @@ def abc_part(seed: int, twin: bool) -> dict:
         )
         best = lqr_step_metrics("x", res.x)
         history = [lqr_step_metrics("x", x) for x in res.best_x]
-        row = {
+        row: dict[str, Any] = {
             "log10_q": res.x.tolist(),
             "cost": res.cost,
             "evaluations": res.evaluations,
@@ -597,12 +610,12 @@ def trajectories(twin: bool) -> dict:
     """Table 2: the fitting index per axis for every path and experiment, TF loop and twin."""
     from twin.metrics import fit_index
 
-    out = {}
+    out: dict[str, Any] = {}
     for path in TRAJECTORIES:
         rows = []
         for e in (1, 2, 3):
             _, ref, pos = trajectory_tf(path, e)
-            row = {"tf": fit_index(pos, ref).tolist()}
+            row: dict[str, Any] = {"tf": fit_index(pos, ref).tolist()}
             if twin:
                 res = trajectory_run(path, e)
                 row["twin"] = fit_index(res.table_position_m(), res.ref[:, :, 0]).tolist()

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from tqdm import tqdm
@@ -20,7 +21,7 @@ def run(samples: int, twin_samples: int, seed: int, progress: bool) -> dict:
     exact fractional responses; ``twin_samples = 0`` leaves the twin out (the relay test's
     (Ku, Pu) then come from the TF loop); ``seed``: those points and the bee colony."""
     twin = twin_samples > 0
-    out = {
+    out: dict[str, Any] = {
         "paper": {
             "table1": s1.TABLE1,
             "table2": s1.TABLE2,

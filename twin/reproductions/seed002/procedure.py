@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 
@@ -42,7 +43,7 @@ from twin.sim.tf_loop import tf_loop
 
 #: The paper's numbers.  Table 1 is printed with its middle rows as given: (0.4 Hz, 20 mm) and
 #: (0.7 Hz, 10 mm) read as swapped against every linear loop (see the report).
-PAPER = {
+PAPER: dict[str, Any] = {
     "gm_db": 9.94,
     "pm_deg": 61.4,
     "ms_db": 5.12,
@@ -91,7 +92,7 @@ DT_S, DURATION_S, STEADY_FROM_S = 1e-4, 10.0, 2.5
 REFERENCES = ((0.4, 10), (0.4, 20), (0.7, 10), (0.7, 20))
 SPINDLES_RPM = (None, 1500.0, 2500.0, 3500.0)
 #: The bundled scenario's cut (seed002_sine_cutting.toml).
-CUT = {"n_flutes": 2, "diameter_mm": 10.0, "axial_depth_mm": 1.0, "radial_depth_mm": 10.0}
+CUT: dict[str, Any] = {"n_flutes": 2, "diameter_mm": 10.0, "axial_depth_mm": 1.0, "radial_depth_mm": 10.0}
 #: Derivative filter of the twin's PID (s).
 TF_S = 1e-4
 #: Largest departure of a twin number from its transfer-function number.
@@ -263,7 +264,7 @@ def critical_gains(twin: bool = True) -> dict:
             return np.full(n, np.inf)
         return res.error_m()[:, 0]
 
-    out = {"tf_loop": critical_gain(tf_run)}
+    out: dict[str, Any] = {"tf_loop": critical_gain(tf_run)}
     if twin:
         out["twin"] = critical_gain(twin_run)
     return out
@@ -295,7 +296,7 @@ def table_case(
     n = round(duration_s / DT_S)
     ref = sine_reference(f_hz, a_mm, n)
     params = npid_params if controller == "seed002_npid" and npid_params else {}
-    out = {}
+    out: dict[str, Any] = {}
     force_V = None
     if twin:
         dist = () if rpm is None else (EndMilling(spindle_rpm=rpm, **CUT),)
@@ -331,7 +332,7 @@ def tables(twin: bool = True, duration_s: float = DURATION_S, progress=None) -> 
     rows = []
     for f, a in REFERENCES:
         for rpm in SPINDLES_RPM:
-            row = {"f_hz": f, "a_mm": a, "rpm": rpm}
+            row: dict[str, Any] = {"f_hz": f, "a_mm": a, "rpm": rpm}
             for ctrl in ("seed002_pid", "seed002_npid"):
                 row[ctrl] = table_case(f, a, rpm, ctrl, twin, duration_s)
                 if progress:
@@ -354,7 +355,7 @@ def error_unit_study(duration_s: float = DURATION_S) -> list[dict]:
     rows = []
     for f, a in REFERENCES:
         pid = table_case(f, a, None, "seed002_pid", False, duration_s)["tf_loop"]
-        row = {"f_hz": f, "a_mm": a}
+        row: dict[str, Any] = {"f_hz": f, "a_mm": a}
         for unit, params in units.items():
             npid = table_case(f, a, None, "seed002_npid", False, duration_s, params)["tf_loop"]
             stable = math.isfinite(npid["rmse_mm"]) and npid["rmse_mm"] < 10 * pid["rmse_mm"]

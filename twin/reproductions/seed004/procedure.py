@@ -15,6 +15,7 @@ import itertools
 import math
 import tomllib
 from functools import lru_cache
+from typing import Any
 
 import control
 import numpy as np
@@ -37,7 +38,7 @@ SETTLED_S = 0.1  # the circle starts with a velocity step: errors also reported 
 REVERSAL_WINDOW_S = 0.05  # an axis' reversal error: the largest within 50 ms of its velocity's sign change
 #: The controllers compared on the same circles: name -> (kind, registry parameters).  Every PID
 #: is ours (the paper gives no gains): "loop at input" is the bundled seed004_pid.
-CONTROLLER_VARIANTS = {
+CONTROLLER_VARIANTS: dict[str, Any] = {
     "MIMO, order 4 (reduced)": ("mimo", {}),
     "MIMO, order 8 (full)": ("mimo", {"order": "full"}),
     "PID, loop at input": ("pid", {}),
@@ -47,7 +48,7 @@ CONTROLLER_VARIANTS = {
 }
 TWIN_TOL_REL = 0.02
 #: average-force gains for the circle cuts: the paper's estimate |k| = 1800 N s/m, up milling
-AVERAGE_FORCE = {
+AVERAGE_FORCE: dict[str, Any] = {
     "type": "average_force",
     "k_il_N_s_per_m": -1800.0,
     "k_c_N_s_per_m": 1800.0,
@@ -124,7 +125,10 @@ def _peak(values: np.ndarray, mask=None) -> dict:
 def _performance_norm(N_rp, delta, omega) -> float:
     """max over omega of sigma_max(Wp S) of the loop with the real perturbation ``delta``
     (the first 10 channels closed by constant ``delta``, the performance channel left)."""
-    sys = control.ss(*constant_upper_lft(N_rp, delta))
+    closed = constant_upper_lft(N_rp, delta)
+    if closed is None:
+        raise ValueError(f"the loop with delta = {delta} is ill-posed")
+    sys = control.ss(*closed)
     return float(max(np.linalg.norm(m, 2) for m in frequency_response(sys, omega)))
 
 
@@ -151,7 +155,7 @@ def mu_analysis(samples: int, seed: int) -> dict:
     corners = np.array(list(itertools.product((-1.0, 1.0), repeat=10)))
     randoms = rng.uniform(-1.0, 1.0, (samples, 10))
     coarse = np.logspace(-1, 4, 60)
-    out = {}
+    out: dict[str, Any] = {}
     for kind in KINDS:
         N_rs, N_rp = perturbation_loops(kind)
         rs, rp = mu_curves(kind)
@@ -191,11 +195,12 @@ def _claim_grid(n: int = 11) -> dict:
     """The paper's range claim on an n x n grid of (k_il, k_c) with every corner of m and b,
     nominal amplifier: stable everywhere? (reduced MIMO and PID, the TF models)."""
     box = s4.stable_range_claim()["table1_box"]
-    out = {}
+    out: dict[str, Any] = {}
     for kind in KINDS:
         K = s4.controller_si(kind)
         unstable = []
-        for k_il, k_c in itertools.product(np.linspace(*box["k_il"], n), np.linspace(*box["k_c"], n)):
+        (il_lo, il_hi), (c_lo, c_hi) = box["k_il"], box["k_c"]
+        for k_il, k_c in itertools.product(np.linspace(il_lo, il_hi, n), np.linspace(c_lo, c_hi, n)):
             for signs in itertools.product((-1.0, 1.0), repeat=4):
                 p = s4.nominal_params()
                 for key, sg in zip(("m_x", "m_y", "b_x", "b_y"), signs):
@@ -222,7 +227,7 @@ def _errors(t_s, ref_xy, pos_xy, u_V, ref_vel_xy=None) -> dict:
     late = t_s >= SETTLED_S
     path = contour_error(pos_xy, ref_xy)
     point = np.linalg.norm(ref_xy - pos_xy, axis=1)
-    out = {
+    out: dict[str, Any] = {
         "max_tracking_um": (err.max(axis=0) * 1e6).tolist(),
         "max_tracking_settled_um": (err[late].max(axis=0) * 1e6).tolist(),
         "max_contour_path_um": float(path[late].max() * 1e6),
@@ -264,7 +269,7 @@ def tf_loop_xy(plant, ctrl, ref):
 
 def zpetc_part() -> dict:
     """Part 5: each ZPETC, and the air-cut tracking error on the TF loop with and without it."""
-    out = {}
+    out: dict[str, Any] = {}
     for kind in KINDS:
         filters = s4.zpetc_filters(kind)
         out[kind] = {
@@ -305,7 +310,7 @@ def static_gains() -> dict:
     """What sets the steady cutting deflection: K(0) of the full and reduced MIMO controllers
     (2 x 2) and each PID's proportional gain per axis, V/mm."""
     mm = s4.POSITION_UNIT_PER_M
-    out = {
+    out: dict[str, Any] = {
         f"mimo_{order}_K0_V_per_mm": (s4.mimo_static_gain_V_per_m(order) / mm).tolist() for order in ("full", "reduced")
     }
     for name, (kind, params) in CONTROLLER_VARIANTS.items():
@@ -326,7 +331,7 @@ def controller_comparison() -> dict:
     """Part 4's question, what beats what and why: every :data:`CONTROLLER_VARIANTS` entry in the
     twin on the same two circles (the MIMO's bundled air cut, R 20, and mechanistic cutting
     circle, R 28; the paper cut R 30 with its PID), with the static gains beside them."""
-    runs = {}
+    runs: dict[str, Any] = {}
     for name, (kind, params) in CONTROLLER_VARIANTS.items():
         runs[name] = {}
         for case in ("air_cut", "cutting"):
@@ -339,7 +344,7 @@ def controller_comparison() -> dict:
 def circle_cases() -> dict:
     """Part 6: the paper's circle tests in the twin (friction, encoders, 982 N), and the
     twin-vs-TF checks on the linear runs (no friction, ideal encoders)."""
-    out = {}
+    out: dict[str, Any] = {}
     for kind in KINDS:
         air = scenario_data(f"seed004_{kind}_air_cut")
         cut = scenario_data(f"seed004_{kind}_cutting")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from tqdm import tqdm
@@ -18,7 +19,7 @@ def run(samples: int, twin_samples: int, seed: int, progress: bool) -> dict:
     """Every part as one JSON-ready dict: ``samples`` random plants per controller in the mu
     check, ``twin_samples = 0`` leaves the twin out."""
     steps = ["design", "pid", "zpetc", "mu"] + (["circles", "comparison"] if twin_samples > 0 else [])
-    out = {
+    out: dict[str, Any] = {
         "paper": s4.PAPER,
         "settings": {
             "dt_s": s4.DT_S,
@@ -264,7 +265,7 @@ def markdown_tables(res: dict) -> dict[str, str]:
         ]
         for kind in r.KINDS
     ]
-    out = {
+    out: dict[str, Any] = {
         "design": markdown_table(["", "paper", "ours"], design),
         "mu": markdown_table(
             [
@@ -324,6 +325,7 @@ def markdown_tables(res: dict) -> dict[str, str]:
         )
     if "comparison" in res:
         comparison = []
+        g = res["comparison"]["static_gains"]
         for name, runs in res["comparison"]["runs"].items():
             gains = g.get(name)
             kp = (
