@@ -297,6 +297,7 @@ def list_things():
     """Machines, controller kinds, observers, bundled scenarios and reproducible papers."""
     from controllers import CONTROLLERS, OBSERVERS
     from twin.machines import MACHINES
+    from twin.references import REFERENCES
     from twin.reproductions import REPRODUCTIONS
     from twin.scenario import bundled_scenarios, load_scenario
 
@@ -312,6 +313,9 @@ def list_things():
     typer.echo("observers ([controller.observer] type = ...):")
     for name, (desc, allowed) in OBSERVERS.items():
         typer.echo(f"  {name:<22} {desc}{params(allowed)}")
+    typer.echo("references ([reference] type = ...):")
+    for name, kind in REFERENCES.items():
+        typer.echo(f"  {name:<22} {kind.doc.removeprefix(name + ': ')}")
     typer.echo("scenarios:")
     for name in sorted(bundled_scenarios()):
         typer.echo(f"  {name:<30} {load_scenario(name).description}")

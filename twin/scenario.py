@@ -14,10 +14,10 @@ from contextlib import contextmanager
 from dataclasses import replace
 from importlib import resources
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import TYPE_CHECKING, Annotated, Literal, Union
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, PositiveFloat, ValidationError
+from pydantic import Field, PositiveFloat, ValidationError
 
 from controllers import CONTROLLERS, OBSERVERS, make_controller
 from controllers.blocks import with_correction
@@ -26,30 +26,25 @@ from twin.errors import TwinInputError
 from twin.machines import build
 from twin.process.cutting import MATERIALS, MAX_FLUTES, MIN_SPINDLE_RPM, AverageForce, EndMilling
 from twin.process.disturbances import MAX_INPUT_HARMONICS, HarmonicInput, VoltageStep
-from twin.references import MAX_SINES, Circle, Polyline, Ramp, Step, SumOfSines, square
+from twin.references import REFERENCES, ReferenceSpecBase
 from twin.sim.drive import Drive, Encoder, substeps_per_tick
 from twin.sim.runner import MAX_PHYSICS_STEPS, RunResult, simulate
+from twin.spec import StrictSpec, axes_indices
 
 
-class _Strict(BaseModel):
-    """Unknown fields and non-finite numbers (nan, inf) are errors."""
-
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
-
-
-class ObserverSpec(_Strict):
+class ObserverSpec(StrictSpec):
     """An observer add-on: a name of ``controllers.OBSERVERS`` and its parameters."""
 
     type: str
-    params: dict[str, float | list[float]] = {}
+    params: dict[str, float | list[float]] = Field(default_factory=dict)
 
 
-class ControllerSpec(_Strict):
+class ControllerSpec(StrictSpec):
     """One controller: a registry name (any block kind), its parameters, discretization,
     feedforward, an optional observer add-on and, for ``type = "sum"``, its parts."""
 
     type: str
-    params: dict[str, bool | float | str | list[float] | list[list[float]] | list[str]] = {}
+    params: dict[str, bool | float | str | list[float] | list[list[float]] | list[str]] = Field(default_factory=dict)
     discretization: Literal["tustin", "zoh"] = "tustin"
     velocity_ff: float = Field(0.0, description="V per m/s of reference velocity")
     acceleration_ff: float = Field(0.0, description="V per m/s^2 of reference acceleration")
@@ -57,73 +52,28 @@ class ControllerSpec(_Strict):
     parts: list[ControllerSpec] | None = Field(None, description="the summed controllers of type 'sum'")
 
 
-class StepRef(_Strict):
-    type: Literal["step"]
-    amplitude_m: float
-    t0_s: float = 0.0
-    axes: list[str] | None = None
+#: The ``[reference]`` table: one spec per registered kind (:mod:`twin.references`), told apart by
+#: ``type``.  A union built from the registry at import, which a type checker cannot follow: to
+#: it, a reference spec is the kinds' common base.
+if TYPE_CHECKING:
+    ReferenceSpec = ReferenceSpecBase
+else:
+    kinds = tuple(kind.spec for kind in REFERENCES.values())
+    ReferenceSpec = Annotated[Union[kinds], Field(discriminator="type")]  # noqa: UP007 (a union built at run time)
 
 
-class RampRef(_Strict):
-    type: Literal["ramp"]
-    rate_m_per_s: float
-    t0_s: float = 0.0
-    axes: list[str] | None = None
-
-
-class SinesRef(_Strict):
-    type: Literal["sines"]
-    amplitudes_m: list[float] = Field(max_length=MAX_SINES)
-    frequencies_hz: list[PositiveFloat] = Field(max_length=MAX_SINES)
-    phases_rad: list[float] | None = Field(None, max_length=MAX_SINES)
-    axes: list[str] | None = None
-
-
-#: Smallest path size (mm) and feed (mm/min) a 2-D path may have: 1 um and 1 um/min.
-MIN_PATH_MM, MIN_FEED_MM_PER_MIN = 1e-3, 1e-3
-#: Largest: 10 m (the runaway limit) and 1e6 mm/min (16.7 m/s, beyond any machine tool).
-MAX_PATH_MM, MAX_FEED_MM_PER_MIN = 1e4, 1e6
-
-
-class CircleRef(_Strict):
-    type: Literal["circle"]
-    radius_mm: float = Field(ge=MIN_PATH_MM, le=MAX_PATH_MM)
-    feed_mm_per_min: float = Field(ge=MIN_FEED_MM_PER_MIN, le=MAX_FEED_MM_PER_MIN)
-
-
-class SquareRef(_Strict):
-    type: Literal["square"]
-    side_mm: float = Field(ge=MIN_PATH_MM, le=MAX_PATH_MM)
-    feed_mm_per_min: float = Field(ge=MIN_FEED_MM_PER_MIN, le=MAX_FEED_MM_PER_MIN)
-
-
-#: A coordinate of a path point (mm): within the 10 m runaway limit either side of the origin.
-PathCoordinateMm = Annotated[float, Field(ge=-MAX_PATH_MM, le=MAX_PATH_MM)]
-
-
-class PolylineRef(_Strict):
-    type: Literal["polyline"]
-    points_mm: list[tuple[PathCoordinateMm, PathCoordinateMm]]
-    feed_mm_per_min: float = Field(ge=MIN_FEED_MM_PER_MIN, le=MAX_FEED_MM_PER_MIN)
-
-
-ReferenceSpec = Annotated[
-    StepRef | RampRef | SinesRef | CircleRef | SquareRef | PolylineRef, Field(discriminator="type")
-]
-
-
-class DriveSpec(_Strict):
+class DriveSpec(StrictSpec):
     saturation_V: PositiveFloat | None = None
     delay_s: float | None = Field(None, ge=0, le=10.0, description="default: the machine's delay; at most 10 s")
 
 
-class SensorSpec(_Strict):
+class SensorSpec(StrictSpec):
     encoder_resolution_m: float | list[float] = Field(0.0, description="0 for ideal")
     noise_std_m: float | list[float] = 0.0
     velocity: Literal["backward_difference", "tachometer"] = "backward_difference"
 
 
-class CoefficientsSpec(_Strict):
+class CoefficientsSpec(StrictSpec):
     """Overrides of the material's cutting (N/mm^2) and edge (N/mm) coefficients."""
 
     K_tc: float | None = None
@@ -134,7 +84,7 @@ class CoefficientsSpec(_Strict):
     K_ae: float | None = None
 
 
-class EndMillingSpec(_Strict):
+class EndMillingSpec(StrictSpec):
     """Mechanistic end-milling force on the workpiece (:class:`twin.process.cutting.EndMilling`)."""
 
     type: Literal["end_milling"]
@@ -153,7 +103,7 @@ class EndMillingSpec(_Strict):
     seed: int | None = Field(None, ge=0, description="default: the scenario's seed")
 
 
-class AverageForceSpec(_Strict):
+class AverageForceSpec(StrictSpec):
     """Seed 004's average cutting force (:class:`twin.process.cutting.AverageForce`)."""
 
     type: Literal["average_force"]
@@ -168,7 +118,7 @@ class AverageForceSpec(_Strict):
     seed: int | None = Field(None, ge=0)
 
 
-class HarmonicInputSpec(_Strict):
+class HarmonicInputSpec(StrictSpec):
     """Sum of sines on the drive input, V (:class:`twin.disturbances.HarmonicInput`)."""
 
     type: Literal["harmonic_input"]
@@ -182,7 +132,7 @@ class HarmonicInputSpec(_Strict):
     seed: int | None = Field(None, ge=0)
 
 
-class VoltageStepSpec(_Strict):
+class VoltageStepSpec(StrictSpec):
     """Step on the drive input, V (:class:`twin.disturbances.VoltageStep`)."""
 
     type: Literal["voltage_step"]
@@ -204,13 +154,13 @@ MAX_TIMESTEP_S = 1e-2
 MAX_CONTROL_PERIOD_S = 1.0
 
 
-class Scenario(_Strict):
+class Scenario(StrictSpec):
     """A closed-loop run; every field in SI unless its name says otherwise."""
 
     name: str = "scenario"
     description: str = ""
     machine: str
-    overrides: dict[str, float] = {}
+    overrides: dict[str, float] = Field(default_factory=dict)
     duration_s: PositiveFloat
     timestep_s: float = Field(1e-4, ge=MIN_TIMESTEP_S, le=MAX_TIMESTEP_S)
     control_period_s: float = Field(1e-3, ge=MIN_TIMESTEP_S, le=MAX_CONTROL_PERIOD_S)
@@ -223,7 +173,7 @@ class Scenario(_Strict):
     reference: ReferenceSpec
     drive: DriveSpec = DriveSpec()
     sensors: SensorSpec = SensorSpec()
-    disturbances: list[DisturbanceSpec] = []
+    disturbances: list[DisturbanceSpec] = Field(default_factory=list)
 
 
 def _first_error(err: ValidationError) -> TwinInputError:
@@ -359,49 +309,6 @@ def _per_axis(value, n_axes: int, field: str) -> np.ndarray:
     return arr
 
 
-def _axes_indices(names: list[str] | None, axis_names: list[str], field: str) -> tuple[int, ...] | None:
-    if names is None:
-        return None
-    for a in names:
-        if a not in axis_names:
-            raise TwinInputError(field, a, f"machine axes are {axis_names}")
-    return tuple(axis_names.index(a) for a in names)
-
-
-def _reference(spec, axis_names: list[str]):
-    n = len(axis_names)
-
-    def axes_idx(names):
-        return _axes_indices(names, axis_names, "reference.axes")
-
-    if isinstance(spec, (CircleRef, SquareRef, PolylineRef)) and n != 2:
-        raise TwinInputError("reference.type", spec.type, f"a 2-D path needs two axes, the machine has {n}")
-    if isinstance(spec, StepRef):
-        return Step(spec.amplitude_m, spec.t0_s, n, axes_idx(spec.axes))
-    if isinstance(spec, RampRef):
-        return Ramp(spec.rate_m_per_s, spec.t0_s, n, axes_idx(spec.axes))
-    if isinstance(spec, SinesRef):
-        if len(spec.amplitudes_m) != len(spec.frequencies_hz):
-            raise TwinInputError(
-                "reference.frequencies_hz", spec.frequencies_hz, "needs as many entries as amplitudes_m"
-            )
-        return SumOfSines(
-            tuple(spec.amplitudes_m),
-            tuple(spec.frequencies_hz),
-            tuple(spec.phases_rad) if spec.phases_rad else None,
-            n,
-            axes_idx(spec.axes),
-        )
-    if isinstance(spec, CircleRef):
-        return Circle(spec.radius_mm, spec.feed_mm_per_min)
-    if isinstance(spec, SquareRef):
-        return square(spec.side_mm, spec.feed_mm_per_min)
-    try:
-        return Polyline([tuple(p) for p in spec.points_mm], spec.feed_mm_per_min)
-    except ValueError as exc:
-        raise TwinInputError("reference.points_mm", spec.points_mm, str(exc)) from None
-
-
 @contextmanager
 def _design_warnings_as_errors():
     """Run a design procedure with its numerical warnings (numpy's overflow or invalid value,
@@ -493,7 +400,7 @@ def _disturbance(spec, index: int, axis_names: list[str], seed: int):
                 spec.harmonic_phase_rad,
                 seed,
             )
-        axes = _axes_indices(spec.axes, axis_names, f"{field}.axes")
+        axes = axes_indices(spec.axes, axis_names, f"{field}.axes")
         if isinstance(spec, HarmonicInputSpec):
             return HarmonicInput(
                 tuple(spec.amplitudes_V),
@@ -548,7 +455,7 @@ def prepare(scn: Scenario):
     return {
         "machine": machine,
         "controllers": ctrls,
-        "reference": _reference(scn.reference, names),
+        "reference": REFERENCES[scn.reference.type].build(scn.reference, names),
         "duration_s": scn.duration_s,
         "control_period_s": scn.control_period_s,
         "drive": drive,

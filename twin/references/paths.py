@@ -1,85 +1,27 @@
-"""Reference signals: position with velocity and acceleration for feedforward.
-
-Every reference has ``n_axes`` and ``sample(t) -> ndarray (len(t), n_axes, 3)`` with columns
-position (m), velocity (m/s), acceleration (m/s^2).  One-axis signals (step, ramp, sines) drive
-the axes listed in ``axes`` (indices) and hold the others at zero; paths (circle, square,
-polyline) need two axes and are given in mm and mm/min as machinists state them.
-"""
+"""2-D paths at a constant feed, in mm and mm/min as machinists state them: circle, square,
+polyline.  Each needs a machine of two axes."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Annotated, Literal
 
 import numpy as np
+from pydantic import Field
 
+from twin.references.kinds import ReferenceSpecBase, register, two_axes
 
-def _per_axis(signal: np.ndarray, n_axes: int, axes: tuple[int, ...] | None) -> np.ndarray:
-    out = np.zeros((signal.shape[0], n_axes, 3))
-    for a in range(n_axes) if axes is None else axes:
-        out[:, a, :] = signal
-    return out
-
-
-@dataclass
-class Step:
-    """Step of ``amplitude_m`` at ``t0_s``."""
-
-    amplitude_m: float
-    t0_s: float = 0.0
-    n_axes: int = 1
-    axes: tuple[int, ...] | None = None
-
-    def sample(self, t):
-        t = np.asarray(t, float)
-        s = np.zeros((t.size, 3))
-        s[:, 0] = np.where(t >= self.t0_s, self.amplitude_m, 0.0)
-        return _per_axis(s, self.n_axes, self.axes)
-
-
-@dataclass
-class Ramp:
-    """Ramp of slope ``rate_m_per_s`` from ``t0_s``."""
-
-    rate_m_per_s: float
-    t0_s: float = 0.0
-    n_axes: int = 1
-    axes: tuple[int, ...] | None = None
-
-    def sample(self, t):
-        t = np.asarray(t, float)
-        on = t >= self.t0_s
-        s = np.zeros((t.size, 3))
-        s[:, 0] = np.where(on, self.rate_m_per_s * (t - self.t0_s), 0.0)
-        s[:, 1] = np.where(on, self.rate_m_per_s, 0.0)
-        return _per_axis(s, self.n_axes, self.axes)
-
-
-#: Most sines a sum-of-sines reference may hold (each is evaluated at every tick).
-MAX_SINES = 100
-
-
-@dataclass
-class SumOfSines:
-    """Sum of sines: x(t) = sum_i A_i sin(2 pi f_i t + phi_i), at most :data:`MAX_SINES` terms."""
-
-    amplitudes_m: tuple[float, ...]
-    frequencies_hz: tuple[float, ...]
-    phases_rad: tuple[float, ...] | None = None
-    n_axes: int = 1
-    axes: tuple[int, ...] | None = None
-
-    def sample(self, t):
-        t = np.asarray(t, float)
-        s = np.zeros((t.size, 3))
-        phases = self.phases_rad or (0.0,) * len(self.amplitudes_m)
-        for a, f, ph in zip(self.amplitudes_m, self.frequencies_hz, phases):
-            w = 2 * math.pi * f
-            arg = w * t + ph
-            s[:, 0] += a * np.sin(arg)
-            s[:, 1] += a * w * np.cos(arg)
-            s[:, 2] += -a * w * w * np.sin(arg)
-        return _per_axis(s, self.n_axes, self.axes)
+#: Smallest path size (mm) and feed (mm/min) a 2-D path may have: 1 um and 1 um/min.
+MIN_PATH_MM, MIN_FEED_MM_PER_MIN = 1e-3, 1e-3
+#: Largest: 10 m (the runaway limit) and 1e6 mm/min (16.7 m/s, beyond any machine tool).
+MAX_PATH_MM, MAX_FEED_MM_PER_MIN = 1e4, 1e6
+#: A coordinate of a path point (mm): within the 10 m runaway limit either side of the origin.
+PathCoordinateMm = Annotated[float, Field(ge=-MAX_PATH_MM, le=MAX_PATH_MM)]
+#: A feed (mm/min) within the limits above.
+FeedMmPerMin = Annotated[float, Field(ge=MIN_FEED_MM_PER_MIN, le=MAX_FEED_MM_PER_MIN)]
+#: A path size (mm) within the limits above.
+PathSizeMm = Annotated[float, Field(ge=MIN_PATH_MM, le=MAX_PATH_MM)]
 
 
 @dataclass
@@ -154,3 +96,52 @@ def square(side_mm: float, feed_mm_per_min: float) -> Polyline:
     """Square of ``side_mm`` starting and ending at the origin, counter-clockwise."""
     s = side_mm
     return Polyline([(0, 0), (s, 0), (s, s), (0, s), (0, 0)], feed_mm_per_min)
+
+
+class CircleRef(ReferenceSpecBase):
+    """circle: radius_mm at feed_mm_per_min, from the origin, counter-clockwise (two axes)."""
+
+    type: Literal["circle"]
+    radius_mm: PathSizeMm
+    feed_mm_per_min: FeedMmPerMin
+
+
+class SquareRef(ReferenceSpecBase):
+    """square: side_mm at feed_mm_per_min, from the origin, counter-clockwise (two axes)."""
+
+    type: Literal["square"]
+    side_mm: PathSizeMm
+    feed_mm_per_min: FeedMmPerMin
+
+
+class PolylineRef(ReferenceSpecBase):
+    """polyline: straight segments through points_mm = [[x, y], ...] at feed_mm_per_min (two axes)."""
+
+    type: Literal["polyline"]
+    points_mm: list[tuple[PathCoordinateMm, PathCoordinateMm]]
+    feed_mm_per_min: FeedMmPerMin
+
+
+def _circle(spec: CircleRef, axis_names: list[str]) -> Circle:
+    two_axes(spec.type, axis_names)
+    return Circle(spec.radius_mm, spec.feed_mm_per_min)
+
+
+def _square(spec: SquareRef, axis_names: list[str]) -> Polyline:
+    two_axes(spec.type, axis_names)
+    return square(spec.side_mm, spec.feed_mm_per_min)
+
+
+def _polyline(spec: PolylineRef, axis_names: list[str]) -> Polyline:
+    from twin.errors import TwinInputError
+
+    two_axes(spec.type, axis_names)
+    try:
+        return Polyline([(x, y) for x, y in spec.points_mm], spec.feed_mm_per_min)
+    except ValueError as exc:
+        raise TwinInputError("reference.points_mm", spec.points_mm, str(exc)) from None
+
+
+register("circle", CircleRef, _circle)
+register("square", SquareRef, _square)
+register("polyline", PolylineRef, _polyline)
