@@ -66,12 +66,19 @@ def test_a_new_kind_is_one_module(tmp_path):
     (tmp_path / "twin" / "references" / "hold.py").write_text(HOLD)
     (tmp_path / "hold.toml").write_text(SCENARIO)
     env = {"PYTHONPATH": str(tmp_path), "PATH": "/usr/bin:/bin"}
-    listing = subprocess.run([sys.executable, "-m", "twin.cli", "list"], capture_output=True, text=True, env=env,
-                             cwd=tmp_path, timeout=300)
+    listing = subprocess.run(
+        [sys.executable, "-m", "twin.cli", "list"], capture_output=True, text=True, env=env, cwd=tmp_path, timeout=300
+    )
     assert listing.returncode == 0, listing.stderr
     assert "hold                   every axis at position_m from t = 0." in listing.stdout
-    run = subprocess.run([sys.executable, "-m", "twin.cli", "run", "hold.toml", "--json"], capture_output=True,
-                         text=True, env=env, cwd=tmp_path, timeout=300)
+    run = subprocess.run(
+        [sys.executable, "-m", "twin.cli", "run", "hold.toml", "--json"],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=tmp_path,
+        timeout=300,
+    )
     assert run.returncode == 0, run.stderr
     out = json.loads(run.stdout)
     # a 1 mm step at t = 0: the largest error is the step itself, at the first tick
