@@ -13,6 +13,10 @@ from typing import Any
 import numpy as np
 from numba import njit
 
+from twin.numba_cache import configure as configure_numba_cache
+
+configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
+
 
 def step_metrics(
     t_s: np.ndarray, y: np.ndarray, final: float | None = None, settling_band: float = 0.02

@@ -44,6 +44,9 @@ import numpy as np
 from numba import njit
 
 from twin.errors import TwinInputError
+from twin.numba_cache import configure as configure_numba_cache
+
+configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
 
 #: Feed per tooth (m) below which the feed direction is held at its last value.
 MIN_FEED_M = 1e-9

@@ -17,6 +17,9 @@ from numba import njit
 
 from controllers.blocks.signals import AXIS_SIGNALS
 from twin.errors import TwinInputError
+from twin.numba_cache import configure as configure_numba_cache
+
+configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
 
 #: Physics steps per control period at most.
 MAX_SUBSTEPS = 1_000_000

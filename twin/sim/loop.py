@@ -43,8 +43,11 @@ import mujoco
 from numba import njit
 
 from controllers.kernels import run_blocks
+from twin.numba_cache import configure as configure_numba_cache
 from twin.process.cutting import workpiece_forces
 from twin.sim.drive import STRIDE, accelerations_ok, actuator_input, drive_command, sense, table_in_bounds
+
+configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
 
 OK, RUNAWAY, BAD_CONTROL, BAD_QACC = 0, 1, 2, 3
 

@@ -10,9 +10,8 @@ any compiled :class:`~controllers.blocks.core.Controller` on the loop's bus (sig
 ``ref_vel``, ``ref_acc``, ``pos``, ``vel`` as the encoder's backward difference, ``error``,
 ``u_prev``, ``tick``), run by the same kernel as the twin's loop.
 
-numba caches this loop with :func:`controllers.kernels.run_blocks` inlined, keyed on this file
-alone: a change of block kinds (the relay, for seed 001) must touch this file and
-``twin/sim/loop.py`` too, or a checkout's old cache keeps running the old kernel.
+numba caches this loop with :func:`controllers.kernels.run_blocks` inlined; the cache folder is
+keyed on every kernel's source (:mod:`twin.numba_cache`), so an edited kernel is recompiled in.
 """
 
 from __future__ import annotations
@@ -23,6 +22,9 @@ from numba import njit
 from controllers.blocks import Program, preview_ticks_needed, standard_signals
 from controllers.kernels import run_blocks
 from controllers.lti import SisoTf, discretize, tf_to_ss
+from twin.numba_cache import configure as configure_numba_cache
+
+configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
 
 
 @njit(cache=True)
