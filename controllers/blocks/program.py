@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from controllers import kernels
+from controllers.blocks.signals import AXIS_SIGNALS
 
 
 class SignalError(ValueError):
@@ -124,4 +125,4 @@ class Program:
 
 def _summary(names: list[str]) -> str:
     axes = sorted({s.split(".")[1] for s in names if "." in s})
-    return f"tick, and per axis ({', '.join(axes)}): ref, ref_vel, ref_acc, pos, vel, error, u_prev, preview.<axis>.<i>"
+    return f"tick, and per axis ({', '.join(axes)}): {', '.join(AXIS_SIGNALS)}, preview.<axis>.<i>"

@@ -26,14 +26,30 @@ from __future__ import annotations
 
 #: Longest reference preview a block may read (ticks): bounds the bus and the sampled reference.
 MAX_PREVIEW_TICKS = 10_000
-#: Per-axis signals, in bus order (the loop's sensor kernel writes them at these offsets).
+#: Per-axis signals, in bus order: the one declaration of the bus layout (the loop's sensor
+#: kernel, the recording and the transfer-function loop take their offsets from it).
 AXIS_SIGNALS = ("ref", "ref_vel", "ref_acc", "pos", "vel", "error", "u_prev")
+#: Offset of each per-axis signal within its axis's block of the bus.
+OFFSET = {name: i for i, name in enumerate(AXIS_SIGNALS)}
+#: Bus index of ``tick``; the axes' blocks follow it, then the previews.
+TICK_INDEX = 0
+FIRST_AXIS_INDEX = TICK_INDEX + 1
+
+
+def axis_signal_index(axis_number: int, name: str) -> int:
+    """Bus index of signal ``name`` (one of :data:`AXIS_SIGNALS`) of the ``axis_number``-th axis."""
+    return FIRST_AXIS_INDEX + len(AXIS_SIGNALS) * axis_number + OFFSET[name]
+
+
+def preview_index(n_axes: int, preview_ticks: int, axis_number: int, ticks_ahead: int) -> int:
+    """Bus index of ``preview.<axis>.<ticks_ahead>`` (1 to ``preview_ticks``) on a bus of ``n_axes``."""
+    return FIRST_AXIS_INDEX + len(AXIS_SIGNALS) * n_axes + axis_number * preview_ticks + ticks_ahead - 1
 
 
 def standard_signals(axes, preview_ticks: int = 0) -> list[str]:
     """Bus layout of the loop's signals: ``tick``, then per axis :data:`AXIS_SIGNALS`, then
     per axis ``preview.<a>.1 .. preview.<a>.P``."""
-    names = ["tick"]
+    names = ["tick"]  # at TICK_INDEX
     for a in axes:
         names += [f"{s}.{a}" for s in AXIS_SIGNALS]
     for a in axes:

@@ -253,24 +253,25 @@ class EndMilling:
         lag_steps = 1.0 / self.tooth_frequency_hz / dt
         lag_lo = int(lag_steps)
         n_hist = lag_lo + 2
-        params = np.concatenate(
-            [
-                self.coefficients.as_array(),
-                [
-                    int(self.n_flutes),
-                    self.axial_depth_mm,
-                    phi_st,
-                    phi_ex,
-                    2.0 * math.pi * self.spindle_rpm / 60.0,
-                    _spindle_phase(self.spindle_phase_rad, self.seed),
-                    dt,
-                    lag_lo,
-                    lag_steps - lag_lo,
-                    *_window(self.start_s, self.stop_s, dt),
-                    n_hist,
-                ],
-                machine.workpiece_jacobian().ravel(),
-            ]
+        lo, hi = _window(self.start_s, self.stop_s, dt)
+        params = pack_slots(
+            END_MILLING_SLOTS,
+            {
+                **dict(zip(("K_tc", "K_rc", "K_ac", "K_te", "K_re", "K_ae"), self.coefficients.as_array())),
+                "n_flutes": int(self.n_flutes),
+                "axial_depth_mm": self.axial_depth_mm,
+                "phi_st": phi_st,
+                "phi_ex": phi_ex,
+                "omega": 2.0 * math.pi * self.spindle_rpm / 60.0,
+                "phase0": _spindle_phase(self.spindle_phase_rad, self.seed),
+                "dt": dt,
+                "lag_lo": lag_lo,
+                "lag_frac": lag_steps - lag_lo,
+                "lo": lo,
+                "hi": hi,
+                "n_hist": n_hist,
+            },
+            machine.workpiece_jacobian(),
         )
         state = np.zeros(3 + 2 * n_hist)
         state[1] = 1.0  # feed direction +x until the workpiece first moves
@@ -321,33 +322,86 @@ class AverageForce:
 
     def kernel_arrays(self, machine) -> tuple[int, np.ndarray, np.ndarray]:
         """``(AVERAGE_FORCE, params, state)`` for :func:`workpiece_forces`."""
-        params = np.concatenate(
-            [
-                [
-                    self.k_il_N_s_per_m,
-                    self.k_c_N_s_per_m,
-                    self.harmonic_fraction,
-                    2.0 * math.pi * _tooth_frequency_hz(self.spindle_rpm, self.n_flutes),
-                    _spindle_phase(self.harmonic_phase_rad, self.seed),
-                    *_window(self.start_s, self.stop_s, machine.model.opt.timestep),
-                ],
-                machine.workpiece_jacobian().ravel(),
-            ]
+        lo, hi = _window(self.start_s, self.stop_s, machine.model.opt.timestep)
+        params = pack_slots(
+            AVERAGE_FORCE_SLOTS,
+            {
+                "k_il": self.k_il_N_s_per_m,
+                "k_c": self.k_c_N_s_per_m,
+                "harmonic_fraction": self.harmonic_fraction,
+                "omega": 2.0 * math.pi * _tooth_frequency_hz(self.spindle_rpm, self.n_flutes),
+                "phase": _spindle_phase(self.harmonic_phase_rad, self.seed),
+                "lo": lo,
+                "hi": hi,
+            },
+            machine.workpiece_jacobian(),
         )
         return AVERAGE_FORCE, params, np.zeros(0)
 
 
 #: Kinds of :func:`workpiece_forces`.
 END_MILLING, AVERAGE_FORCE = 0, 1
+#: The parameter slots of each force kernel, in order: the one declaration of its layout.  The
+#: workpiece's 2 x nq position Jacobian follows them (:func:`pack_slots`).
+END_MILLING_SLOTS = (
+    "K_tc",
+    "K_rc",
+    "K_ac",
+    "K_te",
+    "K_re",
+    "K_ae",
+    "n_flutes",
+    "axial_depth_mm",
+    "phi_st",
+    "phi_ex",
+    "omega",
+    "phase0",
+    "dt",
+    "lag_lo",
+    "lag_frac",
+    "lo",
+    "hi",
+    "n_hist",
+)
+AVERAGE_FORCE_SLOTS = ("k_il", "k_c", "harmonic_fraction", "omega", "phase", "lo", "hi")
+_EM = {name: i for i, name in enumerate(END_MILLING_SLOTS)}
+_AF = {name: i for i, name in enumerate(AVERAGE_FORCE_SLOTS)}
+# the kernels' slot indices (module constants: numba freezes them)
+EM_K, EM_N_FLUTES, EM_DEPTH, EM_PHI_ST, EM_PHI_EX = (
+    _EM["K_tc"],
+    _EM["n_flutes"],
+    _EM["axial_depth_mm"],
+    _EM["phi_st"],
+    _EM["phi_ex"],
+)
+EM_OMEGA, EM_PHASE0, EM_DT, EM_LAG_LO, EM_LAG_FRAC = (
+    _EM["omega"],
+    _EM["phase0"],
+    _EM["dt"],
+    _EM["lag_lo"],
+    _EM["lag_frac"],
+)
+EM_LO, EM_HI, EM_N_HIST, EM_JACOBIAN = _EM["lo"], _EM["hi"], _EM["n_hist"], len(END_MILLING_SLOTS)
+AF_K_IL, AF_K_C, AF_R, AF_OMEGA = _AF["k_il"], _AF["k_c"], _AF["harmonic_fraction"], _AF["omega"]
+AF_PHASE, AF_LO, AF_HI, AF_JACOBIAN = _AF["phase"], _AF["lo"], _AF["hi"], len(AVERAGE_FORCE_SLOTS)
+
+
+def pack_slots(slots: tuple[str, ...], values: dict[str, float], jacobian: np.ndarray) -> np.ndarray:
+    """A force kernel's parameter array: ``values`` in the order of ``slots`` (every slot
+    given, no other), then the workpiece Jacobian row by row."""
+    if set(values) != set(slots):
+        raise ValueError(f"parameter slots {sorted(set(slots) ^ set(values))} missing or unknown")
+    return np.concatenate([[float(values[name]) for name in slots], np.asarray(jacobian, float).ravel()])
 
 
 @njit(cache=True)
 def _end_milling(par, state, qpos, t, out):  # pragma: no cover - compiled
     """Add one step's mechanistic milling force on the workpiece (world frame, N) to ``out``."""
-    k = par[0:6]
-    n_flutes, a, phi_st, phi_ex, omega, phase0, dt = int(par[6]), par[7], par[8], par[9], par[10], par[11], par[12]
-    lag_lo, frac, lo, hi, n = int(par[13]), par[14], par[15], par[16], int(par[17])
-    jac = par[18:].reshape((2, -1))
+    k = par[EM_K : EM_K + 6]
+    n_flutes, a, phi_st, phi_ex = int(par[EM_N_FLUTES]), par[EM_DEPTH], par[EM_PHI_ST], par[EM_PHI_EX]
+    omega, phase0, dt = par[EM_OMEGA], par[EM_PHASE0], par[EM_DT]
+    lag_lo, frac, lo, hi, n = int(par[EM_LAG_LO]), par[EM_LAG_FRAC], par[EM_LO], par[EM_HI], int(par[EM_N_HIST])
+    jac = par[EM_JACOBIAN:].reshape((2, -1))
     hist = state[3:].reshape((n, 2))
     i = int(state[0])
     state[0] = i + 1
@@ -379,10 +433,11 @@ def _end_milling(par, state, qpos, t, out):  # pragma: no cover - compiled
 @njit(cache=True)
 def _average_force(par, qvel, t, out):  # pragma: no cover - compiled
     """Add seed 004's average cutting force on the workpiece (N) to ``out``."""
-    k_il, k_c, r, w, phase, lo, hi = par[0], par[1], par[2], par[3], par[4], par[5], par[6]
+    k_il, k_c, r, w = par[AF_K_IL], par[AF_K_C], par[AF_R], par[AF_OMEGA]
+    phase, lo, hi = par[AF_PHASE], par[AF_LO], par[AF_HI]
     if not (lo <= t < hi):
         return
-    jac = par[7:].reshape((2, -1))
+    jac = par[AF_JACOBIAN:].reshape((2, -1))
     vx = vy = 0.0
     for j in range(jac.shape[1]):
         vx += jac[0, j] * qvel[j]

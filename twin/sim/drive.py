@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from controllers.blocks.signals import AXIS_SIGNALS
+from controllers.blocks.signals import AXIS_SIGNALS, FIRST_AXIS_INDEX, OFFSET, TICK_INDEX
 from twin.errors import TwinInputError
 from twin.numba_cache import configure as configure_numba_cache
 
@@ -149,6 +149,9 @@ def substeps_per_tick(control_period_s: float, timestep_s: float) -> int:
 
 #: Stride of the per-axis signals on the bus (:func:`controllers.blocks.signals.standard_signals`).
 STRIDE = len(AXIS_SIGNALS)
+# each signal's offset in its axis's block, from the one declaration (numba freezes them)
+REF, REF_VEL, REF_ACC = OFFSET["ref"], OFFSET["ref_vel"], OFFSET["ref_acc"]
+POS, VEL, ERROR, U_PREV = OFFSET["pos"], OFFSET["vel"], OFFSET["error"], OFFSET["u_prev"]
 #: Largest magnitude MuJoCo accepts in ``ctrl``, ``qacc`` (``mjMAXVAL``); beyond it, divergence.
 MAX_VALUE = 1e10
 
@@ -190,26 +193,26 @@ def sense(
     encoder reading) is updated in place.
     """
     n_axes = q_idx.shape[0]
-    bus[0] = k
+    bus[TICK_INDEX] = k
     for a in range(n_axes):
         y = gains[a] * qpos[q_idx[a]]
         if resolution[a] > 0:
             y = np.rint(y / resolution[a]) * resolution[a]
         y = y + noise[row, a]
-        base = 1 + STRIDE * a
-        bus[base] = ref[row, a, 0]
-        bus[base + 1] = ref[row, a, 1]
-        bus[base + 2] = ref[row, a, 2]
-        bus[base + 3] = y
+        base = FIRST_AXIS_INDEX + STRIDE * a
+        bus[base + REF] = ref[row, a, 0]
+        bus[base + REF_VEL] = ref[row, a, 1]
+        bus[base + REF_ACC] = ref[row, a, 2]
+        bus[base + POS] = y
         if tachometer:
-            bus[base + 4] = gains[a] * qvel[v_idx[a]]
+            bus[base + VEL] = gains[a] * qvel[v_idx[a]]
         else:
-            bus[base + 4] = (y - meas_prev[a]) / period_s if k > 0 else 0.0
-        bus[base + 5] = ref[row, a, 0] - y
-        bus[base + 6] = u_prev[a]
+            bus[base + VEL] = (y - meas_prev[a]) / period_s if k > 0 else 0.0
+        bus[base + ERROR] = ref[row, a, 0] - y
+        bus[base + U_PREV] = u_prev[a]
         meas_prev[a] = y
         for i in range(preview):
-            bus[1 + STRIDE * n_axes + a * preview + i] = ref[row + 1 + i, a, 0]
+            bus[FIRST_AXIS_INDEX + STRIDE * n_axes + a * preview + i] = ref[row + 1 + i, a, 0]
 
 
 @njit(cache=True, inline="always")

@@ -13,23 +13,10 @@ struct addresses, with the simulation time accumulated as MuJoCo accumulates it,
 ``mujoco.mj_step`` and ``data.time``) and in running Python blocks.  The state they carry
 between chunks lives in the argument arrays.
 
-Argument groups (tuples, so that both loops take the same ones):
-
-- ``mj``: ``qpos, qvel, qacc, ctrl, actuator_force, xfrc_applied`` views of ``MjData``;
-- ``sensor``: ``q_idx, v_idx, gains, resolution, tachometer, period_s, runaway_m, meas_prev,
-  preview``;
-- ``drive``: ``u_idx, act_idx, limit, substeps, delay_steps, delay_line, u, ua, u_sat`` (bus
-  indices of ``u.<axis>``, the axes' actuator ids in ``ctrl``; ``u_sat`` holds the previous
-  tick's saturated command, the ``u_prev`` signal, until :func:`twin.sim.drive.drive_command`
-  overwrites it);
-- ``prog``: ``ops, io, par, state, scratch, bus`` (:class:`controllers.blocks.Program`);
-- ``force``: ``fops, fpar, fstate, workpiece_body, timestep_s, clock, f_sum`` (``f_sum``: the
-  tick's summed workpiece force, N);
-- ``chunk``: ``ref`` (rows k0 .. k1 + preview), ``noise``, ``u_dist`` (rows k0 .. k1);
-- ``rec``: ``every, qpos, qvel, actuator_force, ref, meas, u, ua, workpiece_force``: tick k is
-  recorded in row ``k // every`` when ``k % every == 0``; ``every = 0`` records nothing;
-- ``acc``: ``error`` (n_axes, 2): max |e| and sum of e^2 of ``ref - table position`` over every
-  tick; ``force_max`` (n_axes,): max |tick-mean workpiece force| along each axis.
+Both take the same argument groups, each a :class:`typing.NamedTuple` (numba compiles them as
+tuples, so naming costs nothing): :class:`MjViews`, :class:`Sensor`, :class:`DriveState`,
+:class:`ProgramArrays`, :class:`ForceState`, :class:`Chunk`, :class:`Recording` and
+:class:`Accumulators`.
 
 Each returns ``(status, k, s)``: :data:`OK`, or the first failure, at physics step ``s`` of
 tick ``k``: :data:`RUNAWAY` (table not finite or beyond ``runaway_m`` at the start of tick k),
@@ -39,17 +26,121 @@ tick ``k``: :data:`RUNAWAY` (table not finite or beyond ``runaway_m`` at the sta
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import mujoco
+import numpy as np
 from numba import njit
 
+from controllers.blocks.signals import FIRST_AXIS_INDEX
 from controllers.kernels import run_blocks
 from twin.numba_cache import configure as configure_numba_cache
 from twin.process.cutting import workpiece_forces
-from twin.sim.drive import STRIDE, accelerations_ok, actuator_input, drive_command, sense, table_in_bounds
+from twin.sim.drive import POS, STRIDE, accelerations_ok, actuator_input, drive_command, sense, table_in_bounds
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
 
 OK, RUNAWAY, BAD_CONTROL, BAD_QACC = 0, 1, 2, 3
+
+
+class MjViews(NamedTuple):
+    """Views of ``MjData`` the loop reads and writes."""
+
+    qpos: np.ndarray
+    qvel: np.ndarray
+    qacc: np.ndarray
+    ctrl: np.ndarray
+    actuator_force: np.ndarray
+    xfrc_applied: np.ndarray
+
+
+class Sensor(NamedTuple):
+    """The encoders: table qpos and dof indices per axis, gains, resolution (m), tachometer or
+    backward difference, the control period (s), the runaway limit (m), the last reading per
+    axis (updated in place) and the preview ticks on the bus."""
+
+    q_idx: np.ndarray
+    v_idx: np.ndarray
+    gains: np.ndarray
+    resolution: np.ndarray
+    tachometer: bool
+    period_s: float
+    runaway_m: float
+    meas_prev: np.ndarray
+    preview: int
+
+
+class DriveState(NamedTuple):
+    """The drive: bus indices of ``u.<axis>``, the axes' actuator ids in ``ctrl``, the
+    saturation (V), physics steps per tick, the delay (physics steps), the delay line, and per
+    axis the tick's command, drive input and saturated command (``u_prev`` until
+    :func:`twin.sim.drive.drive_command` overwrites it)."""
+
+    u_idx: np.ndarray
+    act_idx: np.ndarray
+    limit: float
+    substeps: int
+    delay_steps: int
+    delay_line: np.ndarray
+    u: np.ndarray
+    ua: np.ndarray
+    u_sat: np.ndarray
+
+
+class ProgramArrays(NamedTuple):
+    """The compiled controllers (:class:`controllers.blocks.Program`)."""
+
+    ops: np.ndarray
+    io: np.ndarray
+    par: np.ndarray
+    state: np.ndarray
+    scratch: np.ndarray
+    bus: np.ndarray
+
+
+class ForceState(NamedTuple):
+    """The force models on the workpiece: their ops, parameters and states, the workpiece body,
+    the physics step (s), the simulation clock (s, in place) and the tick's summed force (N)."""
+
+    fops: np.ndarray
+    fpar: np.ndarray
+    fstate: np.ndarray
+    workpiece_body: int
+    timestep_s: float
+    clock: np.ndarray
+    f_sum: np.ndarray
+
+
+class Chunk(NamedTuple):
+    """One chunk of ticks k0 .. k1: the reference (rows k0 .. k1 + preview), encoder noise and
+    drive-input disturbance (rows k0 .. k1)."""
+
+    ref: np.ndarray
+    noise: np.ndarray
+    u_dist: np.ndarray
+
+
+class Recording(NamedTuple):
+    """What is recorded: tick k in row ``k // every`` when ``k % every == 0`` (``every = 0``
+    records nothing)."""
+
+    every: int
+    qpos: np.ndarray
+    qvel: np.ndarray
+    actuator_force: np.ndarray
+    ref: np.ndarray
+    meas: np.ndarray
+    u: np.ndarray
+    ua: np.ndarray
+    workpiece_force: np.ndarray
+
+
+class Accumulators(NamedTuple):
+    """Over every tick: per axis max |e| and the sum of e^2 of ``ref - table position``, and
+    the largest |tick-mean workpiece force|."""
+
+    error: np.ndarray
+    force_max: np.ndarray
 
 
 @njit(cache=True, inline="always")
@@ -87,7 +178,7 @@ def end_tick(
     if every > 0 and k % every == 0:
         r = k // every
         for a in range(u.shape[0]):
-            rec_meas[r, a] = bus[1 + STRIDE * a + 3]
+            rec_meas[r, a] = bus[FIRST_AXIS_INDEX + STRIDE * a + POS]
             rec_u[r, a] = u[a]
             rec_ua[r, a] = ua[a]
         for i in range(3):
@@ -102,14 +193,19 @@ def compiled_ticks(
     (an argument, so numba can cache the loop), ``m_addr``/``d_addr`` the struct addresses.
     The groups are unpacked once, before the loop (numba reference-counts every array taken
     out of a tuple)."""
-    qpos, qvel, qacc, ctrl, act, xfrc = mj
-    q_idx, v_idx, gains, resolution, tachometer, period_s, runaway_m, meas_prev, preview = sensor
-    u_idx, act_idx, limit, substeps, delay_steps, delay_line, u, ua, u_sat = drive
-    ops, io, par, state, scratch, bus = prog
-    fops, fpar, fstate, wp, dt, clock, f_sum = force
-    ref, noise, u_dist = chunk
-    every, rec_qpos, rec_qvel, rec_act, rec_ref, rec_meas, rec_u, rec_ua, rec_force = rec
-    error, force_max = acc
+    qpos, qvel, qacc, ctrl, act, xfrc = mj.qpos, mj.qvel, mj.qacc, mj.ctrl, mj.actuator_force, mj.xfrc_applied
+    q_idx, v_idx, gains, resolution = sensor.q_idx, sensor.v_idx, sensor.gains, sensor.resolution
+    tachometer, period_s, runaway_m = sensor.tachometer, sensor.period_s, sensor.runaway_m
+    meas_prev, preview = sensor.meas_prev, sensor.preview
+    u_idx, act_idx, limit, substeps = drive.u_idx, drive.act_idx, drive.limit, drive.substeps
+    delay_steps, delay_line, u, ua, u_sat = drive.delay_steps, drive.delay_line, drive.u, drive.ua, drive.u_sat
+    fops, fpar, fstate, wp, f_sum = force.fops, force.fpar, force.fstate, force.workpiece_body, force.f_sum
+    ref, noise, u_dist = chunk.ref, chunk.noise, chunk.u_dist
+    every, rec_qpos, rec_qvel, rec_act = rec.every, rec.qpos, rec.qvel, rec.actuator_force
+    rec_ref, rec_meas, rec_u, rec_ua, rec_force = rec.ref, rec.meas, rec.u, rec.ua, rec.workpiece_force
+    error, force_max = acc.error, acc.force_max
+    ops, io, par, state, scratch, bus = prog.ops, prog.io, prog.par, prog.state, prog.scratch, prog.bus
+    dt, clock = force.timestep_s, force.clock
     n_blocks = ops.shape[0]
     for k in range(k0, k1):
         row = k - k0
@@ -154,13 +250,17 @@ def compiled_ticks(
 def python_ticks(k0, k1, model, data, program, mj, sensor, drive, force, chunk, rec, acc):
     """Ticks ``k0 <= k < k1`` in Python: ``program.run()`` (Python blocks too) and
     ``mujoco.mj_step``; the simulation time is ``data.time``."""
-    qpos, qvel, qacc, ctrl, act, xfrc = mj
-    q_idx, v_idx, gains, resolution, tachometer, period_s, runaway_m, meas_prev, preview = sensor
-    u_idx, act_idx, limit, substeps, delay_steps, delay_line, u, ua, u_sat = drive
-    fops, fpar, fstate, wp, _dt, _clock, f_sum = force
-    ref, noise, u_dist = chunk
-    every, rec_qpos, rec_qvel, rec_act, rec_ref, rec_meas, rec_u, rec_ua, rec_force = rec
-    error, force_max = acc
+    qpos, qvel, qacc, ctrl, act, xfrc = mj.qpos, mj.qvel, mj.qacc, mj.ctrl, mj.actuator_force, mj.xfrc_applied
+    q_idx, v_idx, gains, resolution = sensor.q_idx, sensor.v_idx, sensor.gains, sensor.resolution
+    tachometer, period_s, runaway_m = sensor.tachometer, sensor.period_s, sensor.runaway_m
+    meas_prev, preview = sensor.meas_prev, sensor.preview
+    u_idx, act_idx, limit, substeps = drive.u_idx, drive.act_idx, drive.limit, drive.substeps
+    delay_steps, delay_line, u, ua, u_sat = drive.delay_steps, drive.delay_line, drive.u, drive.ua, drive.u_sat
+    fops, fpar, fstate, wp, f_sum = force.fops, force.fpar, force.fstate, force.workpiece_body, force.f_sum
+    ref, noise, u_dist = chunk.ref, chunk.noise, chunk.u_dist
+    every, rec_qpos, rec_qvel, rec_act = rec.every, rec.qpos, rec.qvel, rec.actuator_force
+    rec_ref, rec_meas, rec_u, rec_ua, rec_force = rec.ref, rec.meas, rec.u, rec.ua, rec.workpiece_force
+    error, force_max = acc.error, acc.force_max
     bus = program.bus
     for k in range(k0, k1):
         row = k - k0

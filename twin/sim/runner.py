@@ -260,7 +260,7 @@ def simulate(
         record_every = -(-n // MAX_RECORDED_TICKS)
     data = mujoco.MjData(model)
     n_rec = 0 if record_every == 0 else -(-n // record_every)
-    rec = (
+    rec = loop.Recording(
         int(record_every),
         np.empty((n_rec, model.nq)),
         np.empty((n_rec, model.nv)),
@@ -271,9 +271,9 @@ def simulate(
         np.empty((n_rec, n_axes)),
         np.empty((n_rec, 3)),
     )
-    acc = (np.zeros((n_axes, 2)), np.zeros(n_axes))
-    mj = (data.qpos, data.qvel, data.qacc, data.ctrl, data.actuator_force, data.xfrc_applied)
-    sensor = (
+    acc = loop.Accumulators(np.zeros((n_axes, 2)), np.zeros(n_axes))
+    mj = loop.MjViews(data.qpos, data.qvel, data.qacc, data.ctrl, data.actuator_force, data.xfrc_applied)
+    sensor = loop.Sensor(
         machine.table_qpos_indices(),
         np.array([machine.joint_dof_index(a.table_joint) for a in machine.axes]),
         encoder.gains,
@@ -285,7 +285,7 @@ def simulate(
         preview,
     )
     u_applied = np.zeros(n_axes)  # the drive input of the last tick (V), reported on divergence
-    drive_args = (
+    drive_args = loop.DriveState(
         np.array([program.index(f"u.{a}") for a in names]),
         np.array([model.actuator(a.actuator).id for a in machine.axes]),
         drive.limit_V,
@@ -296,11 +296,13 @@ def simulate(
         u_applied,
         np.zeros(n_axes),
     )
-    force = (forces.fops, forces.fpar, forces.fstate, machine.workpiece_body_id, dt, np.array([data.time]), np.zeros(3))
+    force = loop.ForceState(
+        forces.fops, forces.fpar, forces.fstate, machine.workpiece_body_id, dt, np.array([data.time]), np.zeros(3)
+    )
     draw_noise = encoder.noise_source()
     if use_compiled:
         addresses = mujoco_c.struct_addresses(model, data)
-        prog = (program.ops, program.io, program.par, program.state, program.scratch, program.bus)
+        prog = loop.ProgramArrays(program.ops, program.io, program.par, program.state, program.scratch, program.bus)
 
     def run_chunk(k0, k1, chunk):
         if use_compiled:
@@ -312,8 +314,9 @@ def simulate(
     def result(ticks: int, accumulated: int) -> RunResult:
         """The run's first ``ticks`` ticks (metrics over the ``accumulated`` ones)."""
         rows = 0 if record_every == 0 else -(-ticks // record_every)
-        qpos, qvel, act, ref, meas, u, ua, force_N = (a[:rows] for a in rec[1:])
-        error, force_max = acc
+        qpos, qvel, act, ref = rec.qpos[:rows], rec.qvel[:rows], rec.actuator_force[:rows], rec.ref[:rows]
+        meas, u, ua, force_N = rec.meas[:rows], rec.u[:rows], rec.ua[:rows], rec.workpiece_force[:rows]
+        error, force_max = acc.error, acc.force_max
         return RunResult(
             machine,
             np.arange(rows) * record_every * control_period_s,
@@ -362,10 +365,10 @@ def simulate(
                     )
                     exc.result = result(k0, k0)
                     raise exc
-                chunk = (ref, draw_noise(k1 - k0), u_dist)
+                chunk = loop.Chunk(ref, draw_noise(k1 - k0), u_dist)
                 status, k, s = run_chunk(k0, k1, chunk)
                 try:
-                    _check(status, k, s, data, sensor[0], u_applied, control_period_s, dt, warnings0, messages)
+                    _check(status, k, s, data, sensor.q_idx, u_applied, control_period_s, dt, warnings0, messages)
                 except SimulationDiverged as exc:  # keep what was computed: the ticks before k
                     exc.result = result(k, k + (status in (loop.BAD_CONTROL, loop.BAD_QACC)))
                     raise

@@ -23,47 +23,45 @@ from controllers.blocks import Program, preview_ticks_needed, standard_signals
 from controllers.kernels import run_blocks
 from controllers.lti import SisoTf, discretize, tf_to_ss
 from twin.numba_cache import configure as configure_numba_cache
+from twin.sim.drive import actuator_input, drive_command, sense
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
 
 
 @njit(cache=True)
 def _ticks(
-    Ad, Bd, Cd, delay, ops, io, par, state, scratch, bus, sig, preview_at, ref, u_dist, plant_dist, limit, dt, pos, u
+    Ad, Bd, Cd, delay, ops, io, par, state, scratch, bus, u_idx, preview, ref, u_dist, plant_dist, limit, dt, pos, u
 ):  # pragma: no cover - compiled
+    """The loop on the sampled plant ``x <- Ad x + Bd v, y = Cd x``, tick by tick, with the twin's
+    own kernels: :func:`twin.sim.drive.sense` (an ideal encoder: unit gain, no quantization, no
+    noise), :func:`controllers.kernels.run_blocks`, :func:`twin.sim.drive.drive_command`
+    (disturbance, saturation, delay line) and :func:`twin.sim.drive.actuator_input` (one plant
+    step a tick)."""
     n, n_axes = pos.shape
-    n_preview = preview_at.shape[1]
     x = np.zeros(Ad.shape[0])
-    line = np.zeros((delay + 1, n_axes))
     y = np.zeros(n_axes)
+    axis = np.arange(n_axes)
+    ones, zeros = np.ones(n_axes), np.zeros(n_axes)
+    no_noise = np.zeros((n, n_axes))
     y_prev = np.zeros(n_axes)
     u_prev = np.zeros(n_axes)
+    command, drive_input = np.zeros(n_axes), np.zeros(n_axes)
+    delay_line = np.zeros((delay + 2, n_axes))
     applied = np.zeros(n_axes)
     for k in range(n):
-        bus[sig[0, 0]] = k
         for a in range(n_axes):
             y[a] = 0.0
             for i in range(x.shape[0]):
                 y[a] += Cd[a, i] * x[i]
             pos[k, a] = y[a]
-            bus[sig[a, 1]] = ref[k, a, 0]
-            bus[sig[a, 2]] = ref[k, a, 1]
-            bus[sig[a, 3]] = ref[k, a, 2]
-            bus[sig[a, 4]] = y[a]
-            bus[sig[a, 5]] = (y[a] - y_prev[a]) / dt if k > 0 else 0.0
-            bus[sig[a, 6]] = ref[k, a, 0] - y[a]
-            bus[sig[a, 7]] = u_prev[a]
-            for i in range(n_preview):
-                bus[preview_at[a, i]] = ref[k + 1 + i, a, 0]
+        sense(k, k, y, y, axis, axis, ones, zeros, no_noise, ref, False, dt, y_prev, u_prev, preview, bus)
         run_blocks(0, ops.shape[0], ops, io, par, state, scratch, bus)
+        drive_command(k, k, bus, u_idx, u_dist, limit, command, drive_input, u_prev, delay_line)
+        actuator_input(k, 0, 1, delay, delay_line, axis, applied)
         for a in range(n_axes):
-            command = bus[sig[a, 8]]
-            u[k, a] = command
-            u_prev[a] = min(max(command, -limit), limit)
-            line[k % (delay + 1), a] = min(max(command + u_dist[k, a], -limit), limit)
-            applied[a] = (line[(k - delay) % (delay + 1), a] if k >= delay else 0.0) + plant_dist[k, a]
+            u[k, a] = command[a]
+            applied[a] += plant_dist[k, a]
         x[:] = Ad @ x + Bd @ applied
-        y_prev[:] = y
 
 
 def tf_loop(
@@ -121,11 +119,7 @@ def tf_loop(
     n = len(ref) - preview
     if n < 1:
         raise ValueError(f"the reference has {len(ref)} rows: the controller previews {preview} ticks")
-    names = ("ref", "ref_vel", "ref_acc", "pos", "vel", "error", "u_prev", "u")
-    sig = np.array([[program.index("tick")] + [program.index(f"{s}.{a}") for s in names] for a in axes], np.int64)
-    preview_at = np.array(
-        [[program.index(f"preview.{a}.{i}") for i in range(1, preview + 1)] for a in axes], np.int64
-    ).reshape(len(axes), preview)
+    u_idx = np.array([program.index(f"u.{a}") for a in axes], np.int64)
 
     def per_axis(v):
         return np.zeros((n, len(axes))) if v is None else np.asarray(v, float).reshape(n, len(axes))
@@ -142,8 +136,8 @@ def tf_loop(
         program.state,
         program.scratch,
         program.bus,
-        sig,
-        preview_at,
+        u_idx,
+        preview,
         ref,
         per_axis(u_dist_V),
         per_axis(plant_dist_V),
