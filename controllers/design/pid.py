@@ -34,6 +34,19 @@ def pid_tf(kp: float, ki: float = 0.0, kd: float = 0.0, tf_s: float = 0.0) -> Si
     return SisoTf((kp,), (1.0,))
 
 
+def _pid_parts(w_c: float, integral_ratio: float, filter_ratio: float) -> tuple[float, float, complex, complex]:
+    """The loop-shaping rule's integral corner ``w_i`` (rad/s) and filter time ``tf_s`` (s), and
+    at ``j w_c`` the factors of ``C = kp p_part + kd d_part``: ``1 + w_i/(j w_c)`` and
+    ``j w_c/(1 + j w_c tf_s)``."""
+    w_i, tf_s = integral_ratio * w_c, 1.0 / (filter_ratio * w_c)
+    return w_i, tf_s, 1.0 + w_i / (1j * w_c), 1j * w_c / (1.0 + 1j * w_c * tf_s)
+
+
+def _response(plant, w: float) -> complex:
+    """The plant's frequency response at one angular frequency ``w`` (rad/s)."""
+    return complex(np.asarray(plant(np.array([w])))[0])
+
+
 def pid_for_crossover(
     plant, w_c: float, pm_deg: float, integral_ratio: float = 0.1, filter_ratio: float = 10.0
 ) -> tuple[float, float, float, float]:
@@ -62,9 +75,8 @@ def pid_for_crossover(
     ValueError
         If the phase needed at ``w_c`` cannot be reached with positive ``kp`` and ``kd``.
     """
-    w_i, tf_s = integral_ratio * w_c, 1.0 / (filter_ratio * w_c)
-    target = np.exp(1j * np.radians(pm_deg - 180.0)) / complex(np.asarray(plant(np.array([w_c])))[0])
-    p_part, d_part = 1.0 + w_i / (1j * w_c), 1j * w_c / (1.0 + 1j * w_c * tf_s)
+    w_i, tf_s, p_part, d_part = _pid_parts(w_c, integral_ratio, filter_ratio)
+    target = np.exp(1j * np.radians(pm_deg - 180.0)) / _response(plant, w_c)
     kp, kd = np.linalg.solve([[p_part.real, d_part.real], [p_part.imag, d_part.imag]], [target.real, target.imag])
     if not (kp > 0 and kd >= 0):
         raise ValueError(f"no PID with kp, kd > 0 gives {pm_deg:g} deg at {w_c:g} rad/s (kp {kp:.3g}, kd {kd:.3g})")
@@ -98,9 +110,9 @@ def pid_for_crossover_with_kp(
         If ``kp`` with its integral term alone already exceeds unit loop gain at ``w_c`` (no
         ``kd >= 0`` brings the crossover there).
     """
-    w_i, tf_s = integral_ratio * w_c, 1.0 / (filter_ratio * w_c)
-    need = 1.0 / abs(complex(np.asarray(plant(np.array([w_c])))[0]))  # |C(j w_c)| for crossover
-    a, b = kp * (1.0 + w_i / (1j * w_c)), 1j * w_c / (1.0 + 1j * w_c * tf_s)
+    w_i, tf_s, p_part, b = _pid_parts(w_c, integral_ratio, filter_ratio)
+    need = 1.0 / abs(_response(plant, w_c))  # |C(j w_c)| for crossover
+    a = kp * p_part
     # |a + kd b|^2 = need^2: |b|^2 kd^2 + 2 Re(a conj b) kd + |a|^2 - need^2 = 0
     qa, qb, qc = abs(b) ** 2, 2.0 * (a * b.conjugate()).real, abs(a) ** 2 - need**2
     if qc > 0:
