@@ -84,3 +84,13 @@ def test_bad_disturbance_names_its_field(entry, field):
     with pytest.raises(TwinInputError) as err:
         run_scenario(_scenario(0, disturbances=[entry]))
     assert err.value.field == field
+
+
+def test_the_disturbance_schema_is_the_registry():
+    """[[disturbances]] entries are the registered kinds, each built by its own module's builder."""
+    from twin.process import DISTURBANCES
+    from twin.scenario import Scenario
+
+    schema = Scenario.model_json_schema()
+    tags = set(schema["properties"]["disturbances"]["items"]["discriminator"]["mapping"])
+    assert tags == set(DISTURBANCES) == {"end_milling", "average_force", "harmonic_input", "voltage_step"}

@@ -297,6 +297,7 @@ def list_things():
     """Machines, controller kinds, observers, bundled scenarios and reproducible papers."""
     from controllers import CONTROLLERS, OBSERVERS
     from twin.machines import MACHINES
+    from twin.process import DISTURBANCES
     from twin.references import REFERENCES
     from twin.reproductions import REPRODUCTIONS
     from twin.scenario import bundled_scenarios, load_scenario
@@ -313,6 +314,9 @@ def list_things():
     typer.echo("observers ([controller.observer] type = ...):")
     for name, (desc, allowed) in OBSERVERS.items():
         typer.echo(f"  {name:<22} {desc}{params(allowed)}")
+    typer.echo("disturbances ([[disturbances]] type = ...):")
+    for name, kind in DISTURBANCES.items():
+        typer.echo(f"  {name:<22} {kind.doc.removeprefix(name + ': ')}")
     typer.echo("references ([reference] type = ...):")
     for name, kind in REFERENCES.items():
         typer.echo(f"  {name:<22} {kind.doc.removeprefix(name + ': ')}")

@@ -24,12 +24,11 @@ from controllers.blocks import with_correction
 from controllers.registry import Context, make_observers
 from twin.errors import TwinInputError
 from twin.machines import build
-from twin.process.cutting import MATERIALS, MAX_FLUTES, MIN_SPINDLE_RPM, AverageForce, EndMilling
-from twin.process.disturbances import MAX_INPUT_HARMONICS, HarmonicInput, VoltageStep
+from twin.process import DISTURBANCES, DisturbanceSpecBase
 from twin.references import REFERENCES, ReferenceSpecBase
 from twin.sim.drive import Drive, Encoder, substeps_per_tick
 from twin.sim.runner import MAX_PHYSICS_STEPS, RunResult, simulate
-from twin.spec import StrictSpec, axes_indices
+from twin.spec import StrictSpec
 
 
 class ObserverSpec(StrictSpec):
@@ -73,77 +72,13 @@ class SensorSpec(StrictSpec):
     velocity: Literal["backward_difference", "tachometer"] = "backward_difference"
 
 
-class CoefficientsSpec(StrictSpec):
-    """Overrides of the material's cutting (N/mm^2) and edge (N/mm) coefficients."""
-
-    K_tc: float | None = None
-    K_rc: float | None = None
-    K_ac: float | None = None
-    K_te: float | None = None
-    K_re: float | None = None
-    K_ae: float | None = None
-
-
-class EndMillingSpec(StrictSpec):
-    """Mechanistic end-milling force on the workpiece (:class:`twin.process.cutting.EndMilling`)."""
-
-    type: Literal["end_milling"]
-    spindle_rpm: float = Field(ge=MIN_SPINDLE_RPM, description="rev/min; at least 1 (a tooth period of at most 60 s)")
-    n_flutes: int = Field(ge=1, le=MAX_FLUTES)
-    diameter_mm: PositiveFloat
-    axial_depth_mm: PositiveFloat
-    radial_depth_mm: PositiveFloat
-    mode: Literal["up", "down"] = "up"
-    # the names of the materials table (pydantic evaluates the Literal at run time; mypy cannot)
-    material: Literal[tuple(MATERIALS)] = "aluminium_7075_t6"  # type: ignore[valid-type]
-    coefficients: CoefficientsSpec = CoefficientsSpec()
-    start_s: float = Field(0.0, ge=0)
-    stop_s: PositiveFloat | None = None
-    spindle_phase_rad: float | None = Field(None, description="None: drawn from the seed")
-    seed: int | None = Field(None, ge=0, description="default: the scenario's seed")
-
-
-class AverageForceSpec(StrictSpec):
-    """Seed 004's average cutting force (:class:`twin.process.cutting.AverageForce`)."""
-
-    type: Literal["average_force"]
-    k_il_N_s_per_m: float = -2500.0
-    k_c_N_s_per_m: float = 2500.0
-    harmonic_fraction: float = Field(0.0, ge=0, le=0.2)
-    spindle_rpm: float = Field(10000.0, ge=MIN_SPINDLE_RPM)
-    n_flutes: int = Field(2, ge=1, le=MAX_FLUTES)
-    start_s: float = Field(0.0, ge=0)
-    stop_s: PositiveFloat | None = None
-    harmonic_phase_rad: float | None = None
-    seed: int | None = Field(None, ge=0)
-
-
-class HarmonicInputSpec(StrictSpec):
-    """Sum of sines on the drive input, V (:class:`twin.disturbances.HarmonicInput`)."""
-
-    type: Literal["harmonic_input"]
-    amplitudes_V: list[float] = Field(max_length=MAX_INPUT_HARMONICS)
-    frequencies_hz: list[PositiveFloat] = Field(max_length=MAX_INPUT_HARMONICS)
-    phases_rad: list[float] | None = Field(
-        None, max_length=MAX_INPUT_HARMONICS, description="None: drawn from the seed"
-    )
-    axes: list[str] | None = None
-    start_s: float = Field(0.0, ge=0)
-    seed: int | None = Field(None, ge=0)
-
-
-class VoltageStepSpec(StrictSpec):
-    """Step on the drive input, V (:class:`twin.disturbances.VoltageStep`)."""
-
-    type: Literal["voltage_step"]
-    amplitude_V: float
-    start_s: float = Field(0.0, ge=0)
-    axes: list[str] | None = None
-
-
-DisturbanceSpec = Annotated[
-    EndMillingSpec | AverageForceSpec | HarmonicInputSpec | VoltageStepSpec, Field(discriminator="type")
-]
+#: The ``[[disturbances]]`` entries: one spec per registered kind (:mod:`twin.process`), told apart
+#: by ``type`` (a union built from the registry; to a type checker, the kinds' common base).
+if TYPE_CHECKING:
+    DisturbanceSpec = DisturbanceSpecBase
+else:
+    _disturbance_kinds = tuple(kind.spec for kind in DISTURBANCES.values())
+    DisturbanceSpec = Annotated[Union[_disturbance_kinds], Field(discriminator="type")]  # noqa: UP007 (built at run time)
 
 
 #: Shortest physics step (s): 0.1 us, a thousand times finer than any mode of these drives needs.
@@ -368,50 +303,11 @@ def _controller(spec: ControllerSpec, field: str, base: Context):
 
 
 def _disturbance(spec, index: int, axis_names: list[str], seed: int):
-    """Build one disturbance; errors name ``disturbances.<index>.<field>``."""
+    """Build one disturbance by its kind's builder; errors name ``disturbances.<index>.<field>``."""
     field = f"disturbances.{index}"
     seed = seed if getattr(spec, "seed", None) is None else spec.seed
-    n = len(axis_names)
     try:
-        if isinstance(spec, EndMillingSpec):
-            coeffs = replace(MATERIALS[spec.material], **spec.coefficients.model_dump(exclude_none=True))
-            return EndMilling(
-                spec.spindle_rpm,
-                spec.n_flutes,
-                spec.diameter_mm,
-                spec.axial_depth_mm,
-                spec.radial_depth_mm,
-                spec.mode,
-                coeffs,
-                spec.start_s,
-                spec.stop_s,
-                spec.spindle_phase_rad,
-                seed,
-            )
-        if isinstance(spec, AverageForceSpec):
-            return AverageForce(
-                spec.k_il_N_s_per_m,
-                spec.k_c_N_s_per_m,
-                spec.harmonic_fraction,
-                spec.spindle_rpm,
-                spec.n_flutes,
-                spec.start_s,
-                spec.stop_s,
-                spec.harmonic_phase_rad,
-                seed,
-            )
-        axes = axes_indices(spec.axes, axis_names, f"{field}.axes")
-        if isinstance(spec, HarmonicInputSpec):
-            return HarmonicInput(
-                tuple(spec.amplitudes_V),
-                tuple(spec.frequencies_hz),
-                tuple(spec.phases_rad) if spec.phases_rad is not None else None,
-                n,
-                axes,
-                spec.start_s,
-                seed,
-            )
-        return VoltageStep(spec.amplitude_V, spec.start_s, n, axes)
+        return DISTURBANCES[spec.type].build(spec, axis_names, seed, field)
     except TwinInputError as exc:
         name = exc.field.removeprefix("disturbance.")
         if name.startswith(field):

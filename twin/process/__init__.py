@@ -1,2 +1,19 @@
 """The machining process and the papers' disturbances: milling forces on the workpiece
-(:mod:`.cutting`, compiled kernels) and drive-input disturbances (:mod:`.disturbances`)."""
+(:mod:`.cutting`, compiled kernels) and drive-input disturbances (:mod:`.disturbances`).
+
+Each kind registers its scenario spec and builder (:func:`twin.process.kinds.register`); every
+module here is imported below, so a new disturbance kind is one new module (and its tests): the
+scenario schema, ``twin list`` and the runs read :data:`DISTURBANCES`.
+"""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+
+from twin.process.kinds import DISTURBANCES, DisturbanceKind, DisturbanceSpecBase, register
+
+for _module in pkgutil.iter_modules(__path__):
+    importlib.import_module(f"{__name__}.{_module.name}")
+
+__all__ = ["DISTURBANCES", "DisturbanceKind", "DisturbanceSpecBase", "register"]

@@ -38,13 +38,17 @@ perspective analysis", Chinese J. Mech. Eng. 34 (2021) 98, doi:10.1186/s10033-02
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import Literal
 
 import numpy as np
 from numba import njit
+from pydantic import Field, PositiveFloat
 
 from twin.errors import TwinInputError
 from twin.numba_cache import configure as configure_numba_cache
+from twin.process.kinds import DisturbanceSpecBase, register
+from twin.spec import StrictSpec
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
 
@@ -495,3 +499,83 @@ class ForceModels:
         xfrc, total = np.zeros((1, 6)), np.zeros(3)
         workpiece_forces(self.fops, self.fpar, self.fstate, qpos, qvel, t, xfrc, 0, total)
         return total
+
+
+class CoefficientsSpec(StrictSpec):
+    """Overrides of the material's cutting (N/mm^2) and edge (N/mm) coefficients."""
+
+    K_tc: float | None = None
+    K_rc: float | None = None
+    K_ac: float | None = None
+    K_te: float | None = None
+    K_re: float | None = None
+    K_ae: float | None = None
+
+
+class EndMillingSpec(DisturbanceSpecBase):
+    """end_milling: the mechanistic milling force on the workpiece (EndMilling), driven by its motion."""
+
+    type: Literal["end_milling"]
+    spindle_rpm: float = Field(ge=MIN_SPINDLE_RPM, description="rev/min; at least 1 (a tooth period of at most 60 s)")
+    n_flutes: int = Field(ge=1, le=MAX_FLUTES)
+    diameter_mm: PositiveFloat
+    axial_depth_mm: PositiveFloat
+    radial_depth_mm: PositiveFloat
+    mode: Literal["up", "down"] = "up"
+    # the names of the materials table (pydantic evaluates the Literal at run time; mypy cannot)
+    material: Literal[tuple(MATERIALS)] = "aluminium_7075_t6"  # type: ignore[valid-type]
+    coefficients: CoefficientsSpec = Field(default_factory=CoefficientsSpec)
+    start_s: float = Field(0.0, ge=0)
+    stop_s: PositiveFloat | None = None
+    spindle_phase_rad: float | None = Field(None, description="None: drawn from the seed")
+    seed: int | None = Field(None, ge=0, description="default: the scenario's seed")
+
+
+class AverageForceSpec(DisturbanceSpecBase):
+    """average_force: seed 004's average cutting force k_il v + k_c (z x v) (AverageForce)."""
+
+    type: Literal["average_force"]
+    k_il_N_s_per_m: float = -2500.0
+    k_c_N_s_per_m: float = 2500.0
+    harmonic_fraction: float = Field(0.0, ge=0, le=0.2)
+    spindle_rpm: float = Field(10000.0, ge=MIN_SPINDLE_RPM)
+    n_flutes: int = Field(2, ge=1, le=MAX_FLUTES)
+    start_s: float = Field(0.0, ge=0)
+    stop_s: PositiveFloat | None = None
+    harmonic_phase_rad: float | None = None
+    seed: int | None = Field(None, ge=0)
+
+
+def _end_milling_from(spec: EndMillingSpec, axis_names: list[str], seed: int, field: str) -> EndMilling:
+    coefficients = replace(MATERIALS[spec.material], **spec.coefficients.model_dump(exclude_none=True))
+    return EndMilling(
+        spec.spindle_rpm,
+        spec.n_flutes,
+        spec.diameter_mm,
+        spec.axial_depth_mm,
+        spec.radial_depth_mm,
+        spec.mode,
+        coefficients,
+        spec.start_s,
+        spec.stop_s,
+        spec.spindle_phase_rad,
+        seed,
+    )
+
+
+def _average_force_from(spec: AverageForceSpec, axis_names: list[str], seed: int, field: str) -> AverageForce:
+    return AverageForce(
+        spec.k_il_N_s_per_m,
+        spec.k_c_N_s_per_m,
+        spec.harmonic_fraction,
+        spec.spindle_rpm,
+        spec.n_flutes,
+        spec.start_s,
+        spec.stop_s,
+        spec.harmonic_phase_rad,
+        seed,
+    )
+
+
+register("end_milling", EndMillingSpec, _end_milling_from)
+register("average_force", AverageForceSpec, _average_force_from)

@@ -11,10 +11,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
+from pydantic import Field, PositiveFloat
 
 from twin.errors import TwinInputError
+from twin.process.kinds import DisturbanceSpecBase, register
+from twin.spec import axes_indices
 
 
 def _axis_mask(axes: tuple[int, ...] | None, n_axes: int) -> np.ndarray:
@@ -122,3 +126,48 @@ class HarmonicInput:
         ).sum(axis=1)
         wave = np.where(t[:, 0] >= self.start_s, wave, 0.0)
         return wave[:, None] * _axis_mask(self.axes, self.n_axes)
+
+
+class HarmonicInputSpec(DisturbanceSpecBase):
+    """harmonic_input: a sum of sines on the drive input, V (HarmonicInput; seed 003)."""
+
+    type: Literal["harmonic_input"]
+    amplitudes_V: list[float] = Field(max_length=MAX_INPUT_HARMONICS)
+    frequencies_hz: list[PositiveFloat] = Field(max_length=MAX_INPUT_HARMONICS)
+    phases_rad: list[float] | None = Field(
+        None, max_length=MAX_INPUT_HARMONICS, description="None: drawn from the seed"
+    )
+    axes: list[str] | None = None
+    start_s: float = Field(0.0, ge=0)
+    seed: int | None = Field(None, ge=0)
+
+
+class VoltageStepSpec(DisturbanceSpecBase):
+    """voltage_step: a step on the drive input, V (VoltageStep; seed 000)."""
+
+    type: Literal["voltage_step"]
+    amplitude_V: float
+    start_s: float = Field(0.0, ge=0)
+    axes: list[str] | None = None
+
+
+def _harmonic_input_from(spec: HarmonicInputSpec, axis_names: list[str], seed: int, field: str) -> HarmonicInput:
+    return HarmonicInput(
+        tuple(spec.amplitudes_V),
+        tuple(spec.frequencies_hz),
+        tuple(spec.phases_rad) if spec.phases_rad is not None else None,
+        len(axis_names),
+        axes_indices(spec.axes, axis_names, f"{field}.axes"),
+        spec.start_s,
+        seed,
+    )
+
+
+def _voltage_step_from(spec: VoltageStepSpec, axis_names: list[str], seed: int, field: str) -> VoltageStep:
+    return VoltageStep(
+        spec.amplitude_V, spec.start_s, len(axis_names), axes_indices(spec.axes, axis_names, f"{field}.axes")
+    )
+
+
+register("harmonic_input", HarmonicInputSpec, _harmonic_input_from)
+register("voltage_step", VoltageStepSpec, _voltage_step_from)
