@@ -14,7 +14,7 @@ from contextlib import contextmanager
 from dataclasses import replace
 from importlib import resources
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Literal, Union
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from pydantic import Field, PositiveFloat, ValidationError
@@ -28,7 +28,7 @@ from twin.process import DISTURBANCES, DisturbanceSpecBase
 from twin.references import REFERENCES, ReferenceSpecBase
 from twin.sim.drive import Drive, Encoder, substeps_per_tick
 from twin.sim.runner import MAX_PHYSICS_STEPS, RunResult, simulate
-from twin.spec import StrictSpec
+from twin.spec import StrictSpec, tagged_union
 
 
 class ObserverSpec(StrictSpec):
@@ -52,13 +52,11 @@ class ControllerSpec(StrictSpec):
 
 
 #: The ``[reference]`` table: one spec per registered kind (:mod:`twin.references`), told apart by
-#: ``type``.  A union built from the registry at import, which a type checker cannot follow: to
-#: it, a reference spec is the kinds' common base.
+#: ``type``; to a type checker, which cannot follow a union built at run time, the kinds' base.
 if TYPE_CHECKING:
     ReferenceSpec = ReferenceSpecBase
 else:
-    kinds = tuple(kind.spec for kind in REFERENCES.values())
-    ReferenceSpec = Annotated[Union[kinds], Field(discriminator="type")]  # noqa: UP007 (a union built at run time)
+    ReferenceSpec = tagged_union(REFERENCES)
 
 
 class DriveSpec(StrictSpec):
@@ -72,13 +70,11 @@ class SensorSpec(StrictSpec):
     velocity: Literal["backward_difference", "tachometer"] = "backward_difference"
 
 
-#: The ``[[disturbances]]`` entries: one spec per registered kind (:mod:`twin.process`), told apart
-#: by ``type`` (a union built from the registry; to a type checker, the kinds' common base).
+#: The ``[[disturbances]]`` entries: one spec per registered kind (:mod:`twin.process`), the same way.
 if TYPE_CHECKING:
     DisturbanceSpec = DisturbanceSpecBase
 else:
-    _disturbance_kinds = tuple(kind.spec for kind in DISTURBANCES.values())
-    DisturbanceSpec = Annotated[Union[_disturbance_kinds], Field(discriminator="type")]  # noqa: UP007 (built at run time)
+    DisturbanceSpec = tagged_union(DISTURBANCES)
 
 
 #: Shortest physics step (s): 0.1 us, a thousand times finer than any mode of these drives needs.

@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
-from pydantic import BaseModel, ConfigDict
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Annotated, Union
+
+from pydantic import BaseModel, ConfigDict, Field
 
 
 class StrictSpec(BaseModel):
@@ -28,3 +32,50 @@ def axes_indices(names: list[str] | None, axis_names: list[str], field: str) -> 
         if a not in axis_names:
             raise TwinInputError(field, a, f"machine axes are {axis_names}")
     return tuple(axis_names.index(a) for a in names)
+
+
+class KindSpec(StrictSpec):
+    """What the spec of every registered kind (reference, disturbance) has: the ``type`` that
+    names its kind."""
+
+    type: str
+
+
+@dataclass(frozen=True)
+class Kind:
+    """One kind of a registry (:data:`twin.references.REFERENCES`, :data:`twin.process.DISTURBANCES`).
+
+    Attributes
+    ----------
+    name : str
+        The scenario's ``type``.
+    spec : type
+        Its pydantic model (a :class:`KindSpec` with ``type: Literal[name]``); its docstring's
+        first line is the kind's docs line (``twin list``).
+    build : callable
+        The builder of the kind's model from its spec (its registry says the arguments).
+    """
+
+    name: str
+    spec: type[KindSpec]
+    build: Callable
+
+    @property
+    def doc(self) -> str:
+        """The first line of the spec's docstring."""
+        return (self.spec.__doc__ or self.name).strip().splitlines()[0]
+
+
+def register_kind(registry: dict[str, Kind], name: str, spec: type[KindSpec], build: Callable) -> Kind:
+    """Add a kind to ``registry``; each kind's module calls this at import."""
+    if name in registry:
+        raise ValueError(f"kind {name!r} is registered twice")
+    registry[name] = Kind(name, spec, build)
+    return registry[name]
+
+
+def tagged_union(registry: dict[str, Kind]):
+    """The pydantic type of a table that is any of ``registry``'s kinds, told apart by ``type``
+    (a union built at run time from the registered specs)."""
+    specs = tuple(kind.spec for kind in registry.values())
+    return Annotated[Union[specs], Field(discriminator="type")]  # noqa: UP007 (a union built at run time)

@@ -11,9 +11,9 @@ from __future__ import annotations
 import importlib
 import pkgutil
 
-from twin.process.kinds import DISTURBANCES, DisturbanceKind, DisturbanceSpecBase, register
+from twin.process.kinds import DISTURBANCES, DisturbanceSpecBase, Kind, register
 
 for _module in pkgutil.iter_modules(__path__):
     importlib.import_module(f"{__name__}.{_module.name}")
 
-__all__ = ["DISTURBANCES", "DisturbanceKind", "DisturbanceSpecBase", "register"]
+__all__ = ["DISTURBANCES", "DisturbanceSpecBase", "Kind", "register"]

@@ -16,7 +16,7 @@ from __future__ import annotations
 import importlib
 import pkgutil
 
-from twin.references.kinds import REFERENCES, ReferenceKind, ReferenceSpecBase, register
+from twin.references.kinds import REFERENCES, Kind, ReferenceSpecBase, register
 from twin.references.paths import Circle, Polyline, square
 from twin.references.sines import MAX_SINES, SumOfSines
 from twin.references.step import Ramp, Step
@@ -28,9 +28,9 @@ __all__ = [
     "MAX_SINES",
     "REFERENCES",
     "Circle",
+    "Kind",
     "Polyline",
     "Ramp",
-    "ReferenceKind",
     "ReferenceSpecBase",
     "Step",
     "SumOfSines",

@@ -4,55 +4,21 @@ scenario's ``[reference]`` table, ``type = "<name>"``) and the builder of its re
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 
-from twin.spec import StrictSpec
+from twin.spec import Kind, KindSpec, register_kind
+
+#: The base of every reference kind's spec.
+ReferenceSpecBase = KindSpec
+#: Reference kinds by name, in registration order: each builder is ``build(spec, axis_names) ->
+#: reference`` (``sample(t) -> (len(t), n_axes, 3)``), raising ``TwinInputError`` naming the field.
+REFERENCES: dict[str, Kind] = {}
 
 
-class ReferenceSpecBase(StrictSpec):
-    """What every reference kind's spec has: the ``type`` that names its kind."""
-
-    type: str
-
-
-@dataclass(frozen=True)
-class ReferenceKind:
-    """One reference kind.
-
-    Attributes
-    ----------
-    name : str
-        The scenario's ``type``.
-    spec : type
-        Its pydantic model (a :class:`ReferenceSpecBase` with ``type: Literal[name]``); its
-        docstring's first line is the kind's docs line (``twin list``).
-    build : callable
-        ``build(spec, axis_names) -> reference``: the reference for a machine with those axes
-        (``sample(t) -> (len(t), n_axes, 3)``); raises ``TwinInputError`` naming the field.
-    """
-
-    name: str
-    spec: type[ReferenceSpecBase]
-    build: Callable
-
-    @property
-    def doc(self) -> str:
-        """The first line of the spec's docstring."""
-        return (self.spec.__doc__ or self.name).strip().splitlines()[0]
-
-
-#: Reference kinds by name, in registration order.
-REFERENCES: dict[str, ReferenceKind] = {}
-
-
-def register(name: str, spec: type[ReferenceSpecBase], build: Callable) -> ReferenceKind:
+def register(name: str, spec: type[KindSpec], build: Callable) -> Kind:
     """Add a reference kind; its module calls this at import."""
-    if name in REFERENCES:
-        raise ValueError(f"reference kind {name!r} is registered twice")
-    REFERENCES[name] = ReferenceKind(name, spec, build)
-    return REFERENCES[name]
+    return register_kind(REFERENCES, name, spec, build)
 
 
 def per_axis(signal: np.ndarray, n_axes: int, axes: tuple[int, ...] | None) -> np.ndarray:
