@@ -104,7 +104,19 @@ def test_tachometer_and_decimated_recording_from_a_scenario():
             "controller block linear/linear.x",
             "vel.z",
         ),
-        ({"type": "cascade", "params": {"kp_pos": 1.0, "gain": 2.0}}, "controller.params", "'gain' is not one of"),
+        (
+            {"type": "cascade", "params": {"kp_pos": 1.0, "gain": 2.0}},
+            "controller.params.gain",
+            "not a parameter of cascade (its parameters: kp_pos, ki_pos, kp_vel, ki_vel, velocity_ref_ff)",
+        ),
+        ({"type": "pid", "params": {"kp": "30"}}, "controller.params.kp", "valid number"),
+        ({"type": "tf", "params": {"num": [1.0]}}, "controller.params.den", "tf needs it"),
+        ({"type": "seed004_mimo", "params": {"zpetc": 1}}, "controller.params.zpetc", "valid boolean"),
+        (
+            {"type": "pid", "observer": {"type": "harmonic", "params": {"bandwidth_hz": -1.0}}},
+            "controller.observer.params.bandwidth_hz",
+            "greater than 0",
+        ),
         ({"type": "pid", "observer": {"type": "kalman"}}, "controller.observer.type", "kalman"),
         (
             {"type": "pid", "observer": {"type": "inverse_model", "params": {"order": 1}}},

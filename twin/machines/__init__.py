@@ -1,15 +1,20 @@
-"""Machine registry: ``build(name, overrides)`` returns a compiled :class:`BuiltMachine`."""
+"""Machine registry: ``build(name, overrides)`` returns a compiled :class:`BuiltMachine`.
+
+Each machine is one module here whose class registers itself (:func:`register_machine`): its
+parameters with units, sources and limits, its MJCF file, its docs line; every module of this
+package is imported below, so a new machine is one module, its MJCF folder and its tests.
+"""
 
 from __future__ import annotations
 
-from twin.errors import TwinInputError
-from twin.machines.base import Axis, BuiltMachine, Machine, Parameter, mjcf_dir
-from twin.machines.cncmt import CNCMT, CNCMTXY
-from twin.machines.googol import GoogolXY
-from twin.machines.linear_motor import LinearMotorXY
-from twin.machines.sabau import SabauXY
+import importlib
+import pkgutil
 
-MACHINES: dict[str, Machine] = {m.name: m for m in (CNCMT(), CNCMTXY(), GoogolXY(), LinearMotorXY(), SabauXY())}
+from twin.errors import TwinInputError
+from twin.machines.base import MACHINES, Axis, BuiltMachine, Machine, Parameter, mjcf_dir, register_machine
+
+for _module in pkgutil.iter_modules(__path__):
+    importlib.import_module(f"{__name__}.{_module.name}")
 
 
 def get_machine(name: str) -> Machine:
@@ -31,4 +36,14 @@ def build(name: str, overrides: dict[str, float] | None = None, timestep_s: floa
     return get_machine(name).build(overrides, timestep_s)
 
 
-__all__ = ["MACHINES", "Axis", "BuiltMachine", "Machine", "Parameter", "build", "get_machine", "mjcf_dir"]
+__all__ = [
+    "MACHINES",
+    "Axis",
+    "BuiltMachine",
+    "Machine",
+    "Parameter",
+    "build",
+    "get_machine",
+    "mjcf_dir",
+    "register_machine",
+]

@@ -517,16 +517,20 @@ class EndMillingSpec(DisturbanceSpecBase):
 
     type: Literal["end_milling"]
     spindle_rpm: float = Field(ge=MIN_SPINDLE_RPM, description="rev/min; at least 1 (a tooth period of at most 60 s)")
-    n_flutes: int = Field(ge=1, le=MAX_FLUTES)
-    diameter_mm: PositiveFloat
-    axial_depth_mm: PositiveFloat
-    radial_depth_mm: PositiveFloat
-    mode: Literal["up", "down"] = "up"
+    n_flutes: int = Field(ge=1, le=MAX_FLUTES, description="teeth of the cutter")
+    diameter_mm: PositiveFloat = Field(description="cutter diameter, mm")
+    axial_depth_mm: PositiveFloat = Field(description="axial depth of cut, mm")
+    radial_depth_mm: PositiveFloat = Field(description="radial depth of cut (the diameter: a slot), mm")
+    mode: Literal["up", "down"] = Field("up", description="up (conventional) or down (climb) milling")
     # the names of the materials table (pydantic evaluates the Literal at run time; mypy cannot)
-    material: Literal[tuple(MATERIALS)] = "aluminium_7075_t6"  # type: ignore[valid-type]
-    coefficients: CoefficientsSpec = Field(default_factory=CoefficientsSpec)
-    start_s: float = Field(0.0, ge=0)
-    stop_s: PositiveFloat | None = None
+    material: Literal[tuple(MATERIALS)] = Field(  # type: ignore[valid-type]
+        "aluminium_7075_t6", description="cutting coefficients of: " + ", ".join(MATERIALS)
+    )
+    coefficients: CoefficientsSpec = Field(
+        default_factory=CoefficientsSpec, description="overrides of the material's coefficients"
+    )
+    start_s: float = Field(0.0, ge=0, description="the cut starts, s")
+    stop_s: PositiveFloat | None = Field(None, description="the cut stops, s (default: never)")
     spindle_phase_rad: float | None = Field(None, description="None: drawn from the seed")
     seed: int | None = Field(None, ge=0, description="default: the scenario's seed")
 
@@ -535,15 +539,15 @@ class AverageForceSpec(DisturbanceSpecBase):
     """average_force: seed 004's average cutting force k_il v + k_c (z x v) (AverageForce)."""
 
     type: Literal["average_force"]
-    k_il_N_s_per_m: float = -2500.0
-    k_c_N_s_per_m: float = 2500.0
-    harmonic_fraction: float = Field(0.0, ge=0, le=0.2)
-    spindle_rpm: float = Field(10000.0, ge=MIN_SPINDLE_RPM)
-    n_flutes: int = Field(2, ge=1, le=MAX_FLUTES)
-    start_s: float = Field(0.0, ge=0)
-    stop_s: PositiveFloat | None = None
-    harmonic_phase_rad: float | None = None
-    seed: int | None = Field(None, ge=0)
+    k_il_N_s_per_m: float = Field(-2500.0, description="force along the velocity per velocity, N s/m")
+    k_c_N_s_per_m: float = Field(2500.0, description="force across the velocity per velocity, N s/m")
+    harmonic_fraction: float = Field(0.0, ge=0, le=0.2, description="tooth-passing harmonic, a fraction of the force")
+    spindle_rpm: float = Field(10000.0, ge=MIN_SPINDLE_RPM, description="rev/min (sets the tooth frequency)")
+    n_flutes: int = Field(2, ge=1, le=MAX_FLUTES, description="teeth of the cutter")
+    start_s: float = Field(0.0, ge=0, description="the cut starts, s")
+    stop_s: PositiveFloat | None = Field(None, description="the cut stops, s (default: never)")
+    harmonic_phase_rad: float | None = Field(None, description="None: drawn from the seed")
+    seed: int | None = Field(None, ge=0, description="default: the scenario's seed")
 
 
 def _end_milling_from(spec: EndMillingSpec, axis_names: list[str], seed: int, field: str) -> EndMilling:

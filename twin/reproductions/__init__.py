@@ -1,27 +1,19 @@
-"""Each paper's reproduction, one package per seed, behind one registry.
-
-A reproduction package offers ``run(samples, twin_samples, seed, progress) -> dict``,
-``format_report(results) -> str``, ``write_plots(folder, results) -> list of Path`` (``results``: what
-``run`` returned, for the plots that need it), ``record(path)`` and
-``failed(results) -> bool``, ``markdown_tables(results) -> dict`` (the docs page's tables) and,
-where the paper gives one, ``certificates(machine, controller, symbols, others) -> list of
-dict`` (a robustness certificate over a parameter box, which ``twin sweep`` prints beside its
-evidence); ``twin reproduce SEED`` dispatches through :data:`REPRODUCTIONS`.
+"""The papers' reproductions, one package per seed, each registering a
+:class:`~twin.reproductions.base.Reproduction` (every package here is imported below, so a new
+reproduction is one new package and its tests); ``twin reproduce SEED`` and ``twin.reproduce``
+dispatch through :data:`REPRODUCTIONS`, ``twin sweep`` asks each for certificates.
 """
 
 from __future__ import annotations
 
 import importlib
+import pkgutil
 
-#: Seed name -> package of its reproduction.
-REPRODUCTIONS = {
-    "seed000": "twin.reproductions.seed000",
-    "seed001": "twin.reproductions.seed001",
-    "seed002": "twin.reproductions.seed002",
-    "seed003": "twin.reproductions.seed003",
-    "seed004": "twin.reproductions.seed004",
-}
+from twin.reproductions.base import REPRODUCTIONS, Reproduction, register_reproduction
 
+for _module in pkgutil.iter_modules(__path__):
+    if _module.ispkg:
+        importlib.import_module(f"{__name__}.{_module.name}")
 
 #: ``twin reproduce``'s defaults: Monte Carlo samples, random twin samples, seed.
 DEFAULT_SAMPLES, DEFAULT_TWIN_SAMPLES, DEFAULT_SEED = 1000, 20, 0
@@ -37,18 +29,25 @@ def twin_vs_tf(label: str, twin: dict, tf: dict, keys, tol_rel: float) -> list[s
     ]
 
 
-def reproduction(seed: str):
-    """The reproduction package of ``seed`` (imported on demand)."""
-    return importlib.import_module(REPRODUCTIONS[seed])
+def reproduction(seed: str) -> Reproduction:
+    """The reproduction of ``seed``."""
+    return REPRODUCTIONS[seed]
 
 
 def certificates(machine: str, controller: str | None, symbols: set[str], others: list[str]) -> list[dict]:
     """Every reproduction's robustness certificates for ``controller`` on ``machine`` when a
-    sweep varies the machine parameters ``symbols`` (and the other scenario paths ``others``):
-    each package's ``certificates`` hook, where it has one."""
-    out = []
-    for seed in REPRODUCTIONS:
-        hook = getattr(reproduction(seed), "certificates", None)
-        if hook is not None:
-            out += hook(machine, controller, symbols, others)
-    return out
+    sweep varies the machine parameters ``symbols`` (and the other scenario paths ``others``)."""
+    return [c for r in REPRODUCTIONS.values() for c in r.certificates(machine, controller, symbols, others)]
+
+
+__all__ = [
+    "DEFAULT_SAMPLES",
+    "DEFAULT_SEED",
+    "DEFAULT_TWIN_SAMPLES",
+    "REPRODUCTIONS",
+    "Reproduction",
+    "certificates",
+    "register_reproduction",
+    "reproduction",
+    "twin_vs_tf",
+]

@@ -10,6 +10,38 @@ from twin.reproductions.seed000 import procedure as r
 from twin.reproductions.tables import fmt, markdown_table
 
 
+def run(samples: int, twin_samples: int, seed: int, progress: bool) -> dict:
+    """Every number of the reproduction (:func:`run_all`)."""
+    return run_all(samples, twin_samples, seed, progress=progress)
+
+
+def twin_runs() -> dict:
+    """The nominal twin step runs of Table 2, by controller."""
+    nominal = r.nominal_params()
+    return {name: r.twin_step_result(c, nominal) for name, c in r.TABLE2_CONTROLLERS.items()}
+
+
+#: The scenario controller kinds whose certificate this reproduction computes, by Table 2 name.
+CERTIFIED = {"seed000_robust_pi": "robust_pi", "seed000_imc": "imc", "seed000_hinf_reduced": "hinf"}
+
+
+def certificates(machine: str, controller: str | None, symbols: set[str], others: list[str]) -> list[dict]:
+    """Seed 000's Kharitonov verdict and stability margin over Table 1's box (K1, K2, m, Im) for
+    its three controllers on ``cncmt``, when a sweep varies nothing else."""
+    if not (machine == "cncmt" and controller in CERTIFIED and symbols <= {"K1", "K2", "m", "Im"} and not others):
+        return []
+    row = next(row for row in r.interval_table() if row["controller"] == CERTIFIED[controller])
+    return [
+        {
+            "source": "seed 000, Kharitonov over Table 1's box (K1, K2, m, Im)",
+            "kharitonov_robustly_stable": bool(row["kharitonov_stable"]),
+            "stability_margin": float(row["sm"]),
+            "family_stable": bool(row["family_stable"]),
+            "note": "SM < 0: Kharitonov cannot prove stability; family_stable: every member checked",
+        }
+    ]
+
+
 def run_all(mc_samples: int = 1000, twin_random: int = 20, seed: int = 0, progress: bool = True) -> dict:
     """Every part of the reproduction, as one JSON-ready dict."""
     t2 = r.table2(mc_samples, twin_random, seed, progress)
@@ -357,7 +389,7 @@ def _stable_series(ctrl, params) -> tuple[np.ndarray, np.ndarray]:
     return series
 
 
-def write_plots(directory: Path) -> list[Path]:
+def write_plots(directory: Path, results: dict | None = None) -> list[Path]:
     """PNG step responses as Figs. 7-10: per controller the nominal response with the band of
     the paper's 10 samples (transfer functions) and the nominal twin, then all three nominal."""
     import matplotlib

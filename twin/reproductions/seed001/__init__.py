@@ -1,4 +1,4 @@
-"""Seed 001 (Sabau 2022): the entry points ``twin reproduce seed001`` calls.
+"""Seed 001: the :class:`~twin.reproductions.base.Reproduction` ``twin reproduce seed001`` runs.
 
 :mod:`.procedure` computes (relay test and Ziegler-Nichols, cascades, state feedback by pole
 placement, LQR and LMI regions with their cascades, the fractional PI and the structured-mu
@@ -6,6 +6,17 @@ cascade, the bee colony, the trajectories of Table 2, on the transfer functions 
 twin); :mod:`.report` prints and plots.
 """
 
-from twin.reproductions.seed001.report import failed, format_report, markdown_tables, record, run, write_plots
+from __future__ import annotations
 
-__all__ = ["failed", "format_report", "markdown_tables", "record", "run", "write_plots"]
+from twin.reproductions.base import Reproduction, register_reproduction
+
+
+@register_reproduction
+class Seed001(Reproduction):
+    """Seed 001 (Sabau 2022): classical to advanced control of two coupled identified axes.
+
+    From the relay test and Ziegler-Nichols to LMI regions and the fractional PI.
+    """
+
+    name = "seed001"
+    report_module = "twin.reproductions.seed001.report"

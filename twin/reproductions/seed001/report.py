@@ -537,13 +537,6 @@ def write_plots(folder, results: dict) -> list[Path]:
     return written
 
 
-def record(path: Path) -> None:
-    """Rerun recording of the twin's Table 2 runs of experiment 3 (every path)."""
-    from twin.recording import record_runs
-
-    record_runs({path_name.replace(" ", "_"): r.trajectory_run(path_name, 3) for path_name in r.TRAJECTORIES}, path)
-
-
-def failed(results: dict) -> bool:
-    """Whether a twin number departs from its transfer-function number by more than 2 %."""
-    return bool(results["twin_vs_tf_mismatches"])
+def twin_runs() -> dict:
+    """The twin's Table 2 runs of experiment 3, by path."""
+    return {path_name.replace(" ", "_"): r.trajectory_run(path_name, 3) for path_name in r.TRAJECTORIES}

@@ -1,10 +1,18 @@
-"""Seed 002 (Anang et al.): the entry points ``twin reproduce seed002`` calls.
+"""Seed 002: the :class:`~twin.reproductions.base.Reproduction` ``twin reproduce seed002`` runs.
 
 :mod:`.procedure` computes (margins, Popov bound, critical gains, Tables 1-3 on the
 transfer-function loop and the twin); :mod:`.report` prints and plots.  ``samples`` and
 ``seed`` do not apply (nothing is random); ``twin_samples = 0`` leaves the twin out.
 """
 
-from twin.reproductions.seed002.report import failed, format_report, markdown_tables, record, run, write_plots
+from __future__ import annotations
 
-__all__ = ["failed", "format_report", "markdown_tables", "record", "run", "write_plots"]
+from twin.reproductions.base import Reproduction, register_reproduction
+
+
+@register_reproduction
+class Seed002(Reproduction):
+    """Seed 002 (Anang et al.): PID margins, the nonlinear PID and its Popov bound, sine tracking while milling."""
+
+    name = "seed002"
+    report_module = "twin.reproductions.seed002.report"

@@ -241,7 +241,7 @@ def write_plots(directory: Path, results: dict | None = None) -> list[Path]:
     written.append(directory / "seed002_fig4_bode_sensitivity.png")
     fig.savefig(written[-1], dpi=120, bbox_inches="tight")
     plt.close(fig)
-    runs = fig10_runs()
+    runs = twin_runs()
     fig, axes = plt.subplots(2, 1, figsize=(7, 6))
     for name, res in runs.items():
         e = res.error_m()[:, 0] * 1e3
@@ -264,7 +264,7 @@ def write_plots(directory: Path, results: dict | None = None) -> list[Path]:
     return written
 
 
-def fig10_runs() -> dict:
+def twin_runs() -> dict:
     """The twin runs of Fig. 10: 0.4 Hz, 10 mm, 1500 rpm, PID and NPID."""
     from controllers import make_controller
     from twin.process.cutting import EndMilling
@@ -291,15 +291,3 @@ def run(samples: int, twin_samples: int, seed: int, progress: bool) -> dict:
     """The registry's entry point: :func:`run_all`; ``samples`` and ``seed`` do not apply
     (nothing is random), ``twin_samples = 0`` leaves the twin out."""
     return run_all(twin=twin_samples > 0, progress=progress)
-
-
-def record(path: Path) -> None:
-    """Rerun recording of Fig. 10's twin runs (0.4 Hz, 10 mm, 1500 rpm; PID and NPID)."""
-    from twin.recording import record_runs
-
-    record_runs(fig10_runs(), path)
-
-
-def failed(results: dict) -> bool:
-    """Whether a twin table number departs from its transfer-function number by more than 2 %."""
-    return bool(results["twin_vs_tf_mismatches"])

@@ -1,10 +1,18 @@
-"""Seed 003 (Maharof 2021): the entry points ``twin reproduce seed003`` calls.
+"""Seed 003: the :class:`~twin.reproductions.base.Reproduction` ``twin reproduce seed003`` runs.
 
 :mod:`.procedure` computes (cascade design, IMBDO Q-filter, the numerical cases on the
 transfer-function loop and the twin); :mod:`.report` prints and plots.  ``samples`` and
 ``seed`` do not apply; ``twin_samples = 0`` leaves the twin out.
 """
 
-from twin.reproductions.seed003.report import failed, format_report, markdown_tables, record, run, write_plots
+from __future__ import annotations
 
-__all__ = ["failed", "format_report", "markdown_tables", "record", "run", "write_plots"]
+from twin.reproductions.base import Reproduction, register_reproduction
+
+
+@register_reproduction
+class Seed003(Reproduction):
+    """Seed 003 (Maharof 2021): cascade P/PI with inverse-model and harmonic disturbance observers."""
+
+    name = "seed003"
+    report_module = "twin.reproductions.seed003.report"

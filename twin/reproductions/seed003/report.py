@@ -281,7 +281,7 @@ def write_plots(directory: Path, results: dict | None = None) -> list[Path]:
     fig.savefig(written[-1], dpi=120, bbox_inches="tight")
     plt.close(fig)
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    for config, res in config_runs().items():
+    for config, res in twin_runs().items():
         e = res.error_m()[int(r.STEADY_FROM_S / r.DT_S) :, 0]
         window = np.hanning(len(e))
         ax.loglog(
@@ -304,7 +304,7 @@ def write_plots(directory: Path, results: dict | None = None) -> list[Path]:
     return written
 
 
-def config_runs() -> dict:
+def twin_runs() -> dict:
     """Twin runs of the four configurations: 10 mm at 0.5 Hz, three harmonics."""
     from twin.references import SumOfSines
     from twin.sim.runner import simulate
@@ -328,15 +328,3 @@ def run(samples: int, twin_samples: int, seed: int, progress: bool) -> dict:
     """The registry's entry point: :func:`run_all`; ``samples`` and ``seed`` do not apply
     (nothing is random), ``twin_samples = 0`` leaves the twin out."""
     return run_all(twin=twin_samples > 0, progress=progress)
-
-
-def record(path: Path) -> None:
-    """Rerun recording of the four configurations' twin runs (10 mm at 0.5 Hz, three harmonics)."""
-    from twin.recording import record_runs
-
-    record_runs(config_runs(), path)
-
-
-def failed(results: dict) -> bool:
-    """Whether a twin MTE or RMSE departs from its transfer-function number by more than 2 %."""
-    return bool(results["twin_vs_tf_mismatches"])

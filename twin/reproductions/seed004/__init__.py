@@ -1,4 +1,4 @@
-"""Seed 004 (Choi, Hong, Kim, Kim 1999): the entry points ``twin reproduce seed004`` calls.
+"""Seed 004: the :class:`~twin.reproductions.base.Reproduction` ``twin reproduce seed004`` runs.
 
 :mod:`.procedure` computes (loop-shaping design, reduction, PID, mu analysis and sampled
 plants, ZPETC, the circle tests on the transfer functions and the twin); :mod:`.report`
@@ -6,14 +6,21 @@ prints and plots.  ``samples`` random plants per controller beside the 1024 corn
 ``twin_samples = 0`` leaves the twin out.
 """
 
-from twin.reproductions.seed004.report import (
-    certificates,
-    failed,
-    format_report,
-    markdown_tables,
-    record,
-    run,
-    write_plots,
-)
+from __future__ import annotations
 
-__all__ = ["certificates", "failed", "format_report", "markdown_tables", "record", "run", "write_plots"]
+from twin.reproductions.base import Reproduction, register_reproduction
+
+
+@register_reproduction
+class Seed004(Reproduction):
+    """Seed 004 (Choi, Hong, Kim, Kim 1999): MIMO H-infinity loop shaping, mu and ZPETC.
+
+    On the linear-motor XY table, with the PID pair it is compared with.
+    """
+
+    name = "seed004"
+    report_module = "twin.reproductions.seed004.report"
+
+    def certificates(self, machine: str, controller: str | None, symbols: set[str], others: list[str]) -> list[dict]:
+        """See :func:`.report.certificates`."""
+        return self.report().certificates(machine, controller, symbols, others)

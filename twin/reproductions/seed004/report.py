@@ -405,7 +405,7 @@ def write_plots(folder, results: dict | None = None) -> list[Path]:
         ax.legend()
         save(fig, name)
 
-    runs = cutting_runs()
+    runs = twin_runs()
     fig, ax = plt.subplots(figsize=(6.5, 6.5))
     for kind, res in runs.items():
         ref, pos = res.ref[:, :, 0], res.table_position_m()
@@ -432,16 +432,9 @@ def write_plots(folder, results: dict | None = None) -> list[Path]:
     return written
 
 
-def cutting_runs() -> dict:
+def twin_runs() -> dict:
     """The twin's two cutting circles (MIMO R 28, PID R 30), mechanistic force."""
     return {kind: r.cutting_run(kind) for kind in r.KINDS}
-
-
-def record(path: Path) -> None:
-    """Rerun recording of the two cutting circles."""
-    from twin.recording import record_runs
-
-    record_runs(cutting_runs(), path)
 
 
 def certificates(machine: str, controller: str | None, symbols: set[str], others: list[str]) -> list[dict]:
@@ -461,8 +454,3 @@ def certificates(machine: str, controller: str | None, symbols: set[str], others
             "note": "covers the sweep only where its draws lie inside that box",
         }
     ]
-
-
-def failed(results: dict) -> bool:
-    """Whether a twin number departs from its transfer-function number by more than 2 %."""
-    return bool(results["twin_vs_tf_mismatches"])

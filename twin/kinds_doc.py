@@ -1,0 +1,96 @@
+"""The docs site's reference of every registered kind, generated from the registries
+(``docs/hooks.py`` puts it where a page says ``<!-- kinds: NAME -->``), so the docs cannot drift
+from the code: each kind's docs line, and its parameters with defaults, limits and units."""
+
+from __future__ import annotations
+
+from pydantic import BaseModel
+
+#: What each ``<!-- kinds: NAME -->`` marker expands to: the registry's title and table key.
+SECTIONS = ("references", "disturbances", "controllers", "observers", "machines", "reproductions")
+
+_LIMITS = {"ge": "≥", "gt": ">", "le": "≤", "lt": "<"}
+
+
+def _limits(info) -> str:
+    """A field's bounds, e.g. ``> 0, ≤ 2``."""
+    out = []
+    for item in info.metadata:
+        for attr, sign in _LIMITS.items():
+            bound = getattr(item, attr, None)
+            if bound is not None:
+                out.append(f"{sign} {bound:g}")
+    return ", ".join(out)
+
+
+def _cell(text: str) -> str:
+    return text.replace("|", "\\|").replace("\n", " ")
+
+
+def parameter_table(model: type[BaseModel], skip: tuple[str, ...] = ("type",)) -> str:
+    """A markdown table of a pydantic model's fields: name, default, limits, description."""
+    rows = ["| parameter | default | limits | what (unit) |", "|---|---|---|---|"]
+    for name, info in model.model_fields.items():
+        if name in skip:
+            continue
+        default = "required" if info.is_required() else f"`{info.get_default(call_default_factory=True)!r}`"
+        rows.append(f"| `{name}` | {default} | {_limits(info)} | {_cell(info.description or '')} |")
+    return "\n".join(rows) if len(rows) > 2 else "No parameters."
+
+
+def _kinds(registry: dict, spec_of) -> str:
+    parts = []
+    for name, kind in registry.items():
+        parts += [
+            f"### `{name}`",
+            "",
+            _cell(kind.doc.removeprefix(f"{name}: ")),
+            "",
+            parameter_table(spec_of(kind)),
+            "",
+        ]
+    return "\n".join(parts)
+
+
+def _machines() -> str:
+    from twin.machines import MACHINES
+
+    parts = []
+    for name, machine in MACHINES.items():
+        rows = ["| symbol | nominal | unit | what (source) |", "|---|---|---|---|"]
+        rows += [f"| `{s}` | {p.value:g} | {p.unit} | {_cell(p.description)} |" for s, p in machine.parameters.items()]
+        parts += [f"### `{name}`", "", machine.summary, "", *rows, ""]
+    return "\n".join(parts)
+
+
+def kinds_markdown(section: str) -> str:
+    """The markdown of one section of :data:`SECTIONS`, from its registry.
+
+    Raises
+    ------
+    KeyError
+        A section that is not one of :data:`SECTIONS`.
+    """
+    if section == "references":
+        from twin.references import REFERENCES
+
+        return _kinds(REFERENCES, lambda k: k.spec)
+    if section == "disturbances":
+        from twin.process import DISTURBANCES
+
+        return _kinds(DISTURBANCES, lambda k: k.spec)
+    if section == "controllers":
+        from controllers import CONTROLLERS
+
+        return _kinds(CONTROLLERS, lambda k: k.params)
+    if section == "observers":
+        from controllers import OBSERVERS
+
+        return _kinds(OBSERVERS, lambda k: k.params)
+    if section == "machines":
+        return _machines()
+    if section == "reproductions":
+        from twin.reproductions import REPRODUCTIONS
+
+        return "\n".join(f"- `{name}`: {paper.doc}" for name, paper in REPRODUCTIONS.items()) + "\n"
+    raise KeyError(section)
