@@ -41,7 +41,7 @@ class HoldRef(ReferenceSpecBase):
     position_m: float
 
 
-register("hold", HoldRef, lambda spec, axis_names: Hold(spec.position_m, len(axis_names)))
+register("hold", HoldRef, lambda spec, ctx: Hold(spec.position_m, len(ctx.axis_names)))
 '''
 
 SCENARIO = """
@@ -57,7 +57,7 @@ position_m = 0.001
 
 def test_the_schema_is_the_registry():
     tags = set(Scenario.model_json_schema()["properties"]["reference"]["discriminator"]["mapping"])
-    assert tags == set(REFERENCES) == {"step", "ramp", "sines", "circle", "square", "polyline"}
+    assert tags == set(REFERENCES) == {"step", "ramp", "sines", "circle", "square", "polyline", "gcode"}
 
 
 def test_a_new_kind_is_one_module(tmp_path):

@@ -112,3 +112,12 @@ def test_every_reproduction_offers_the_whole_interface(tmp_path: Path):
     assert not REPRODUCTIONS["seed002"].failed({"twin_vs_tf_mismatches": []})
     # the certificates hook: seed 004's mu bound for its own controllers, nothing elsewhere
     assert REPRODUCTIONS["seed002"].certificates("googol_xy", "seed002_pid", {"m"}, []) == []
+
+
+def test_each_machine_readme_states_its_motion_limits():
+    from twin.kinds_doc import motion_limits_table
+
+    root = Path(__file__).resolve().parent.parent
+    for name, machine in MACHINES.items():
+        readme = (root / "mjcf" / name / "README.md").read_text()
+        assert motion_limits_table(machine) in readme, name

@@ -330,3 +330,38 @@ def reproduce(
             "must be >= 1 (samples) / >= 0 (twin_samples)",
         )
     return reproduction(seed).run(samples, twin_samples, random_seed, progress)
+
+
+def gcode(file: str | Path, machine: str | None = None, **settings: Any) -> dict:
+    """A part program as ``twin gcode FILE --json`` reports it: ``moves`` as read (line, kind,
+    end_mm, arcs' plane, center_mm and turns, feed, spindle) and, with a ``machine``,
+    ``planned`` (cycle time, feed-only time, limits and largest values per axis, path deviation).
+
+    Settings are keyword arguments with dotted paths below ``planner`` and ``reference``
+    (``planner__tolerance_mm=0.02`` or ``**{"planner.feed_override": 0.8}``).
+
+    Raises
+    ------
+    TwinInputError
+        The program's first bad line (``file:line``, its text and the reason), or a bad setting.
+    """
+    from twin.gcode.planner import PlanningError, plan
+    from twin.gcode.reader import GcodeError, read_program
+    from twin.gcode.report import planned_summary
+    from twin.machines import build
+    from twin.references.gcode import program_settings
+
+    reference, planner = program_settings(str(file), _paths(settings))
+    if not Path(file).is_file():
+        raise TwinInputError("file", str(file), "no such file")
+    try:
+        moves = list(read_program(file, reference.reader_settings()))
+        out: dict[str, Any] = {"file": str(file), "moves": [m.as_dict() for m in moves]}
+        if machine is not None:
+            limits = planner.limits(build(machine).motion_limits)
+            out["planned"] = planned_summary(plan(moves, limits, planner), limits)
+    except GcodeError as exc:
+        raise TwinInputError(f"{exc.source}:{exc.line}", exc.text.strip(), exc.reason) from None
+    except PlanningError as exc:
+        raise TwinInputError("file", str(file), str(exc)) from None
+    return out

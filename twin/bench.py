@@ -14,7 +14,14 @@ Cases:
     observer on ``googol_xy`` at 10 kHz (the velocity is the encoder's backward difference);
 (c) ``npid_googol``: seed 002's nonlinear PID (eqs. 6-8) on ``googol_xy`` at 10 kHz;
 (d) ``cutting_circle_linear_motor``: the bundled ``seed004_cutting_circle`` (mechanistic end
-    milling every physics step, PID + feedforward at 2 kHz, 0.1 ms physics).
+    milling every physics step, PID + feedforward at 2 kHz, 0.1 ms physics);
+(e) ``gcode_test_piece_linear_motor``: the bundled ``gcode_test_piece`` (the part program planned
+    once, before the timing; its reference sampled by Hermite interpolation every tick).
+
+G-code (``gcode``): the reader's lines per second on a generated program of ``gcode_lines``
+lines read from a file on one core (``read_lines_per_s``), and the planner's wall time for a
+generated pocket raster of 10 000 moves, lines with tangent arc turnarounds
+(``plan_10000_moves_s``, median of the repeats) on ``linear_motor_xy``'s limits.
 
 Start-up (``startup``): wall time of ``twin run seed004_cutting_circle --json`` (2.2 s simulated)
 as a new Python process (``python -m twin.cli``, as the ``twin`` script), alternating with the
@@ -63,6 +70,9 @@ def _cases() -> dict:
     cutting = prepare(load_scenario("seed004_cutting_circle"))
     cutting.pop("duration_s")
     cutting_machine = cutting.pop("machine")
+    part = prepare(load_scenario("gcode_test_piece"))
+    part.pop("duration_s")
+    part_machine = part.pop("machine")
     return {
         "hinf_cncmt": (cncmt, lambda sec: simulate(cncmt, hinf, Step(0.01), sec, 1e-4, progress=False)),
         "cascade_dob_googol": (googol, lambda sec: simulate(googol, cascade_dob, sine, sec, 1e-4, progress=False)),
@@ -71,6 +81,60 @@ def _cases() -> dict:
             cutting_machine,
             lambda sec: simulate(cutting_machine, **cutting, duration_s=sec, progress=False),
         ),
+        "gcode_test_piece_linear_motor": (
+            part_machine,
+            lambda sec: simulate(part_machine, **part, duration_s=sec, progress=False),
+        ),
+    }
+
+
+def raster_program(n_moves: int) -> list[str]:
+    """A pocket raster of ``n_moves`` moves: 5 mm lines along X joined by tangent half circles
+    of 0.5 mm radius (a CAM-style zig-zag at 3000 mm/min)."""
+    lines = ["G21 G90 G17 G94", "G64 P0.01", "G0 X0 Y0 Z1", "G1 Z-1 F300", "F3000"]
+    y = 0.0
+    for k in range(n_moves // 2):
+        if k % 2 == 0:
+            lines += ["G1 X5", f"G3 X5 Y{y + 1:g} I0 J0.5"]
+        else:
+            lines += ["G1 X0", f"G2 X0 Y{y + 1:g} I0 J0.5"]
+        y += 1.0
+    return lines
+
+
+def gcode_figures(lines: int = 1_000_000, repeats: int = 5) -> dict:
+    """The reader's throughput and the planner's time (see the module docstring)."""
+    import tempfile
+    from pathlib import Path
+
+    from twin.gcode.planner import PlannerSettings, plan
+    from twin.gcode.reader import Reader, read_program
+
+    pattern = ["G1 X{i}.5 Y{j}.25 Z-1.5 F1200", "G2 X{i}.5 Y{j}.25 I-0.5 J0", "N{n} G0 X{i} Y{j} (rapid)"]
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "long.ngc"
+        with path.open("w") as out:
+            out.write("G21 G90 G94\n")
+            for n in range(lines - 1):
+                out.write(pattern[n % 3].format(i=(n // 3) % 97, j=(n // 3) % 89, n=n) + "\n")
+        t0 = time.perf_counter()
+        moves = sum(1 for _ in read_program(path))
+        read_s = time.perf_counter() - t0
+    settings = PlannerSettings()
+    limits = settings.limits(build("linear_motor_xy").motion_limits)
+    program = list(Reader(raster_program(10_000)).moves())
+    timings = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        planned = plan(program, limits, settings)
+        timings.append(time.perf_counter() - t0)
+    return {
+        "gcode_lines": lines,
+        "moves_read": moves,
+        "read_lines_per_s": lines / read_s,
+        "plan_moves": len(program),
+        "plan_10000_moves_s": statistics.median(timings),
+        "plan_cycle_time_s": planned.cycle_time_s,
     }
 
 
@@ -109,7 +173,7 @@ def startup(repeats: int = 5) -> dict:
     }
 
 
-def run_bench(seconds: float = 2.0, repeats: int = 5) -> dict:
+def run_bench(seconds: float = 2.0, repeats: int = 5, gcode_lines: int = 1_000_000) -> dict:
     """Measure every case and the start-up; figures as in the module docstring.
 
     Returns
@@ -119,7 +183,13 @@ def run_bench(seconds: float = 2.0, repeats: int = 5) -> dict:
         timestep_s}``, ``startup.{scenario, run_process_s, run_in_process_s, overhead_s,
         help_process_s}``, ``simulated_s``, ``repeats``.
     """
-    out: dict[str, Any] = {"simulated_s": seconds, "repeats": repeats, "cases": {}, "startup": startup(repeats)}
+    out: dict[str, Any] = {
+        "simulated_s": seconds,
+        "repeats": repeats,
+        "cases": {},
+        "startup": startup(repeats),
+        "gcode": gcode_figures(gcode_lines, repeats),
+    }
     for name, (bm, run) in _cases().items():
         dt = bm.model.opt.timestep
         n = round(seconds / dt)

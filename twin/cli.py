@@ -1,4 +1,4 @@
-"""Command line: ``twin run | demo | fidelity | reproduce | sweep | list | bench``.
+"""Command line: ``twin run | demo | gcode | fidelity | reproduce | sweep | list | bench``.
 
 Bad input (unknown machine, controller or field, invalid values, malformed TOML) prints one
 line ``error: <field> = <value>: <reason>`` on stderr and exits with code 2; a diverging
@@ -292,6 +292,69 @@ def sweep(
         raise typer.Exit(130)
 
 
+@app.command()
+@_guard
+def gcode(
+    file: Path = typer.Argument(..., help="The part program (RS-274/NGC, LinuxCNC's dialect)"),
+    machine: str = typer.Option(None, "--machine", help="Plan the program for this machine (twin list)"),
+    as_json: bool = typer.Option(False, "--json", help="Print the moves (and the plan) as JSON"),
+    settings: list[str] = typer.Option(
+        None, "--set", help="planner.KEY=VALUE or reference.KEY=VALUE, e.g. planner.tolerance_mm=0.02"
+    ),
+):
+    """Read a part program as LinuxCNC reads it and print its moves; with --machine, plan it
+    (look-ahead, jerk-limited) and print the cycle time, the limits and the largest values."""
+    from twin.gcode.planner import PlanningError, plan
+    from twin.gcode.reader import GcodeError, read_program
+    from twin.gcode.report import planned_summary
+    from twin.machines import build
+    from twin.references.gcode import program_settings
+    from twin.scenario import parse_settings
+
+    reference, planner = program_settings(str(file), parse_settings(settings or []))
+    if not file.is_file():
+        raise TwinInputError("file", str(file), "no such file")
+    limits = planner.limits(build(machine).motion_limits) if machine is not None else None
+    kept = []
+    first = True
+    try:
+        if as_json:
+            typer.echo(f'{{"file": {json.dumps(str(file))}, "moves": [')
+        else:
+            typer.echo(f"{'line':>6}  {'kind':<6} {'end_mm (x, y, z)':<34} {'feed mm/min':>11}  spindle")
+        for move in read_program(file, reference.reader_settings()):
+            if limits is not None:
+                kept.append(move)
+            if as_json:
+                typer.echo(("" if first else ",\n") + json.dumps(move.as_dict()), nl=False)
+            else:
+                end = ", ".join(f"{v:.4f}" for v in move.end_mm)
+                extra = f"  arc {move.plane} turns {move.turns}" if move.kind == "arc" else ""
+                spindle = f"{move.spindle} {move.spindle_rpm:g}" if move.spindle != "off" else "off"
+                typer.echo(f"{move.line:>6}  {move.kind:<6} {end:<34} {move.feed_mm_per_min:>11.1f}  {spindle}{extra}")
+            first = False
+        planned = planned_summary(plan(kept, limits, planner), limits) if limits is not None else None
+    except GcodeError as exc:
+        if as_json:
+            typer.echo("")
+        raise TwinInputError(f"{exc.source}:{exc.line}", exc.text.strip(), exc.reason) from None
+    except PlanningError as exc:
+        raise TwinInputError("file", str(file), str(exc)) from None
+    if as_json:
+        tail = "" if planned is None else f', "planned": {json.dumps(planned, indent=1)}'
+        typer.echo(f"\n]{tail}}}")
+    elif planned is not None:
+        typer.echo(f"planned for {machine}:")
+        _print_summary("", {k: v for k, v in planned.items() if k not in ("limits", "max")})
+        for axis in "xyz":
+            lim, top = planned["limits"][axis], planned["max"][axis]
+            typer.echo(
+                f"  {axis}: v {top['velocity_m_per_s']:.4g}/{lim['velocity_m_per_s']:.4g} m/s, "
+                f"a {top['acceleration_m_per_s2']:.4g}/{lim['acceleration_m_per_s2']:.4g} m/s^2, "
+                f"j {top['jerk_m_per_s3']:.4g}/{lim['jerk_m_per_s3']:.4g} m/s^3 (largest/limit)"
+            )
+
+
 @app.command("list")
 def list_things():
     """Machines, controller kinds, observers, bundled scenarios and reproducible papers."""
@@ -302,18 +365,19 @@ def list_things():
     from twin.reproductions import REPRODUCTIONS
     from twin.scenario import bundled_scenarios, load_scenario
 
-    def params(names):
+    def params(kind):
+        names = list(kind.params.model_fields)
         return f" [params: {', '.join(names)}]" if names else ""
 
     typer.echo("machines:")
     for name, m in MACHINES.items():
         typer.echo(f"  {name:<22} {m.summary}")
     typer.echo("controllers (type = ...):")
-    for name, (desc, _, allowed) in CONTROLLERS.items():
-        typer.echo(f"  {name:<22} {desc}{params(allowed)}")
+    for name, kind in CONTROLLERS.items():
+        typer.echo(f"  {name:<22} {kind.doc}{params(kind)}")
     typer.echo("observers ([controller.observer] type = ...):")
-    for name, (desc, allowed) in OBSERVERS.items():
-        typer.echo(f"  {name:<22} {desc}{params(allowed)}")
+    for name, kind in OBSERVERS.items():
+        typer.echo(f"  {name:<22} {kind.doc}{params(kind)}")
     typer.echo("disturbances ([[disturbances]] type = ...):")
     for name, kind in DISTURBANCES.items():
         typer.echo(f"  {name:<22} {kind.doc.removeprefix(name + ': ')}")
@@ -323,7 +387,9 @@ def list_things():
     typer.echo("scenarios:")
     for name in sorted(bundled_scenarios()):
         typer.echo(f"  {name:<30} {load_scenario(name).description}")
-    typer.echo(f"reproductions (twin reproduce ...): {', '.join(REPRODUCTIONS)}")
+    typer.echo("reproductions (twin reproduce ...):")
+    for name, paper in REPRODUCTIONS.items():
+        typer.echo(f"  {name:<22} {paper.doc}")
 
 
 @app.command()
@@ -337,9 +403,11 @@ def bench(
     memory_samples: int = typer.Option(
         10_000, "--memory-samples", help="--sweep: one-tick samples for the client memory check"
     ),
+    gcode_lines: int = typer.Option(1_000_000, "--gcode-lines", help="Lines of the G-code reader's program"),
 ):
-    """Steps per second, bare mj_step vs the closed loop, for four controller kinds, and start-up time
-    (twin/bench.py); with --sweep, twin sweep's wall time, samples/s, parallel efficiency and memory."""
+    """Steps per second, bare mj_step vs the closed loop, for four controller kinds and a part
+    program, start-up time, the G-code reader's lines/s and the planner's time (twin/bench.py);
+    with --sweep, twin sweep's wall time, samples/s, parallel efficiency and memory."""
     from twin.bench import run_bench
 
     if not (seconds > 0 and seconds <= 600):
@@ -347,10 +415,12 @@ def bench(
     repeats = repeats if repeats is not None else 1 if sweep else 5
     if not 1 <= repeats <= 100:
         raise TwinInputError("--repeats", repeats, "must be in 1..100")
+    if not 2 <= gcode_lines <= 10_000_000:
+        raise TwinInputError("--gcode-lines", gcode_lines, "must be in 2..10000000")
     if sweep:
         _bench_sweep(as_json, samples, memory_samples, repeats)
         return
-    figures = run_bench(seconds, repeats)
+    figures = run_bench(seconds, repeats, gcode_lines)
     if as_json:
         typer.echo(json.dumps(figures, indent=2))
         return
@@ -366,6 +436,12 @@ def bench(
         f"start-up: twin run {f['scenario']} {f['run_process_s']:.2f} s as a new process, "
         f"{f['run_in_process_s']:.2f} s in process, overhead {f['overhead_s']:.2f} s; "
         f"twin --help {f['help_process_s']:.2f} s"
+    )
+    g = figures["gcode"]
+    typer.echo(
+        f"G-code: read {g['gcode_lines']:,} lines at {g['read_lines_per_s']:,.0f} lines/s; "
+        f"planned {g['plan_moves']:,} moves in {g['plan_10000_moves_s']:.2f} s "
+        f"(cycle time {g['plan_cycle_time_s']:.0f} s)"
     )
 
 

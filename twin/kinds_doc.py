@@ -52,6 +52,22 @@ def _kinds(registry: dict, spec_of) -> str:
     return "\n".join(parts)
 
 
+def motion_limits_table(machine) -> str:
+    """A machine's motion limits (the G-code interpolator's) as the markdown table its README
+    holds (``tests/test_registries.py`` checks that it does)."""
+    from twin.machines.base import SPINDLE_HEAD_Z
+
+    limits = {**machine.motion_limits, "z": machine.motion_limits.get("z", SPINDLE_HEAD_Z)}
+    rows = ["| axis | velocity (m/s) | acceleration (m/s²) | jerk (m/s³) | source |", "|---|---|---|---|---|"]
+    for axis in [a.name for a in machine.axes] + ["z"]:
+        lim = limits[axis]
+        rows.append(
+            f"| {axis} | {lim.velocity_m_per_s:.4g} | {lim.acceleration_m_per_s2:.4g} | {lim.jerk_m_per_s3:.4g} | "
+            f"{_cell(lim.source)} |"
+        )
+    return "\n".join(rows)
+
+
 def _machines() -> str:
     from twin.machines import MACHINES
 
@@ -59,7 +75,8 @@ def _machines() -> str:
     for name, machine in MACHINES.items():
         rows = ["| symbol | nominal | unit | what (source) |", "|---|---|---|---|"]
         rows += [f"| `{s}` | {p.value:g} | {p.unit} | {_cell(p.description)} |" for s, p in machine.parameters.items()]
-        parts += [f"### `{name}`", "", machine.summary, "", *rows, ""]
+        limits = motion_limits_table(machine)
+        parts += [f"### `{name}`", "", machine.summary, "", *rows, "", "Motion limits:", "", limits, ""]
     return "\n".join(parts)
 
 

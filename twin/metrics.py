@@ -87,6 +87,10 @@ def fit_index(y: np.ndarray, r: np.ndarray) -> np.ndarray:
     return 100.0 * (1.0 - np.linalg.norm(y - r, axis=0) / np.linalg.norm(r - r.mean(axis=0), axis=0))
 
 
+#: Path samples closer than this (m) to the one before are the path standing still.
+STILL_M = 1e-9
+
+
 def contour_error(actual_xy: np.ndarray, path_xy: np.ndarray) -> np.ndarray:
     """Distance (same unit) from each actual point to the reference path near it, in O(n).
 
@@ -109,7 +113,13 @@ def contour_error(actual_xy: np.ndarray, path_xy: np.ndarray) -> np.ndarray:
         is on, as a contour error should be.
     """
     p = np.ascontiguousarray(actual_xy, float)
-    path = np.ascontiguousarray(path_xy, float)
+    path = np.asarray(path_xy, float)
+    # a path that stands still (a G-code program's dwells and Z moves) as one point: the walk
+    # follows the path's segments, and a long stop would otherwise leave it behind
+    if len(path) > 1:
+        moving = np.concatenate([[True], np.abs(np.diff(path, axis=0)).max(axis=1) > STILL_M])
+        path = path[moving]
+    path = np.ascontiguousarray(path)
     out = np.empty(len(p))
     if len(p) == 0:
         return out
@@ -139,7 +149,9 @@ def _contour_walk(p, path, window, out):  # pragma: no cover - compiled
         best = math.inf
         for j in range(lo, hi):
             d = _segment_distance(p[i, 0], p[i, 1], path, j)
-            if d < best:
+            # of equally near segments the first for the first point (it searches the whole
+            # path), the latest after: the walk moves on where the path stands still
+            if d < best or (i > 0 and d == best):
                 best, best_j = d, j
         out[i] = best
         lo, hi = max(best_j - window, 0), min(best_j + window + 1, n_seg)

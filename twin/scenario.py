@@ -14,36 +14,39 @@ from contextlib import contextmanager
 from dataclasses import replace
 from importlib import resources
 from pathlib import Path
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from pydantic import Field, PositiveFloat, ValidationError
 
 from controllers import CONTROLLERS, OBSERVERS, make_controller
 from controllers.blocks import with_correction
-from controllers.registry import Context, make_observers
+from controllers.registry import Context, ParameterError, make_observers
 from twin.errors import TwinInputError
+from twin.gcode.planner import PlannerSettings
 from twin.machines import build
 from twin.process import DISTURBANCES, DisturbanceSpecBase
-from twin.references import REFERENCES, ReferenceSpecBase
+from twin.references import REFERENCES, ReferenceContext, ReferenceSpecBase
 from twin.sim.drive import Drive, Encoder, substeps_per_tick
 from twin.sim.runner import MAX_PHYSICS_STEPS, RunResult, simulate
 from twin.spec import StrictSpec, tagged_union
 
 
 class ObserverSpec(StrictSpec):
-    """An observer add-on: a name of ``controllers.OBSERVERS`` and its parameters."""
+    """An observer add-on: a kind of ``controllers.OBSERVERS`` and its parameters (checked by
+    the kind's own model)."""
 
     type: str
-    params: dict[str, float | list[float]] = Field(default_factory=dict)
+    params: dict[str, Any] = Field(default_factory=dict)
 
 
 class ControllerSpec(StrictSpec):
-    """One controller: a registry name (any block kind), its parameters, discretization,
-    feedforward, an optional observer add-on and, for ``type = "sum"``, its parts."""
+    """One controller: a kind of ``controllers.CONTROLLERS``, its parameters (checked by the
+    kind's own model), discretization, feedforward, an optional observer add-on and, for
+    ``type = "sum"``, its parts."""
 
     type: str
-    params: dict[str, bool | float | str | list[float] | list[list[float]] | list[str]] = Field(default_factory=dict)
+    params: dict[str, Any] = Field(default_factory=dict)
     discretization: Literal["tustin", "zoh"] = "tustin"
     velocity_ff: float = Field(0.0, description="V per m/s of reference velocity")
     acceleration_ff: float = Field(0.0, description="V per m/s^2 of reference acceleration")
@@ -92,7 +95,9 @@ class Scenario(StrictSpec):
     description: str = ""
     machine: str
     overrides: dict[str, float] = Field(default_factory=dict)
-    duration_s: PositiveFloat
+    duration_s: PositiveFloat | None = Field(
+        None, description="simulated time, s; default the reference's own end (a G-code program's cycle time)"
+    )
     timestep_s: float = Field(1e-4, ge=MIN_TIMESTEP_S, le=MAX_TIMESTEP_S)
     control_period_s: float = Field(1e-3, ge=MIN_TIMESTEP_S, le=MAX_CONTROL_PERIOD_S)
     seed: int = Field(0, ge=0)
@@ -105,6 +110,7 @@ class Scenario(StrictSpec):
     drive: DriveSpec = DriveSpec()
     sensors: SensorSpec = SensorSpec()
     disturbances: list[DisturbanceSpec] = Field(default_factory=list)
+    planner: PlannerSettings = PlannerSettings()
 
 
 def _first_error(err: ValidationError) -> TwinInputError:
@@ -203,13 +209,25 @@ def read_scenario_data(source: str | Path) -> dict:
     if not path.is_file():
         raise TwinInputError("scenario", str(source), "not a file")
     try:
-        return tomllib.loads(path.read_bytes().decode("utf-8"))
+        return _relative_to(tomllib.loads(path.read_bytes().decode("utf-8")), path.parent)
     except UnicodeDecodeError as exc:
         raise TwinInputError("scenario file", str(path), f"not UTF-8 text (byte {exc.start})") from None
     except tomllib.TOMLDecodeError as exc:
         raise TwinInputError("scenario file", str(path), f"malformed TOML: {exc}") from None
     except OSError as exc:
         raise TwinInputError("scenario file", str(path), f"cannot be read ({exc.strerror})") from None
+
+
+def _relative_to(data: dict, folder: Path) -> dict:
+    """``data`` with the reference's file fields (its kind's ``relative_paths``) made relative to
+    the scenario file's ``folder`` where they are relative paths."""
+    reference = data.get("reference")
+    if isinstance(reference, dict) and isinstance(reference.get("type"), str) and reference["type"] in REFERENCES:
+        for key in getattr(REFERENCES[reference["type"]].spec, "relative_paths", ()):
+            value = reference.get(key)
+            if isinstance(value, str) and not Path(value).is_absolute():
+                reference[key] = str(folder / value)
+    return data
 
 
 def load_scenario(source: str | Path, settings: list[str] | None = None) -> Scenario:
@@ -274,14 +292,16 @@ def _controller(spec: ControllerSpec, field: str, base: Context):
                 spec.type,
                 ctx.dt,
                 spec.params,
-                ctx.method,
-                spec.velocity_ff,
-                spec.acceleration_ff,
-                ctx.axes,
-                ctx.plants,
-                parts,
-                ctx.delay_s,
+                method=ctx.method,
+                velocity_ff=spec.velocity_ff,
+                acceleration_ff=spec.acceleration_ff,
+                axes=ctx.axes,
+                plants=ctx.plants,
+                parts=parts,
+                delay_s=ctx.delay_s,
             )
+    except ParameterError as exc:
+        raise TwinInputError(f"{field}.params.{exc.field}", exc.value, exc.reason) from None
     except (ValueError, KeyError, TypeError, RuntimeWarning) as exc:
         raise TwinInputError(f"{field}.params", spec.params, _design_failure(exc)) from None
     if spec.observer is None:
@@ -293,6 +313,8 @@ def _controller(spec: ControllerSpec, field: str, base: Context):
     try:
         with _design_warnings_as_errors():
             observers = make_observers(spec.observer.type, spec.observer.params, ctx)
+    except ParameterError as exc:
+        raise TwinInputError(f"{field}.observer.params.{exc.field}", exc.value, exc.reason) from None
     except (ValueError, KeyError, TypeError, RuntimeWarning) as exc:
         raise TwinInputError(f"{field}.observer.params", spec.observer.params, _design_failure(exc)) from None
     return with_correction(ctrl, observers)
@@ -336,6 +358,10 @@ def prepare(scn: Scenario):
         ctrls = [_controller(scn.controllers[a], f"controllers.{a}", replace(base, axes=(a,))) for a in names]
     elif scn.controller is not None:
         ctrls = [_controller(scn.controller, "controller", base)]
+    reference = REFERENCES[scn.reference.type].build(scn.reference, ReferenceContext(names, machine, scn.planner))
+    duration_s = scn.duration_s if scn.duration_s is not None else getattr(reference, "duration_s", None)
+    if duration_s is None:
+        raise TwinInputError("duration_s", None, f"give it: a {scn.reference.type} reference has no end of its own")
     drive = Drive(len(names), substeps, scn.timestep_s, delay, scn.drive.saturation_V)
     encoder = Encoder(
         _per_axis(scn.sensors.encoder_resolution_m, len(names), "sensors.encoder_resolution_m"),
@@ -347,8 +373,8 @@ def prepare(scn: Scenario):
     return {
         "machine": machine,
         "controllers": ctrls,
-        "reference": REFERENCES[scn.reference.type].build(scn.reference, names),
-        "duration_s": scn.duration_s,
+        "reference": reference,
+        "duration_s": duration_s,
         "control_period_s": scn.control_period_s,
         "drive": drive,
         "encoder": encoder,

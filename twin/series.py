@@ -97,4 +97,8 @@ def named_series(result, rows: slice = slice(None)) -> list[Series]:
                 strong,
             )
         )
+    for name, values in result.reference_extra.items():  # planned axes the machine has not (G-code z)
+        out.append(
+            Series(f"reference/{name}", values[rows] * 1e3, f"{name} reference", "mm", OTHER_AXIS_COLORS[1], 3.0)
+        )
     return out

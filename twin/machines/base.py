@@ -78,6 +78,29 @@ class Axis:
     screw_joint: str | None = None
 
 
+@dataclass(frozen=True)
+class MotionLimits:
+    """One axis's kinematic limits, what the G-code interpolator plans within.
+
+    Attributes
+    ----------
+    velocity_m_per_s, acceleration_m_per_s2, jerk_m_per_s3 : float
+        The limits (SI).
+    source : str
+        Where they come from (a datasheet value of the source, or ours).
+    """
+
+    velocity_m_per_s: float
+    acceleration_m_per_s2: float
+    jerk_m_per_s3: float
+    source: str
+
+
+#: The spindle head's Z of the XY tables, which the twin does not simulate (ours: a small ball-screw
+#: head; the interpolator plans Z within these and the recording shows it).
+SPINDLE_HEAD_Z = MotionLimits(0.2, 2.0, 200.0, "ours: a small ball-screw spindle head (Z is not simulated)")
+
+
 @dataclass
 class BuiltMachine:
     """A compiled machine: MuJoCo model plus its reference model.
@@ -101,6 +124,8 @@ class BuiltMachine:
         Lead p (m/rad) per axis, to express screw-side slip as table travel.
     sensor_gains : tuple of float
         Encoder gain per axis (measured position = gain * table position).
+    motion_limits : dict of str to MotionLimits
+        Each axis's kinematic limits for the G-code interpolator, z included.
     """
 
     name: str
@@ -112,6 +137,7 @@ class BuiltMachine:
     couplings: list[tuple[str, str, float]] = field(default_factory=list)
     table_per_screw_m_per_rad: dict[str, float] = field(default_factory=dict)
     sensor_gains: tuple[float, ...] = ()
+    motion_limits: dict[str, MotionLimits] = field(default_factory=dict)
 
     def plant_lti(self):
         """:attr:`plant` as a ``control.TransferFunction`` (imports python-control)."""
@@ -215,6 +241,8 @@ class Machine:
     summary: str = ""
     parameters: dict[str, Parameter] = {}
     axes: tuple[Axis, ...] = ()
+    #: Each axis's limits for the G-code interpolator (Z: :data:`SPINDLE_HEAD_Z` unless given).
+    motion_limits: dict[str, MotionLimits] = {}
 
     def resolve(self, overrides: dict[str, float] | None = None) -> dict[str, float]:
         """Merge overrides into the nominal values, validating names and values.
@@ -301,6 +329,7 @@ class Machine:
             couplings,
             leads,
             self.sensor_gains(params),
+            motion_limits={**self.motion_limits, "z": self.motion_limits.get("z", SPINDLE_HEAD_Z)},
         )
 
 
@@ -354,3 +383,18 @@ def diagonal_plant(channels: list[SisoTf]) -> tuple[tuple[SisoTf, ...], ...]:
     """Diagonal transfer matrix from SISO channels (zeros elsewhere)."""
     zero = SisoTf((0.0,), (1.0,))
     return tuple(tuple(g if i == j else zero for j in range(len(channels))) for i, g in enumerate(channels))
+
+
+#: Machines by name, in registration order: each machine's module registers its class with
+#: :func:`register_machine` (every module of :mod:`twin.machines` is imported by the package).
+MACHINES: dict[str, Machine] = {}
+
+
+def register_machine(cls: type[Machine]) -> type[Machine]:
+    """Class decorator: add an instance of the machine ``cls`` to :data:`MACHINES` under its
+    ``name``; its parameters (values, units, sources, limits), model file and ``summary`` (the
+    docs line) are the class's own."""
+    if not cls.name or cls.name in MACHINES:
+        raise ValueError(f"machine {cls.name!r} has no name or is registered twice")
+    MACHINES[cls.name] = cls()
+    return cls

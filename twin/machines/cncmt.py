@@ -21,9 +21,11 @@ from twin.errors import TwinInputError
 from twin.machines.base import (
     Axis,
     Machine,
+    MotionLimits,
     Parameter,
     coulomb_friction_parameters,
     diagonal_plant,
+    register_machine,
     set_axial_inertia,
     set_gear,
     set_mass,
@@ -63,6 +65,8 @@ class _LeadScrewMachine(Machine):
     """Shared configure/plant for one or two seed-000 axes."""
 
     suffixes: tuple[str, ...] = ("",)
+    #: ours: seed 000 gives no limits; 6 m/min, 1 m/s^2, 20 m/s^3 for its 50 kg lead-screw table
+    motion_limits = {a: MotionLimits(0.1, 1.0, 20.0, "ours: a 50 kg lead-screw table") for a in ("x", "y")}
     common = {
         "Js": Parameter(
             8e-4, "kg m^2", "lead-screw inertia (32 mm x 1 m steel screw; assumed, part of Im: rotor gets Im - Js/n^2)"
@@ -140,6 +144,7 @@ class _LeadScrewMachine(Machine):
         return tuple(params[f"H1{s}"] for s in self.suffixes)
 
 
+@register_machine
 class CNCMT(_LeadScrewMachine):
     name = "cncmt"
     xml = "cncmt/cncmt.xml"
@@ -149,6 +154,7 @@ class CNCMT(_LeadScrewMachine):
     axes = (Axis("x", "x_drive", "x_table", "x_motor", "x_screw"),)
 
 
+@register_machine
 class CNCMTXY(_LeadScrewMachine):
     name = "cncmt_xy"
     xml = "cncmt_xy/cncmt_xy.xml"

@@ -23,9 +23,11 @@ from twin.errors import TwinInputError
 from twin.machines.base import (
     Axis,
     Machine,
+    MotionLimits,
     Parameter,
     coulomb_friction_parameters,
     diagonal_plant,
+    register_machine,
     set_axial_inertia,
     set_gear,
     set_mass,
@@ -34,6 +36,7 @@ from twin.machines.base import (
 SEED = "seed 002 (Anang et al.) eq. (1)"
 
 
+@register_machine
 class GoogolXY(Machine):
     name = "googol_xy"
     xml = "googol_xy/googol_xy.xml"
@@ -49,6 +52,8 @@ class GoogolXY(Machine):
         "m_workpiece": Parameter(2.0, "kg", "workpiece mass (assumed)"),
         **coulomb_friction_parameters(("x", "y")),
     }
+    #: ours: a small ball-screw table (5 mm lead): 15 m/min, 2.5 m/s^2, 100 m/s^3 (the sources give none)
+    motion_limits = {a: MotionLimits(0.25, 2.5, 100.0, "ours: a small ball-screw table") for a in ("x", "y")}
     axes = (
         Axis("x", "x_drive", "x_table", "x_motor", "x_screw"),
         Axis("y", "y_drive", "y_table", "y_motor", "y_screw"),

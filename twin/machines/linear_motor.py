@@ -14,16 +14,19 @@ from controllers.lti import SisoTf
 from twin.machines.base import (
     Axis,
     Machine,
+    MotionLimits,
     Parameter,
     check_stacked_masses,
     coulomb_friction_parameters,
     diagonal_plant,
+    register_machine,
     set_mass,
 )
 
 SEED = "seed 004 (Choi et al. 1999)"
 
 
+@register_machine
 class LinearMotorXY(Machine):
     name = "linear_motor_xy"
     xml = "linear_motor_xy/linear_motor_xy.xml"
@@ -41,6 +44,12 @@ class LinearMotorXY(Machine):
         "k_y": Parameter(98.2, "N/V", "input gain Y: 982 N peak force at 10 V (assumed)"),
         **coulomb_friction_parameters(("x", "y"), f"eq. (1); no value in {SEED}"),
         "m_workpiece": Parameter(2.0, "kg", "workpiece mass, part of m_y (assumed)"),
+    }
+    #: seed 004: the LEB-S-8's peak force 982 N over the moving masses (52.3 kg on X, 17 kg on Y);
+    #: velocity and jerk ours (1 m/s, and the jerk that reaches the peak acceleration in 10 ms)
+    motion_limits = {
+        "x": MotionLimits(1.0, 982.0 / 52.3, 100 * 982.0 / 52.3, "seed 004: peak force 982 N / 52.3 kg; v, j ours"),
+        "y": MotionLimits(1.0, 982.0 / 17.0, 100 * 982.0 / 17.0, "seed 004: peak force 982 N / 17 kg; v, j ours"),
     }
     axes = (Axis("x", "x_drive", "x_table"), Axis("y", "y_drive", "y_table"))
 

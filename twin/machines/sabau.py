@@ -14,7 +14,16 @@ slide sized so that it gets the eq. (6) cross-acceleration.
 from __future__ import annotations
 
 from controllers.lti import SisoTf
-from twin.machines.base import Axis, Machine, Parameter, check_stacked_masses, coulomb_friction_parameters, set_mass
+from twin.machines.base import (
+    Axis,
+    Machine,
+    MotionLimits,
+    Parameter,
+    check_stacked_masses,
+    coulomb_friction_parameters,
+    register_machine,
+    set_mass,
+)
 
 SEED = "seed 001 (Sabau 2022)"
 
@@ -24,6 +33,7 @@ def _boxed(value: float, unit: str, description: str, positive: bool = True) -> 
     return Parameter(value, unit, f"{description}; box +-10 %, section 5.3", (0.9 * value, 1.1 * value), positive)
 
 
+@register_machine
 class SabauXY(Machine):
     name = "sabau_xy"
     xml = "sabau_xy/sabau_xy.xml"
@@ -40,6 +50,8 @@ class SabauXY(Machine):
         "m_workpiece": Parameter(2.0, "kg", "workpiece mass (assumed)"),
         **coulomb_friction_parameters(("x", "y")),
     }
+    #: ours: seed 001 gives no limits; 12 m/min, 2 m/s^2, 50 m/s^3 as a small 3-axis CNC
+    motion_limits = {a: MotionLimits(0.2, 2.0, 50.0, "ours: a small 3-axis CNC") for a in ("x", "y")}
     axes = (Axis("x", "x_drive", "x_table"), Axis("y", "y_drive", "y_table"))
 
     def check(self, params):

@@ -4,6 +4,8 @@ scenario's ``[reference]`` table, ``type = "<name>"``) and the builder of its re
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -11,9 +13,31 @@ from twin.spec import Kind, KindSpec, register_kind
 
 #: The base of every reference kind's spec.
 ReferenceSpecBase = KindSpec
-#: Reference kinds by name, in registration order: each builder is ``build(spec, axis_names) ->
-#: reference`` (``sample(t) -> (len(t), n_axes, 3)``), raising ``TwinInputError`` naming the field.
+#: Reference kinds by name, in registration order: each builder is ``build(spec, ctx) -> reference``
+#: (``ctx``: a :class:`ReferenceContext`; the reference has ``n_axes`` and ``sample(t) -> (len(t),
+#: n_axes, 3)``), raising ``TwinInputError`` naming the field.
 REFERENCES: dict[str, Kind] = {}
+
+
+@dataclass(frozen=True)
+class ReferenceContext:
+    """What a reference builder knows besides its spec.
+
+    Attributes
+    ----------
+    axis_names : list of str
+        The machine's axes, in order.
+    machine : object or None
+        The built machine (its motion limits, for planned references); None where a reference
+        is built without one.
+    planner : object
+        The scenario's ``[planner]`` table (:class:`twin.gcode.planner.PlannerSettings`, or a
+        dict of its fields).
+    """
+
+    axis_names: list[str]
+    machine: Any = None
+    planner: Any = field(default_factory=dict)
 
 
 def register(name: str, spec: type[KindSpec], build: Callable) -> Kind:

@@ -10,7 +10,7 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import Field
 
-from twin.references.kinds import ReferenceSpecBase, register, two_axes
+from twin.references.kinds import ReferenceContext, ReferenceSpecBase, register, two_axes
 
 #: Smallest path size (mm) and feed (mm/min) a 2-D path may have: 1 um and 1 um/min.
 MIN_PATH_MM, MIN_FEED_MM_PER_MIN = 1e-3, 1e-3
@@ -122,20 +122,20 @@ class PolylineRef(ReferenceSpecBase):
     feed_mm_per_min: FeedMmPerMin
 
 
-def _circle(spec: CircleRef, axis_names: list[str]) -> Circle:
-    two_axes(spec.type, axis_names)
+def _circle(spec: CircleRef, ctx: ReferenceContext) -> Circle:
+    two_axes(spec.type, ctx.axis_names)
     return Circle(spec.radius_mm, spec.feed_mm_per_min)
 
 
-def _square(spec: SquareRef, axis_names: list[str]) -> Polyline:
-    two_axes(spec.type, axis_names)
+def _square(spec: SquareRef, ctx: ReferenceContext) -> Polyline:
+    two_axes(spec.type, ctx.axis_names)
     return square(spec.side_mm, spec.feed_mm_per_min)
 
 
-def _polyline(spec: PolylineRef, axis_names: list[str]) -> Polyline:
+def _polyline(spec: PolylineRef, ctx: ReferenceContext) -> Polyline:
     from twin.errors import TwinInputError
 
-    two_axes(spec.type, axis_names)
+    two_axes(spec.type, ctx.axis_names)
     try:
         return Polyline([(x, y) for x, y in spec.points_mm], spec.feed_mm_per_min)
     except ValueError as exc:

@@ -9,7 +9,7 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, PositiveFloat
 
-from twin.references.kinds import ReferenceSpecBase, per_axis, register
+from twin.references.kinds import ReferenceContext, ReferenceSpecBase, per_axis, register
 from twin.spec import axes_indices
 
 #: Most sines a sum-of-sines reference may hold (each is evaluated at every tick).
@@ -49,7 +49,7 @@ class SinesRef(ReferenceSpecBase):
     axes: list[str] | None = None
 
 
-def build(spec: SinesRef, axis_names: list[str]) -> SumOfSines:
+def build(spec: SinesRef, ctx: ReferenceContext) -> SumOfSines:
     """The sum of sines; amplitudes and frequencies must pair up."""
     from twin.errors import TwinInputError
 
@@ -59,8 +59,8 @@ def build(spec: SinesRef, axis_names: list[str]) -> SumOfSines:
         tuple(spec.amplitudes_m),
         tuple(spec.frequencies_hz),
         tuple(spec.phases_rad) if spec.phases_rad else None,
-        len(axis_names),
-        axes_indices(spec.axes, axis_names, "reference.axes"),
+        len(ctx.axis_names),
+        axes_indices(spec.axes, ctx.axis_names, "reference.axes"),
     )
 
 

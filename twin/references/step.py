@@ -66,14 +66,14 @@ class RampRef(ReferenceSpecBase):
 register(
     "step",
     StepRef,
-    lambda spec, axis_names: Step(
-        spec.amplitude_m, spec.t0_s, len(axis_names), axes_indices(spec.axes, axis_names, "reference.axes")
+    lambda spec, ctx: Step(
+        spec.amplitude_m, spec.t0_s, len(ctx.axis_names), axes_indices(spec.axes, ctx.axis_names, "reference.axes")
     ),
 )
 register(
     "ramp",
     RampRef,
-    lambda spec, axis_names: Ramp(
-        spec.rate_m_per_s, spec.t0_s, len(axis_names), axes_indices(spec.axes, axis_names, "reference.axes")
+    lambda spec, ctx: Ramp(
+        spec.rate_m_per_s, spec.t0_s, len(ctx.axis_names), axes_indices(spec.axes, ctx.axis_names, "reference.axes")
     ),
 )

@@ -96,6 +96,8 @@ class RunResult:
     info : dict
         ``loop`` ("compiled" or "python"), ``record_every`` (ticks; 0: metrics only),
         ``completed_ticks`` (all of them, unless the run diverged or was interrupted).
+    reference_extra : dict of str to ndarray
+        Planned axes the machine does not have (a G-code program's z), m, at the recorded ticks.
     """
 
     machine: BuiltMachine
@@ -113,6 +115,7 @@ class RunResult:
     error_rms_m: np.ndarray
     force_max_N: np.ndarray
     info: dict = field(default_factory=dict)
+    reference_extra: dict = field(default_factory=dict)
 
     @property
     def axis_names(self) -> list[str]:
@@ -317,9 +320,11 @@ def simulate(
         qpos, qvel, act, ref = rec.qpos[:rows], rec.qvel[:rows], rec.actuator_force[:rows], rec.ref[:rows]
         meas, u, ua, force_N = rec.meas[:rows], rec.u[:rows], rec.ua[:rows], rec.workpiece_force[:rows]
         error, force_max = acc.error, acc.force_max
+        t_rec = np.arange(rows) * record_every * control_period_s
+        extra = reference.extra_series(t_rec) if hasattr(reference, "extra_series") else {}
         return RunResult(
             machine,
-            np.arange(rows) * record_every * control_period_s,
+            t_rec,
             ref,
             meas,
             u,
@@ -337,6 +342,7 @@ def simulate(
                 "record_every": int(record_every),
                 "completed_ticks": ticks,
             },
+            reference_extra=extra,
         )
 
     show = progress if progress is not None else n * substeps > PROGRESS_STEPS
@@ -347,7 +353,7 @@ def simulate(
     try:
         with (
             _mujoco_warnings_into(messages),
-            tqdm(total=n, desc=f"{machine.name}", unit="tick", disable=not show, mininterval=0.5, leave=False) as bar,
+            _progress_bar(reference, n, machine.name, show) as bar,
         ):
             for k0 in range(0, n, size):
                 k1 = min(n, k0 + size)
@@ -373,10 +379,21 @@ def simulate(
                     exc.result = result(k, k + (status in (loop.BAD_CONTROL, loop.BAD_QACC)))
                     raise
                 done = k1
-                bar.update(k1 - k0)
+                if hasattr(reference, "line_at"):  # a program: progress in its lines, all of them at the end
+                    line = reference.n_lines if k1 == n else reference.line_at(k1 * control_period_s)
+                    bar.update(max(line - bar.n, 0))
+                else:
+                    bar.update(k1 - k0)
     except KeyboardInterrupt:
         raise RunInterrupted(done * control_period_s, result(done, done)) from None
     return result(n, n)
+
+
+def _progress_bar(reference, n_ticks: int, name: str, show: bool) -> tqdm:
+    """The run's progress bar: in ticks, or in program lines for a G-code reference."""
+    if hasattr(reference, "line_at"):
+        return tqdm(total=reference.n_lines, desc=f"{name} program", unit="line", disable=not show, leave=False)
+    return tqdm(total=n_ticks, desc=name, unit="tick", disable=not show, mininterval=0.5, leave=False)
 
 
 @contextmanager

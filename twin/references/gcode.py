@@ -1,0 +1,181 @@
+"""A part program as the reference: the G-code reader (:mod:`twin.gcode.reader`) and the
+look-ahead, jerk-limited interpolator (:mod:`twin.gcode.planner`), planned at build time within
+the machine's motion limits and the scenario's ``[planner]`` table.
+
+The XY table follows the program's X and Y; Z is planned too and recorded (``reference/z``),
+the machine having no Z axis.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import ClassVar, Literal
+
+import numpy as np
+from pydantic import Field
+
+from twin.gcode.planner import Plan, PlannerSettings, PlanningError, plan
+from twin.gcode.reader import GcodeError, Reader, Settings, program_lines
+from twin.references.kinds import ReferenceContext, ReferenceSpecBase, register, two_axes
+
+#: The work coordinate systems a program may select.
+WORK_SYSTEMS = ("G54", "G55", "G56", "G57", "G58", "G59")
+
+
+class GcodeReference:
+    """A planned program sampled at any time: position by cubic Hermite interpolation between
+    the plan's samples (its velocity as slopes), velocity and acceleration linearly; at rest
+    before the start and after the end.
+
+    Parameters
+    ----------
+    planned : Plan
+        The interpolator's output (machine axes x, y, z).
+    axes : tuple of int
+        Which of x, y, z (indices) the machine's axes follow, in its order.
+    n_lines : int
+        The program's lines read, to its end (M2, M30, the second %) (for the progress bar).
+    """
+
+    def __init__(self, planned: Plan, axes: tuple[int, ...], n_lines: int):
+        self.plan, self.axes, self.n_lines = planned, axes, n_lines
+        self.n_axes = len(axes)
+
+    @property
+    def duration_s(self) -> float:
+        """The program's cycle time (s)."""
+        return self.plan.cycle_time_s
+
+    def _at(self, t: np.ndarray):
+        dt = self.plan.period_s
+        x = np.clip(np.asarray(t, float) / dt, 0.0, len(self.plan.position) - 1)
+        k = np.minimum(x.astype(int), len(self.plan.position) - 2)
+        return k, x - k, dt
+
+    def positions(self, t) -> np.ndarray:
+        """Positions of x, y, z (m) at times ``t``, shape (len(t), 3)."""
+        p, v = self.plan.position, self.plan.velocity
+        if len(p) < 2:
+            return np.broadcast_to(p[0], (np.size(t), 3)).copy()
+        k, f, dt = self._at(t)
+        f = f[:, None]
+        h00, h10 = 2 * f**3 - 3 * f**2 + 1, f**3 - 2 * f**2 + f
+        h01, h11 = -2 * f**3 + 3 * f**2, f**3 - f**2
+        return h00 * p[k] + h10 * dt * v[k] + h01 * p[k + 1] + h11 * dt * v[k + 1]
+
+    def sample(self, t) -> np.ndarray:
+        """Position, velocity and acceleration of the machine's axes, shape (len(t), n_axes, 3)."""
+        t = np.asarray(t, float)
+        out = np.zeros((t.size, self.n_axes, 3))
+        pos = self.positions(t)
+        if len(self.plan.position) < 2:
+            out[:, :, 0] = pos[:, list(self.axes)]
+            return out
+        k, f, _ = self._at(t)
+        f = f[:, None]
+        vel = (1 - f) * self.plan.velocity[k] + f * self.plan.velocity[k + 1]
+        acc = (1 - f) * self.plan.acceleration[k] + f * self.plan.acceleration[k + 1]
+        for i, axis in enumerate(self.axes):
+            out[:, i] = np.stack([pos[:, axis], vel[:, axis], acc[:, axis]], axis=1)
+        return out
+
+    def extra_series(self, t) -> dict[str, np.ndarray]:
+        """The planned axes the machine does not have, by name (m): what the recording adds."""
+        pos = self.positions(t)
+        return {name: pos[:, i] for i, name in enumerate("xyz") if i not in self.axes}
+
+    def line_at(self, t: float) -> int:
+        """The program line the reference is on at time ``t`` (s)."""
+        k = int(np.clip(round(t / self.plan.period_s), 0, len(self.plan.line) - 1))
+        return int(self.plan.line[k])
+
+
+class GcodeRef(ReferenceSpecBase):
+    """gcode: a part program (LinuxCNC's dialect) through the look-ahead, jerk-limited interpolator."""
+
+    type: Literal["gcode"]
+    file: str = Field(description="the program; a relative path is relative to the scenario file")
+    work_offsets_mm: dict[Literal["G54", "G55", "G56", "G57", "G58", "G59"], tuple[float, float, float]] = Field(
+        default_factory=dict, description="work offsets [x, y, z] in machine coordinates, mm (default 0)"
+    )
+    tool_lengths_mm: dict[int, float] = Field(default_factory=dict, description="tool length (G43) by tool number, mm")
+    g28_home_mm: tuple[float, float, float] = Field((0.0, 0.0, 0.0), description="G28's home, machine mm")
+
+    #: Fields that hold a path relative to the scenario file.
+    relative_paths: ClassVar[tuple[str, ...]] = ("file",)
+
+    def reader_settings(self) -> Settings:
+        """The settings the reader takes from this table."""
+        return Settings(
+            {WORK_SYSTEMS.index(k) + 1: v for k, v in self.work_offsets_mm.items()},
+            dict(self.tool_lengths_mm),
+            self.g28_home_mm,
+        )
+
+
+def build(spec: GcodeRef, ctx: ReferenceContext) -> GcodeReference:
+    """Read and plan the program for the machine of ``ctx``.
+
+    Raises
+    ------
+    TwinInputError
+        ``reference.file`` naming the program's line and the reason; or the planner's settings.
+    """
+    from twin.errors import TwinInputError
+
+    two_axes(spec.type, ctx.axis_names)
+    if ctx.machine is None:
+        raise TwinInputError("reference.type", spec.type, "a program is planned for a machine: give one")
+    unknown = [a for a in ctx.axis_names if a not in "xyz"]
+    if unknown:
+        raise TwinInputError("reference.type", spec.type, f"the machine's axes {ctx.axis_names} are not x, y, z")
+    settings = ctx.planner if isinstance(ctx.planner, PlannerSettings) else PlannerSettings.model_validate(ctx.planner)
+    path = Path(spec.file)
+    if not path.is_file():
+        raise TwinInputError("reference.file", spec.file, "no such file")
+    reader = Reader(program_lines(path), spec.reader_settings(), str(path))
+    try:
+        planned = plan(reader.moves(), settings.limits(ctx.machine.motion_limits), settings)
+    except GcodeError as exc:
+        raise TwinInputError(
+            "reference.file", f"{exc.source}:{exc.line}", f"{exc.text.strip()!r}: {exc.reason}"
+        ) from None
+    except PlanningError as exc:
+        raise TwinInputError("reference.file", spec.file, str(exc)) from None
+    return GcodeReference(planned, tuple("xyz".index(a) for a in ctx.axis_names), reader.lines_read)
+
+
+register("gcode", GcodeRef, build)
+
+
+def program_settings(file: str, settings: dict):
+    """The reader's table and the planner's settings for ``twin gcode FILE``: ``settings`` are
+    dotted paths below ``reference.`` (work_offsets_mm, tool_lengths_mm, g28_home_mm) and
+    ``planner.`` (:class:`~twin.gcode.planner.PlannerSettings`).
+
+    Raises
+    ------
+    TwinInputError
+        A path outside those tables, or a value they cannot take (named).
+    """
+    from pydantic import ValidationError
+
+    from twin.errors import TwinInputError
+    from twin.scenario import set_fields
+
+    for path in settings:
+        if not str(path).startswith(("reference.", "planner.")):
+            raise TwinInputError(f"--set {path}", settings[path], "give planner.KEY or reference.KEY")
+    data = set_fields({"reference": {"type": "gcode", "file": file}, "planner": {}}, settings, "--set ")
+    for key, model in (("reference", GcodeRef), ("planner", PlannerSettings)):
+        try:
+            parsed = model.model_validate(data[key])
+        except ValidationError as exc:
+            error = exc.errors()[0]
+            where = ".".join([key, *(str(p) for p in error["loc"])])
+            raise TwinInputError(where, error.get("input"), error["msg"]) from None
+        if key == "reference":
+            reference = parsed
+        else:
+            planner = parsed
+    return reference, planner
