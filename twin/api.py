@@ -92,6 +92,28 @@ class Run:
             "loop": self.result.info["loop"],
         }
 
+    def lines_to_parquet(self, path: str | Path) -> Path:
+        """Write the per-line table of a G-code run (``summary["lines"]``, the per-axis
+        tracking errors as columns ``max_tracking_error_um_<axis>``) to a Parquet file.
+
+        Raises
+        ------
+        TwinInputError
+            The run has no G-code reference.
+        """
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        rows = self.summary.get("lines")
+        if not rows:
+            raise TwinInputError("lines", str(path), "the run has no G-code reference: no per-line table")
+        flat = []
+        for row in rows:
+            per_axis = {f"max_tracking_error_um_{a}": v for a, v in row["max_tracking_error_um"].items()}
+            flat.append({**{k: v for k, v in row.items() if k != "max_tracking_error_um"}, **per_axis})
+        pq.write_table(pa.Table.from_pylist(flat), Path(path))
+        return Path(path)
+
     def to_pandas(self) -> pd.DataFrame:
         """The run's named series as a ``pandas.DataFrame`` indexed by simulated time (s), one
         column per series of the recording, named ``<path> (<unit>)``: ``reference/x (mm)``,
@@ -197,6 +219,28 @@ class Sweep:
     plan: Plan
     axes: tuple[str, ...]
     interrupted: bool = False
+
+    def lines_to_parquet(self, path: str | Path) -> Path:
+        """Write the per-line table of a G-code run (``summary["lines"]``, the per-axis
+        tracking errors as columns ``max_tracking_error_um_<axis>``) to a Parquet file.
+
+        Raises
+        ------
+        TwinInputError
+            The run has no G-code reference.
+        """
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        rows = self.summary.get("lines")
+        if not rows:
+            raise TwinInputError("lines", str(path), "the run has no G-code reference: no per-line table")
+        flat = []
+        for row in rows:
+            per_axis = {f"max_tracking_error_um_{a}": v for a, v in row["max_tracking_error_um"].items()}
+            flat.append({**{k: v for k, v in row.items() if k != "max_tracking_error_um"}, **per_axis})
+        pq.write_table(pa.Table.from_pylist(flat), Path(path))
+        return Path(path)
 
     def to_pandas(self) -> pd.DataFrame:
         """Every sample's row (its parameters, status and metrics) as a ``pandas.DataFrame``."""
@@ -353,7 +397,7 @@ def gcode(file: str | Path, machine: str | None = None, **settings: Any) -> dict
 
     reference, planner = program_settings(str(file), _paths(settings))
     if not Path(file).is_file():
-        raise TwinInputError("file", str(file), "no such file")
+        raise TwinInputError("file", str(file), "is a folder" if Path(file).is_dir() else "no such file")
     try:
         moves = list(read_program(file, reference.reader_settings()))
         out: dict[str, Any] = {"file": str(file), "moves": [m.as_dict() for m in moves]}

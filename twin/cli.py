@@ -63,6 +63,21 @@ def _check_plots_folder(plots: Path | None) -> None:
         raise TwinInputError("--plots", str(plots), "exists and is not a folder")
 
 
+def _print_worst_lines(rows: list[dict]) -> None:
+    """The program's worst lines (contour error, else tracking error) with their text."""
+    if not rows:
+        return
+    key = "max_contour_error_um" if "max_contour_error_um" in rows[0] else None
+
+    def badness(row):
+        return row[key] if key else max(row["max_tracking_error_um"].values())
+
+    typer.echo(f"  worst lines ({'max contour' if key else 'max tracking'} error, um):")
+    for row in sorted(rows, key=badness, reverse=True)[:WORST_LINES]:
+        span = f"{row['t_start_s']:.3f}-{row['t_end_s']:.3f} s"
+        typer.echo(f"    {row['line']:>6}  {badness(row):>9.3f}  {span}  {row['text']}")
+
+
 def _print_summary(name: str, summary: dict) -> None:
     typer.echo(f"{name}")
     for key, value in summary.items():
@@ -80,6 +95,7 @@ def _run(
     settings: list[str] | None = None,
     max_steps: int | None = None,
     plots: Path | None = None,
+    lines: Path | None = None,
 ) -> None:
     """Run a scenario and report it; a run that diverges or is interrupted still reports,
     records and plots what it computed before the error line."""
@@ -87,8 +103,12 @@ def _run(
     from twin.scenario import load_scenario
 
     _check_output("--rrd", rrd, ".rrd")
+    _check_output("--lines", lines, ".parquet")
     _check_plots_folder(plots)
     scn = load_scenario(scenario, settings)
+    if lines is not None and scn.reference.type != "gcode":
+        kind = scn.reference.type
+        raise TwinInputError("--lines", str(lines), f"a per-line table needs a G-code reference, not {kind}")
     if rrd is not None and scn.record_every_ticks == 0:
         raise TwinInputError("record_every_ticks", 0, "the run keeps metrics only: nothing to write to --rrd")
     try:
@@ -96,21 +116,30 @@ def _run(
     except (SimulationDiverged, RunInterrupted) as exc:
         status = "diverged" if isinstance(exc, SimulationDiverged) else "interrupted"
         if exc.result is not None:
-            _report(api.Run(scn, exc.result, status, {"sim_time_s": exc.sim_time_s}), rrd, as_json, plots)
+            _report(api.Run(scn, exc.result, status, {"sim_time_s": exc.sim_time_s}), rrd, as_json, plots, lines)
         raise
-    _report(done, rrd, as_json, plots)
+    _report(done, rrd, as_json, plots, lines)
 
 
-def _report(done, rrd: Path | None, as_json: bool, plots: Path | None) -> None:
-    """Print the run's summary (text or JSON), write its recording and its plots."""
+#: Lines of a program the text summary names, worst first.
+WORST_LINES = 5
+
+
+def _report(done, rrd: Path | None, as_json: bool, plots: Path | None, lines: Path | None = None) -> None:
+    """Print the run's summary (text or JSON), write its recording, its plots and, for a
+    program, its per-line table."""
     summary = done.summary
     if as_json:
         typer.echo(json.dumps(summary, indent=2, allow_nan=False))
     else:
         _print_summary(
             f"{done.scenario.name}: {done.scenario.description}",
-            {k: v for k, v in summary.items() if k not in ("scenario", "machine")},
+            {k: v for k, v in summary.items() if k not in ("scenario", "machine", "lines")},
         )
+        _print_worst_lines(summary.get("lines", []))
+    if lines is not None:
+        done.lines_to_parquet(lines)
+        typer.echo(f"per-line table written to {lines}", err=as_json)
     if rrd is not None and len(done.result.t_s):
         done.record(rrd)  # rerun is imported only when a recording is asked for
         typer.echo(f"recording written to {rrd} (view with: rerun {rrd})", err=as_json)
@@ -134,9 +163,10 @@ def run(
     plots: Path = typer.Option(
         None, "--plots", help="Write PNG plots (errors, inputs, forces, contour) to this folder"
     ),
+    lines: Path = typer.Option(None, "--lines", help="A G-code run: write its per-line table to this .parquet"),
 ):
-    """Run a closed-loop scenario and print its tracking metrics."""
-    _run(scenario, rrd, as_json, sets, max_steps, plots)
+    """Run a closed-loop scenario and print its tracking metrics (a G-code run: per program line too)."""
+    _run(scenario, rrd, as_json, sets, max_steps, plots, lines)
 
 
 @app.command()
@@ -313,7 +343,7 @@ def gcode(
 
     reference, planner = program_settings(str(file), parse_settings(settings or []))
     if not file.is_file():
-        raise TwinInputError("file", str(file), "no such file")
+        raise TwinInputError("file", str(file), "is a folder" if Path(file).is_dir() else "no such file")
     limits = planner.limits(build(machine).motion_limits) if machine is not None else None
     kept = []
     first = True

@@ -168,8 +168,65 @@ def tracking_summary(result) -> dict:
     if result.force_max_N.any():  # cutting: tick-mean force on the workpiece along each axis
         out["max_cutting_force_N"] = dict(zip(result.axis_names, result.force_max_N.round(1).tolist()))
     ref = result.ref[:, :, 0]
+    ce = None
     if ref.shape[1] == 2 and len(ref) > 1 and (np.ptp(ref, axis=0) > 0).all():  # a 2-D path
         ce = contour_error(result.table_position_m(), ref)
         out["max_contour_error_um"] = round(float(ce.max() * 1e6), 3)
         out["rms_contour_error_um"] = round(float(np.sqrt(np.mean(ce**2)) * 1e6), 3)
+    if result.program_lines.size:
+        out["cycle_time_s"] = round(float(result.info.get("program_cycle_time_s", 0.0)), 6)
+        if result.engagement.size:  # with a stock: the share of the recorded time the tool cuts
+            cutting = (result.engagement[:, 0] > 0) & (result.engagement[:, 1] > 0)
+            out["cutting_share"] = round(float(cutting.mean()), 4)
+        out["lines"] = line_table(result, ce)
     return out
+
+
+def line_table(result, contour_m: np.ndarray | None) -> list[dict]:
+    """Per G-code line, over the recorded ticks the reference is on it: its text, time span,
+    max and RMS contour error (um), max tracking error per axis (um), the largest cutting
+    force (N, the XY magnitude) and, with a stock, the mean engaged angle (deg) and the largest
+    axial depth (mm), in program order.
+
+    Parameters
+    ----------
+    result : RunResult
+        A run of a G-code reference (``program_lines`` at each recorded tick).
+    contour_m : ndarray or None
+        The contour error at each recorded tick (m); None: the path is not 2-D.
+    """
+    lines = result.program_lines
+    if lines.size == 0:
+        return []
+    starts = np.flatnonzero(np.concatenate([[True], lines[1:] != lines[:-1]]))
+    ends = np.concatenate([starts[1:], [lines.size]])
+    error_um = np.abs(result.error_m()) * 1e6
+    err_max = np.maximum.reduceat(error_um, starts, axis=0)
+    force = np.hypot(result.workpiece_force_N[:, 0], result.workpiece_force_N[:, 1])
+    force_max = np.maximum.reduceat(force, starts)
+    if contour_m is not None:
+        ce_max = np.maximum.reduceat(contour_m, starts) * 1e6
+        ce_rms = np.sqrt(np.add.reduceat(contour_m**2, starts) / (ends - starts)) * 1e6
+    t, period = result.t_s, result.control_period_s * max(result.info.get("record_every", 1), 1)
+    if result.engagement.size:
+        engaged = np.add.reduceat(result.engagement[:, 0], starts) / (ends - starts)
+        depth = np.maximum.reduceat(result.engagement[:, 1], starts)
+    rows = []
+    for i, (a, b) in enumerate(zip(starts, ends)):
+        line = int(lines[a])
+        row: dict[str, Any] = {
+            "line": line,
+            "text": result.program_texts.get(line, ""),
+            "t_start_s": round(float(t[a]), 6),
+            "t_end_s": round(float(t[b - 1] + period), 6),
+        }
+        if contour_m is not None:
+            row["max_contour_error_um"] = round(float(ce_max[i]), 3)
+            row["rms_contour_error_um"] = round(float(ce_rms[i]), 3)
+        row["max_tracking_error_um"] = dict(zip(result.axis_names, err_max[i].round(3).tolist()))
+        row["max_cutting_force_N"] = round(float(force_max[i]), 1)
+        if result.engagement.size:
+            row["mean_engagement_deg"] = round(float(engaged[i]), 2)
+            row["axial_depth_mm"] = round(float(depth[i]), 4)
+        rows.append(row)
+    return rows

@@ -26,6 +26,7 @@ from twin.errors import TwinInputError
 from twin.gcode.planner import PlannerSettings
 from twin.machines import build
 from twin.process import DISTURBANCES, DisturbanceSpecBase
+from twin.process.machining import StockSpec, ToolSpec, program_milling
 from twin.references import REFERENCES, ReferenceContext, ReferenceSpecBase
 from twin.sim.drive import Drive, Encoder, substeps_per_tick
 from twin.sim.runner import MAX_PHYSICS_STEPS, RunResult, simulate
@@ -111,6 +112,9 @@ class Scenario(StrictSpec):
     sensors: SensorSpec = SensorSpec()
     disturbances: list[DisturbanceSpec] = Field(default_factory=list)
     planner: PlannerSettings = PlannerSettings()
+    stock: StockSpec | None = Field(None, description="a workpiece the G-code program cuts")
+    tool: ToolSpec | None = Field(None, description="the cutter of a program without T words")
+    tools: list[ToolSpec] = Field(default_factory=list, description="the cutters of a program, by T number")
 
 
 def _first_error(err: ValidationError) -> TwinInputError:
@@ -358,7 +362,10 @@ def prepare(scn: Scenario):
         ctrls = [_controller(scn.controllers[a], f"controllers.{a}", replace(base, axes=(a,))) for a in names]
     elif scn.controller is not None:
         ctrls = [_controller(scn.controller, "controller", base)]
-    reference = REFERENCES[scn.reference.type].build(scn.reference, ReferenceContext(names, machine, scn.planner))
+    numbers = frozenset(t.number for t in scn.tools if t.number is not None) if scn.tools else None
+    reference = REFERENCES[scn.reference.type].build(
+        scn.reference, ReferenceContext(names, machine, scn.planner, numbers)
+    )
     duration_s = scn.duration_s if scn.duration_s is not None else getattr(reference, "duration_s", None)
     if duration_s is None:
         raise TwinInputError("duration_s", None, f"give it: a {scn.reference.type} reference has no end of its own")
@@ -370,6 +377,15 @@ def prepare(scn: Scenario):
         scn.seed,
         scn.sensors.velocity,
     )
+    disturbances = [_disturbance(d, i, names, scn.seed) for i, d in enumerate(scn.disturbances)]
+    if scn.stock is not None:
+        if scn.reference.type != "gcode":
+            raise TwinInputError(
+                "stock", "...", f"a stock is cut by a G-code program, not a {scn.reference.type} reference"
+            )
+        milling, table, height_map = program_milling(reference.plan, scn.stock, scn.tool, scn.tools, scn.seed)
+        reference.engagement, reference.height_map = table, height_map
+        disturbances.append(milling)
     return {
         "machine": machine,
         "controllers": ctrls,
@@ -379,7 +395,7 @@ def prepare(scn: Scenario):
         "drive": drive,
         "encoder": encoder,
         "record_every": scn.record_every_ticks,
-        "disturbances": [_disturbance(d, i, names, scn.seed) for i, d in enumerate(scn.disturbances)],
+        "disturbances": disturbances,
     }
 
 

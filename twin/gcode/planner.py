@@ -36,7 +36,10 @@ from pydantic import Field, field_validator
 
 from twin.gcode.path import TANGENT_TOLERANCE_RAD, Segment, blend, move_segment
 from twin.gcode.reader import Move
+from twin.numba_cache import configure as configure_numba_cache
 from twin.spec import StrictSpec
+
+configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
 
 #: Planning and sampling period of the reference (s): positions are Hermite-interpolated between.
 SAMPLE_PERIOD_S = 1e-3
@@ -134,6 +137,12 @@ class Plan:
         The path tolerance used (m).
     segments : list of Segment
         The programmed path (unblended), for deviation checks.
+    texts : dict of int to str
+        The text of each program line that moved or dwelt.
+    spindle_rpm : dict of int to float
+        The spindle speed of each line's moves (0 where M5 stops it).
+    tools : dict of int to int
+        The tool in the spindle on each line (0: none).
     """
 
     period_s: float
@@ -146,6 +155,14 @@ class Plan:
     filter_s: float
     tolerance_m: float
     segments: list[Segment] = field(repr=False)
+    texts: dict[int, str] = field(default_factory=dict, repr=False)
+    spindle_rpm: dict[int, float] = field(default_factory=dict, repr=False)
+    tools: dict[int, int] = field(default_factory=dict, repr=False)
+
+    def per_sample(self, by_line: dict, default) -> np.ndarray:
+        """A per-line value (``spindle_rpm``, ``tools``) at each sample."""
+        lines, where = np.unique(self.line, return_inverse=True)
+        return np.array([by_line.get(int(line), default) for line in lines])[where]
 
     @property
     def cycle_time_s(self) -> float:
@@ -419,6 +436,9 @@ def plan(moves: Iterable[Move], limits: Limits, settings: PlannerSettings | None
         _filter_length(limits)[0],
         tolerance_m,
         programmed,
+        {m.line: m.text for m in moves},
+        {m.line: (m.spindle_rpm if m.spindle != "off" else 0.0) for m in moves},
+        {m.line: m.tool for m in moves},
     )
 
 

@@ -93,6 +93,10 @@ class Move:
         For dwells: the time (s).
     tolerance_mm : float or None
         G64 P in force (None: G64 without P; 0: G61 exact path).
+    text : str
+        The block as written (stripped).
+    tool : int
+        The tool in the spindle (T with M6; 0: none).
     """
 
     line: int
@@ -108,6 +112,8 @@ class Move:
     turns: int = 0
     dwell_s: float = 0.0
     tolerance_mm: float | None = None
+    text: str = ""
+    tool: int = 0
 
     def as_dict(self) -> dict:
         """The move as ``twin gcode --json`` prints it."""
@@ -139,11 +145,14 @@ class Settings:
         Tool length offset (Z) by tool number.
     g28_home_mm : tuple of float
         G28's home position in machine coordinates.
+    tools : frozenset of int or None
+        The tool numbers a T word may select (None: any).
     """
 
     work_offsets_mm: dict[int, tuple[float, float, float]] = field(default_factory=dict)
     tool_lengths_mm: dict[int, float] = field(default_factory=dict)
     g28_home_mm: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    tools: frozenset[int] | None = None
 
 
 @dataclass
@@ -313,6 +322,9 @@ class Reader:
             if words["T"] < 0 or words["T"] != int(words["T"]):
                 error(f"T = {words['T']:g}: a tool number is a whole number >= 0")
             selected = int(words["T"])
+            known = self.settings.tools
+            if known is not None and selected != 0 and selected not in known:
+                error(f"T{selected}: no such tool (tools: {sorted(known)})")
         else:
             selected = None
         if 6 in ms:
@@ -410,6 +422,8 @@ class Reader:
             spindle_rpm=s.spindle_rpm,
             spindle=s.spindle,
             tolerance_mm=s.tolerance,
+            text=self.text.strip(),
+            tool=s.tool_in_spindle,
             **extra,
         )
 

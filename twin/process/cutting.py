@@ -344,7 +344,7 @@ class AverageForce:
 
 
 #: Kinds of :func:`workpiece_forces`.
-END_MILLING, AVERAGE_FORCE = 0, 1
+END_MILLING, AVERAGE_FORCE, PROGRAM_MILLING = 0, 1, 2
 #: The parameter slots of each force kernel, in order: the one declaration of its layout.  The
 #: workpiece's 2 x nq position Jacobian follows them (:func:`pack_slots`).
 END_MILLING_SLOTS = (
@@ -368,6 +368,16 @@ END_MILLING_SLOTS = (
     "n_hist",
 )
 AVERAGE_FORCE_SLOTS = ("k_il", "k_c", "harmonic_fraction", "omega", "phase", "lo", "hi")
+#: A part program's milling (:class:`twin.process.machining.ProgramMilling`): then the workpiece
+#: Jacobian (2 x nq), each tool's ``K_tc .. K_ae, n_flutes`` (7 values), and the engagement table
+#: of ``n_table`` rows of :data:`PM_COLUMNS`, one every ``table_period`` seconds.
+PROGRAM_MILLING_SLOTS = ("n_tools", "table_period", "n_table", "dt", "n_hist", "n_jac")
+#: The table's columns: the two engaged arcs (rad), axial depth (mm), spindle speed (rad/s),
+#: spindle angle at the row's start (rad), tool index.
+PM_COLUMNS = ("phi_st1", "phi_ex1", "phi_st2", "phi_ex2", "axial_depth_mm", "omega", "angle", "tool")
+_PM = {name: i for i, name in enumerate(PROGRAM_MILLING_SLOTS)}
+PM_N_TOOLS, PM_PERIOD, PM_N_TABLE, PM_DT = _PM["n_tools"], _PM["table_period"], _PM["n_table"], _PM["dt"]
+PM_N_HIST, PM_N_JAC, PM_JACOBIAN, PM_WIDTH = _PM["n_hist"], _PM["n_jac"], len(PROGRAM_MILLING_SLOTS), len(PM_COLUMNS)
 _EM = {name: i for i, name in enumerate(END_MILLING_SLOTS)}
 _AF = {name: i for i, name in enumerate(AVERAGE_FORCE_SLOTS)}
 # the kernels' slot indices (module constants: numba freezes them)
@@ -435,6 +445,56 @@ def _end_milling(par, state, qpos, t, out):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
+def _program_milling(par, state, qpos, t, out):  # pragma: no cover - compiled
+    """Add one step's milling force of a part program on the workpiece (world frame, N) to
+    ``out``: the engagement, spindle and tool by time from the table, the chip from the
+    workpiece's displacement over the last tooth period (as :func:`_end_milling`)."""
+    n_tools, period, n_table = int(par[PM_N_TOOLS]), par[PM_PERIOD], int(par[PM_N_TABLE])
+    dt, n, n_jac = par[PM_DT], int(par[PM_N_HIST]), int(par[PM_N_JAC])
+    jac = par[PM_JACOBIAN : PM_JACOBIAN + n_jac].reshape((2, -1))
+    tools = par[PM_JACOBIAN + n_jac : PM_JACOBIAN + n_jac + 7 * n_tools].reshape((n_tools, 7))
+    table = par[PM_JACOBIAN + n_jac + 7 * n_tools :].reshape((n_table, PM_WIDTH))
+    hist = state[3:].reshape((n, 2))
+    i = int(state[0])
+    state[0] = i + 1
+    for r in range(2):
+        acc = 0.0
+        for j in range(jac.shape[1]):
+            acc += jac[r, j] * qpos[j]
+        hist[i % n, r] = acc
+    if i == 0:
+        for m in range(1, n):
+            hist[m, 0], hist[m, 1] = hist[0, 0], hist[0, 1]
+    row = min(max(int(t / period), 0), n_table - 1)
+    a, omega = table[row, 4], table[row, 5]
+    if a <= 0.0 or omega <= 0.0:
+        return
+    tool = int(table[row, 7])
+    k = tools[tool, :6]
+    n_flutes = int(tools[tool, 6])
+    lag_steps = 2.0 * math.pi / (omega * n_flutes) / dt
+    lag_lo = int(lag_steps)
+    frac = lag_steps - lag_lo
+    p0, p1 = max(i - lag_lo, 0) % n, max(i - lag_lo - 1, 0) % n
+    dx = (1.0 - frac) * hist[p0, 0] + frac * hist[p1, 0] - hist[i % n, 0]
+    dy = (1.0 - frac) * hist[p0, 1] + frac * hist[p1, 1] - hist[i % n, 1]
+    c_m = math.hypot(dx, dy)
+    if c_m > MIN_FEED_M:
+        state[1], state[2] = dx / c_m, dy / c_m
+    ux, uy = state[1], state[2]
+    angle = table[row, 6] + omega * (t - row * period)
+    fx = fy = fz = 0.0
+    for arc in range(2):
+        st, ex = table[row, 2 * arc], table[row, 2 * arc + 1]
+        if ex > st:
+            gx, gy, gz = step_tool_forces_N(k, n_flutes, a, c_m * 1e3, st, ex, angle, omega * dt)
+            fx, fy, fz = fx + gx, fy + gy, fz + gz
+    out[0] -= fx * ux - fy * uy
+    out[1] -= fx * uy + fy * ux
+    out[2] -= fz
+
+
+@njit(cache=True)
 def _average_force(par, qvel, t, out):  # pragma: no cover - compiled
     """Add seed 004's average cutting force on the workpiece (N) to ``out``."""
     k_il, k_c, r, w = par[AF_K_IL], par[AF_K_C], par[AF_R], par[AF_OMEGA]
@@ -461,6 +521,8 @@ def workpiece_forces(fops, fpar, fstate, qpos, qvel, t, xfrc, body, f_sum):  # p
         kind, p0, pn, s0, sn = fops[m, 0], fops[m, 1], fops[m, 2], fops[m, 3], fops[m, 4]
         if kind == END_MILLING:
             _end_milling(fpar[p0 : p0 + pn], fstate[s0 : s0 + sn], qpos, t, out)
+        elif kind == PROGRAM_MILLING:
+            _program_milling(fpar[p0 : p0 + pn], fstate[s0 : s0 + sn], qpos, t, out)
         else:
             _average_force(fpar[p0 : p0 + pn], qvel, t, out)
     for i in range(3):

@@ -40,6 +40,10 @@ class GcodeReference:
     def __init__(self, planned: Plan, axes: tuple[int, ...], n_lines: int):
         self.plan, self.axes, self.n_lines = planned, axes, n_lines
         self.n_axes = len(axes)
+        #: With a stock: the engagement at each sample (:func:`twin.process.machining.engagement_table`)
+        #: and the stock's height map as the program leaves it.
+        self.engagement: np.ndarray | None = None
+        self.height_map = None
 
     @property
     def duration_s(self) -> float:
@@ -86,8 +90,28 @@ class GcodeReference:
 
     def line_at(self, t: float) -> int:
         """The program line the reference is on at time ``t`` (s)."""
-        k = int(np.clip(round(t / self.plan.period_s), 0, len(self.plan.line) - 1))
-        return int(self.plan.line[k])
+        return int(self.lines_at(np.array([t]))[0])
+
+    def lines_at(self, t) -> np.ndarray:
+        """The program line at each time of ``t`` (s)."""
+        k = np.clip(np.rint(np.asarray(t, float) / self.plan.period_s).astype(int), 0, len(self.plan.line) - 1)
+        return self.plan.line[k]
+
+    def engagement_at(self, t) -> np.ndarray:
+        """The engaged angle (deg) and axial depth (mm) at times ``t`` (s), shape (len(t), 2);
+        empty without a stock."""
+        if self.engagement is None:
+            return np.zeros((0, 2))
+        from twin.process.machining import engaged_degrees
+
+        k = np.clip(np.rint(np.asarray(t, float) / self.plan.period_s).astype(int), 0, len(self.engagement) - 1)
+        rows = self.engagement[k]
+        return np.column_stack([engaged_degrees(rows), rows[:, 4]])
+
+    @property
+    def texts(self) -> dict[int, str]:
+        """The text of each program line that moved or dwelt."""
+        return self.plan.texts
 
 
 class GcodeRef(ReferenceSpecBase):
@@ -104,12 +128,14 @@ class GcodeRef(ReferenceSpecBase):
     #: Fields that hold a path relative to the scenario file.
     relative_paths: ClassVar[tuple[str, ...]] = ("file",)
 
-    def reader_settings(self) -> Settings:
-        """The settings the reader takes from this table."""
+    def reader_settings(self, tools: frozenset[int] | None = None) -> Settings:
+        """The settings the reader takes from this table, and the tool numbers a T word may
+        select (None: any)."""
         return Settings(
             {WORK_SYSTEMS.index(k) + 1: v for k, v in self.work_offsets_mm.items()},
             dict(self.tool_lengths_mm),
             self.g28_home_mm,
+            tools,
         )
 
 
@@ -132,8 +158,8 @@ def build(spec: GcodeRef, ctx: ReferenceContext) -> GcodeReference:
     settings = ctx.planner if isinstance(ctx.planner, PlannerSettings) else PlannerSettings.model_validate(ctx.planner)
     path = Path(spec.file)
     if not path.is_file():
-        raise TwinInputError("reference.file", spec.file, "no such file")
-    reader = Reader(program_lines(path), spec.reader_settings(), str(path))
+        raise TwinInputError("reference.file", spec.file, "is a folder" if path.is_dir() else "no such file")
+    reader = Reader(program_lines(path), spec.reader_settings(ctx.tools), str(path))
     try:
         planned = plan(reader.moves(), settings.limits(ctx.machine.motion_limits), settings)
     except GcodeError as exc:

@@ -33,11 +33,14 @@ class ReferenceContext:
     planner : object
         The scenario's ``[planner]`` table (:class:`twin.gcode.planner.PlannerSettings`, or a
         dict of its fields).
+    tools : frozenset of int or None
+        The T numbers of the scenario's ``[[tools]]`` (None: no list, any T word).
     """
 
     axis_names: list[str]
     machine: Any = None
     planner: Any = field(default_factory=dict)
+    tools: frozenset[int] | None = None
 
 
 def register(name: str, spec: type[KindSpec], build: Callable) -> Kind:

@@ -98,6 +98,13 @@ class RunResult:
         ``completed_ticks`` (all of them, unless the run diverged or was interrupted).
     reference_extra : dict of str to ndarray
         Planned axes the machine does not have (a G-code program's z), m, at the recorded ticks.
+    program_lines : ndarray of int
+        For a G-code reference, the program line at each recorded tick (else empty).
+    program_texts : dict of int to str
+        For a G-code reference, the text of each line that moved.
+    engagement : ndarray (n, 2)
+        With a stock: the engaged angle (deg) and axial depth (mm) at each recorded tick (else
+        empty).
     """
 
     machine: BuiltMachine
@@ -116,6 +123,9 @@ class RunResult:
     force_max_N: np.ndarray
     info: dict = field(default_factory=dict)
     reference_extra: dict = field(default_factory=dict)
+    program_lines: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    program_texts: dict = field(default_factory=dict)
+    engagement: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
 
     @property
     def axis_names(self) -> list[str]:
@@ -322,6 +332,7 @@ def simulate(
         error, force_max = acc.error, acc.force_max
         t_rec = np.arange(rows) * record_every * control_period_s
         extra = reference.extra_series(t_rec) if hasattr(reference, "extra_series") else {}
+        program = hasattr(reference, "lines_at")
         return RunResult(
             machine,
             t_rec,
@@ -341,8 +352,12 @@ def simulate(
                 "loop": "compiled" if use_compiled else "python",
                 "record_every": int(record_every),
                 "completed_ticks": ticks,
+                **({"program_cycle_time_s": reference.duration_s} if program else {}),
             },
             reference_extra=extra,
+            program_lines=reference.lines_at(t_rec) if program else np.zeros(0, int),
+            program_texts=reference.texts if program else {},
+            engagement=reference.engagement_at(t_rec) if program else np.zeros((0, 2)),
         )
 
     show = progress if progress is not None else n * substeps > PROGRESS_STEPS
