@@ -78,6 +78,11 @@ def test_bad_settings_and_divergence_are_the_twins_errors():
         ("run_and_plot.py", ["--duration", "0.3"], "run_and_plot.png"),
         ("compare_controllers.py", ["--duration", "0.3"], "MIMO H-infinity"),
         ("sweep_box.py", ["--samples", "4", "--workers", "1"], "4 samples in"),
+        (
+            "feed_override.py",
+            ["--overrides", "0.8", "1.2", "--workers", "1", "--duration", "3.0"],
+            "largest feed override with rms_contour_error_feed_um < 10 µm:",
+        ),
     ],
 )
 def test_examples_run(tmp_path, script, args, check):
@@ -95,3 +100,5 @@ def test_examples_run(tmp_path, script, args, check):
         assert (tmp_path / "run_and_plot.png").stat().st_size > 10_000
     if script == "sweep_box.py":
         assert (tmp_path / "square_sabau_pid_sweep.parquet").is_dir()
+    if script == "feed_override.py":  # two overrides at the four vertices of the m_x, m_y box
+        assert "(8 runs)" in r.stdout and "0.8" in r.stdout and "1.2" in r.stdout

@@ -137,6 +137,7 @@ def test_list_and_bench():
     gcode = figures["gcode"]
     assert gcode["gcode_lines"] == 3000 and gcode["moves_read"] == 2999 and gcode["read_lines_per_s"] > 0
     assert gcode["plan_moves"] == 10_002 and gcode["plan_10000_moves_s"] > 0 and gcode["plan_cycle_time_s"] > 800
+    assert gcode["engagement_10000_moves_s"] > 0
     for figures in cases.values():  # a ratio of medians can differ from the median of ratios, not by 3x
         assert figures["loop"] == "compiled" and figures["raw_steps_per_s"] > 0
         assert figures["closed_loop_steps_per_s"] * figures["timestep_s"] == pytest.approx(figures["realtime_factor"])

@@ -124,3 +124,34 @@ def test_seed004_circle_cutting_a_stock_gives_the_builtin_cutting_circles_force_
     assert stock_run.engagement[window, 0].mean() == pytest.approx(closed, abs=1.0)
     assert stock_run.engagement[window, 1] == pytest.approx(3.0)
     assert ours == pytest.approx(theirs, rel=0.2)
+
+
+def test_the_part_is_recorded_and_plotted(tmp_path):
+    """The recording holds the stock and machined outlines, the path coloured by its contour
+    error and the colour scale; --plots writes the part from above and the feed profile."""
+    from twin.recording import read_back
+
+    run = api.run("gcode_test_piece", duration_s=2.0)
+    counts = read_back(run.record(tmp_path / "part.rrd"))
+    for entity in ("stock", "machined", "path_by_contour_error", "scale", "scale/labels", "tool"):
+        assert counts.get(f"/contour/{entity}", 0) > 0, entity
+    assert counts.get("/engagement/angle", 0) > 0 and "/contour/actual" not in counts
+    written = {p.name for p in run.plots(tmp_path / "plots")}
+    assert {"gcode_test_piece_part.png", "gcode_test_piece_feed.png"} <= written
+    outlines = run.result.part_outlines
+    stock = outlines["stock"][0]
+    assert stock[:, 0].min() == pytest.approx(-5.0) and stock[:, 1].max() == pytest.approx(43.0)
+    # the program leaves the part's top standing and cuts the pocket (1.5 mm), the slot (1 mm)
+    # and the band around the contour (2 mm): the height map as the engagement left it
+    heights = prepare(scenario_from_dict(read_scenario_data("gcode_test_piece")))["reference"].height_map
+
+    def height_mm(x_mm, y_mm):
+        i = int((x_mm * 1e-3 - heights.x0_m) / heights.res_m)
+        j = int((y_mm * 1e-3 - heights.y0_m) / heights.res_m)
+        return heights.heights[i, j] * 1e3
+
+    assert height_mm(35.0, 10.0) == pytest.approx(0.0)  # the part's top
+    assert height_mm(25.0, 19.0) == pytest.approx(-1.5)  # the pocket
+    assert height_mm(8.0, 20.0) == pytest.approx(-1.0)  # the slot
+    assert height_mm(-3.0, 20.0) == pytest.approx(-2.0)  # the contour's band
+    assert height_mm(-4.5, -4.5) == pytest.approx(0.0)  # the block's corner, out of the tool's reach

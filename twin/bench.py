@@ -21,7 +21,8 @@ Cases:
 G-code (``gcode``): the reader's lines per second on a generated program of ``gcode_lines``
 lines read from a file on one core (``read_lines_per_s``), and the planner's wall time for a
 generated pocket raster of 10 000 moves, lines with tangent arc turnarounds
-(``plan_10000_moves_s``, median of the repeats) on ``linear_motor_xy``'s limits.
+(``plan_10000_moves_s``, median of the repeats) on ``linear_motor_xy``'s limits, and the
+engagement along it through a 7 x 5003 mm stock with a 1 mm cutter (``engagement_10000_moves_s``).
 
 Start-up (``startup``): wall time of ``twin run seed004_cutting_circle --json`` (2.2 s simulated)
 as a new Python process (``python -m twin.cli``, as the ``twin`` script), alternating with the
@@ -91,7 +92,7 @@ def _cases() -> dict:
 def raster_program(n_moves: int) -> list[str]:
     """A pocket raster of ``n_moves`` moves: 5 mm lines along X joined by tangent half circles
     of 0.5 mm radius (a CAM-style zig-zag at 3000 mm/min)."""
-    lines = ["G21 G90 G17 G94", "G64 P0.01", "G0 X0 Y0 Z1", "G1 Z-1 F300", "F3000"]
+    lines = ["G21 G90 G17 G94", "G64 P0.01", "G0 X0 Y0 Z1", "M3 S10000", "G1 Z-1 F300", "F3000"]
     y = 0.0
     for k in range(n_moves // 2):
         if k % 2 == 0:
@@ -123,11 +124,17 @@ def gcode_figures(lines: int = 1_000_000, repeats: int = 5) -> dict:
     settings = PlannerSettings()
     limits = settings.limits(build("linear_motor_xy").motion_limits)
     program = list(Reader(raster_program(10_000)).moves())
-    timings = []
+    from twin.process.machining import StockSpec, ToolSpec, program_milling
+
+    timings, engagement = [], []
+    stock = StockSpec(corners_mm=((-1.0, -1.0), (6.0, 5002.0)), top_mm=0.0, bottom_mm=-5.0)
     for _ in range(repeats):
         t0 = time.perf_counter()
         planned = plan(program, limits, settings)
         timings.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        program_milling(planned, stock, ToolSpec(diameter_mm=1.0, n_flutes=2), [], 0)
+        engagement.append(time.perf_counter() - t0)
     return {
         "gcode_lines": lines,
         "moves_read": moves,
@@ -135,6 +142,7 @@ def gcode_figures(lines: int = 1_000_000, repeats: int = 5) -> dict:
         "plan_moves": len(program),
         "plan_10000_moves_s": statistics.median(timings),
         "plan_cycle_time_s": planned.cycle_time_s,
+        "engagement_10000_moves_s": statistics.median(engagement),
     }
 
 

@@ -471,7 +471,7 @@ def bench(
     typer.echo(
         f"G-code: read {g['gcode_lines']:,} lines at {g['read_lines_per_s']:,.0f} lines/s; "
         f"planned {g['plan_moves']:,} moves in {g['plan_10000_moves_s']:.2f} s "
-        f"(cycle time {g['plan_cycle_time_s']:.0f} s)"
+        f"(cycle time {g['plan_cycle_time_s']:.0f} s), their engagement in {g['engagement_10000_moves_s']:.2f} s"
     )
 
 

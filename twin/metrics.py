@@ -175,6 +175,10 @@ def tracking_summary(result) -> dict:
         out["rms_contour_error_um"] = round(float(np.sqrt(np.mean(ce**2)) * 1e6), 3)
     if result.program_lines.size:
         out["cycle_time_s"] = round(float(result.info.get("program_cycle_time_s", 0.0)), 6)
+        feeding = result.program_feed_mm_per_min > 0
+        if ce is not None and feeding.any():  # the contour error on the feed moves, rapids left out
+            out["max_contour_error_feed_um"] = round(float(ce[feeding].max() * 1e6), 3)
+            out["rms_contour_error_feed_um"] = round(float(np.sqrt(np.mean(ce[feeding] ** 2)) * 1e6), 3)
         if result.engagement.size:  # with a stock: the share of the recorded time the tool cuts
             cutting = (result.engagement[:, 0] > 0) & (result.engagement[:, 1] > 0)
             out["cutting_share"] = round(float(cutting.mean()), 4)

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from twin.scales import contour_gain
 
 
@@ -117,4 +119,73 @@ def write_plots(result, directory: Path, name: str = "run") -> list[Path]:
         written.append(directory / f"{name}_contour.png")
         fig.savefig(written[-1], dpi=120, bbox_inches="tight")
         plt.close(fig)
+    if result.program_lines.size and len(axes) == 2:
+        written += _program_plots(plt, result, directory, name)
+    return written
+
+
+#: Lines of a program the part plot labels, worst first.
+LABELLED_LINES = 5
+
+
+def _program_plots(plt, result, directory: Path, name: str) -> list[Path]:
+    """A program's part seen from above (stock and machined outlines, the path coloured by its
+    contour error, the worst lines labelled) and its feed profile (programmed, planned, actual)."""
+    from matplotlib.collections import LineCollection
+
+    from twin.metrics import contour_error, line_table
+
+    ref, act = result.ref[:, :, 0] * 1e3, result.table_position_m() * 1e3
+    error_um = contour_error(act * 1e-3, ref * 1e-3) * 1e6
+    fig, ax = plt.subplots(figsize=(8, 7))
+    for key, color, label in (("stock", "0.55", "stock"), ("machined", "k", "machined outline")):
+        for i, ring in enumerate(result.part_outlines.get(key, [])):
+            ax.plot(ring[:, 0], ring[:, 1], color=color, linewidth=1.0, label=label if i == 0 else None)
+    segments = np.stack([act[:-1], act[1:]], axis=1)
+    path = LineCollection(list(segments), array=error_um[1:], cmap="turbo", linewidths=2.0)
+    ax.add_collection(path)
+    fig.colorbar(path, ax=ax, label="contour error (µm)")
+    rows = sorted(line_table(result, error_um * 1e-6), key=lambda r: r["max_contour_error_um"], reverse=True)
+    for row in rows[:LABELLED_LINES]:
+        inside = (result.t_s >= row["t_start_s"]) & (result.t_s < row["t_end_s"])
+        where = act[inside][np.argmax(error_um[inside])] if inside.any() else act[0]
+        ax.annotate(
+            f"line {row['line']}: {row['max_contour_error_um']:.1f} µm\n{row['text']}",
+            where,
+            xytext=(12, 12),
+            textcoords="offset points",
+            fontsize=7,
+            arrowprops={"arrowstyle": "->", "linewidth": 0.6},
+            bbox={"boxstyle": "round", "fc": "white", "alpha": 0.8},
+        )
+    ax.autoscale()
+    ax.set(
+        xlabel="x (mm)",
+        ylabel="y (mm)",
+        title=f"{name}: contour error along the path, the {LABELLED_LINES} worst lines",
+    )
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.grid(True, alpha=0.3)
+    if result.part_outlines:
+        ax.legend(loc="lower right", fontsize=8)
+    written = [directory / f"{name}_part.png"]
+    fig.savefig(written[-1], dpi=120, bbox_inches="tight")
+    plt.close(fig)
+    fig, ax = plt.subplots(figsize=(9, 3.6))
+    t = result.t_s
+    planned = np.hypot(result.ref[:, 0, 1], result.ref[:, 1, 1]) * 60e3
+    velocity = np.gradient(result.table_position_m(), t, axis=0) if len(t) > 1 else np.zeros_like(act)
+    ax.plot(t, result.program_feed_mm_per_min, color="0.5", linewidth=1.2, label="programmed F (0: rapid)")
+    ax.plot(t, planned, color="tab:blue", linewidth=1.0, label="planned (reference)")
+    actual = np.hypot(velocity[:, 0], velocity[:, 1]) * 60e3
+    ax.plot(t, actual, color="tab:red", linewidth=0.7, label="actual (table)")
+    top_feed = float(result.program_feed_mm_per_min.max())
+    if top_feed > 0:  # the feeds in view; rapids run off the top
+        ax.set_ylim(0.0, 1.3 * top_feed)
+    ax.set(xlabel="time (s)", ylabel="XY feed (mm/min)", title=f"{name}: feed profile (rapids above the view)")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    written.append(directory / f"{name}_feed.png")
+    fig.savefig(written[-1], dpi=120, bbox_inches="tight")
+    plt.close(fig)
     return written

@@ -143,6 +143,8 @@ class Plan:
         The spindle speed of each line's moves (0 where M5 stops it).
     tools : dict of int to int
         The tool in the spindle on each line (0: none).
+    feeds : dict of int to float
+        The programmed feed of each line's moves (mm/min; 0 for rapids and dwells).
     """
 
     period_s: float
@@ -158,6 +160,7 @@ class Plan:
     texts: dict[int, str] = field(default_factory=dict, repr=False)
     spindle_rpm: dict[int, float] = field(default_factory=dict, repr=False)
     tools: dict[int, int] = field(default_factory=dict, repr=False)
+    feeds: dict[int, float] = field(default_factory=dict, repr=False)
 
     def per_sample(self, by_line: dict, default) -> np.ndarray:
         """A per-line value (``spindle_rpm``, ``tools``) at each sample."""
@@ -439,6 +442,7 @@ def plan(moves: Iterable[Move], limits: Limits, settings: PlannerSettings | None
         {m.line: m.text for m in moves},
         {m.line: (m.spindle_rpm if m.spindle != "off" else 0.0) for m in moves},
         {m.line: m.tool for m in moves},
+        {m.line: m.feed_mm_per_min for m in moves},
     )
 
 

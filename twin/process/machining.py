@@ -132,6 +132,7 @@ class HeightMap:
 
     def __init__(self, stock: StockSpec, margin_mm: float):
         poly = stock.polygon()
+        self.stock_polygon = poly
         res = stock.resolution_mm
         x0, y0, x1, y1 = poly.bounds
         x0, y0, x1, y1 = x0 - margin_mm, y0 - margin_mm, x1 + margin_mm, y1 + margin_mm
@@ -151,18 +152,20 @@ class HeightMap:
         self.x0_m, self.y0_m, self.res_m = x0 * 1e-3, y0 * 1e-3, res * 1e-3
         self.top_m, self.bottom_m = stock.top_mm * 1e-3, stock.bottom_mm * 1e-3
 
-    def machined_outline(self, z_m: float) -> shapely.MultiPolygon:
-        """The material left at height ``z_m`` (m), as polygons (mm): the cells still above it."""
-        above = self.heights > z_m
-        cells = [
-            shapely.box(x, y, x + self.res_m * 1e3, y + self.res_m * 1e3)
-            for x, y in zip(
-                (self.x0_m + np.nonzero(above)[0] * self.res_m) * 1e3,
-                (self.y0_m + np.nonzero(above)[1] * self.res_m) * 1e3,
-            )
+    def outlines(self) -> dict[str, list[np.ndarray]]:
+        """The stock's outline and the outline of the material left at its full height (the
+        part's top as machined), each a list of closed polylines (n, 2) in mm."""
+        import contourpy
+
+        stock = [np.asarray(self.stock_polygon.exterior.coords)] + [
+            np.asarray(ring.coords) for ring in self.stock_polygon.interiors
         ]
-        merged = shapely.union_all(cells) if cells else shapely.MultiPolygon()
-        return merged
+        nx, ny = self.heights.shape
+        xs = (self.x0_m + (np.arange(nx) + 0.5) * self.res_m) * 1e3
+        ys = (self.y0_m + (np.arange(ny) + 0.5) * self.res_m) * 1e3
+        z = np.where(np.isfinite(self.heights), self.heights, self.bottom_m - 1.0).T
+        lines = contourpy.contour_generator(xs, ys, z).lines(self.top_m - 1e-6)
+        return {"stock": stock, "machined": [np.asarray(line) for line in lines]}
 
 
 @njit(cache=True)

@@ -35,8 +35,14 @@ def _contour_view(result, prefix: str, gain: int) -> rrb.Spatial3DView:
     ref = result.ref[:, :, 0] * 1e3
     centre = (ref.min(axis=0) + ref.max(axis=0)) / 2
     height = 1.35 * max(float(np.ptp(ref, axis=0).max()), 1e-3)
+    name = f"contour (mm, seen from above): reference grey, actual blue, error x{gain} red, tool yellow"
+    if result.program_lines.size:
+        name = (
+            f"part (mm, seen from above): path coloured by contour error (scale right), error x{gain} red, "
+            "stock grey, machined outline white, tool yellow"
+        )
     return rrb.Spatial3DView(
-        name=f"contour (mm, seen from above): reference grey, actual blue, error x{gain} red, tool yellow",
+        name=name,
         origin=f"{prefix}contour",
         eye_controls=rrb.EyeControls3D(
             position=[centre[0], centre[1], height], look_target=[centre[0], centre[1], 0.0], eye_up=[0.0, 1.0, 0.0]

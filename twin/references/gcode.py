@@ -108,6 +108,17 @@ class GcodeReference:
         rows = self.engagement[k]
         return np.column_stack([engaged_degrees(rows), rows[:, 4]])
 
+    def feeds_at(self, t) -> np.ndarray:
+        """The programmed feed (mm/min; 0 on rapids and dwells) at times ``t`` (s)."""
+        lines = self.lines_at(t)
+        known, where = np.unique(lines, return_inverse=True)
+        return np.array([self.plan.feeds.get(int(line), 0.0) for line in known])[where]
+
+    def outlines(self) -> dict[str, list[np.ndarray]]:
+        """With a stock: its outline and the machined one (mm, see
+        :meth:`twin.process.machining.HeightMap.outlines`); else empty."""
+        return {} if self.height_map is None else self.height_map.outlines()
+
     @property
     def texts(self) -> dict[int, str]:
         """The text of each program line that moved or dwelt."""

@@ -105,6 +105,10 @@ class RunResult:
     engagement : ndarray (n, 2)
         With a stock: the engaged angle (deg) and axial depth (mm) at each recorded tick (else
         empty).
+    program_feed_mm_per_min : ndarray (n,)
+        For a G-code reference, the programmed feed at each recorded tick (else empty).
+    part_outlines : dict of str to list of ndarray
+        With a stock: ``stock`` and ``machined`` outlines (mm), as the program leaves them.
     """
 
     machine: BuiltMachine
@@ -126,6 +130,8 @@ class RunResult:
     program_lines: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     program_texts: dict = field(default_factory=dict)
     engagement: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    program_feed_mm_per_min: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    part_outlines: dict = field(default_factory=dict)
 
     @property
     def axis_names(self) -> list[str]:
@@ -358,8 +364,11 @@ def simulate(
             program_lines=reference.lines_at(t_rec) if program else np.zeros(0, int),
             program_texts=reference.texts if program else {},
             engagement=reference.engagement_at(t_rec) if program else np.zeros((0, 2)),
+            program_feed_mm_per_min=reference.feeds_at(t_rec) if program else np.zeros(0),
+            part_outlines=outlines,
         )
 
+    outlines = reference.outlines() if hasattr(reference, "outlines") else {}
     show = progress if progress is not None else n * substeps > PROGRESS_STEPS
     size = max(1, min(CHUNK_TICKS, CHUNK_STEPS // substeps, n))
     warnings0 = [data.warning[w].number for w in FATAL_WARNINGS]

@@ -26,9 +26,27 @@ from twin.sweeps.plan import Plan
 STATUSES = ("ok", "diverged", "error")
 
 
-def metric_columns(axes) -> list[str]:
-    """The metric columns for machine axes ``axes``."""
-    return [f"{m}_{a}" for m in ("max_tracking_error_um", "rmse_um", "max_cutting_force_N") for a in axes]
+#: The contour columns of a two-axis machine: filled for a G-code reference (the samples record
+#: their ticks for it; ``_feed``: on the feed moves alone), empty otherwise.
+CONTOUR_COLUMNS = (
+    "max_contour_error_um",
+    "rms_contour_error_um",
+    "max_contour_error_feed_um",
+    "rms_contour_error_feed_um",
+)
+
+
+def metric_columns(axes, program: bool = False) -> list[str]:
+    """The metric columns for machine axes ``axes`` (a G-code ``program`` on two axes: and the
+    contour columns)."""
+    per_axis = [f"{m}_{a}" for m in ("max_tracking_error_um", "rmse_um", "max_cutting_force_N") for a in axes]
+    return per_axis + (list(CONTOUR_COLUMNS) if program and len(axes) == 2 else [])
+
+
+def is_program(base: dict) -> bool:
+    """Whether the scenario ``base`` (a dict) runs a G-code program."""
+    reference = base.get("reference")
+    return isinstance(reference, dict) and reference.get("type") == "gcode"
 
 
 def scenario_value(value):
@@ -40,9 +58,9 @@ def run_sample(base: dict, index: int, values: dict, seed: int, axes) -> dict:
     """Run one sample of the scenario ``base`` (a scenario dict) and return its row.
 
     The scenario gets the sample's ``values`` (as ``twin run --set`` would set them), its
-    ``seed`` and ``record_every_ticks = 0``.  Never raises for the sample's own failures: a
-    diverging run is a ``diverged`` row with the simulated time, an invalid or failing one an
-    ``error`` row with the message.
+    ``seed`` and ``record_every_ticks = 0`` (a G-code program: recorded, for its contour
+    error).  Never raises for the sample's own failures: a diverging run is a ``diverged`` row
+    with the simulated time, an invalid or failing one an ``error`` row with the message.
     """
     from twin.scenario import run_scenario, scenario_from_dict, set_fields
 
@@ -54,13 +72,16 @@ def run_sample(base: dict, index: int, values: dict, seed: int, axes) -> dict:
         "error": "",
         "sim_time_s": math.nan,
         "completed_ticks": 0,
-        **{c: math.nan for c in metric_columns(axes)},
+        **{c: math.nan for c in metric_columns(axes, is_program(base))},
     }
     start = time.perf_counter()
     result = None
     try:
         data = set_fields(base, {p: scenario_value(v) for p, v in values.items()})
-        data["seed"], data["record_every_ticks"] = seed, 0
+        program = is_program(data)
+        # a program's samples record (every tick up to 100 000, the runner's default) for the
+        # contour error; others keep metrics only
+        data["seed"], data["record_every_ticks"] = seed, None if program else 0
         result = run_scenario(scenario_from_dict(data), progress=False)
         row["sim_time_s"] = result.info["completed_ticks"] * result.control_period_s
     except SimulationDiverged as exc:
@@ -76,6 +97,12 @@ def run_sample(base: dict, index: int, values: dict, seed: int, axes) -> dict:
             row[f"max_tracking_error_um_{a}"] = float(result.error_max_m[i] * 1e6)
             row[f"rmse_um_{a}"] = float(result.error_rms_m[i] * 1e6)
             row[f"max_cutting_force_N_{a}"] = float(result.force_max_N[i])
+        if is_program(base) and len(result.t_s) > 1 and len(axes) == 2:
+            from twin.metrics import tracking_summary
+
+            summary = tracking_summary(result)
+            for column in CONTOUR_COLUMNS:
+                row[column] = float(summary.get(column, math.nan))
     elif result is not None:
         row["completed_ticks"] = int(result.info["completed_ticks"])
     row["wall_s"] = time.perf_counter() - start
@@ -87,7 +114,7 @@ def run_batch(base: dict, items: list, axes) -> list[dict]:
     return [run_sample(base, i, values, seed, axes) for i, values, seed in items]
 
 
-def _schema(plan: Plan, axes):
+def _schema(plan: Plan, axes, program: bool):
     import pyarrow as pa
 
     fields = [pa.field("index", pa.int64()), pa.field("seed", pa.int64())]
@@ -100,7 +127,8 @@ def _schema(plan: Plan, axes):
         pa.field("sim_time_s", pa.float64()),
         pa.field("completed_ticks", pa.int64()),
     ]
-    fields += [pa.field(c, pa.float64()) for c in metric_columns(axes)] + [pa.field("wall_s", pa.float64())]
+    metrics = metric_columns(axes, program)
+    fields += [pa.field(c, pa.float64()) for c in metrics] + [pa.field("wall_s", pa.float64())]
     return pa.schema(fields)
 
 
@@ -204,7 +232,7 @@ def run_sweep(
     if not (isinstance(batch_size, int) and 1 <= batch_size <= 10_000):
         raise TwinInputError("--batch", batch_size, "must be a whole number from 1 to 10000")
     out.mkdir(parents=True, exist_ok=True)
-    schema = _schema(plan, axes)
+    schema = _schema(plan, axes, is_program(base))
     done = done_indices(out)
     todo = (i for i in range(len(plan)) if i not in done)
     remaining = len(plan) - len(done)

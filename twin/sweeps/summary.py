@@ -37,7 +37,7 @@ def summarize(table, plan: Plan, axes) -> dict:
         "worst": None,
     }
     ok = status == "ok"
-    for c in metric_columns(axes):
+    for c in [c for c in metric_columns(axes, program=True) if c in table.column_names]:
         v = _column(table, c)[ok]
         if v.size and np.isfinite(v).any():
             q = np.nanpercentile(v, [0, 5, 50, 95, 100])
@@ -116,7 +116,8 @@ def write_sweep_plots(table, plan: Plan, axes, folder) -> list:
 
     plt, save, written = plot_folder(folder)
     ok = np.array(table.column("status").to_pylist()) == "ok"
-    columns = [c for c in metric_columns(axes) if np.isfinite(_column(table, c)[ok]).any()]
+    present = [c for c in metric_columns(axes, program=True) if c in table.column_names]
+    columns = [c for c in present if np.isfinite(_column(table, c)[ok]).any()]
     n = len(columns)
     fig, grid = plt.subplots(
         math.ceil(n / len(axes)), len(axes), figsize=(5 * len(axes), 3 * math.ceil(n / len(axes))), squeeze=False
