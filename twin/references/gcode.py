@@ -8,6 +8,7 @@ the machine having no Z axis.
 
 from __future__ import annotations
 
+from functools import cached_property
 from pathlib import Path
 from typing import ClassVar, Literal
 
@@ -114,9 +115,10 @@ class GcodeReference:
         known, where = np.unique(lines, return_inverse=True)
         return np.array([self.plan.feeds.get(int(line), 0.0) for line in known])[where]
 
+    @cached_property
     def outlines(self) -> dict[str, list[np.ndarray]]:
         """With a stock: its outline and the machined one (mm, see
-        :meth:`twin.process.machining.HeightMap.outlines`); else empty."""
+        :meth:`twin.process.machining.HeightMap.outlines`, computed once); else empty."""
         return {} if self.height_map is None else self.height_map.outlines()
 
     @property

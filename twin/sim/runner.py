@@ -368,7 +368,7 @@ def simulate(
             part_outlines=outlines,
         )
 
-    outlines = reference.outlines() if hasattr(reference, "outlines") else {}
+    outlines = reference.outlines if hasattr(reference, "outlines") else {}
     show = progress if progress is not None else n * substeps > PROGRESS_STEPS
     size = max(1, min(CHUNK_TICKS, CHUNK_STEPS // substeps, n))
     warnings0 = [data.warning[w].number for w in FATAL_WARNINGS]
