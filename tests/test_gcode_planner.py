@@ -155,8 +155,11 @@ def test_bundled_programs_run_to_their_end_with_z_recorded():
     assert "reference/z (mm)" in frame.columns
     assert frame["reference/z (mm)"].max() == pytest.approx(2.0, abs=0.05)  # the rapid up to Z2
     whole = api.run("gcode_seed004_circle")
-    planned = api.gcode(PROGRAMS / "seed004_circle.ngc", machine="linear_motor_xy", **{"planner.tolerance_mm": 0.005})
+    planned = api.program(PROGRAMS / "seed004_circle.ngc", machine="linear_motor_xy", **{"planner.tolerance_mm": 0.005})
     assert whole.summary["completed_ticks"] == pytest.approx(planned["planned"]["cycle_time_s"] / 5e-4, abs=2)
+    import twin
+
+    assert twin.program is api.program  # the public name (twin.gcode is the package)
 
 
 def test_twin_gcode_prints_moves_and_the_plan(tmp_path):

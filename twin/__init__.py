@@ -7,14 +7,15 @@ command line start fast::
     run = twin.run("seed004_mimo_cutting", duration_s=0.5)
     run.summary, run.to_pandas()
 
-``twin.load``, ``twin.run``, ``twin.sweep``, ``twin.fidelity``, ``twin.reproduce``, and the
+``twin.load``, ``twin.run``, ``twin.sweep``, ``twin.fidelity``, ``twin.reproduce``,
+``twin.program`` (a part program read and planned, as ``twin gcode``), and the
 classes ``twin.Run`` and ``twin.Sweep``; errors are :class:`twin.errors.TwinInputError` and
 :class:`twin.errors.SimulationDiverged`.
 """
 
 from __future__ import annotations
 
-__all__ = ["Run", "Sweep", "fidelity", "load", "reproduce", "run", "sweep"]
+__all__ = ["Run", "Sweep", "fidelity", "load", "program", "reproduce", "run", "sweep"]
 
 
 def __getattr__(name: str):

@@ -376,7 +376,7 @@ def reproduce(
     return reproduction(seed).run(samples, twin_samples, random_seed, progress)
 
 
-def gcode(file: str | Path, machine: str | None = None, **settings: Any) -> dict:
+def program(file: str | Path, machine: str | None = None, **settings: Any) -> dict:
     """A part program as ``twin gcode FILE --json`` reports it: ``moves`` as read (line, kind,
     end_mm, arcs' plane, center_mm and turns, feed, spindle) and, with a ``machine``,
     ``planned`` (cycle time, feed-only time, limits and largest values per axis, path deviation).
