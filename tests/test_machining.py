@@ -89,6 +89,11 @@ def test_air_moves_and_a_stopped_spindle_cut_nothing():
             "is not above bottom_mm",
         ),
         ({"stock": {"top_mm": 0, "bottom_mm": -5}}, "stock", "give outline_mm or corners_mm"),
+        (
+            {"stock": {"corners_mm": [[0, 0], [9, 9]], "islands_mm": [[[0, 0], [1, 1]]], "top_mm": 0, "bottom_mm": -5}},
+            "stock.islands_mm.0",
+            "at least 3 items",
+        ),
         ({"tools": [{"number": 1, "diameter_mm": 0, "n_flutes": 2}]}, "tools.0.diameter_mm", "greater than 0"),
         ({"tools": [{"number": 1, "diameter_mm": 6, "n_flutes": 0}]}, "tools.0.n_flutes", "greater than or equal to 1"),
         (

@@ -20,7 +20,7 @@ angle ``arccos(1 - 2 a/D)`` comes out within about a degree (tested).
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import Annotated, Literal
 
 import numpy as np
 import shapely
@@ -34,6 +34,8 @@ from twin.spec import StrictSpec
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
 
+#: Points of a stock polygon at most.
+MAX_POLYGON_POINTS = 100_000
 #: Height-map cells at most: 4e7 float64 is 320 MB (a 300 x 300 mm stock at 0.05 mm).
 MAX_CELLS = 40_000_000
 #: Angular step of the engagement test on the tool's leading half circle (degrees).
@@ -47,14 +49,16 @@ COLUMNS = ("phi_st1", "phi_ex1", "phi_st2", "phi_ex2", "axial_depth_mm", "radius
 class StockSpec(StrictSpec):
     """The ``[stock]`` table: a 2.5-D workpiece, machine coordinates (mm)."""
 
-    outline_mm: list[tuple[float, float]] | None = Field(None, description="outline polygon [[x, y], ...]")
+    outline_mm: list[tuple[float, float]] | None = Field(
+        None, min_length=3, max_length=MAX_POLYGON_POINTS, description="outline polygon [[x, y], ...]"
+    )
     corners_mm: tuple[tuple[float, float], tuple[float, float]] | None = Field(
         None, description="a rectangle [[x0, y0], [x1, y1]] instead of an outline"
     )
     top_mm: float = Field(description="top of the stock (Z, mm)")
     bottom_mm: float = Field(description="bottom of the stock (Z, mm)")
-    islands_mm: list[list[tuple[float, float]]] = Field(
-        default_factory=list, description="openings through the stock, each a polygon"
+    islands_mm: list[Annotated[list[tuple[float, float]], Field(min_length=3, max_length=MAX_POLYGON_POINTS)]] = Field(
+        default_factory=list, max_length=1000, description="openings through the stock, each a polygon"
     )
     resolution_mm: float = Field(0.05, ge=0.005, le=1.0, description="height-map cell (mm)")
 
