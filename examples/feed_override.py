@@ -21,7 +21,7 @@ def main(overrides: list[float], workers: int, out: Path, duration_s: float | No
     """The sweep (one sample per override and vertex) and its rows as a DataFrame."""
     out.mkdir(parents=True, exist_ok=True)
     low, high = min(overrides), max(overrides)
-    grid = f"grid({low},{high},{len(overrides)})" if len(overrides) > 1 else f"grid({low},{low},1)"
+    grid = f"grid({low},{high},{len(overrides)})" if len(overrides) > 1 else f"choice({low})"
     settings = {} if duration_s is None else {"duration_s": duration_s}
     sweep = twin.sweep(
         "gcode_test_piece",

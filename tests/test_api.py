@@ -80,7 +80,7 @@ def test_bad_settings_and_divergence_are_the_twins_errors():
         ("sweep_box.py", ["--samples", "4", "--workers", "1"], "4 samples in"),
         (
             "feed_override.py",
-            ["--overrides", "0.8", "1.2", "--workers", "1", "--duration", "3.0"],
+            ["--overrides", "0.8", "1.2", "--workers", "1", "--duration", "1.0"],
             "largest feed override with rms_contour_error_feed_um < 10 µm:",
         ),
     ],

@@ -121,7 +121,7 @@ def test_list_and_bench():
     r = _twin("list")
     assert r.returncode == 0 and "linear_motor_xy" in r.stdout and "seed000_hinf" in r.stdout
     assert "cascade" in r.stdout and "inverse_model" in r.stdout and "reproductions" in r.stdout
-    r = _twin("bench", "--json", "--seconds", "0.05", "--repeats", "3", "--gcode-lines", "3000")
+    r = _twin("bench", "--json", "--seconds", "0.05", "--repeats", "3", "--gcode-lines", "3000", "--gcode-moves", "500")
     figures = json.loads(r.stdout)
     start = figures["startup"]  # a new process does the in-process work and more; --help much less
     assert start["run_in_process_s"] < start["run_process_s"] and 0 < start["help_process_s"] < start["run_process_s"]
@@ -136,8 +136,8 @@ def test_list_and_bench():
     ]
     gcode = figures["gcode"]
     assert gcode["gcode_lines"] == 3000 and gcode["moves_read"] == 2999 and gcode["read_lines_per_s"] > 0
-    assert gcode["plan_moves"] == 10_002 and gcode["plan_10000_moves_s"] > 0 and gcode["plan_cycle_time_s"] > 800
-    assert gcode["engagement_10000_moves_s"] > 0
+    assert gcode["plan_moves"] == 502 and gcode["plan_s"] > 0 and gcode["plan_cycle_time_s"] > 40
+    assert gcode["engagement_s"] > 0
     for figures in cases.values():  # a ratio of medians can differ from the median of ratios, not by 3x
         assert figures["loop"] == "compiled" and figures["raw_steps_per_s"] > 0
         assert figures["closed_loop_steps_per_s"] * figures["timestep_s"] == pytest.approx(figures["realtime_factor"])

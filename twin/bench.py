@@ -20,9 +20,9 @@ Cases:
 
 G-code (``gcode``): the reader's lines per second on a generated program of ``gcode_lines``
 lines read from a file on one core (``read_lines_per_s``), and the planner's wall time for a
-generated pocket raster of 10 000 moves, lines with tangent arc turnarounds
-(``plan_10000_moves_s``, median of the repeats) on ``linear_motor_xy``'s limits, and the
-engagement along it through a 7 x 5003 mm stock with a 1 mm cutter (``engagement_10000_moves_s``).
+generated pocket raster of ``plan_moves`` moves (``gcode_moves``, default 10 000), lines with
+tangent arc turnarounds (``plan_s``, median of the repeats) on ``linear_motor_xy``'s limits, and
+the engagement along it through a 7 mm wide stock with a 1 mm cutter (``engagement_s``).
 
 Start-up (``startup``): wall time of ``twin run seed004_cutting_circle --json`` (2.2 s simulated)
 as a new Python process (``python -m twin.cli``, as the ``twin`` script), alternating with the
@@ -103,13 +103,14 @@ def raster_program(n_moves: int) -> list[str]:
     return lines
 
 
-def gcode_figures(lines: int = 1_000_000, repeats: int = 5) -> dict:
+def gcode_figures(lines: int = 1_000_000, repeats: int = 5, moves: int = 10_000) -> dict:
     """The reader's throughput and the planner's time (see the module docstring)."""
     import tempfile
     from pathlib import Path
 
     from twin.gcode.planner import PlannerSettings, plan
     from twin.gcode.reader import Reader, read_program
+    from twin.process.machining import StockSpec, ToolSpec, program_milling
 
     pattern = ["G1 X{i}.5 Y{j}.25 Z-1.5 F1200", "G2 X{i}.5 Y{j}.25 I-0.5 J0", "N{n} G0 X{i} Y{j} (rapid)"]
     with tempfile.TemporaryDirectory() as folder:
@@ -119,15 +120,14 @@ def gcode_figures(lines: int = 1_000_000, repeats: int = 5) -> dict:
             for n in range(lines - 1):
                 out.write(pattern[n % 3].format(i=(n // 3) % 97, j=(n // 3) % 89, n=n) + "\n")
         t0 = time.perf_counter()
-        moves = sum(1 for _ in read_program(path))
+        read = sum(1 for _ in read_program(path))
         read_s = time.perf_counter() - t0
     settings = PlannerSettings()
     limits = settings.limits(build("linear_motor_xy").motion_limits)
-    program = list(Reader(raster_program(10_000)).moves())
-    from twin.process.machining import StockSpec, ToolSpec, program_milling
+    program = list(Reader(raster_program(moves)).moves())
 
     timings, engagement = [], []
-    stock = StockSpec(corners_mm=((-1.0, -1.0), (6.0, 5002.0)), top_mm=0.0, bottom_mm=-5.0)
+    stock = StockSpec(corners_mm=((-1.0, -1.0), (6.0, moves / 2 + 2.0)), top_mm=0.0, bottom_mm=-5.0)
     for _ in range(repeats):
         t0 = time.perf_counter()
         planned = plan(program, limits, settings)
@@ -137,12 +137,12 @@ def gcode_figures(lines: int = 1_000_000, repeats: int = 5) -> dict:
         engagement.append(time.perf_counter() - t0)
     return {
         "gcode_lines": lines,
-        "moves_read": moves,
+        "moves_read": read,
         "read_lines_per_s": lines / read_s,
         "plan_moves": len(program),
-        "plan_10000_moves_s": statistics.median(timings),
+        "plan_s": statistics.median(timings),
         "plan_cycle_time_s": planned.cycle_time_s,
-        "engagement_10000_moves_s": statistics.median(engagement),
+        "engagement_s": statistics.median(engagement),
     }
 
 
@@ -181,7 +181,7 @@ def startup(repeats: int = 5) -> dict:
     }
 
 
-def run_bench(seconds: float = 2.0, repeats: int = 5, gcode_lines: int = 1_000_000) -> dict:
+def run_bench(seconds: float = 2.0, repeats: int = 5, gcode_lines: int = 1_000_000, gcode_moves: int = 10_000) -> dict:
     """Measure every case and the start-up; figures as in the module docstring.
 
     Returns
@@ -196,7 +196,7 @@ def run_bench(seconds: float = 2.0, repeats: int = 5, gcode_lines: int = 1_000_0
         "repeats": repeats,
         "cases": {},
         "startup": startup(repeats),
-        "gcode": gcode_figures(gcode_lines, repeats),
+        "gcode": gcode_figures(gcode_lines, repeats, gcode_moves),
     }
     for name, (bm, run) in _cases().items():
         dt = bm.model.opt.timestep
