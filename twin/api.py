@@ -220,28 +220,6 @@ class Sweep:
     axes: tuple[str, ...]
     interrupted: bool = False
 
-    def lines_to_parquet(self, path: str | Path) -> Path:
-        """Write the per-line table of a G-code run (``summary["lines"]``, the per-axis
-        tracking errors as columns ``max_tracking_error_um_<axis>``) to a Parquet file.
-
-        Raises
-        ------
-        TwinInputError
-            The run has no G-code reference.
-        """
-        import pyarrow as pa
-        import pyarrow.parquet as pq
-
-        rows = self.summary.get("lines")
-        if not rows:
-            raise TwinInputError("lines", str(path), "the run has no G-code reference: no per-line table")
-        flat = []
-        for row in rows:
-            per_axis = {f"max_tracking_error_um_{a}": v for a, v in row["max_tracking_error_um"].items()}
-            flat.append({**{k: v for k, v in row.items() if k != "max_tracking_error_um"}, **per_axis})
-        pq.write_table(pa.Table.from_pylist(flat), Path(path))
-        return Path(path)
-
     def to_pandas(self) -> pd.DataFrame:
         """Every sample's row (its parameters, status and metrics) as a ``pandas.DataFrame``."""
         return self.table.to_pandas()
