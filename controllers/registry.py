@@ -77,7 +77,8 @@ class ParameterError(ValueError):
 
 @dataclass(frozen=True)
 class ControllerKind:
-    """One controller kind (``type = "<name>"``).
+    """One controller kind (``type = "<name>"``), or an observer add-on kind
+    (``[controller.observer] type = "<name>"``).
 
     Attributes
     ----------
@@ -86,27 +87,13 @@ class ControllerKind:
     params : type of Params
         Its parameters: names, defaults, limits; the units are in each field's description.
     build : callable
-        ``build(params, ctx) -> Controller`` for the axes of ``ctx``.
+        ``build(params, ctx)``: a ``Controller`` for the axes of ``ctx`` (an observer kind:
+        its list of blocks for every served axis).
     """
 
     name: str
     params: type[Params]
-    build: Callable[[Any, Context], Controller]
-
-    @property
-    def doc(self) -> str:
-        """The kind's docs line: the builder's docstring, on one line."""
-        return " ".join((self.build.__doc__ or self.name).split())
-
-
-@dataclass(frozen=True)
-class ObserverKind:
-    """One observer add-on kind (``[controller.observer] type = "<name>"``); ``build(params,
-    ctx) -> list of blocks`` for every served axis.  See :class:`ControllerKind`."""
-
-    name: str
-    params: type[Params]
-    build: Callable[[Any, Context], list]
+    build: Callable[[Any, Context], Any]
 
     @property
     def doc(self) -> str:
@@ -117,41 +104,29 @@ class ObserverKind:
 #: Controller kinds by name, in registration order (:mod:`controllers.kinds`).
 CONTROLLERS: dict[str, ControllerKind] = {}
 #: Observer add-on kinds by name, in registration order.
-OBSERVERS: dict[str, ObserverKind] = {}
+OBSERVERS: dict[str, ControllerKind] = {}
+
+
+def _registering(registry: dict[str, ControllerKind], what: str, name: str, params: type[Params]):
+    """A decorator that adds its builder to ``registry`` as kind ``name``."""
+
+    def register(build):
+        if name in registry:
+            raise ValueError(f"{what} kind {name!r} is registered twice")
+        registry[name] = ControllerKind(name, params, build)
+        return build
+
+    return register
 
 
 def controller_kind(name: str, params: type[Params] = NoParams):
     """Register the decorated ``build(params, ctx) -> Controller`` as controller kind ``name``."""
-
-    def register(build):
-        if name in CONTROLLERS:
-            raise ValueError(f"controller kind {name!r} is registered twice")
-        CONTROLLERS[name] = ControllerKind(name, params, build)
-        return build
-
-    return register
+    return _registering(CONTROLLERS, "controller", name, params)
 
 
 def observer_kind(name: str, params: type[Params] = NoParams):
     """Register the decorated ``build(params, ctx) -> list of blocks`` as observer kind ``name``."""
-
-    def register(build):
-        if name in OBSERVERS:
-            raise ValueError(f"observer kind {name!r} is registered twice")
-        OBSERVERS[name] = ObserverKind(name, params, build)
-        return build
-
-    return register
-
-
-def parameter_list(params: type[Params]) -> list[tuple[str, str, str]]:
-    """Each parameter of a kind as ``(name, default, description)`` (default ``"required"``
-    where there is none), for ``twin list`` and the docs."""
-    out = []
-    for key, info in params.model_fields.items():
-        default = "required" if info.is_required() else repr(info.default)
-        out.append((key, default, info.description or ""))
-    return out
+    return _registering(OBSERVERS, "observer", name, params)
 
 
 def validate_params(name: str, model: type[Params], params: dict | None) -> Any:
