@@ -409,13 +409,10 @@ def pack_slots(slots: tuple[str, ...], values: dict[str, float], jacobian: np.nd
 
 
 @njit(cache=True)
-def _end_milling(par, state, qpos, t, out):  # pragma: no cover - compiled
-    """Add one step's mechanistic milling force on the workpiece (world frame, N) to ``out``."""
-    k = par[EM_K : EM_K + 6]
-    n_flutes, a, phi_st, phi_ex = int(par[EM_N_FLUTES]), par[EM_DEPTH], par[EM_PHI_ST], par[EM_PHI_EX]
-    omega, phase0, dt = par[EM_OMEGA], par[EM_PHASE0], par[EM_DT]
-    lag_lo, frac, lo, hi, n = int(par[EM_LAG_LO]), par[EM_LAG_FRAC], par[EM_LO], par[EM_HI], int(par[EM_N_HIST])
-    jac = par[EM_JACOBIAN:].reshape((2, -1))
+def _record_position(jac, qpos, state, n):  # pragma: no cover - compiled
+    """Step count ``state[0]`` on by one and the workpiece's XY position (``jac @ qpos``, m) into
+    the ring buffer ``state[3:]`` of ``n`` rows (filled with it at the first step); returns the
+    step index and the buffer."""
     hist = state[3:].reshape((n, 2))
     i = int(state[0])
     state[0] = i + 1
@@ -427,21 +424,44 @@ def _end_milling(par, state, qpos, t, out):  # pragma: no cover - compiled
     if i == 0:
         for m in range(1, n):
             hist[m, 0], hist[m, 1] = hist[0, 0], hist[0, 1]
-    if not (lo <= t < hi):
-        return
-    # position one tooth period ago, between steps i - lag_lo - 1 and i - lag_lo
+    return i, hist
+
+
+@njit(cache=True)
+def _chip(hist, i, n, lag_lo, frac, state):  # pragma: no cover - compiled
+    """The feed per tooth (m): the workpiece's displacement since one tooth period ago (between
+    steps ``i - lag_lo - 1`` and ``i - lag_lo``), and the feed direction, held in ``state[1:3]``
+    through stops."""
     p0, p1 = max(i - lag_lo, 0) % n, max(i - lag_lo - 1, 0) % n
     dx = (1.0 - frac) * hist[p0, 0] + frac * hist[p1, 0] - hist[i % n, 0]
     dy = (1.0 - frac) * hist[p0, 1] + frac * hist[p1, 1] - hist[i % n, 1]
     c_m = math.hypot(dx, dy)
     if c_m > MIN_FEED_M:
         state[1], state[2] = dx / c_m, dy / c_m
-    ux, uy = state[1], state[2]
-    fx, fy, fz = step_tool_forces_N(k, n_flutes, a, c_m * 1e3, phi_st, phi_ex, phase0 + omega * t, omega * dt)
-    # feed frame -> world; the workpiece gets the reaction of the force on the tool
+    return c_m, state[1], state[2]
+
+
+@njit(cache=True)
+def _on_workpiece(fx, fy, fz, ux, uy, out):  # pragma: no cover - compiled
+    """Add the reaction of a force on the tool (feed frame, N) to ``out`` (world frame)."""
     out[0] -= fx * ux - fy * uy
     out[1] -= fx * uy + fy * ux
     out[2] -= fz
+
+
+@njit(cache=True)
+def _end_milling(par, state, qpos, t, out):  # pragma: no cover - compiled
+    """Add one step's mechanistic milling force on the workpiece (world frame, N) to ``out``."""
+    k = par[EM_K : EM_K + 6]
+    n_flutes, a, phi_st, phi_ex = int(par[EM_N_FLUTES]), par[EM_DEPTH], par[EM_PHI_ST], par[EM_PHI_EX]
+    omega, phase0, dt = par[EM_OMEGA], par[EM_PHASE0], par[EM_DT]
+    lag_lo, frac, lo, hi, n = int(par[EM_LAG_LO]), par[EM_LAG_FRAC], par[EM_LO], par[EM_HI], int(par[EM_N_HIST])
+    i, hist = _record_position(par[EM_JACOBIAN:].reshape((2, -1)), qpos, state, n)
+    if not (lo <= t < hi):
+        return
+    c_m, ux, uy = _chip(hist, i, n, lag_lo, frac, state)
+    fx, fy, fz = step_tool_forces_N(k, n_flutes, a, c_m * 1e3, phi_st, phi_ex, phase0 + omega * t, omega * dt)
+    _on_workpiece(fx, fy, fz, ux, uy, out)
 
 
 @njit(cache=True)
@@ -454,17 +474,7 @@ def _program_milling(par, state, qpos, t, out):  # pragma: no cover - compiled
     jac = par[PM_JACOBIAN : PM_JACOBIAN + n_jac].reshape((2, -1))
     tools = par[PM_JACOBIAN + n_jac : PM_JACOBIAN + n_jac + 7 * n_tools].reshape((n_tools, 7))
     table = par[PM_JACOBIAN + n_jac + 7 * n_tools :].reshape((n_table, PM_WIDTH))
-    hist = state[3:].reshape((n, 2))
-    i = int(state[0])
-    state[0] = i + 1
-    for r in range(2):
-        acc = 0.0
-        for j in range(jac.shape[1]):
-            acc += jac[r, j] * qpos[j]
-        hist[i % n, r] = acc
-    if i == 0:
-        for m in range(1, n):
-            hist[m, 0], hist[m, 1] = hist[0, 0], hist[0, 1]
+    i, hist = _record_position(jac, qpos, state, n)
     row = min(max(int(t / period), 0), n_table - 1)
     a, omega = table[row, 4], table[row, 5]
     if a <= 0.0 or omega <= 0.0:
@@ -474,14 +484,7 @@ def _program_milling(par, state, qpos, t, out):  # pragma: no cover - compiled
     n_flutes = int(tools[tool, 6])
     lag_steps = 2.0 * math.pi / (omega * n_flutes) / dt
     lag_lo = int(lag_steps)
-    frac = lag_steps - lag_lo
-    p0, p1 = max(i - lag_lo, 0) % n, max(i - lag_lo - 1, 0) % n
-    dx = (1.0 - frac) * hist[p0, 0] + frac * hist[p1, 0] - hist[i % n, 0]
-    dy = (1.0 - frac) * hist[p0, 1] + frac * hist[p1, 1] - hist[i % n, 1]
-    c_m = math.hypot(dx, dy)
-    if c_m > MIN_FEED_M:
-        state[1], state[2] = dx / c_m, dy / c_m
-    ux, uy = state[1], state[2]
+    c_m, ux, uy = _chip(hist, i, n, lag_lo, lag_steps - lag_lo, state)
     angle = table[row, 6] + omega * (t - row * period)
     fx = fy = fz = 0.0
     for arc in range(2):
@@ -489,9 +492,7 @@ def _program_milling(par, state, qpos, t, out):  # pragma: no cover - compiled
         if ex > st:
             gx, gy, gz = step_tool_forces_N(k, n_flutes, a, c_m * 1e3, st, ex, angle, omega * dt)
             fx, fy, fz = fx + gx, fy + gy, fz + gz
-    out[0] -= fx * ux - fy * uy
-    out[1] -= fx * uy + fy * ux
-    out[2] -= fz
+    _on_workpiece(fx, fy, fz, ux, uy, out)
 
 
 @njit(cache=True)
