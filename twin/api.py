@@ -313,15 +313,13 @@ def fidelity(machines: list[str] | tuple = (), **symbols: float) -> list[dict]:
     TwinInputError
         An unknown machine or case, or an override the machine refuses, before anything runs.
     """
-    from twin.fidelity import CASES
+    from twin.fidelity import CASES, case_machine
     from twin.fidelity import fidelity as check
     from twin.machines import get_machine
 
     names = list(machines) or list(CASES)
     for name in names:  # validate everything before computing anything
-        if name not in CASES:
-            raise TwinInputError("machine", name, f"unknown machine or fidelity case (known: {', '.join(CASES)})")
-        get_machine(CASES[name][0]).resolve(symbols)
+        get_machine(case_machine(name)[0]).resolve(symbols)
     return [check(name, symbols) for name in names]
 
 

@@ -1,4 +1,4 @@
-"""Command line: ``twin run | demo | gcode | fidelity | reproduce | sweep | list | bench``.
+"""Command line: ``twin run | demo | gcode | fidelity | frf | calibrate | tune | reproduce | sweep | list | bench``.
 
 Bad input (unknown machine, controller or field, invalid values, malformed TOML) prints one
 line ``error: <field> = <value>: <reason>`` on stderr and exits with code 2; a diverging
@@ -197,7 +197,9 @@ def _parse_sets(sets: list[str]) -> dict[str, float]:
 @app.command()
 @_guard
 def fidelity(
-    machine: list[str] = typer.Option(None, "--machine", help="Machine(s) or fidelity case(s); default all"),
+    machine: list[str] = typer.Option(
+        None, "--machine", help="Machine(s), fidelity case(s) or machine file(s) (FILE.toml); default all"
+    ),
     sets: list[str] = typer.Option(None, "--set", help="Parameter override SYMBOL=VALUE"),
     as_json: bool = typer.Option(False, "--json", help="Print the results as JSON"),
 ):
@@ -383,6 +385,61 @@ def gcode(
                 f"a {top['acceleration_m_per_s2']:.4g}/{lim['acceleration_m_per_s2']:.4g} m/s^2, "
                 f"j {top['jerk_m_per_s3']:.4g}/{lim['jerk_m_per_s3']:.4g} m/s^3 (largest/limit)"
             )
+
+
+@app.command()
+@_guard
+def frf(
+    machine: str = typer.Argument(..., help="A machine (twin list) or a machine file (FILE.toml)"),
+    axis: str = typer.Option("x", "--axis", help="The axis to excite"),
+    loop: str = typer.Option("velocity", "--loop", help="open | velocity | position"),
+    sensor: str = typer.Option("table", "--sensor", help="motor | table: whose position is measured"),
+    excitation: str = typer.Option("prbs", "--excitation", help="prbs | chirp | multisine"),
+    amplitude: float = typer.Option(1.0, "--amplitude", help="Excitation amplitude, V (peak)"),
+    duration: float = typer.Option(16.0, "--duration", help="Recorded time, s"),
+    f_max: float = typer.Option(1000.0, "--f-max", help="Highest frequency, Hz"),
+    sets: list[str] = typer.Option(None, "--set", help="Parameter override SYMBOL=VALUE"),
+    as_json: bool = typer.Option(False, "--json", help="Print the FRF as JSON"),
+    plots: Path = typer.Option(None, "--plots", help="Write the Bode plot (PNG) to this folder"),
+    rrd: Path = typer.Option(None, "--rrd", help="Write the experiment as a Rerun recording (.rrd)"),
+):
+    """Measure an axis's frequency response on the twin as a commissioning tool does (excite,
+    H1 with coherence, resonances and anti-resonances) beside the model's."""
+    from twin.frf import FrfSettings, measure, write_bode
+
+    _check_output("--rrd", rrd, ".rrd")
+    _check_plots_folder(plots)
+    settings = FrfSettings(axis, loop, sensor, excitation, amplitude, duration, f_max)  # type: ignore[arg-type]
+    result = measure(machine, settings, _parse_sets(sets or []))
+    run = result.pop("run")
+    if as_json:
+        typer.echo(json.dumps(result, indent=1, allow_nan=False))
+    else:
+        typer.echo(
+            f"{machine}: axis {axis}, {loop} loop, {sensor} sensor, {excitation} {amplitude:g} V, "
+            f"{len(result['frequency_hz'])} lines {result['frequency_hz'][0]:.2f}-{result['frequency_hz'][-1]:.0f} Hz"
+        )
+        listing = ", ".join(f"{f:.1f}" for f in result["resonances_hz"]) or "none"
+        model = ", ".join(f"{f:.1f}" for f in result["model_resonances_hz"]) or "none"
+        typer.echo(f"  resonances (Hz): {listing}   model: {model}")
+        listing = ", ".join(f"{f:.1f}" for f in result["antiresonances_hz"]) or "none"
+        model = ", ".join(f"{f:.1f}" for f in result["model_antiresonances_hz"]) or "none"
+        typer.echo(f"  anti-resonances (Hz): {listing}   model: {model}")
+        error = result["max_model_error_db"]
+        typer.echo(
+            f"  coherence >= 0.9 on {100 * result['coherent_share']:.0f} % of the lines; "
+            f"largest |measured - model| there: {'-' if error is None else f'{error:.2f}'} dB"
+        )
+    if plots is not None:
+        plots.mkdir(parents=True, exist_ok=True)
+        path = plots / f"frf_{Path(machine).stem}_{axis}_{loop}_{sensor}.png"
+        write_bode(result, path)
+        typer.echo(f"plot written to {path}", err=as_json)
+    if rrd is not None:
+        from twin.recording import record
+
+        record(run, rrd)
+        typer.echo(f"recording written to {rrd} (view with: rerun {rrd})", err=as_json)
 
 
 @app.command("list")

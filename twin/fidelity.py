@@ -35,14 +35,15 @@ from controllers.blocks import error_feedback, open_loop
 from controllers.lti import SisoTf
 from controllers.papers.seed004 import cutting_coupled_plant
 from twin.errors import TwinInputError
-from twin.machines import MACHINES, build, get_machine
+from twin.machines import MACHINES, build, get_machine, is_machine_file
 from twin.process.cutting import AverageForce
 from twin.references import Step, SumOfSines
 from twin.sim.runner import simulate
 
 TARGETS = {"time_nrmse": 0.005, "frf_max_mag_err_db": 0.2, "frf_max_phase_err_deg": 2.0, "coupling_slip_um": 0.1}
 FULL_SCALE_V = 10.0
-FRICTION_SYMBOLS = ("F_coul_x", "F_coul_y")
+#: Longest settling (s) the frequency check waits for before its measured periods.
+MAX_SETTLE_S = 600.0
 #: Seed 004 Table 1, up milling (N s/m).
 SEED004_CUTTING = AverageForce(k_il_N_s_per_m=-2500.0, k_c_N_s_per_m=2500.0)
 #: Fidelity cases: name -> (machine, cutting-force model or None).
@@ -50,6 +51,25 @@ CASES = {
     **{name: (name, None) for name in MACHINES},
     "linear_motor_xy+average_force": ("linear_motor_xy", SEED004_CUTTING),
 }
+
+
+def case_machine(case: str) -> tuple[str, AverageForce | None]:
+    """The machine (a name or a machine file) and cutting-force model of a fidelity case: one of
+    :data:`CASES`, or a machine file (``.toml``, no cutting).
+
+    Raises
+    ------
+    TwinInputError
+        Neither a case nor a readable machine file.
+    """
+    if is_machine_file(case):
+        get_machine(case)
+        return case, None
+    if case not in CASES:
+        raise TwinInputError(
+            "machine", case, f"unknown fidelity case (known: {', '.join(CASES)}; or a machine file, FILE.toml)"
+        )
+    return CASES[case]
 
 
 def _discrete_reference(bm, reference, dt):
@@ -127,7 +147,17 @@ def frequency_response_errors(
     # proportional gain per axis: loop gain 1 at crossover_hz on the diagonal channel
     kp = [1.0 / abs(reference[i, i](2j * math.pi * crossover_hz)) for i in range(n_axes)]
     n_period = round(period_s / dt)
-    settle = max(1, math.ceil(settle_s / period_s))  # whole periods discarded as transient
+    # a lightly damped loop (a heavy table with little friction) settles slower than settle_s:
+    # wait until its slowest transient has decayed by e^-12 (6e-6)
+    decay = min(-control.poles(control.feedback(kp[i] * reference[i, i])).real.max() for i in range(n_axes))
+    if decay < 12.0 / MAX_SETTLE_S:
+        raise TwinInputError(
+            "machine",
+            bm.name,
+            f"its proportional position loop settles in over {MAX_SETTLE_S:g} s (slowest decay {decay:.3g} 1/s):"
+            " the frequency check needs some viscous friction",
+        )
+    settle = max(1, math.ceil(max(settle_s, 12.0 / decay) / period_s))  # whole periods discarded as transient
     phases = -math.pi * bins * (bins - 1) / len(bins)  # Schroeder: low crest factor
     Y = np.zeros((len(bins), n_axes, n_axes), complex)
     U = np.zeros((len(bins), n_axes, n_axes), complex)
@@ -187,7 +217,7 @@ def coupling_slip_um(bm, duration_s: float = 0.4) -> float:
 
 def fidelity(case: str, overrides: dict | None = None, *, frf_period_s: float = 10.0, frf_tones: int = 40) -> dict:
     """All three checks for one case of :data:`CASES` (a machine name, or a machine with a
-    cutting-force model); see the module docstring.
+    cutting-force model) or a machine file; see the module docstring.
 
     Returns
     -------
@@ -200,12 +230,10 @@ def fidelity(case: str, overrides: dict | None = None, *, frf_period_s: float = 
     TwinInputError
         Unknown case.
     """
-    if case not in CASES:
-        raise TwinInputError("machine", case, f"unknown fidelity case (known: {', '.join(CASES)})")
-    machine, cutting = CASES[case]
+    machine, cutting = case_machine(case)
     overrides = dict(overrides or {})
     spec = get_machine(machine)
-    forced = {s: 0.0 for s in FRICTION_SYMBOLS if s in spec.parameters}
+    forced = {s: 0.0 for s in spec.coulomb_symbols()}
     bm = build(machine, {**overrides, **forced})
     reference = bm.plant_lti()
     disturbances: tuple = ()

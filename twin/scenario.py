@@ -24,7 +24,7 @@ from controllers.blocks import with_correction
 from controllers.registry import Context, ParameterError, make_observers
 from twin.errors import TwinInputError
 from twin.gcode.planner import PlannerSettings
-from twin.machines import build
+from twin.machines import build, is_machine_file
 from twin.process import DISTURBANCES, DisturbanceSpecBase
 from twin.process.machining import StockSpec, ToolSpec, program_milling
 from twin.references import REFERENCES, ReferenceContext, ReferenceSpecBase
@@ -69,7 +69,9 @@ class DriveSpec(StrictSpec):
 
 
 class SensorSpec(StrictSpec):
-    encoder_resolution_m: float | list[float] = Field(0.0, description="0 for ideal")
+    encoder_resolution_m: float | list[float] | None = Field(
+        None, description="m; 0 for ideal; default: the machine's (0 for the papers' machines)"
+    )
     noise_std_m: float | list[float] = 0.0
     velocity: Literal["backward_difference", "tachometer"] = "backward_difference"
 
@@ -223,8 +225,11 @@ def read_scenario_data(source: str | Path) -> dict:
 
 
 def _relative_to(data: dict, folder: Path) -> dict:
-    """``data`` with the reference's file fields (its kind's ``relative_paths``) made relative to
-    the scenario file's ``folder`` where they are relative paths."""
+    """``data`` with its file fields (a machine file, the reference's ``relative_paths``) made
+    relative to the scenario file's ``folder`` where they are relative paths."""
+    machine = data.get("machine")
+    if isinstance(machine, str) and is_machine_file(machine) and not Path(machine).is_absolute():
+        data["machine"] = str(folder / machine)
     reference = data.get("reference")
     if isinstance(reference, dict) and isinstance(reference.get("type"), str) and reference["type"] in REFERENCES:
         for key in getattr(REFERENCES[reference["type"]].spec, "relative_paths", ()):
@@ -371,7 +376,13 @@ def prepare(scn: Scenario):
         raise TwinInputError("duration_s", None, f"give it: a {scn.reference.type} reference has no end of its own")
     drive = Drive(len(names), substeps, scn.timestep_s, delay, scn.drive.saturation_V)
     encoder = Encoder(
-        _per_axis(scn.sensors.encoder_resolution_m, len(names), "sensors.encoder_resolution_m"),
+        _per_axis(
+            list(machine.encoder_resolution_m)
+            if scn.sensors.encoder_resolution_m is None
+            else scn.sensors.encoder_resolution_m,
+            len(names),
+            "sensors.encoder_resolution_m",
+        ),
         _per_axis(scn.sensors.noise_std_m, len(names), "sensors.noise_std_m"),
         np.array(machine.sensor_gains),
         scn.seed,

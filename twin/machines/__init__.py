@@ -9,26 +9,46 @@ from __future__ import annotations
 
 import importlib
 import pkgutil
+from functools import lru_cache
+from pathlib import Path
 
 from twin.errors import TwinInputError
 from twin.machines.base import MACHINES, Axis, BuiltMachine, Machine, Parameter, mjcf_dir, register_machine
+from twin.machines.datasheet import load_machine_file
 
 for _module in pkgutil.iter_modules(__path__):
     importlib.import_module(f"{__name__}.{_module.name}")
 
 
+def is_machine_file(name: str) -> bool:
+    """Whether ``name`` names a machine file (ends in ``.toml``) rather than a bundled machine."""
+    return str(name).endswith(".toml")
+
+
+@lru_cache(maxsize=32)
+def _machine_file(path: str, modified_ns: int) -> Machine:
+    return load_machine_file(path)
+
+
 def get_machine(name: str) -> Machine:
-    """Look a machine up by name.
+    """Look a machine up by name, or read a machine file (a path ending in ``.toml``).
 
     Raises
     ------
     TwinInputError
-        If no machine has that name.
+        If no machine has that name, or the machine file is missing or invalid.
     """
+    if is_machine_file(name):
+        path = Path(name).resolve()
+        if not path.is_file():
+            raise TwinInputError("machine", str(name), "no such machine file")
+        return _machine_file(str(path), path.stat().st_mtime_ns)
     try:
         return MACHINES[name]
     except KeyError:
-        raise TwinInputError("machine", name, f"unknown machine (known: {', '.join(MACHINES)})") from None
+        raise TwinInputError(
+            "machine", name, f"unknown machine (known: {', '.join(MACHINES)}; or a machine file, FILE.toml)"
+        ) from None
 
 
 def build(name: str, overrides: dict[str, float] | None = None, timestep_s: float | None = None) -> BuiltMachine:
@@ -44,6 +64,7 @@ __all__ = [
     "Parameter",
     "build",
     "get_machine",
+    "is_machine_file",
     "mjcf_dir",
     "register_machine",
 ]

@@ -45,6 +45,8 @@ class Parameter:
         Whether the value must be strictly positive.
     nonnegative : bool
         Whether the value must be >= 0 (for parameters that may be zero, e.g. friction).
+    infinite : bool
+        Whether the value may be infinite (a stiffness: infinite is rigid).
     """
 
     value: float
@@ -53,6 +55,7 @@ class Parameter:
     box: tuple[float, float] | None = None
     positive: bool = True
     nonnegative: bool = False
+    infinite: bool = False
 
 
 @dataclass(frozen=True)
@@ -126,6 +129,13 @@ class BuiltMachine:
         Encoder gain per axis (measured position = gain * table position).
     motion_limits : dict of str to MotionLimits
         Each axis's kinematic limits for the G-code interpolator, z included.
+    encoder_resolution_m : tuple of float
+        Each axis's encoder resolution (m of table travel; 0: ideal), a scenario's default.
+    motor_plant : tuple of SisoTf
+        Per axis, drive input (V) to the motor's angle in table travel (m), where it differs from
+        the table's (a compliant drive train); empty otherwise.
+    motor_travel_m_per_rad : dict of str to float
+        Table travel per motor radian (m/rad) of each axis with a motor joint (lead / gear ratio).
     """
 
     name: str
@@ -138,6 +148,9 @@ class BuiltMachine:
     table_per_screw_m_per_rad: dict[str, float] = field(default_factory=dict)
     sensor_gains: tuple[float, ...] = ()
     motion_limits: dict[str, MotionLimits] = field(default_factory=dict)
+    encoder_resolution_m: tuple[float, ...] = ()
+    motor_plant: tuple[SisoTf, ...] = ()
+    motor_travel_m_per_rad: dict[str, float] = field(default_factory=dict)
 
     def plant_lti(self):
         """:attr:`plant` as a ``control.TransferFunction`` (imports python-control)."""
@@ -263,11 +276,19 @@ class Machine:
                 value = float(value)
             except (TypeError, ValueError):
                 raise TwinInputError(f"overrides.{key}", value, "must be a number") from None
-            if not math.isfinite(value):
-                raise TwinInputError(f"overrides.{key}", value, "must be finite")
+            infinite = self.parameters[key].infinite and value == math.inf
+            if not (math.isfinite(value) or infinite):
+                raise TwinInputError(
+                    f"overrides.{key}", value, "must be finite" + (" or inf" if self.parameters[key].infinite else "")
+                )
             nominal = self.parameters[key].value
             limit = OVERRIDE_RANGE * abs(nominal) if nominal else OVERRIDE_RANGE
-            if abs(value) > limit or (nominal and value and abs(value) < abs(nominal) / OVERRIDE_RANGE):
+            in_range = (
+                infinite
+                or math.isinf(nominal)
+                or not (abs(value) > limit or (nominal and value and abs(value) < abs(nominal) / OVERRIDE_RANGE))
+            )
+            if not in_range:
                 raise TwinInputError(
                     f"overrides.{key}",
                     value,
@@ -306,16 +327,40 @@ class Machine:
         """Encoder gain per axis."""
         return (1.0,) * len(self.axes)
 
-    def build(self, overrides: dict[str, float] | None = None, timestep_s: float | None = None) -> BuiltMachine:
-        """Apply parameters with MjSpec, compile, and derive the reference model."""
-        params = self.resolve(overrides)
+    def motor_plant(self, params: dict[str, float], model: mujoco.MjModel) -> tuple[SisoTf, ...]:
+        """Per axis, drive input (V) to motor angle in table travel (m); empty: as the table."""
+        return ()
+
+    def motor_travel(self, params: dict[str, float]) -> dict[str, float]:
+        """Table travel per motor radian (m/rad) per axis with a motor: the lead over the
+        motor-screw coupling's ratio."""
+        couplings, leads = self.couplings(params)
+        ratios = {a.name: r for a in self.axes for j, _, r in couplings if j == a.motor_joint}
+        return {a: leads[a] / r for a, r in ratios.items()}
+
+    def encoder_resolution(self, params: dict[str, float]) -> tuple[float, ...]:
+        """Encoder resolution (m) per axis (0: ideal, the papers' machines)."""
+        return (0.0,) * len(self.axes)
+
+    def coulomb_symbols(self) -> tuple[str, ...]:
+        """The symbols of the guideways' Coulomb friction (what ``twin fidelity`` forces off)."""
+        return tuple(s for s in (f"F_coul_{a.name}" for a in self.axes) if s in self.parameters)
+
+    def make_spec(self, params: dict[str, float], timestep_s: float | None = None) -> mujoco.MjSpec:
+        """The machine's MJCF with the parameter values written in: the hand-written file
+        :attr:`xml` edited by :meth:`configure` (a machine file generates its own)."""
         spec = mujoco.MjSpec.from_file(str(mjcf_dir() / self.xml))
         if timestep_s is not None:
             spec.option.timestep = timestep_s
         self.configure(spec, params)
         for axis in self.axes:
             spec.joint(axis.table_joint).frictionloss = params.get(f"F_coul_{axis.name}", 0.0)
-        model = spec.compile()
+        return spec
+
+    def build(self, overrides: dict[str, float] | None = None, timestep_s: float | None = None) -> BuiltMachine:
+        """Apply parameters with MjSpec, compile, and derive the reference model."""
+        params = self.resolve(overrides)
+        model = self.make_spec(params, timestep_s).compile()
         # a diverged state stays in MjData (not reset to the initial one) so the runner reports it
         model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_AUTORESET
         couplings, leads = self.couplings(params)
@@ -330,6 +375,9 @@ class Machine:
             leads,
             self.sensor_gains(params),
             motion_limits={**self.motion_limits, "z": self.motion_limits.get("z", SPINDLE_HEAD_Z)},
+            encoder_resolution_m=self.encoder_resolution(params),
+            motor_plant=self.motor_plant(params, model),
+            motor_travel_m_per_rad=self.motor_travel(params),
         )
 
 

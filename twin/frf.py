@@ -1,0 +1,311 @@
+"""Frequency-response measurement on the twin, as a drive's commissioning tool does it.
+
+An excitation ``d`` (PRBS, logarithmic chirp or random-phase multisine, volts) is added to one
+axis's drive input, with the loop open or closed around the axis (a velocity loop: derivative
+feedback of the position; a position loop: PD), and the plant's FRF from drive input ``u`` (V)
+to the sensor's position (m; the table's, or the motor's in table travel) is estimated from the
+recorded signals with Welch's averaged cross spectra (``scipy.signal.csd``):
+
+    G = S_dy / S_du,      coherence = |S_du|^2 / (S_dd S_uu) x |S_dy|^2 / (S_dd S_yy)
+
+In the open loop ``u = d`` and G is the H1 estimator S_uy / S_uu; in a closed loop the ratio
+through the excitation removes the feedback's correlation (the indirect method). Resonances
+and anti-resonances are the local maxima and minima of the magnitude (prominence >= 3 dB, with
+coherence >= 0.9). The model's FRF is the zero-order-hold equivalent of the machine's transfer
+function at the sample period, with the drive delay.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+from scipy import signal
+
+from controllers.blocks import error_feedback, open_loop, sum_of
+from controllers.lti import SisoTf
+from twin.errors import TwinInputError
+from twin.machines import BuiltMachine, build, get_machine
+from twin.references import Step
+from twin.sim.runner import simulate
+
+LOOPS = ("open", "velocity", "position")
+SENSORS = ("motor", "table")
+EXCITATIONS = ("prbs", "chirp", "multisine")
+#: Sample period (s) of the measurement: the control period of a modern drive.
+SAMPLE_PERIOD_S = 1e-4
+#: Most seconds one measurement may simulate (memory and time stay bounded).
+MAX_DURATION_S = 120.0
+#: Welch segment length (samples): 1.6 s at 0.1 ms, a 0.61 Hz resolution.
+SEGMENT = 16384
+#: Peaks of the magnitude this prominent (dB) and this coherent count as (anti-)resonances.
+PEAK_PROMINENCE_DB = 3.0
+MIN_COHERENCE = 0.9
+
+
+@dataclass(frozen=True)
+class FrfSettings:
+    """What one measurement does.
+
+    Attributes
+    ----------
+    axis : str
+    loop : {"open", "velocity", "position"}
+    sensor : {"motor", "table"}
+    excitation : {"prbs", "chirp", "multisine"}
+    amplitude_V : float
+        Excitation amplitude (V, peak).
+    duration_s : float
+        Recorded time (s), after 0.5 s of settling.
+    f_max_hz : float
+        Highest frequency reported (Hz), at most 0.4 / the sample period.
+    seed : int
+        Random seed of the PRBS and multisine.
+    """
+
+    axis: str = "x"
+    loop: Literal["open", "velocity", "position"] = "velocity"
+    sensor: Literal["motor", "table"] = "table"
+    excitation: Literal["prbs", "chirp", "multisine"] = "prbs"
+    amplitude_V: float = 1.0
+    duration_s: float = 16.0
+    f_max_hz: float = 1000.0
+    seed: int = 1
+
+    def check(self) -> None:
+        """Refuse a value out of range, naming its option."""
+        for name, value, allowed in (
+            ("--loop", self.loop, LOOPS),
+            ("--sensor", self.sensor, SENSORS),
+            ("--excitation", self.excitation, EXCITATIONS),
+        ):
+            if value not in allowed:
+                raise TwinInputError(name, value, f"must be one of {', '.join(allowed)}")
+        if not (0 < self.amplitude_V <= 10):
+            raise TwinInputError("--amplitude", self.amplitude_V, "must be in (0, 10] V")
+        if not (2 * SEGMENT * SAMPLE_PERIOD_S <= self.duration_s <= MAX_DURATION_S):
+            raise TwinInputError(
+                "--duration", self.duration_s, f"must be in [{2 * SEGMENT * SAMPLE_PERIOD_S:g}, {MAX_DURATION_S:g}] s"
+            )
+        if not (10 <= self.f_max_hz <= 0.4 / SAMPLE_PERIOD_S):
+            raise TwinInputError("--f-max", self.f_max_hz, f"must be in [10, {0.4 / SAMPLE_PERIOD_S:g}] Hz")
+
+
+def excitation_signal(kind: str, n: int, dt: float, amplitude: float, f_max_hz: float, seed: int) -> np.ndarray:
+    """The excitation (V), ``n`` samples at ``dt``.
+
+    prbs: a maximum-length sequence (``scipy.signal.max_len_seq``) of +-amplitude, each bit held
+    for ``round(0.4 / (f_max dt))`` samples (flat spectrum to about f_max); chirp: logarithmic
+    sweep from 1 Hz to f_max over the record (``scipy.signal.chirp``); multisine: every DFT bin of
+    a 2^k-sample period up to f_max with random phases, scaled to the amplitude's peak.
+    """
+    rng = np.random.default_rng(seed)
+    if kind == "prbs":
+        hold = max(1, round(0.4 / (f_max_hz * dt)))
+        bits = math.ceil(math.log2(n / hold + 1))
+        seq = signal.max_len_seq(bits, state=rng.integers(0, 2, bits) | np.r_[1, np.zeros(bits - 1, int)])[0]
+        return amplitude * (2.0 * np.repeat(seq, hold)[:n] - 1.0)
+    t = np.arange(n) * dt
+    if kind == "chirp":
+        return amplitude * signal.chirp(t, 1.0, t[-1], f_max_hz, method="logarithmic", phi=-90)
+    period = SEGMENT
+    bins = np.arange(1, int(f_max_hz * period * dt) + 1)
+    spectrum = np.zeros(period // 2 + 1, complex)
+    spectrum[bins] = np.exp(2j * math.pi * rng.random(len(bins)))
+    one = np.fft.irfft(spectrum, period)
+    return amplitude * np.resize(one / np.abs(one).max(), n)
+
+
+def _loop_controller(bm: BuiltMachine, settings: FrfSettings, dt: float, k: int):
+    """The feedback of each axis during the measurement (V per m of position error): velocity
+    loop, derivative feedback with a 1 ms filter and a 20 Hz rigid-body bandwidth; position
+    loop, PD with a 10 Hz bandwidth and damping ratio 0.7; the open loop, none (other axes
+    always hold position with the PD)."""
+    parts = []
+    for i, a in enumerate(bm.axes):
+        mass = _rigid_mass_per_volt(bm, i)  # V s^2 / m: 1 V accelerates the axis by 1/mass
+        w = 2 * math.pi * (20.0 if (i == k and settings.loop == "velocity") else 10.0)
+        if i == k and settings.loop == "open":
+            continue
+        kd, kp = mass * w, mass * w**2  # velocity loop: kd alone (s + w pole); PD: w_n = w
+        kd = 2 * 0.7 * mass * w if not (i == k and settings.loop == "velocity") else kd
+        num = (kd, 0.0) if (i == k and settings.loop == "velocity") else (kd, kp)
+        parts.append(error_feedback(SisoTf(num, (1e-3, 1.0)), dt, (a.name,), name=f"loop.{a.name}"))
+    return parts
+
+
+def _rigid_mass_per_volt(bm: BuiltMachine, i: int) -> float:
+    """Axis ``i``'s rigid body (V s^2/m: 1 V accelerates it by the inverse): the s^2
+    coefficient of its transfer function's denominator over the numerator's constant, the
+    low-frequency asymptote of every plant here."""
+    g = bm.plant[i][i]
+    return g.den[-3] / g.num[-1]
+
+
+def model_frf(bm: BuiltMachine, axis: int, sensor: str, freqs_hz: np.ndarray, dt: float) -> np.ndarray:
+    """The model's FRF (m/V) at ``freqs_hz``: ZOH equivalent at ``dt`` with the drive delay."""
+    import control
+
+    g = sensor_plant(bm, axis, sensor)
+    gd = control.c2d(control.ss(control.tf(list(g.num), list(g.den))), dt, "zoh")
+    delay = round(bm.delay_s / dt)
+    z = np.exp(2j * math.pi * freqs_hz * dt)
+    return np.array([complex(gd(zi)) for zi in z]) * z ** (-delay)
+
+
+def sensor_plant(bm: BuiltMachine, axis: int, sensor: str) -> SisoTf:
+    """The transfer function from axis ``axis``'s drive input (V) to the sensor's position (m)."""
+    if sensor == "motor" and bm.motor_plant:
+        return bm.motor_plant[axis]
+    return bm.plant[axis][axis]
+
+
+def peaks(freqs: np.ndarray, mag_db: np.ndarray, coherence: np.ndarray) -> tuple[list[float], list[float]]:
+    """Resonances and anti-resonances (Hz): coherent local maxima and minima of the magnitude
+    above the rigid body's -40 dB/decade slope (prominence >= PEAK_PROMINENCE_DB)."""
+    trend = mag_db + 40.0 * np.log10(freqs)  # a rigid body is flat here
+    smooth = np.convolve(trend, np.ones(3) / 3, mode="same")
+    found = []
+    for sign in (1.0, -1.0):
+        idx, _ = signal.find_peaks(sign * smooth, prominence=PEAK_PROMINENCE_DB)
+        at = []
+        for i in idx:
+            if coherence[i] < MIN_COHERENCE or not 3 <= i < len(freqs) - 3:
+                continue
+            i = i - 1 + int(np.argmax(sign * mag_db[i - 1 : i + 2]))  # the raw magnitude's extreme
+            a, b, c = sign * mag_db[i - 1 : i + 2]
+            shift = 0.5 * (a - c) / (a - 2 * b + c) if a - 2 * b + c < 0 else 0.0  # parabola's vertex
+            at.append(float(freqs[i] + shift * (freqs[1] - freqs[0])))
+        found.append(at)
+    return found[0], found[1]
+
+
+def model_modes(bm: BuiltMachine, axis: int, sensor: str) -> tuple[list[float], list[float]]:
+    """The model's resonances and anti-resonances (Hz): damped natural frequencies of its poles
+    and zeros with damping ratio < 0.5."""
+
+    def frequencies(coefficients) -> list[float]:
+        roots = np.roots(coefficients)
+        keep = [r for r in roots if r.imag > 0 and -r.real / abs(r) < 0.5]
+        return sorted(float(abs(r) / (2 * math.pi)) for r in keep)
+
+    g = sensor_plant(bm, axis, sensor)
+    return frequencies(g.den), frequencies(g.num)
+
+
+def measure(machine: str, settings: FrfSettings, overrides: dict[str, float] | None = None) -> dict:
+    """Measure one axis's FRF on the twin (see the module docstring).
+
+    Returns
+    -------
+    dict
+        ``machine``, ``settings``, ``parameters`` (symbol: value in effect), ``frequency_hz``,
+        ``magnitude_db``, ``phase_deg``, ``coherence``, ``model_magnitude_db``,
+        ``model_phase_deg``, ``resonances_hz``, ``antiresonances_hz``, ``model_resonances_hz``,
+        ``model_antiresonances_hz``, ``max_model_error_db`` (where the coherence >= 0.9) and
+        ``run`` (the simulation, for plots and recordings; not JSON).
+
+    Raises
+    ------
+    TwinInputError
+        An unknown machine, axis, parameter or option value.
+    """
+    settings.check()
+    get_machine(machine)
+    timestep = get_machine(machine).build(overrides).model.opt.timestep
+    substeps = max(1, round(SAMPLE_PERIOD_S / timestep))
+    bm = build(machine, overrides)
+    names = [a.name for a in bm.axes]
+    if settings.axis not in names:
+        raise TwinInputError("--axis", settings.axis, f"machine axes are {names}")
+    k = names.index(settings.axis)
+    dt = substeps * bm.model.opt.timestep
+    settle = round(0.5 / dt)
+    n = settle + round(settings.duration_s / dt)
+    d = np.zeros((n, len(names)))
+    d[settle:, k] = excitation_signal(
+        settings.excitation, n - settle, dt, settings.amplitude_V, settings.f_max_hz, settings.seed
+    )
+    controller = sum_of([*_loop_controller(bm, settings, dt, k), open_loop(d, dt, names, name="excitation")])
+    run = simulate(bm, controller, Step(0.0, n_axes=len(names)), n * dt, dt, progress=False, record_every=1)
+    u = run.u_applied_V[settle:, k]
+    if settings.sensor == "motor" and bm.axes[k].motor_joint is not None:
+        y = run.qpos[settle:, bm.joint_qpos_index(bm.axes[k].motor_joint)] * bm.motor_travel_m_per_rad[bm.axes[k].name]
+    else:
+        y = run.table_position_m()[settle:, k]
+    e = d[settle:, k]
+    fs = 1.0 / dt
+    kw = dict(fs=fs, nperseg=SEGMENT, window="hann", detrend="linear")
+    freqs, s_du = signal.csd(e, u, **kw)
+    _, s_dy = signal.csd(e, y, **kw)
+    _, s_dd = signal.welch(e, **kw)
+    _, s_uu = signal.welch(u, **kw)
+    _, s_yy = signal.welch(y, **kw)
+    band = (freqs >= 2.0 / (SEGMENT * dt)) & (freqs <= settings.f_max_hz)
+    freqs, s_du, s_dy, s_dd, s_uu, s_yy = (a[band] for a in (freqs, s_du, s_dy, s_dd, s_uu, s_yy))
+    g = s_dy / s_du
+    coherence = np.clip(np.abs(s_du) ** 2 / (s_dd * s_uu) * np.abs(s_dy) ** 2 / (s_dd * s_yy), 0.0, 1.0)
+    model = model_frf(bm, k, settings.sensor, freqs, dt)
+    mag_db, model_db = 20 * np.log10(np.abs(g)), 20 * np.log10(np.abs(model))
+    resonances, antiresonances = peaks(freqs, mag_db, coherence)
+    model_res, model_anti = model_modes(bm, k, settings.sensor)
+    good = coherence >= MIN_COHERENCE
+    spec = get_machine(machine)
+    return {
+        "machine": machine,
+        "settings": {**settings.__dict__, "sample_period_s": dt, "segment_samples": SEGMENT},
+        "parameters": {s: bm.params[s] for s in spec.parameters},
+        "frequency_hz": freqs.tolist(),
+        "magnitude_db": mag_db.tolist(),
+        "phase_deg": np.degrees(np.angle(g)).tolist(),
+        "coherence": coherence.tolist(),
+        "model_magnitude_db": model_db.tolist(),
+        "model_phase_deg": np.degrees(np.angle(model)).tolist(),
+        "resonances_hz": resonances,
+        "antiresonances_hz": antiresonances,
+        "model_resonances_hz": model_res,
+        "model_antiresonances_hz": model_anti,
+        "coherent_share": float(good.mean()),
+        "max_model_error_db": float(np.abs(mag_db - model_db)[good].max()) if good.any() else None,
+        "run": run,
+    }
+
+
+def write_bode(result: dict, path) -> None:
+    """The measured Bode plot beside the model's, with the coherence, as a PNG."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    f = np.array(result["frequency_hz"])
+    fig, (ax_m, ax_p, ax_c) = plt.subplots(3, 1, figsize=(9, 8), sharex=True, height_ratios=(3, 2, 1))
+    ax_m.semilogx(f, result["magnitude_db"], label="measured on the twin")
+    ax_m.semilogx(f, result["model_magnitude_db"], "--", label="model (transfer function)")
+    for fr in result["resonances_hz"]:
+        ax_m.axvline(fr, color="tab:red", lw=0.8, alpha=0.6)
+    for fa in result["antiresonances_hz"]:
+        ax_m.axvline(fa, color="tab:green", lw=0.8, alpha=0.6)
+    ax_m.set_ylabel("magnitude (dB re 1 m/V)")
+    ax_m.legend()
+    ax_p.semilogx(f, np.degrees(np.unwrap(np.radians(result["phase_deg"]))))
+    ax_p.semilogx(f, np.degrees(np.unwrap(np.radians(result["model_phase_deg"]))), "--")
+    ax_p.set_ylabel("phase (deg)")
+    ax_c.semilogx(f, result["coherence"], color="k")
+    ax_c.set_ylim(0, 1.05)
+    ax_c.set_ylabel("coherence")
+    ax_c.set_xlabel("frequency (Hz)")
+    s = result["settings"]
+    fig.suptitle(
+        f"{Path(result['machine']).name}: axis {s['axis']}, {s['loop']} loop, {s['sensor']} sensor, {s['excitation']}"
+        f" (red: resonances, green: anti-resonances)",
+        fontsize=10,
+    )
+    for ax in (ax_m, ax_p, ax_c):
+        ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

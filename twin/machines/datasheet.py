@@ -1,0 +1,669 @@
+"""Machines described by a TOML file of datasheet values (the user's own machine).
+
+A machine file names the axes, their archetype and their datasheet values, units in every key::
+
+    [machine]
+    name = "mid_size_xy"
+    stacking = ["x", "y"]          # the first axis sits on the bed, each next one rides on it
+    workpiece_mass_kg = 20.0
+
+    [axes.x]
+    type = "ball_screw"            # or "linear_motor"
+    motor_inertia_kg_m2 = 1.8e-4
+    ...
+    [axes.x.limits]
+    velocity_m_per_s = 0.5
+    ...
+
+From it :class:`DatasheetMachine` generates the MJCF with :class:`mujoco.MjSpec` (no XML per
+machine) and derives the transfer-function model from the same values: a chain of masses in
+table-travel units (motor side, screw, table) joined by the coupling's torsional spring and the
+screw-nut-bearing axial spring, each rigid where its stiffness is infinite (the default).  Every
+value is a parameter by the symbol ``<axis>_<key>`` (``x_table_mass_kg``) or ``<key>`` for the
+machine's own (``workpiece_mass_kg``), which ``--set``, sweeps and calibration change.
+
+The MJCF, per ball-screw axis ``a`` (hinge axes and the slide along the axis)::
+
+    a_motor_rotor   hinge a_motor     rotor + gearbox inertia (motor shaft), the drive's torque
+    a_coupling_hub  hinge a_coupling  half the coupling's inertia           (finite k_torsion only)
+    a_screw         hinge a_screw     screw inertia (+ the rest of the coupling)
+                    (hinge a_torsion, stiffness k_torsion, inside the hub, when k_torsion is finite)
+    a_table         slide a_table     table mass, guideway viscous damping and Coulomb friction
+    a_nut           slide a_axial     nut mass, stiffness k_axial, inside the table (finite k_axial only)
+
+with gear equalities for the rigid transmission: motor = gear_ratio x screw (or hub) and
+screw angle = travel / lead (a joint equality when both sides are single joints, a tendon
+equality over the sums ``a_coupling + a_torsion`` and ``a_table + a_axial`` otherwise).
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Annotated, Literal
+
+import mujoco
+import numpy as np
+from pydantic import Field, NonNegativeFloat, PositiveFloat, ValidationError, model_validator
+
+from controllers.lti import SisoTf
+from twin.errors import TwinInputError
+from twin.machines.base import Axis, Machine, MotionLimits, Parameter, diagonal_plant
+from twin.spec import StrictSpec
+
+#: Density of screw steel (kg/m^3), for a screw inertia the file does not give.
+STEEL_DENSITY_KG_PER_M3 = 7850.0
+#: Time constant (s) and damping ratio of the gear equalities (as the hand-written models).
+EQUALITY_SOLREF = (0.0002, 0.7)
+EQUALITY_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
+#: Time constant (s) of the guideways' Coulomb friction (as the hand-written models).
+FRICTION_SOLREF = (0.0002, 1.0)
+DIRECTIONS = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0)}
+
+Stiffness = Annotated[float, Field(gt=0, allow_inf_nan=True)]
+
+
+class LimitsSpec(StrictSpec):
+    """An axis's limits for the G-code interpolator."""
+
+    velocity_m_per_s: PositiveFloat
+    acceleration_m_per_s2: PositiveFloat
+    jerk_m_per_s3: PositiveFloat
+    source: str = "the machine file"
+
+
+class AxisSpec(StrictSpec):
+    """What every axis archetype has."""
+
+    table_mass_kg: PositiveFloat = Field(
+        description="the axis's own moving table or carriage (without what rides on it)"
+    )
+    friction_coulomb_N: NonNegativeFloat = 0.0
+    friction_viscous_N_s_per_m: NonNegativeFloat = 0.0
+    travel_m: PositiveFloat
+    encoder_resolution_m: NonNegativeFloat = 0.0
+    limits: LimitsSpec
+
+
+class BallScrewSpec(AxisSpec):
+    """A rotary servo motor, an optional gearbox or belt, a coupling, a ball screw and its nut."""
+
+    type: Literal["ball_screw"]
+    motor_inertia_kg_m2: PositiveFloat
+    motor_mass_kg: PositiveFloat = Field(description="what an axis below carries of this axis's motor")
+    torque_constant_N_m_per_A: PositiveFloat | None = None
+    amplifier_gain_A_per_V: PositiveFloat | None = None
+    drive_gain_N_m_per_V: PositiveFloat | None = Field(None, description="a torque-mode drive, instead of the two")
+    gear_ratio: PositiveFloat = Field(1.0, description="motor revolutions per screw revolution")
+    gear_inertia_kg_m2: NonNegativeFloat = Field(0.0, description="gearbox or pulleys, at the motor shaft")
+    coupling_inertia_kg_m2: NonNegativeFloat = 0.0
+    k_torsion_N_m_per_rad: Stiffness = math.inf
+    c_torsion_N_m_s_per_rad: NonNegativeFloat = 0.0
+    screw_lead_m: PositiveFloat = Field(description="table travel per screw revolution")
+    screw_diameter_m: PositiveFloat
+    screw_length_m: PositiveFloat
+    screw_inertia_kg_m2: PositiveFloat | None = Field(None, description="default: a steel cylinder")
+    nut_mass_kg: NonNegativeFloat = 0.0
+    k_axial_N_per_m: Stiffness = math.inf
+    c_axial_N_s_per_m: NonNegativeFloat = 0.0
+
+    @model_validator(mode="after")
+    def _one_drive_gain(self):
+        pair = (self.torque_constant_N_m_per_A, self.amplifier_gain_A_per_V)
+        if (self.drive_gain_N_m_per_V is None) == (None in pair) or (None in pair and pair != (None, None)):
+            raise ValueError(
+                "give drive_gain_N_m_per_V, or torque_constant_N_m_per_A and amplifier_gain_A_per_V (not both)"
+            )
+        return self
+
+
+class LinearMotorSpec(AxisSpec):
+    """A linear motor driving its carriage directly."""
+
+    type: Literal["linear_motor"]
+    force_constant_N_per_A: PositiveFloat | None = None
+    amplifier_gain_A_per_V: PositiveFloat | None = None
+    drive_gain_N_per_V: PositiveFloat | None = Field(None, description="a force-mode drive, instead of the two")
+
+    @model_validator(mode="after")
+    def _one_drive_gain(self):
+        pair = (self.force_constant_N_per_A, self.amplifier_gain_A_per_V)
+        if (self.drive_gain_N_per_V is None) == (None in pair) or (None in pair and pair != (None, None)):
+            raise ValueError("give drive_gain_N_per_V, or force_constant_N_per_A and amplifier_gain_A_per_V (not both)")
+        return self
+
+
+class MachineSpec(StrictSpec):
+    """The ``[machine]`` table."""
+
+    name: str = Field(pattern=r"^[A-Za-z0-9_.-]{1,64}$")
+    summary: str = ""
+    sources: str = Field("", description="where the values come from")
+    stacking: list[Literal["x", "y"]] = Field(min_length=1, max_length=2)
+    workpiece_mass_kg: PositiveFloat
+    delay_s: NonNegativeFloat = Field(0.0, le=1.0)
+    timestep_s: float = Field(1e-4, ge=1e-7, le=1e-2)
+
+
+class MachineFile(StrictSpec):
+    """A whole machine file."""
+
+    machine: MachineSpec
+    axes: dict[str, Annotated[BallScrewSpec | LinearMotorSpec, Field(discriminator="type")]]
+
+    @model_validator(mode="after")
+    def _axes_match_stacking(self):
+        if sorted(self.axes) != sorted(self.machine.stacking) or len(set(self.machine.stacking)) != len(self.axes):
+            raise ValueError(f"[axes.*] tables {sorted(self.axes)} must be the stacking's axes {self.machine.stacking}")
+        return self
+
+
+#: Parameter metadata by file key: unit and whether the value may be infinite or zero.
+_UNITS = {
+    "kg_m2": "kg m^2",
+    "kg": "kg",
+    "N_m_per_A": "N m/A",
+    "A_per_V": "A/V",
+    "N_m_per_V": "N m/V",
+    "N_per_A": "N/A",
+    "N_per_V": "N/V",
+    "N_m_per_rad": "N m/rad",
+    "N_m_s_per_rad": "N m s/rad",
+    "N_per_m": "N/m",
+    "N_s_per_m": "N s/m",
+    "N": "N",
+    "m": "m",
+    "s": "s",
+}
+
+
+def _unit(key: str) -> str:
+    for suffix, unit in sorted(_UNITS.items(), key=lambda kv: -len(kv[0])):
+        if key.endswith("_" + suffix):
+            return unit
+    return "-"
+
+
+def screw_inertia_kg_m2(diameter_m: float, length_m: float) -> float:
+    """Polar inertia (kg m^2) of a solid steel screw: pi rho d^4 L / 32."""
+    return math.pi * STEEL_DENSITY_KG_PER_M3 * diameter_m**4 * length_m / 32.0
+
+
+def screw_mass_kg(diameter_m: float, length_m: float) -> float:
+    """Mass (kg) of a solid steel screw: rho pi d^2 L / 4."""
+    return STEEL_DENSITY_KG_PER_M3 * math.pi * diameter_m**2 * length_m / 4.0
+
+
+@dataclass(frozen=True)
+class Chain:
+    """One axis as masses in a row, in table-travel units (kg, N/m, N s/m).
+
+    Attributes
+    ----------
+    masses_kg : tuple of float
+        Motor side, screw side (nut included), table (with all it carries); merged where rigid.
+    springs_N_per_m, dampers_N_s_per_m : tuple of float
+        Between neighbouring masses (one fewer than masses).
+    table_damping_N_s_per_m : float
+        Guideway viscous friction, on the last mass.
+    force_per_volt_N_per_V : float
+        Drive force on the first mass per volt of input.
+    """
+
+    masses_kg: tuple[float, ...]
+    springs_N_per_m: tuple[float, ...]
+    dampers_N_s_per_m: tuple[float, ...]
+    table_damping_N_s_per_m: float
+    force_per_volt_N_per_V: float
+
+    def transfer_function(self, output: Literal["table", "motor"] = "table") -> SisoTf:
+        """Drive input (V) to table (or motor-side, in table travel) position (m), in exact
+        polynomial arithmetic: with the dynamic stiffness Z(s) = M s^2 + C s + K (tridiagonal),
+        X_j / F_0 = (-1)^j adj(Z)[j, 0] / det Z, the table's numerator the product of the
+        springs' c s + k, the motor's the determinant of the chain without its first mass."""
+        n = len(self.masses_kg)
+        link = [np.array([c, k]) for k, c in zip(self.springs_N_per_m, self.dampers_N_s_per_m)]
+        diagonal = []
+        for i, m in enumerate(self.masses_kg):
+            d = np.array([m, 0.0, 0.0])
+            for j in (i - 1, i):
+                if 0 <= j < n - 1:
+                    d = np.polyadd(d, np.r_[0.0, link[j]])
+            diagonal.append(np.polyadd(d, [self.table_damping_N_s_per_m, 0.0]) if i == n - 1 else d)
+
+        def determinant(first: int) -> np.ndarray:
+            """det of Z's lower-right block from mass ``first`` on (the continuant)."""
+            before, current = np.array([1.0]), diagonal[first]
+            for i in range(first + 1, n):
+                before, current = (
+                    current,
+                    np.polysub(
+                        np.polymul(diagonal[i], current), np.polymul(np.polymul(link[i - 1], link[i - 1]), before)
+                    ),
+                )
+            return current
+
+        if output == "table":
+            num = np.array([1.0])
+            for factor in link:
+                num = np.polymul(num, factor)
+        else:
+            num = determinant(1) if n > 1 else np.array([1.0])
+        den = determinant(0)
+        den[-1] = 0.0  # det K = 0 exactly (no spring to the ground): the rigid-body pole at s = 0
+        return SisoTf(self.force_per_volt_N_per_V * np.trim_zeros(num, "f"), den)
+
+
+class DatasheetMachine(Machine):
+    """A machine read from a machine file (see the module docstring)."""
+
+    def __init__(self, path: Path, spec: MachineFile):
+        self.path = path
+        self.spec = spec
+        m = spec.machine
+        self.name = m.name
+        self.summary = m.summary or f"machine file {path.name}"
+        self.xml = ""
+        self.axes = tuple(
+            Axis(
+                a,
+                f"{a}_drive",
+                f"{a}_table",
+                *((f"{a}_motor", f"{a}_screw") if isinstance(ax, BallScrewSpec) else ()),
+            )
+            for a in m.stacking
+            for ax in [spec.axes[a]]
+        )
+        self.motion_limits = {
+            a: MotionLimits(
+                spec.axes[a].limits.velocity_m_per_s,
+                spec.axes[a].limits.acceleration_m_per_s2,
+                spec.axes[a].limits.jerk_m_per_s3,
+                spec.axes[a].limits.source,
+            )
+            for a in m.stacking
+        }
+        self.parameters = self._parameters()
+
+    # -- parameters -------------------------------------------------------------------------
+
+    def _parameters(self) -> dict[str, Parameter]:
+        m = self.spec.machine
+        out = {
+            "workpiece_mass_kg": Parameter(m.workpiece_mass_kg, "kg", "workpiece mass"),
+            "delay_s": Parameter(m.delay_s, "s", "drive transport delay", positive=False, nonnegative=True),
+        }
+        for a in m.stacking:
+            ax = self.spec.axes[a]
+            values = ax.model_dump(exclude={"type", "limits"})
+            if isinstance(ax, BallScrewSpec) and ax.screw_inertia_kg_m2 is None:
+                values["screw_inertia_kg_m2"] = screw_inertia_kg_m2(ax.screw_diameter_m, ax.screw_length_m)
+            for key, value in values.items():
+                if value is None:
+                    continue
+                field = type(ax).model_fields[key]
+                positive = any(getattr(c, "gt", None) == 0 for c in field.metadata) or key == "screw_inertia_kg_m2"
+                out[f"{a}_{key}"] = Parameter(
+                    float(value),
+                    _unit(key),
+                    f"{a.upper()} axis ({ax.type}): {key}" + (f", {field.description}" if field.description else ""),
+                    positive=positive,
+                    nonnegative=not positive,
+                    infinite=key.startswith(("k_axial", "k_torsion")),
+                )
+        return out
+
+    def _drive_gain(self, params, a: str) -> float:
+        """Torque (N m/V) or force (N/V) per volt of drive input."""
+        for gain in ("drive_gain_N_m_per_V", "drive_gain_N_per_V"):
+            if f"{a}_{gain}" in params:
+                return params[f"{a}_{gain}"]
+        constant = "torque_constant_N_m_per_A" if self.spec.axes[a].type == "ball_screw" else "force_constant_N_per_A"
+        return params[f"{a}_{constant}"] * params[f"{a}_amplifier_gain_A_per_V"]
+
+    def _riding_mass_kg(self, params, a: str) -> float:
+        """Mass (kg) of everything an axis's own moving parts carry: the axes above it and the workpiece."""
+        stacking = self.spec.machine.stacking
+        mass = params["workpiece_mass_kg"]
+        for above in stacking[stacking.index(a) + 1 :]:
+            mass += params[f"{above}_table_mass_kg"]
+            if self.spec.axes[above].type == "ball_screw":
+                mass += params[f"{above}_motor_mass_kg"] + params[f"{above}_nut_mass_kg"]
+                mass += screw_mass_kg(params[f"{above}_screw_diameter_m"], params[f"{above}_screw_length_m"])
+        return mass
+
+    def chain(self, params, a: str) -> Chain:
+        """Axis ``a`` as a :class:`Chain` (rigid links merged)."""
+        table = params[f"{a}_table_mass_kg"] + self._riding_mass_kg(params, a)
+        viscous = params[f"{a}_friction_viscous_N_s_per_m"]
+        gain = self._drive_gain(params, a)
+        if self.spec.axes[a].type == "linear_motor":
+            return Chain((table,), (), (), viscous, gain)
+        lead = params[f"{a}_screw_lead_m"] / (2.0 * math.pi)  # m/rad
+        n = params[f"{a}_gear_ratio"]
+        coupling = params[f"{a}_coupling_inertia_kg_m2"]
+        k_t, k_a = params[f"{a}_k_torsion_N_m_per_rad"], params[f"{a}_k_axial_N_per_m"]
+        motor = (
+            (params[f"{a}_motor_inertia_kg_m2"] + params[f"{a}_gear_inertia_kg_m2"]) * n**2 + coupling / 2
+        ) / lead**2
+        screw = (params[f"{a}_screw_inertia_kg_m2"] + coupling / 2) / lead**2 + params[f"{a}_nut_mass_kg"]
+        masses, springs, dampers = [motor, screw, table], [], []
+        for k, c in (
+            (k_t / lead**2, params[f"{a}_c_torsion_N_m_s_per_rad"] / lead**2),
+            (k_a, params[f"{a}_c_axial_N_s_per_m"]),
+        ):
+            springs.append(k)
+            dampers.append(c)
+        # merge the rigid links, from the table down
+        for i in (1, 0):
+            if math.isinf(springs[i]):
+                masses[i : i + 2] = [masses[i] + masses[i + 1]]
+                del springs[i], dampers[i]
+        return Chain(tuple(masses), tuple(springs), tuple(dampers), viscous, gain * n / lead)
+
+    def plant(self, params, model):
+        return diagonal_plant([self.chain(params, a).transfer_function() for a in self.spec.machine.stacking])
+
+    def motor_plant(self, params, model):
+        return tuple(self.chain(params, a).transfer_function("motor") for a in self.spec.machine.stacking)
+
+    def motor_travel(self, params):
+        return {
+            a: params[f"{a}_screw_lead_m"] / (2.0 * math.pi) / params[f"{a}_gear_ratio"]
+            for a in self.spec.machine.stacking
+            if self.spec.axes[a].type == "ball_screw"
+        }
+
+    def delay(self, params):
+        return params["delay_s"]
+
+    def coulomb_symbols(self) -> tuple[str, ...]:
+        return tuple(f"{a}_friction_coulomb_N" for a in self.spec.machine.stacking)
+
+    def encoder_resolution(self, params) -> tuple[float, ...]:
+        return tuple(params[f"{a}_encoder_resolution_m"] for a in self.spec.machine.stacking)
+
+    def couplings(self, params):
+        pairs, leads = [], {}
+        for a in self.spec.machine.stacking:
+            if self.spec.axes[a].type != "ball_screw":
+                continue
+            lead = params[f"{a}_screw_lead_m"] / (2.0 * math.pi)
+            if math.isinf(params[f"{a}_k_torsion_N_m_per_rad"]):
+                pairs.append((f"{a}_motor", f"{a}_screw", params[f"{a}_gear_ratio"]))
+            if math.isinf(params[f"{a}_k_axial_N_per_m"]):
+                pairs.append((f"{a}_screw", f"{a}_table", 1.0 / lead))
+            leads[a] = lead
+        return pairs, leads
+
+    # -- the MJCF ---------------------------------------------------------------------------
+
+    def make_spec(self, params, timestep_s: float | None = None) -> mujoco.MjSpec:
+        """The machine's MJCF, generated (see the module docstring)."""
+        spec = mujoco.MjSpec()
+        spec.modelname = self.name
+        spec.compiler.autolimits = True
+        spec.option.timestep = timestep_s if timestep_s is not None else self.spec.machine.timestep_s
+        spec.option.integrator = mujoco.mjtIntegrator.mjINT_EULER
+        spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_GRAVITY | mujoco.mjtDisableBit.mjDSBL_CONTACT
+        parent = spec.worldbody
+        z = 0.1
+        for a in self.spec.machine.stacking:
+            ax = self.spec.axes[a]
+            if ax.type == "ball_screw":
+                table = self._ball_screw(spec, parent, params, a, z)
+            else:
+                table = self._carriage(spec, parent, params, a, z)
+            parent, z = table, 0.05
+        work = parent.add_body(name="workpiece", pos=[0, 0, 0.05], mass=params["workpiece_mass_kg"])
+        work.inertia = [0.005, 0.005, 0.005]
+        work.explicitinertial = True
+        work.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.05, 0.05, 0.02], rgba=[0.8, 0.6, 0.3, 1], mass=0)
+        spindle = spec.worldbody.add_body(name="spindle", pos=[0, 0, 0.1 + 0.05 * len(self.axes) + 0.08])
+        spindle.add_geom(
+            name="tool",
+            type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+            size=[0.005, 0.02, 0],
+            pos=[0, 0, 0.02],
+            rgba=[0.85, 0.85, 0.9, 1],
+            mass=0,
+        )
+        spindle.add_geom(
+            name="spindle_housing",
+            type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+            size=[0.04, 0.06, 0],
+            pos=[0, 0, 0.1],
+            rgba=[0.25, 0.3, 0.35, 1],
+            mass=0,
+        )
+        spindle.add_site(name="tool_tip", size=[0.002, 0, 0])
+        return spec
+
+    @staticmethod
+    def _body(parent, name: str, pos, mass_kg: float, inertia):
+        """A body with its mass (kg) and principal inertias (kg m^2) at its origin."""
+        return parent.add_body(
+            name=name, pos=list(pos), ipos=[0, 0, 0], mass=mass_kg, inertia=list(inertia), explicitinertial=True
+        )
+
+    def _slide(self, body, name: str, a: str, params):
+        travel = params[f"{a}_travel_m"]
+        return body.add_joint(
+            name=name,
+            type=mujoco.mjtJoint.mjJNT_SLIDE,
+            axis=list(DIRECTIONS[a]),
+            damping=[params[f"{a}_friction_viscous_N_s_per_m"], 0, 0],
+            frictionloss=params[f"{a}_friction_coulomb_N"],
+            solref_friction=list(FRICTION_SOLREF),
+            range=[-travel / 2, travel / 2],
+        )
+
+    def _carriage(self, spec, parent, params, a: str, z: float):
+        """A linear-motor axis: its carriage on a slide, the drive's force on it."""
+        carriage = self._body(parent, f"{a}_table", (0, 0, z), params[f"{a}_table_mass_kg"], (1, 1, 1))
+        self._slide(carriage, f"{a}_table", a, params)
+        carriage.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.2, 0.2, 0.02], rgba=[0.4, 0.5, 0.6, 1], mass=0)
+        spec.add_actuator(
+            name=f"{a}_drive",
+            target=f"{a}_table",
+            trntype=mujoco.mjtTrn.mjTRN_JOINT,
+            gainprm=[self._drive_gain(params, a)] + [0] * 9,
+        )
+        return carriage
+
+    def _ball_screw(self, spec, parent, params, a: str, z: float):
+        """A ball-screw axis (see the module docstring); returns its table body."""
+        e = np.array(DIRECTIONS[a])
+        k = "xy".index(a)
+
+        def about_axis(inertia: float, mass: float) -> list[float]:
+            """Principal inertias with ``inertia`` about the axis, the others at least as large."""
+            out = [max(inertia, 1e-3 * mass)] * 3
+            out[k] = inertia
+            return out
+
+        length = params[f"{a}_screw_length_m"]
+        radius = params[f"{a}_screw_diameter_m"] / 2
+        n = params[f"{a}_gear_ratio"]
+        lead = params[f"{a}_screw_lead_m"] / (2.0 * math.pi)
+        coupling = params[f"{a}_coupling_inertia_kg_m2"]
+        nut = params[f"{a}_nut_mass_kg"]
+        k_torsion, k_axial = params[f"{a}_k_torsion_N_m_per_rad"], params[f"{a}_k_axial_N_per_m"]
+        # half the coupling on each side of a compliant coupling; the nut on the screw's side of a
+        # compliant nut (as inertia nut p^2), on the table where the nut is rigid
+        motor_inertia = params[f"{a}_motor_inertia_kg_m2"] + params[f"{a}_gear_inertia_kg_m2"]
+        screw_inertia = params[f"{a}_screw_inertia_kg_m2"] + coupling
+        if math.isfinite(k_torsion):
+            motor_inertia += coupling / 2 / n**2
+            screw_inertia -= coupling / 2
+        if math.isfinite(k_axial):
+            screw_inertia += nut * lead**2
+
+        motor_mass = params[f"{a}_motor_mass_kg"]
+        rotor = self._body(
+            parent,
+            f"{a}_motor_rotor",
+            -(length / 2 + 0.1) * e + [0, 0, z - 0.05],
+            motor_mass,
+            about_axis(motor_inertia, motor_mass),
+        )
+        rotor.add_joint(name=f"{a}_motor", type=mujoco.mjtJoint.mjJNT_HINGE, axis=list(e))
+        rotor.add_geom(
+            type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+            size=[0.03, 0, 0],
+            fromto=list(np.r_[-0.06 * e, 0.06 * e]),
+            rgba=[0.2, 0.2, 0.25, 1],
+            mass=0,
+        )
+        rotor.add_geom(
+            name=f"{a}_motor_rotor_marker",
+            type=mujoco.mjtGeom.mjGEOM_BOX,
+            size=[0.004, 0.004, 0.0105],
+            pos=list(0.061 * e + [0, 0, 0.018]),
+            rgba=[1, 0.45, 0.1, 1],
+            mass=0,
+        )
+        mass = screw_mass_kg(2 * radius, length)
+        screw = self._body(parent, f"{a}_screw", (0, 0, z - 0.05), mass, about_axis(screw_inertia, mass))
+        screw.add_joint(name=f"{a}_screw", type=mujoco.mjtJoint.mjJNT_HINGE, axis=list(e))
+        screw.add_geom(
+            type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+            size=[radius, 0, 0],
+            fromto=list(np.r_[-length / 2 * e, length / 2 * e]),
+            rgba=[0.7, 0.7, 0.7, 1],
+            mass=0,
+        )
+        screw.add_geom(
+            name=f"{a}_screw_marker",
+            type=mujoco.mjtGeom.mjGEOM_BOX,
+            size=[0.006, 0.006, 0.006],
+            pos=list(-0.4 * length * e + [0, 0, radius]),
+            rgba=[1, 0.45, 0.1, 1],
+            mass=0,
+        )
+        table_mass = params[f"{a}_table_mass_kg"] + (0.0 if math.isfinite(k_axial) else nut)
+        table = self._body(parent, f"{a}_table", (0, 0, z), table_mass, (0.2 * table_mass / 12,) * 3)
+        self._slide(table, f"{a}_table", a, params)
+        table.add_geom(
+            type=mujoco.mjtGeom.mjGEOM_BOX,
+            size=[0.18 - 0.04 * k, 0.18 - 0.04 * k, 0.015],
+            rgba=[0.4 + 0.1 * k, 0.5 + 0.1 * k, 0.6 + 0.1 * k, 1],
+            mass=0,
+        )
+        table.add_geom(
+            type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+            size=[radius * 1.8, 0, 0],
+            fromto=list(np.r_[-0.03 * e, 0.03 * e] + np.r_[0, 0, -0.05, 0, 0, -0.05]),
+            rgba=[0.55, 0.45, 0.3, 1],
+            mass=0,
+        )
+        links = (
+            (
+                f"{a}_gear",
+                k_torsion,
+                params[f"{a}_c_torsion_N_m_s_per_rad"],
+                f"{a}_motor",
+                f"{a}_screw",
+                n,
+                1.0 / n,
+                -1.0,
+            ),
+            (f"{a}_nut", k_axial, params[f"{a}_c_axial_N_s_per_m"], f"{a}_screw", f"{a}_table", 1.0 / lead, lead, -1.0),
+        )
+        for name, stiffness, damping, first, second, ratio, coef_first, coef_second in links:
+            if math.isinf(stiffness):
+                self._equality(spec, name, first, second, ratio)
+            else:  # a spring tendon over the two sides: its length is the spring's stretch
+                tendon = spec.add_tendon(name=f"{name}_spring")
+                tendon.wrap_joint(first, coef_first)
+                tendon.wrap_joint(second, coef_second)
+                tendon.stiffness = [stiffness, 0.0, 0.0]
+                tendon.damping = [damping, 0.0, 0.0]
+        spec.add_actuator(
+            name=f"{a}_drive",
+            target=f"{a}_motor",
+            trntype=mujoco.mjtTrn.mjTRN_JOINT,
+            gainprm=[self._drive_gain(params, a)] + [0] * 9,
+        )
+        return table
+
+    @staticmethod
+    def _equality(spec, name: str, first: str, second: str, ratio: float) -> None:
+        """A gear: joint ``first`` = ``ratio`` x joint ``second``."""
+        eq = spec.add_equality(name=name, type=mujoco.mjtEq.mjEQ_JOINT, name1=first, name2=second)
+        eq.data = np.r_[0.0, ratio, 0.0, 0.0, 0.0, np.zeros(len(eq.data) - 5)]
+        eq.solref = list(EQUALITY_SOLREF)
+        eq.solimp = list(EQUALITY_SOLIMP)
+
+
+def _first_error(err: ValidationError, path: Path) -> TwinInputError:
+    e = err.errors()[0]
+    field = ".".join(str(p) for p in e["loc"] if not str(p).startswith(("ball_screw", "linear_motor")))
+    return TwinInputError(f"{path.name}: {field or 'machine file'}", e.get("input"), e["msg"])
+
+
+def read_machine_file(path: str | Path) -> MachineFile:
+    """Read and validate a machine file.
+
+    Raises
+    ------
+    TwinInputError
+        A missing or unreadable file, malformed TOML, or a value the schema refuses (named by
+        its table and key: ``mill.toml: axes.x.table_mass_kg = -3: ...``).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise TwinInputError("machine", str(path), "no such machine file")
+    try:
+        data = tomllib.loads(path.read_bytes().decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        raise TwinInputError("machine file", str(path), f"not UTF-8 text (byte {exc.start})") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise TwinInputError("machine file", str(path), f"malformed TOML: {exc}") from None
+    except OSError as exc:
+        raise TwinInputError("machine file", str(path), f"cannot be read ({exc.strerror})") from None
+    try:
+        return MachineFile.model_validate(data)
+    except ValidationError as exc:
+        raise _first_error(exc, path) from None
+
+
+def load_machine_file(path: str | Path) -> DatasheetMachine:
+    """The :class:`DatasheetMachine` of a machine file (see :func:`read_machine_file`)."""
+    path = Path(path).resolve()
+    return DatasheetMachine(path, read_machine_file(path))
+
+
+def _toml_value(value) -> str:
+    if isinstance(value, float):
+        return "inf" if math.isinf(value) else repr(value)
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(value, list):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    return repr(value)
+
+
+def machine_file_text(machine: DatasheetMachine, params: dict[str, float], note: str = "") -> str:
+    """The machine file of ``machine`` with the parameter values ``params`` (a calibrated
+    machine), as TOML text; ``note`` goes in a comment at the top."""
+    spec = machine.spec.model_copy(deep=True)
+    for key, value in params.items():
+        if key in ("workpiece_mass_kg", "delay_s"):
+            setattr(spec.machine, key, value)
+            continue
+        axis, _, field = key.partition("_")
+        setattr(spec.axes[axis], field, value)
+    lines = [f"# {line}" for line in note.splitlines()] + ["", "[machine]"]
+    for key, value in spec.machine.model_dump().items():
+        lines.append(f"{key} = {_toml_value(value)}")
+    for a, ax in spec.axes.items():
+        lines += ["", f"[axes.{a}]"]
+        for key, value in ax.model_dump(exclude={"limits"}, exclude_none=True).items():
+            lines.append(f"{key} = {_toml_value(value)}")
+        lines += ["", f"[axes.{a}.limits]"]
+        for key, value in ax.limits.model_dump().items():
+            lines.append(f"{key} = {_toml_value(value)}")
+    return "\n".join(lines).lstrip("\n") + "\n"
