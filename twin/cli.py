@@ -442,6 +442,102 @@ def frf(
         typer.echo(f"recording written to {rrd} (view with: rerun {rrd})", err=as_json)
 
 
+@app.command()
+@_guard
+def calibrate(
+    machine: str = typer.Argument(..., help="A machine (twin list) or a machine file (FILE.toml)"),
+    trace: Path = typer.Option(..., "--trace", help="Measured time trace or FRF, .csv or .parquet"),
+    fit: str = typer.Option(..., "--fit", help="Parameters to fit, SYM,SYM"),
+    axis: str = typer.Option("x", "--axis", help="The axis an FRF was measured on"),
+    sets: list[str] = typer.Option(None, "--set", help="Parameter override SYMBOL=VALUE before the fit"),
+    as_json: bool = typer.Option(False, "--json", help="Print the result as JSON"),
+    out: Path = typer.Option(None, "--out", help="Write the calibrated machine file (.toml; machine files only)"),
+):
+    """Fit named machine parameters to a measured time trace or FRF (least squares through the
+    twin), with standard errors and the fit index before and after."""
+    from twin.calibrate import calibrate as fit_machine
+    from twin.machines import get_machine, is_machine_file
+    from twin.machines.datasheet import DatasheetMachine, machine_file_text
+
+    _check_output("--out", out, ".toml")
+    if out is not None and not is_machine_file(machine):
+        raise TwinInputError("--out", str(out), "writes a machine file: calibrate a machine file (FILE.toml)")
+    result = fit_machine(
+        machine, trace, [s.strip() for s in fit.split(",") if s.strip()], _parse_sets(sets or []), axis
+    )
+    if as_json:
+        typer.echo(json.dumps(result, indent=2, allow_nan=False))
+    else:
+        typer.echo(f"{machine}: {result['kind']} trace {trace}, {result['evaluations']} twin evaluations")
+        for s, v in result["fitted"].items():
+            unit = get_machine(machine).parameters[s].unit
+            typer.echo(
+                f"  {s} = {v:.6g} {unit} +- {result['standard_errors'][s]:.2g} (nominal {result['nominal'][s]:.6g})"
+            )
+        for s, why in result["unidentifiable"].items():
+            typer.echo(f"  {s}: not identifiable, kept at {result['nominal'][s]:.6g}: {why}")
+        fi = result["fit_index_pct"]
+        typer.echo("  fit index: " + ", ".join(f"{k} {v:.2f} %" for k, v in fi.items()))
+    if out is not None:
+        note = f"calibrated by twin calibrate against {trace}: " + ", ".join(
+            f"{s} = {v:.6g}" for s, v in result["fitted"].items()
+        )
+        calibrated = get_machine(machine)
+        assert isinstance(calibrated, DatasheetMachine)  # --out was refused above for a bundled machine
+        out.write_text(machine_file_text(calibrated, result["fitted"], note), encoding="utf-8")
+        typer.echo(f"calibrated machine file written to {out}", err=as_json)
+
+
+@app.command()
+@_guard
+def tune(
+    machine: str = typer.Argument(..., help="A machine (twin list) or a machine file (FILE.toml)"),
+    sets: list[str] = typer.Option(None, "--set", help="Parameter override SYMBOL=VALUE"),
+    control_period: float = typer.Option(None, "--control-period", help="Control period, s (default about 0.1 ms)"),
+    as_json: bool = typer.Option(False, "--json", help="Print the design as JSON"),
+    out: Path = typer.Option(None, "--out", help="Write the tuned cascade as a scenario (.toml, a 10 mm circle)"),
+    check: bool = typer.Option(True, "--verify/--no-verify", help="Run a step and a circle on the twin"),
+):
+    """Design each axis's position P / velocity PI cascade with feedforward and a notch or
+    low-pass where a resonance needs it (phase margin >= 45 deg, gain margin >= 6 dB on the
+    sampled loop with its delay), verify it on the twin and write it as a scenario."""
+    import tempfile
+
+    from twin import tune as tuning
+
+    _check_output("--out", out, ".toml")
+    if control_period is not None and not (1e-6 <= control_period <= 0.1):
+        raise TwinInputError("--control-period", control_period, "must be in [1e-6, 0.1] s")
+    result = tuning.tune(machine, _parse_sets(sets or []), control_period)
+    where = str(Path(machine).resolve()) if machine.endswith(".toml") else machine
+    if check:
+        with tempfile.TemporaryDirectory() as folder:
+            result["verification"] = tuning.verify(result, where, Path(folder))
+    if as_json:
+        typer.echo(json.dumps(result, indent=2, allow_nan=True))
+    else:
+        typer.echo(f"{machine}: control period {1e3 * result['control_period_s']:g} ms")
+        for a, r in result["axes"].items():
+            g = r["gains"]
+            filt = (
+                f"notch {g['notch_hz']:.1f} Hz"
+                if g["notch_hz"]
+                else (f"low-pass {g['lowpass_hz']:.0f} Hz" if g["lowpass_hz"] else "no filter")
+            )
+            typer.echo(
+                f"  {a}: kp {g['kp_pos']:.4g} 1/s, kv {g['kp_vel']:.4g} V s/m, "
+                f"Ti {1e3 * g['ti_vel_s']:.3g} ms, {filt}; "
+                f"velocity loop {r['velocity_loop']['crossover_hz']:.1f} Hz, "
+                f"position bandwidth {r['bandwidth_hz']:.1f} Hz, "
+                f"PM {r['phase_margin_deg']:.1f} deg, GM {r['gain_margin_db']:.1f} dB"
+            )
+        for a, v in result.get("verification", {}).items():
+            typer.echo(f"  verified on the twin, {a}: " + ", ".join(f"{k} {x:.4g}" for k, x in v.items()))
+    if out is not None:
+        out.write_text(tuning.scenario_text(result, where), encoding="utf-8")
+        typer.echo(f"scenario written to {out} (run it: twin run {out})", err=as_json)
+
+
 @app.command("list")
 def list_things():
     """Machines, controller kinds, observers, bundled scenarios and reproducible papers."""

@@ -167,13 +167,14 @@ def peaks(freqs: np.ndarray, mag_db: np.ndarray, coherence: np.ndarray) -> tuple
     """Resonances and anti-resonances (Hz): coherent local maxima and minima of the magnitude
     above the rigid body's -40 dB/decade slope (prominence >= PEAK_PROMINENCE_DB)."""
     trend = mag_db + 40.0 * np.log10(freqs)  # a rigid body is flat here
-    smooth = np.convolve(trend, np.ones(3) / 3, mode="same")
+    smooth = np.convolve(np.pad(trend, 1, mode="edge"), np.ones(3) / 3, mode="valid")
+    inside = (freqs > 1.02 * freqs[0]) & (freqs < 0.98 * freqs[-1])  # a peak needs both flanks
     found = []
     for sign in (1.0, -1.0):
         idx, _ = signal.find_peaks(sign * smooth, prominence=PEAK_PROMINENCE_DB)
         at = []
         for i in idx:
-            if coherence[i] < MIN_COHERENCE or not 3 <= i < len(freqs) - 3:
+            if coherence[i] < MIN_COHERENCE or not inside[i] or not 3 <= i < len(freqs) - 3:
                 continue
             i = i - 1 + int(np.argmax(sign * mag_db[i - 1 : i + 2]))  # the raw magnitude's extreme
             a, b, c = sign * mag_db[i - 1 : i + 2]
@@ -232,8 +233,9 @@ def measure(machine: str, settings: FrfSettings, overrides: dict[str, float] | N
     controller = sum_of([*_loop_controller(bm, settings, dt, k), open_loop(d, dt, names, name="excitation")])
     run = simulate(bm, controller, Step(0.0, n_axes=len(names)), n * dt, dt, progress=False, record_every=1)
     u = run.u_applied_V[settle:, k]
-    if settings.sensor == "motor" and bm.axes[k].motor_joint is not None:
-        y = run.qpos[settle:, bm.joint_qpos_index(bm.axes[k].motor_joint)] * bm.motor_travel_m_per_rad[bm.axes[k].name]
+    motor = bm.axes[k].motor_joint
+    if settings.sensor == "motor" and motor is not None:
+        y = run.qpos[settle:][:, bm.joint_qpos_index(motor)] * bm.motor_travel_m_per_rad[bm.axes[k].name]
     else:
         y = run.table_position_m()[settle:, k]
     e = d[settle:, k]

@@ -101,7 +101,12 @@ class Scenario(StrictSpec):
     duration_s: PositiveFloat | None = Field(
         None, description="simulated time, s; default the reference's own end (a G-code program's cycle time)"
     )
-    timestep_s: float = Field(1e-4, ge=MIN_TIMESTEP_S, le=MAX_TIMESTEP_S)
+    timestep_s: float | None = Field(
+        None,
+        ge=MIN_TIMESTEP_S,
+        le=MAX_TIMESTEP_S,
+        description="physics step, s; default the machine's (0.1 ms for the papers')",
+    )
     control_period_s: float = Field(1e-3, ge=MIN_TIMESTEP_S, le=MAX_CONTROL_PERIOD_S)
     seed: int = Field(0, ge=0)
     record_every_ticks: int | None = Field(
@@ -352,7 +357,8 @@ def prepare(scn: Scenario):
     """
     machine = build(scn.machine, scn.overrides, scn.timestep_s)
     names = [a.name for a in machine.axes]
-    substeps = substeps_per_tick(scn.control_period_s, scn.timestep_s)
+    timestep_s = float(machine.model.opt.timestep)
+    substeps = substeps_per_tick(scn.control_period_s, timestep_s)
     delay = machine.delay_s if scn.drive.delay_s is None else scn.drive.delay_s
     base = Context(
         scn.control_period_s, tuple(names), plants={a: machine.plant[i][i] for i, a in enumerate(names)}, delay_s=delay
@@ -374,7 +380,7 @@ def prepare(scn: Scenario):
     duration_s = scn.duration_s if scn.duration_s is not None else getattr(reference, "duration_s", None)
     if duration_s is None:
         raise TwinInputError("duration_s", None, f"give it: a {scn.reference.type} reference has no end of its own")
-    drive = Drive(len(names), substeps, scn.timestep_s, delay, scn.drive.saturation_V)
+    drive = Drive(len(names), substeps, timestep_s, delay, scn.drive.saturation_V)
     encoder = Encoder(
         _per_axis(
             list(machine.encoder_resolution_m)

@@ -18,6 +18,7 @@ from controllers.blocks import (
     lure,
     relay_feedback,
     sum_of,
+    with_feedforward,
 )
 from controllers.design.pid import pid_tf
 from controllers.lti import SisoTf
@@ -75,6 +76,48 @@ def build_cascade(p: CascadeParams, ctx: Context) -> Controller:
     def one(p, ctx, a):
         outer, inner = pid_tf(p.kp_pos, p.ki_pos), pid_tf(p.kp_vel, p.ki_vel)
         return cascade(outer, inner, ctx.dt, a, p.velocity_ref_ff, ctx.method, f"cascade.{a}")
+
+    return each_axis(one, p, ctx)
+
+
+class ServoCascadeParams(Params):
+    kp_pos: float = Field(gt=0.0, description="position loop gain, 1/s")
+    kp_vel: float = Field(gt=0.0, description="velocity loop gain, V s/m")
+    ti_vel_s: float = Field(0.0, ge=0.0, description="velocity loop integral time, s (0: no integral)")
+    velocity_ff: float = Field(1.0, ge=0.0, le=1.0, description="share of the reference velocity fed forward")
+    acceleration_ff: float = Field(0.0, ge=0.0, description="drive input per reference acceleration, V s^2/m")
+    friction_ff: float = Field(0.0, ge=0.0, description="drive input per reference velocity (viscous), V s/m")
+    notch_hz: float = Field(0.0, ge=0.0, description="notch centre on the velocity loop's output, Hz (0: none)")
+    notch_depth_db: float = Field(20.0, gt=0.0, le=60.0, description="notch depth, dB")
+    notch_width: float = Field(0.5, gt=0.0, le=2.0, description="notch pole damping ratio (its width)")
+    lowpass_hz: float = Field(0.0, ge=0.0, description="second-order low-pass (damping 0.7) on it, Hz (0: none)")
+
+
+def velocity_filter(notch_hz: float, depth_db: float, width: float, lowpass_hz: float) -> SisoTf:
+    """The velocity loop's output filter: a notch (s^2 + 2 z_z w s + w^2)/(s^2 + 2 z_p w s + w^2),
+    z_z = z_p 10^(-depth/20), and a low-pass w^2/(s^2 + 1.4 w s + w^2); 1 where both are 0."""
+    num, den = np.array([1.0]), np.array([1.0])
+    if notch_hz:
+        w = 2 * np.pi * notch_hz
+        zeta_zero = width * 10 ** (-depth_db / 20)
+        num, den = np.polymul(num, [1.0, 2 * zeta_zero * w, w * w]), np.polymul(den, [1.0, 2 * width * w, w * w])
+    if lowpass_hz:
+        w = 2 * np.pi * lowpass_hz
+        num, den = np.polymul(num, [w * w]), np.polymul(den, [1.0, 1.4 * w, w * w])
+    return SisoTf(num, den)
+
+
+@controller_kind("servo_cascade", ServoCascadeParams)
+def build_servo_cascade(p: ServoCascadeParams, ctx: Context) -> Controller:
+    """A drive's cascade as commissioning tools set it: position P, velocity PI with a notch or
+    low-pass on its output, velocity, acceleration and viscous feedforward (twin tune writes it)."""
+
+    def one(p, ctx, a):
+        pi = pid_tf(p.kp_vel, p.kp_vel / p.ti_vel_s if p.ti_vel_s else 0.0)
+        f = velocity_filter(p.notch_hz, p.notch_depth_db, p.notch_width, p.lowpass_hz)
+        inner = SisoTf(np.polymul(pi.num, f.num), np.polymul(pi.den, f.den))
+        loop = cascade(SisoTf((p.kp_pos,), (1.0,)), inner, ctx.dt, a, p.velocity_ff, ctx.method, f"servo.{a}")
+        return with_feedforward(loop, p.friction_ff, p.acceleration_ff)
 
     return each_axis(one, p, ctx)
 

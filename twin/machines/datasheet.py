@@ -325,7 +325,7 @@ class DatasheetMachine(Machine):
 
     def _riding_mass_kg(self, params, a: str) -> float:
         """Mass (kg) of everything an axis's own moving parts carry: the axes above it and the workpiece."""
-        stacking = self.spec.machine.stacking
+        stacking: list[str] = list(self.spec.machine.stacking)
         mass = params["workpiece_mass_kg"]
         for above in stacking[stacking.index(a) + 1 :]:
             mass += params[f"{above}_table_mass_kg"]
@@ -601,7 +601,10 @@ class DatasheetMachine(Machine):
 def _first_error(err: ValidationError, path: Path) -> TwinInputError:
     e = err.errors()[0]
     field = ".".join(str(p) for p in e["loc"] if not str(p).startswith(("ball_screw", "linear_motor")))
-    return TwinInputError(f"{path.name}: {field or 'machine file'}", e.get("input"), e["msg"])
+    value = e.get("input")
+    return TwinInputError(
+        f"{path.name}: {field or 'machine file'}", "{...}" if isinstance(value, dict) else value, e["msg"]
+    )
 
 
 def read_machine_file(path: str | Path) -> MachineFile:

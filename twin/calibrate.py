@@ -1,0 +1,320 @@
+"""Calibration: fit named machine parameters to a measured time trace or FRF.
+
+A time trace (CSV or Parquet) has ``time_s`` (uniform, increasing) and per axis ``u_<axis>_V``
+(the drive input) and ``pos_<axis>_m`` (the encoder position); an axis without columns gets zero
+input and is not compared. The fit is output-error least squares (``scipy.optimize.least_squares``,
+trust-region reflective, finite-difference Jacobian) through the twin itself: each evaluation
+replays the measured input open loop on the MuJoCo model built with the trial values, so
+nonlinear terms (Coulomb friction) are fitted as well as the linear ones.
+
+A measured FRF (``frequency_hz``, ``magnitude_db``, ``phase_deg``, one axis: ``--axis``) is fitted
+through the machine's transfer function (with its delay), the residual the complex logarithm
+of model over measurement (log-magnitude and phase in radians).
+
+Standard errors come from the Jacobian at the solution: cov = s^2 (J^T J)^-1 with s^2 the
+residual variance; a parameter the data cannot identify (a Jacobian column near zero or
+nearly dependent on the others: relative standard error above 50 %) is named, and the fit
+keeps its nominal value. The fit index is seed 001's NRMSE fit, 100 (1 - ||y - y_model|| /
+||y - mean(y)||), before (nominal values) and after.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+from scipy import optimize
+
+from controllers.blocks import open_loop
+from twin.errors import TwinInputError
+from twin.machines import BuiltMachine, build, get_machine
+from twin.metrics import fit_index
+from twin.references import Step
+from twin.sim.runner import simulate
+
+#: Fewest samples and seconds a time trace must hold.
+MIN_SAMPLES = 200
+MIN_DURATION_S = 0.05
+#: Most samples a trace may hold (memory and time stay bounded: each evaluation is a run).
+MAX_SAMPLES = 2_000_000
+#: Relative standard error above which a parameter counts as not identifiable.
+MAX_RELATIVE_ERROR = 0.5
+
+
+def read_table(path: str | Path) -> dict[str, np.ndarray]:
+    """A CSV or Parquet file's columns as float arrays.
+
+    Raises
+    ------
+    TwinInputError
+        A missing file, another suffix, or a file that cannot be parsed.
+    """
+    import pyarrow.csv as pacsv
+    import pyarrow.parquet as pq
+
+    path = Path(path)
+    if not path.is_file():
+        raise TwinInputError("--trace", str(path), "no such file")
+    try:
+        if path.suffix == ".parquet":
+            table = pq.read_table(path)
+        elif path.suffix == ".csv":
+            table = pacsv.read_csv(path)
+        else:
+            raise TwinInputError("--trace", str(path), "must be a .csv or .parquet file")
+    except (OSError, ValueError) as exc:
+        if isinstance(exc, TwinInputError):
+            raise
+        raise TwinInputError("--trace", str(path), f"cannot be read: {str(exc).splitlines()[0]}") from None
+    out = {}
+    for name in table.column_names:
+        try:
+            out[name] = np.asarray(table.column(name).to_numpy(zero_copy_only=False), float)
+        except (TypeError, ValueError):
+            raise TwinInputError(f"--trace column {name}", str(table.column(name).type), "must be numbers") from None
+    return out
+
+
+def time_trace(columns: dict[str, np.ndarray], axes: list[str]) -> tuple[float, np.ndarray, np.ndarray, list[int]]:
+    """Check a time trace: its sample period (s), inputs (n, axes) in V, positions (n, axes) in m
+    and the indices of the axes it measures.
+
+    Raises
+    ------
+    TwinInputError
+        One line per defect: missing ``time_s``, an unknown or unpaired column, too short,
+        NaN, time not increasing or not uniform, an axis that never moves.
+    """
+    if "time_s" not in columns:
+        raise TwinInputError("--trace", sorted(columns), "needs a time_s column (or an FRF: frequency_hz, ...)")
+    expected = {"time_s"} | {f"u_{a}_V" for a in axes} | {f"pos_{a}_m" for a in axes}
+    unknown = sorted(set(columns) - expected)
+    if unknown:
+        raise TwinInputError(
+            "--trace column", unknown[0], f"unknown (columns: time_s, u_<axis>_V, pos_<axis>_m; axes {axes})"
+        )
+    t = columns["time_s"]
+    if len(t) < MIN_SAMPLES or (len(t) > 1 and t[-1] - t[0] < MIN_DURATION_S):
+        raise TwinInputError(
+            "--trace", f"{len(t)} samples", f"too short: needs {MIN_SAMPLES} samples and {MIN_DURATION_S} s"
+        )
+    if len(t) > MAX_SAMPLES:
+        raise TwinInputError("--trace", f"{len(t)} samples", f"too long: at most {MAX_SAMPLES}")
+    for name, values in columns.items():
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            raise TwinInputError(f"--trace column {name}", f"row {bad[0]}", "is not a finite number (NaN or inf)")
+    steps = np.diff(t)
+    if (steps <= 0).any():
+        row = int(np.flatnonzero(steps <= 0)[0]) + 1
+        raise TwinInputError("--trace column time_s", f"row {row}", "time must increase from row to row")
+    dt = float(np.median(steps))
+    if np.abs(steps - dt).max() > 1e-3 * dt:
+        raise TwinInputError(
+            "--trace column time_s", f"step {np.abs(steps - dt).max() + dt:g} s", "sampling must be uniform"
+        )
+    measured = [i for i, a in enumerate(axes) if f"pos_{a}_m" in columns]
+    if not measured:
+        raise TwinInputError("--trace", sorted(columns), f"needs a pos_<axis>_m column for one of the axes {axes}")
+    u = np.zeros((len(t), len(axes)))
+    y = np.zeros((len(t), len(axes)))
+    for i, a in enumerate(axes):
+        if f"u_{a}_V" in columns:
+            u[:, i] = columns[f"u_{a}_V"]
+        if f"pos_{a}_m" in columns:
+            y[:, i] = columns[f"pos_{a}_m"]
+            if np.ptp(y[:, i]) < 1e-7:
+                raise TwinInputError(
+                    f"--trace column pos_{a}_m", f"range {np.ptp(y[:, i]):g} m", "the axis never moves"
+                )
+    return dt, u, y, measured
+
+
+def replay(bm: BuiltMachine, dt: float, u: np.ndarray, y0: np.ndarray) -> np.ndarray:
+    """The twin's positions (m) under the measured input ``u`` (V), played open loop at ``dt``
+    from rest at the trace's first positions ``y0``."""
+    names = [a.name for a in bm.axes]
+    run = simulate(
+        bm, open_loop(u, dt, names), Step(0.0, n_axes=len(names)), len(u) * dt, dt, progress=False, record_every=1
+    )
+    return run.table_position_m() - run.table_position_m()[0] + y0
+
+
+def _fit_parameters(machine, fit: list[str]) -> list[str]:
+    if not fit:
+        raise TwinInputError("--fit", "", "name one parameter or more: SYM,SYM")
+    for name in fit:
+        if name not in machine.parameters:
+            raise TwinInputError(
+                "--fit", name, f"not a parameter of {machine.name} (its: {', '.join(machine.parameters)})"
+            )
+        if math.isinf(machine.parameters[name].value):
+            raise TwinInputError("--fit", name, "is infinite (rigid): give it a finite value with --set first")
+    if len(set(fit)) != len(fit):
+        raise TwinInputError("--fit", ",".join(fit), "names a parameter twice")
+    return fit
+
+
+def calibrate(
+    machine: str,
+    trace: str | Path,
+    fit: list[str],
+    overrides: dict[str, float] | None = None,
+    axis: str = "x",
+) -> dict:
+    """Fit ``fit`` (parameter symbols) to a measured trace or FRF (see the module docstring).
+
+    Returns
+    -------
+    dict
+        ``machine``, ``trace``, ``kind`` ("time" or "frf"), ``fitted`` (symbol: value),
+        ``nominal``, ``standard_errors``, ``unidentifiable`` (symbol: reason),
+        ``fit_index_pct`` (``before``, ``after``, and ``twin``: a twin run with the fitted
+        values), ``evaluations``, ``parameters`` (all values in effect after the fit).
+
+    Raises
+    ------
+    TwinInputError
+        A bad machine, parameter, file or column (one line).
+    """
+    spec = get_machine(machine)
+    fit = _fit_parameters(spec, fit)
+    base = spec.resolve(overrides)
+    bm0 = build(machine, overrides)
+    names = [a.name for a in bm0.axes]
+    columns = read_table(trace)
+    nominal = np.array([base[s] for s in fit])
+    scale = np.where(nominal != 0, np.abs(nominal), 1.0)
+    lower = np.array(
+        [1e-6 if spec.parameters[s].positive else 0.0 if spec.parameters[s].nonnegative else -np.inf for s in fit]
+    )
+
+    def values(x):
+        """All parameter values with the fitted ones at ``x`` (in units of their scale)."""
+        return {**base, **dict(zip(fit, (x * scale).tolist()))}
+
+    if "frequency_hz" in columns:
+        kind = "frf"
+        residual, measured_vector, model_vector = _frf_problem(machine, columns, names, axis, values)
+    else:
+        kind = "time"
+        dt, u, y, measured = time_trace(columns, names)
+        substeps = dt / bm0.model.opt.timestep
+        if abs(substeps - round(substeps)) > 1e-6 or round(substeps) < 1:
+            raise TwinInputError(
+                "--trace column time_s",
+                f"step {dt:g} s",
+                f"must be a multiple of the timestep {bm0.model.opt.timestep:g} s",
+            )
+
+        def model_vector(x):
+            return replay(build(machine, values(x)), dt, u, y[0])[:, measured]
+
+        def measured_vector():
+            return y[:, measured]
+
+        def residual(x):
+            return (model_vector(x) - measured_vector()).ravel() / np.std(measured_vector())
+
+    x0 = np.maximum(nominal / scale, lower + 0.01)  # a value on its bound starts just inside
+    try:
+        before = model_vector(x0)
+        sol = optimize.least_squares(residual, x0, bounds=(lower, np.inf), diff_step=1e-4, x_scale="jac", max_nfev=60)
+    except TwinInputError as exc:
+        raise TwinInputError(exc.field, exc.value, f"{exc.reason} (during the fit)") from None
+    J = sol.jac
+    dof = max(1, J.shape[0] - len(fit))
+    s2 = 2 * sol.cost / dof
+    _, sv, vt = np.linalg.svd(J, full_matrices=False)
+    # finite differences of a simulation resolve about 1e-5 of the largest direction
+    tiny = sv < 1e-5 * sv.max() if sv.max() > 0 else np.ones_like(sv, bool)
+    inv_sv2 = np.where(tiny, 0.0, 1.0 / np.where(tiny, 1.0, sv) ** 2)
+    cov = (vt.T * inv_sv2) @ vt * s2
+    std = np.sqrt(np.maximum(np.diag(cov), 0.0)) * scale
+    fitted_x = sol.x.copy()
+    unidentifiable = {}
+    for i, s in enumerate(fit):
+        null = tiny.any() and np.abs(vt[tiny][:, i]).max() > 0.1
+        rel = std[i] / abs(fitted_x[i] * scale[i]) if fitted_x[i] else np.inf
+        if null or not np.abs(J[:, i]).max() > 0 or rel > MAX_RELATIVE_ERROR:
+            unidentifiable[s] = "the data do not determine it" + (
+                "" if null or not np.abs(J[:, i]).max() > 0 else f" (relative standard error {100 * rel:.0f} %)"
+            )
+            fitted_x[i] = nominal[i] / scale[i]
+    after = model_vector(fitted_x)
+    target = measured_vector()
+    fitted = {s: float(fitted_x[i] * scale[i]) for i, s in enumerate(fit) if s not in unidentifiable}
+    fit_index_pct = {
+        "before": float(np.mean(fit_index(_real(target), _real(before)))),
+        "after": float(np.mean(fit_index(_real(target), _real(after)))),
+    }
+    if kind == "time":  # confirmed by a twin run with the fitted values, in full
+        confirm = replay(build(machine, values(fitted_x)), dt, u, y[0])[:, measured]
+        fit_index_pct["twin"] = float(np.mean(fit_index(target, confirm)))
+    return {
+        "machine": machine,
+        "trace": str(trace),
+        "kind": kind,
+        "fitted": fitted,
+        "nominal": {s: float(base[s]) for s in fit},
+        "standard_errors": {s: float(std[i]) for i, s in enumerate(fit) if s not in unidentifiable},
+        "unidentifiable": unidentifiable,
+        "fit_index_pct": fit_index_pct,
+        "evaluations": int(sol.nfev),
+        "parameters": {k: float(v) for k, v in values(fitted_x).items()},
+    }
+
+
+def _real(values: np.ndarray) -> np.ndarray:
+    """A complex series as real and imaginary columns side by side (real series unchanged)."""
+    values = np.asarray(values)
+    if np.iscomplexobj(values):
+        return np.column_stack([values.real, values.imag])
+    return values
+
+
+def _frf_problem(machine, columns, names, axis, values):
+    """Residual and vectors of an FRF fit (see the module docstring)."""
+    import control
+
+    needed = ("frequency_hz", "magnitude_db", "phase_deg")
+    missing = [c for c in needed if c not in columns]
+    if missing:
+        raise TwinInputError(
+            "--trace column", missing[0], "missing: an FRF needs frequency_hz, magnitude_db, phase_deg"
+        )
+    unknown = sorted(set(columns) - set(needed) - {"coherence"})
+    if unknown:
+        raise TwinInputError(
+            "--trace column", unknown[0], f"unknown in an FRF (columns: {', '.join(needed)}, coherence)"
+        )
+    if axis not in names:
+        raise TwinInputError("--axis", axis, f"machine axes are {names}")
+    f = columns["frequency_hz"]
+    if len(f) < 10:
+        raise TwinInputError("--trace", f"{len(f)} lines", "too short: an FRF needs 10 frequency lines")
+    for name in needed:
+        bad = np.flatnonzero(~np.isfinite(columns[name]))
+        if bad.size:
+            raise TwinInputError(f"--trace column {name}", f"row {bad[0]}", "is not a finite number (NaN or inf)")
+    if (f <= 0).any() or (np.diff(f) <= 0).any():
+        raise TwinInputError("--trace column frequency_hz", f"{f.min():g} Hz", "frequencies must be > 0 and increase")
+    g_meas = 10 ** (columns["magnitude_db"] / 20) * np.exp(1j * np.radians(columns["phase_deg"]))
+    k = names.index(axis)
+
+    def model_vector(x):
+        bm = build(machine, values(x))
+        g = bm.plant[k][k]
+        s = 2j * math.pi * f
+        return control.tf(list(g.num), list(g.den))(s) * np.exp(-s * bm.delay_s)
+
+    def measured_vector():
+        return g_meas
+
+    def residual(x):
+        r = np.log(model_vector(x) / g_meas)
+        r = r.real + 1j * np.angle(np.exp(1j * r.imag))  # phase wrapped to +-pi
+        return np.concatenate([r.real, r.imag])
+
+    return residual, measured_vector, model_vector

@@ -1,0 +1,213 @@
+"""Auto-tuning: the cascade a drive's commissioning tool sets, designed on the sampled loop.
+
+Per axis, from the machine's transfer function G (drive input V to table position m) with its
+delay, at the control period T:
+
+1. Velocity loop (velocity from the position by backward difference, as the twin's sensor):
+   a PI, kv (1 + 1/(Ti s)), with Ti = 4 / w_c, in series with a filter; for each crossover
+   w_c from high to low and each filter (none, a notch at each model resonance above w_c, a
+   second-order low-pass at 4 w_c), kv puts |L_v| = 1 at w_c; the first design with a phase
+   margin >= 45 deg, a gain margin >= 6 dB and a stable closed loop wins (the highest bandwidth
+   the resonances allow).
+2. Position loop: a P gain kp, from w_c / 4 down, the first with the same margins on
+   L_p = kp C_v G / (1 + C_v D G).
+3. Feedforward: the whole reference velocity into the velocity loop, and the drive input the
+   rigid body needs, acceleration_ff = 1 / (s^2 coefficient of G's gain) (V s^2/m) and
+   friction_ff its viscous term (V s/m).
+
+Every loop is evaluated exactly as the twin runs it: G by zero-order hold with the delay in
+whole periods, the controller and filter by Tustin, on a frequency grid up to Nyquist.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import control
+import numpy as np
+
+from controllers.kinds.generic import velocity_filter
+from controllers.lti import SisoTf
+from twin.errors import TwinInputError
+from twin.machines import BuiltMachine, build, get_machine
+
+#: Stated targets (sampled loops, with the delay).
+PHASE_MARGIN_DEG = 45.0
+GAIN_MARGIN_DB = 6.0
+#: Control period (s) the design assumes unless told (a multiple of the physics step).
+CONTROL_PERIOD_S = 1e-4
+
+
+def _discrete(g: SisoTf, dt: float, method: str):
+    """``g`` discretized at ``dt`` as a state-space model (a tf of a compliant drive train is
+    too badly conditioned to discretize directly)."""
+    return control.c2d(control.ss(control.tf(list(g.num), list(g.den))), dt, method)
+
+
+def margins(response: np.ndarray, freqs_hz: np.ndarray) -> tuple[float, float, float]:
+    """Phase margin (deg), gain margin (dB) and crossover (Hz) of an open-loop frequency
+    response on a grid: the smallest over every gain crossing and every -180 deg crossing."""
+    mag = np.abs(response)
+    phase = np.unwrap(np.angle(response))
+    cross = np.flatnonzero((mag[:-1] >= 1) & (mag[1:] < 1))
+    if not cross.size:
+        return -math.inf, -math.inf, math.nan
+    pm = min(float(np.degrees(phase[i]) % 360.0 - 180.0) for i in cross)
+    wrapped = (np.degrees(phase) + 180.0) % 360.0 - 180.0  # 0 at -180 deg (mod 360)
+    signs = np.flatnonzero(np.sign(wrapped[:-1]) != np.sign(wrapped[1:]))
+    flips = [i for i in signs if abs(wrapped[i] - wrapped[i + 1]) < 180.0]  # not the +-180 wrap
+    gm = min((-20 * math.log10(mag[i]) for i in flips), default=math.inf)
+    return pm, gm, float(freqs_hz[cross[0]])
+
+
+def _stable(loop) -> bool:
+    """Whether the unity feedback of ``loop`` (discrete) is stable; a pole at z = 1 within 1e-6
+    is the table's integrator that the velocity's difference cancels (not a mode of the loop)."""
+    poles = control.poles(control.feedback(loop))
+    return bool(np.all((np.abs(poles) < 1.0 - 1e-9) | (np.abs(poles - 1.0) < 1e-6)))
+
+
+def tune_axis(bm: BuiltMachine, i: int, dt: float, resonances_hz: list[float]) -> dict:
+    """One axis's design (see the module docstring)."""
+    g = bm.plant[i][i]
+    delay = round(bm.delay_s / dt)
+    z = control.tf([1.0, 0.0], [1.0], dt)
+    gd = _discrete(g, dt, "zoh")
+    if delay:
+        gd = control.ss(control.tf([1.0], [1.0] + [0.0] * delay, dt)) * gd
+    diff = control.ss((z - 1) / (dt * z))
+    nyquist = 0.5 / dt
+    freqs = np.geomspace(0.1, 0.999 * nyquist, 3000)
+    zs = np.exp(2j * math.pi * freqs * dt)
+    g_resp = np.array([complex(gd(x)) for x in zs])
+    d_resp = (zs - 1) / (dt * zs)
+    for f_c in np.geomspace(0.4 * nyquist, 2.0, 80):
+        w = 2 * math.pi * f_c
+        ti = 4.0 / w
+        filters = [(0.0, 0.0)] + [(fr, 0.0) for fr in resonances_hz if fr > f_c] + [(0.0, min(4 * f_c, 0.45 / dt))]
+        for notch, lowpass in filters:
+            f = velocity_filter(notch, 20.0, 0.5, lowpass)
+            pi = SisoTf((ti, 1.0), (ti, 0.0))  # 1 + 1/(Ti s)
+            unit = _discrete(SisoTf(np.polymul(pi.num, f.num), np.polymul(pi.den, f.den)), dt, "tustin")
+            c_resp = np.array([complex(unit(x)) for x in zs])
+            at = np.exp(2j * math.pi * f_c * dt)
+            kv = 1.0 / abs(complex(unit(at)) * complex(gd(at)) * (at - 1) / (dt * at))
+            lv = kv * c_resp * g_resp * d_resp
+            pm_v, gm_v, _ = margins(lv, freqs)
+            if pm_v < PHASE_MARGIN_DEG or gm_v < GAIN_MARGIN_DB or not _stable(kv * unit * gd * diff):
+                continue
+            for kp in w / 4.0 * np.geomspace(1.0, 0.02, 40):
+                lp = kp * kv * c_resp * g_resp / (1 + lv)
+                pm_p, gm_p, _ = margins(lp, freqs)
+                cv = kv * unit
+                if pm_p >= PHASE_MARGIN_DEG and gm_p >= GAIN_MARGIN_DB and _stable(kp * cv * gd / (1 + cv * diff * gd)):
+                    closed = np.abs(lp / (1 + lp))
+                    below = np.flatnonzero(closed < 10 ** (-3 / 20))
+                    return {
+                        "phase_margin_deg": min(pm_v, pm_p),
+                        "gain_margin_db": min(gm_v, gm_p),
+                        "bandwidth_hz": float(freqs[below[0]]) if below.size else float(freqs[-1]),
+                        "velocity_loop": {"crossover_hz": float(f_c), "phase_margin_deg": pm_v, "gain_margin_db": gm_v},
+                        "position_loop": {"phase_margin_deg": pm_p, "gain_margin_db": gm_p},
+                        "gains": {
+                            "kp_pos": float(kp),
+                            "kp_vel": float(kv),
+                            "ti_vel_s": float(ti),
+                            "velocity_ff": 1.0,
+                            "acceleration_ff": float(g.den[-3] / g.num[-1]),
+                            "friction_ff": float(g.den[-2] / g.num[-1]),
+                            "notch_hz": float(notch),
+                            "lowpass_hz": float(lowpass),
+                        },
+                    }
+    raise TwinInputError("machine", bm.name, f"no cascade meets the margins on axis {bm.axes[i].name}")
+
+
+def tune(machine: str, overrides: dict[str, float] | None = None, control_period_s: float | None = None) -> dict:
+    """Design every axis's cascade (see the module docstring).
+
+    Returns
+    -------
+    dict
+        ``machine``, ``control_period_s``, ``targets`` and per axis ``axes.<a>``:
+        ``phase_margin_deg``, ``gain_margin_db`` (the smaller of the two loops'),
+        ``bandwidth_hz`` (the closed position loop's -3 dB), the two loops' figures and ``gains``.
+    """
+    from twin.frf import model_modes
+
+    spec = get_machine(machine)
+    bm = build(machine, overrides)
+    step = float(bm.model.opt.timestep)
+    dt = control_period_s if control_period_s is not None else max(1, round(CONTROL_PERIOD_S / step)) * step
+    ratio = dt / step
+    if abs(ratio - round(ratio)) > 1e-6 or round(ratio) < 1:
+        raise TwinInputError("--control-period", dt, f"must be a whole multiple of the timestep {step:g} s")
+    axes = {}
+    for i, a in enumerate(bm.axes):
+        resonances = model_modes(bm, i, "table")[0]
+        axes[a.name] = tune_axis(bm, i, dt, resonances)
+    return {
+        "machine": machine,
+        "machine_name": spec.name,
+        "control_period_s": dt,
+        "targets": {"phase_margin_deg": PHASE_MARGIN_DEG, "gain_margin_db": GAIN_MARGIN_DB},
+        "overrides": dict(overrides or {}),
+        "axes": axes,
+    }
+
+
+def scenario_text(result: dict, machine_path: str, reference: str = "circle") -> str:
+    """The tuned cascade as a scenario TOML (a circle of 10 mm at 2 m/min, or a 1 mm step)."""
+    lines = [
+        f'name = "tuned_{result["machine_name"]}"',
+        f'description = "twin tune: position P / velocity PI cascade with feedforward on {result["machine_name"]}"',
+        f'machine = "{machine_path}"',
+        f"control_period_s = {result['control_period_s']!r}",
+    ]
+    if result["overrides"]:
+        lines.append("overrides = { " + ", ".join(f"{k} = {v!r}" for k, v in result["overrides"].items()) + " }")
+    if reference == "circle":
+        lines += [
+            "duration_s = 2.0",
+            "",
+            "[reference]",
+            'type = "circle"',
+            "radius_mm = 10.0",
+            "feed_mm_per_min = 2000.0",
+        ]
+    else:
+        lines += ["duration_s = 0.3", "", "[reference]", 'type = "step"', "amplitude_m = 0.001", "t0_s = 0.01"]
+    for a, r in result["axes"].items():
+        lines += ["", f"[controllers.{a}]", 'type = "servo_cascade"', f"[controllers.{a}.params]"]
+        lines += [f"{k} = {v!r}" for k, v in r["gains"].items()]
+    return "\n".join(lines) + "\n"
+
+
+def verify(result: dict, machine_path: str, folder: Path) -> dict:
+    """Run the tuned cascade on the twin: a 1 mm step (overshoot %, 2 % settling time s) and
+    a circle (max tracking and contour error, um)."""
+    from twin.api import run as run_scenario
+
+    out: dict[str, dict[str, float]] = {}
+    for reference in ("step", "circle"):
+        path = folder / f"tuned_{reference}.toml"
+        path.write_text(scenario_text(result, machine_path, reference), encoding="utf-8")
+        run = run_scenario(str(path))
+        if reference == "step":
+            y = run.result.table_position_m()
+            t = run.result.t_s
+            for k, a in enumerate(result["axes"]):
+                final = 0.001
+                over = 100 * (y[:, k].max() - final) / final
+                outside = np.flatnonzero(np.abs(y[:, k] - final) > 0.02 * final)
+                out.setdefault(a, {})["step_overshoot_pct"] = float(max(over, 0.0))
+                out[a]["step_settling_s"] = float(t[outside[-1]] - 0.01) if outside.size else 0.0
+        else:
+            summary = run.summary
+            out["circle"] = {
+                "max_contour_error_um": summary["max_contour_error_um"],
+                "rms_contour_error_um": summary["rms_contour_error_um"],
+                **{f"max_tracking_error_um_{a}": v for a, v in summary["max_tracking_error_um"].items()},
+            }
+    return out
