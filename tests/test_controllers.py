@@ -200,6 +200,7 @@ def test_registry_rejects_unknown_parameters_and_builds_every_kind():
         "lure": {"num": [1.0], "den": [1.0], "nonlinearity": "dead_zone", "width": 1e-6},
         "linear": {"D": [[1.0]]},
         "sum": {},
+        "servo_cascade": {"kp_pos": 100.0, "kp_vel": 5.0, "ti_vel_s": 0.01, "notch_hz": 150.0, "lowpass_hz": 400.0},
     }
     for name in CONTROLLERS:
         parts = [make_controller("pid", 1e-3, {"kp": 1.0}, axes=("x", "y"))] if name == "sum" else ()

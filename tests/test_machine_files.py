@@ -148,7 +148,10 @@ def test_calibration_names_a_combination_it_cannot_identify(tmp_path):
         + "\n".join(f"{i * dt!r},{float(a)!r},{float(b)!r}" for i, (a, b) in enumerate(zip(u, y)))
     )
     r = calibrate(MID, path, ["x_table_mass_kg", "y_table_mass_kg"])
-    assert set(r["unidentifiable"]) == {"x_table_mass_kg", "y_table_mass_kg"}
+    assert r["unidentifiable"] == {
+        "x_table_mass_kg": "the data determine only its combination with y_table_mass_kg",
+        "y_table_mass_kg": "the data determine only its combination with x_table_mass_kg",
+    }
 
 
 @pytest.mark.parametrize(
@@ -218,3 +221,37 @@ def test_tuned_loops_meet_the_margins_checked_by_python_control():
             gm, pm, _, _ = control.margin(loop)
         assert pm == pytest.approx(design["velocity_loop"]["phase_margin_deg"], abs=1.0)
         assert 20 * math.log10(gm) >= 6
+
+
+def test_a_sweep_and_a_scenario_take_a_machine_file(tmp_path):
+    """A scenario names the machine file relative to itself; a sweep on a local Dask cluster
+    varies the file's parameters, each row equal to a run with the same value."""
+    import twin
+
+    (tmp_path / "machines").mkdir()
+    (tmp_path / "machines" / "mill.toml").write_text(Path(MID).read_text())
+    scenario = tmp_path / "step.toml"
+    scenario.write_text(
+        'machine = "machines/mill.toml"\nduration_s = 0.05\ncontrol_period_s = 1e-4\n'
+        '[controller]\ntype = "pid"\nparams = { kp = 2000.0, kd = 40.0, tf_s = 2e-4 }\n'
+        '[reference]\ntype = "step"\namplitude_m = 1e-4\naxes = ["x"]\n'
+    )
+    sweep = twin.sweep(scenario, ["overrides.x_table_mass_kg=grid(60, 120, 2)"], workers=1, out=tmp_path / "sw")
+    rows = sweep.table.to_pylist()
+    assert [r["overrides.x_table_mass_kg"] for r in rows] == [60.0, 120.0]
+    for row in rows:
+        alone = twin.run(scenario, overrides={"x_table_mass_kg": row["overrides.x_table_mass_kg"]}).summary
+        assert row["rmse_um_x"] == pytest.approx(alone["rmse_um"]["x"], abs=5e-4)  # the summary rounds to 1 nm
+    assert rows[0]["rmse_um_x"] != rows[1]["rmse_um_x"]
+
+
+def test_velocity_filter_notch_depth_and_low_pass():
+    """The servo_cascade's filter: -20 dB at the notch centre, unity far from it; the low-pass
+    at its corner |H| = 1/(2 x 0.7)."""
+    from controllers.kinds.generic import velocity_filter
+
+    notch = velocity_filter(200.0, 20.0, 0.5, 0.0)
+    gain = lambda g, f: abs(np.polyval(g.num, 2j * np.pi * f) / np.polyval(g.den, 2j * np.pi * f))
+    assert gain(notch, 200.0) == pytest.approx(0.1, rel=1e-12)
+    assert gain(notch, 2.0) == pytest.approx(1.0, abs=1e-3) and gain(notch, 20000.0) == pytest.approx(1.0, abs=1e-3)
+    assert gain(velocity_filter(0.0, 20.0, 0.5, 300.0), 300.0) == pytest.approx(1 / 1.4, rel=1e-12)

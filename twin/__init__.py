@@ -8,14 +8,15 @@ command line start fast::
     run.summary, run.to_pandas()
 
 ``twin.load``, ``twin.run``, ``twin.sweep``, ``twin.fidelity``, ``twin.reproduce``,
-``twin.program`` (a part program read and planned, as ``twin gcode``), and the
+``twin.program`` (a part program read and planned, as ``twin gcode``), ``twin.frf``,
+``twin.calibrate`` and ``twin.tune`` (a machine's FRF, calibration and tuning), and the
 classes ``twin.Run`` and ``twin.Sweep``; errors are :class:`twin.errors.TwinInputError` and
 :class:`twin.errors.SimulationDiverged`.
 """
 
 from __future__ import annotations
 
-__all__ = ["Run", "Sweep", "fidelity", "load", "program", "reproduce", "run", "sweep"]
+__all__ = ["Run", "Sweep", "calibrate", "fidelity", "frf", "load", "program", "reproduce", "run", "sweep", "tune"]
 
 
 def __getattr__(name: str):

@@ -234,14 +234,18 @@ def calibrate(
     std = np.sqrt(np.maximum(np.diag(cov), 0.0)) * scale
     fitted_x = sol.x.copy()
     unidentifiable = {}
+    null_space = vt[tiny]  # directions the data do not see
     for i, s in enumerate(fit):
-        null = tiny.any() and np.abs(vt[tiny][:, i]).max() > 0.1
         rel = std[i] / abs(fitted_x[i] * scale[i]) if fitted_x[i] else np.inf
-        if null or not np.abs(J[:, i]).max() > 0 or rel > MAX_RELATIVE_ERROR:
-            unidentifiable[s] = "the data do not determine it" + (
-                "" if null or not np.abs(J[:, i]).max() > 0 else f" (relative standard error {100 * rel:.0f} %)"
-            )
-            fitted_x[i] = nominal[i] / scale[i]
+        if not np.abs(J[:, i]).max() > 0:
+            unidentifiable[s] = "the data do not depend on it"
+        elif null_space.size and np.abs(null_space[:, i]).max() > 0.1:
+            partners = [fit[j] for j in range(len(fit)) if j != i and np.abs(null_space[:, j]).max() > 0.1]
+            unidentifiable[s] = "the data determine only its combination with " + (", ".join(partners) or "itself")
+        elif rel > MAX_RELATIVE_ERROR:
+            unidentifiable[s] = f"the data do not determine it (relative standard error {100 * rel:.0f} %)"
+    for s in unidentifiable:
+        fitted_x[fit.index(s)] = nominal[fit.index(s)] / scale[fit.index(s)]
     after = model_vector(fitted_x)
     target = measured_vector()
     fitted = {s: float(fitted_x[i] * scale[i]) for i, s in enumerate(fit) if s not in unidentifiable}

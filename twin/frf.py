@@ -28,7 +28,7 @@ from scipy import signal
 from controllers.blocks import error_feedback, open_loop, sum_of
 from controllers.lti import SisoTf
 from twin.errors import TwinInputError
-from twin.machines import BuiltMachine, build, get_machine
+from twin.machines import BuiltMachine, build
 from twin.references import Step
 from twin.sim.runner import simulate
 
@@ -120,19 +120,21 @@ def excitation_signal(kind: str, n: int, dt: float, amplitude: float, f_max_hz: 
 
 
 def _loop_controller(bm: BuiltMachine, settings: FrfSettings, dt: float, k: int):
-    """The feedback of each axis during the measurement (V per m of position error): velocity
-    loop, derivative feedback with a 1 ms filter and a 20 Hz rigid-body bandwidth; position
-    loop, PD with a 10 Hz bandwidth and damping ratio 0.7; the open loop, none (other axes
-    always hold position with the PD)."""
+    """The feedback during the measurement (V per m of position error, through a 1 ms filter):
+    on the measured axis, none (open loop), derivative feedback of the position for a 20 Hz
+    rigid-body bandwidth (velocity loop) or a PD of 10 Hz and damping ratio 0.7 (position loop);
+    the other axes always hold position with that PD."""
     parts = []
     for i, a in enumerate(bm.axes):
-        mass = _rigid_mass_per_volt(bm, i)  # V s^2 / m: 1 V accelerates the axis by 1/mass
-        w = 2 * math.pi * (20.0 if (i == k and settings.loop == "velocity") else 10.0)
-        if i == k and settings.loop == "open":
+        loop = settings.loop if i == k else "position"
+        if loop == "open":
             continue
-        kd, kp = mass * w, mass * w**2  # velocity loop: kd alone (s + w pole); PD: w_n = w
-        kd = 2 * 0.7 * mass * w if not (i == k and settings.loop == "velocity") else kd
-        num = (kd, 0.0) if (i == k and settings.loop == "velocity") else (kd, kp)
+        mass = _rigid_mass_per_volt(bm, i)  # V s^2 / m: 1 V accelerates the axis by 1/mass
+        if loop == "velocity":
+            num = (mass * 2 * math.pi * 20.0, 0.0)
+        else:
+            w = 2 * math.pi * 10.0
+            num = (2 * 0.7 * mass * w, mass * w**2)
         parts.append(error_feedback(SisoTf(num, (1e-3, 1.0)), dt, (a.name,), name=f"loop.{a.name}"))
     return parts
 
@@ -215,15 +217,12 @@ def measure(machine: str, settings: FrfSettings, overrides: dict[str, float] | N
         An unknown machine, axis, parameter or option value.
     """
     settings.check()
-    get_machine(machine)
-    timestep = get_machine(machine).build(overrides).model.opt.timestep
-    substeps = max(1, round(SAMPLE_PERIOD_S / timestep))
     bm = build(machine, overrides)
     names = [a.name for a in bm.axes]
     if settings.axis not in names:
         raise TwinInputError("--axis", settings.axis, f"machine axes are {names}")
     k = names.index(settings.axis)
-    dt = substeps * bm.model.opt.timestep
+    dt = max(1, round(SAMPLE_PERIOD_S / bm.model.opt.timestep)) * bm.model.opt.timestep
     settle = round(0.5 / dt)
     n = settle + round(settings.duration_s / dt)
     d = np.zeros((n, len(names)))
@@ -255,11 +254,10 @@ def measure(machine: str, settings: FrfSettings, overrides: dict[str, float] | N
     resonances, antiresonances = peaks(freqs, mag_db, coherence)
     model_res, model_anti = model_modes(bm, k, settings.sensor)
     good = coherence >= MIN_COHERENCE
-    spec = get_machine(machine)
     return {
         "machine": machine,
         "settings": {**settings.__dict__, "sample_period_s": dt, "segment_samples": SEGMENT},
-        "parameters": {s: bm.params[s] for s in spec.parameters},
+        "parameters": dict(bm.params),
         "frequency_hz": freqs.tolist(),
         "magnitude_db": mag_db.tolist(),
         "phase_deg": np.degrees(np.angle(g)).tolist(),

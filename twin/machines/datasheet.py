@@ -22,18 +22,20 @@ screw-nut-bearing axial spring, each rigid where its stiffness is infinite (the 
 value is a parameter by the symbol ``<axis>_<key>`` (``x_table_mass_kg``) or ``<key>`` for the
 machine's own (``workpiece_mass_kg``), which ``--set``, sweeps and calibration change.
 
-The MJCF, per ball-screw axis ``a`` (hinge axes and the slide along the axis)::
+The MJCF, per ball-screw axis ``a`` (hinges about the axis, the slide along it)::
 
-    a_motor_rotor   hinge a_motor     rotor + gearbox inertia (motor shaft), the drive's torque
-    a_coupling_hub  hinge a_coupling  half the coupling's inertia           (finite k_torsion only)
-    a_screw         hinge a_screw     screw inertia (+ the rest of the coupling)
-                    (hinge a_torsion, stiffness k_torsion, inside the hub, when k_torsion is finite)
-    a_table         slide a_table     table mass, guideway viscous damping and Coulomb friction
-    a_nut           slide a_axial     nut mass, stiffness k_axial, inside the table (finite k_axial only)
+    a_motor_rotor   hinge a_motor   rotor + gearbox inertia (+ half the coupling's where it is
+                                    compliant); the drive's torque (actuator a_drive)
+    a_screw         hinge a_screw   screw + coupling inertia (+ nut mass x lead^2 where the nut
+                                    is compliant)
+    a_table         slide a_table   table mass (+ a rigid nut's), guideway viscous damping,
+                                    Coulomb friction, travel limits
 
-with gear equalities for the rigid transmission: motor = gear_ratio x screw (or hub) and
-screw angle = travel / lead (a joint equality when both sides are single joints, a tendon
-equality over the sums ``a_coupling + a_torsion`` and ``a_table + a_axial`` otherwise).
+linked by ``a_gear`` (motor = gear_ratio x screw) and ``a_nut`` (screw = travel / lead): a
+joint equality where the stiffness is infinite (the hand-written models' gears), else a spring
+tendon ``a_gear_spring`` (length motor / gear_ratio - screw, k_torsion, c_torsion) or
+``a_nut_spring`` (length lead x screw - table, k_axial, c_axial). A linear-motor axis is its
+carriage ``a_table`` on the slide ``a_table`` with the drive's force on it.
 """
 
 from __future__ import annotations
@@ -55,6 +57,36 @@ from twin.spec import StrictSpec
 
 #: Density of screw steel (kg/m^3), for a screw inertia the file does not give.
 STEEL_DENSITY_KG_PER_M3 = 7850.0
+
+
+def _geom(body, kind: str, size, rgba, **placement) -> None:
+    """A massless geom (the bodies' inertials carry the masses): ``kind`` box or cylinder,
+    ``size`` as MJCF, colour ``rgba`` (r, g, b), placed by ``pos`` or ``fromto``."""
+    shape = {"box": mujoco.mjtGeom.mjGEOM_BOX, "cylinder": mujoco.mjtGeom.mjGEOM_CYLINDER}[kind]
+    body.add_geom(type=shape, size=[*size, 0, 0][:3], rgba=[*rgba, 1.0], mass=0, **placement)
+
+
+def _drive(spec, name: str, joint: str, gain: float) -> None:
+    """The drive: torque (N m) or force (N) on ``joint`` = ``gain`` x the input (V)."""
+    spec.add_actuator(name=name, target=joint, trntype=mujoco.mjtTrn.mjTRN_JOINT, gainprm=[gain] + [0.0] * 9)
+
+
+def _link(spec, name: str, first: str, second: str, ratio: float, stiffness: float, damping: float) -> None:
+    """Joint ``first`` = ``ratio`` x joint ``second``: a gear equality where ``stiffness`` is
+    infinite, else a spring tendon whose length, ``first / ratio - second``, is the stretch."""
+    if math.isinf(stiffness):
+        eq = spec.add_equality(name=name, type=mujoco.mjtEq.mjEQ_JOINT, name1=first, name2=second)
+        eq.data = np.r_[0.0, ratio, 0.0, 0.0, 0.0, np.zeros(len(eq.data) - 5)]
+        eq.solref = list(EQUALITY_SOLREF)
+        eq.solimp = list(EQUALITY_SOLIMP)
+        return
+    tendon = spec.add_tendon(name=f"{name}_spring")
+    tendon.wrap_joint(first, 1.0 / ratio)
+    tendon.wrap_joint(second, -1.0)
+    tendon.stiffness = [stiffness, 0.0, 0.0]
+    tendon.damping = [damping, 0.0, 0.0]
+
+
 #: Time constant (s) and damping ratio of the gear equalities (as the hand-written models).
 EQUALITY_SOLREF = (0.0002, 0.7)
 EQUALITY_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
@@ -417,27 +449,12 @@ class DatasheetMachine(Machine):
             else:
                 table = self._carriage(spec, parent, params, a, z)
             parent, z = table, 0.05
-        work = parent.add_body(name="workpiece", pos=[0, 0, 0.05], mass=params["workpiece_mass_kg"])
-        work.inertia = [0.005, 0.005, 0.005]
-        work.explicitinertial = True
-        work.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.05, 0.05, 0.02], rgba=[0.8, 0.6, 0.3, 1], mass=0)
-        spindle = spec.worldbody.add_body(name="spindle", pos=[0, 0, 0.1 + 0.05 * len(self.axes) + 0.08])
-        spindle.add_geom(
-            name="tool",
-            type=mujoco.mjtGeom.mjGEOM_CYLINDER,
-            size=[0.005, 0.02, 0],
-            pos=[0, 0, 0.02],
-            rgba=[0.85, 0.85, 0.9, 1],
-            mass=0,
-        )
-        spindle.add_geom(
-            name="spindle_housing",
-            type=mujoco.mjtGeom.mjGEOM_CYLINDER,
-            size=[0.04, 0.06, 0],
-            pos=[0, 0, 0.1],
-            rgba=[0.25, 0.3, 0.35, 1],
-            mass=0,
-        )
+        work = self._body(parent, "workpiece", (0, 0, 0.05), params["workpiece_mass_kg"], (0.005,) * 3)
+        _geom(work, "box", [0.05, 0.05, 0.02], (0.8, 0.6, 0.3))
+        # the tool tip touches the workpiece's top face over its starting position (visual only)
+        spindle = spec.worldbody.add_body(name="spindle", pos=[0, 0, 0.1 + 0.05 * len(self.axes) + 0.02])
+        _geom(spindle, "cylinder", [0.005, 0.02], (0.85, 0.85, 0.9), name="tool", pos=[0, 0, 0.02])
+        _geom(spindle, "cylinder", [0.04, 0.06], (0.25, 0.3, 0.35), name="spindle_housing", pos=[0, 0, 0.1])
         spindle.add_site(name="tool_tip", size=[0.002, 0, 0])
         return spec
 
@@ -464,13 +481,8 @@ class DatasheetMachine(Machine):
         """A linear-motor axis: its carriage on a slide, the drive's force on it."""
         carriage = self._body(parent, f"{a}_table", (0, 0, z), params[f"{a}_table_mass_kg"], (1, 1, 1))
         self._slide(carriage, f"{a}_table", a, params)
-        carriage.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.2, 0.2, 0.02], rgba=[0.4, 0.5, 0.6, 1], mass=0)
-        spec.add_actuator(
-            name=f"{a}_drive",
-            target=f"{a}_table",
-            trntype=mujoco.mjtTrn.mjTRN_JOINT,
-            gainprm=[self._drive_gain(params, a)] + [0] * 9,
-        )
+        _geom(carriage, "box", [0.2, 0.2, 0.02], (0.4, 0.5, 0.6))
+        _drive(spec, f"{a}_drive", f"{a}_table", self._drive_gain(params, a))
         return carriage
 
     def _ball_screw(self, spec, parent, params, a: str, z: float):
@@ -510,92 +522,27 @@ class DatasheetMachine(Machine):
             about_axis(motor_inertia, motor_mass),
         )
         rotor.add_joint(name=f"{a}_motor", type=mujoco.mjtJoint.mjJNT_HINGE, axis=list(e))
-        rotor.add_geom(
-            type=mujoco.mjtGeom.mjGEOM_CYLINDER,
-            size=[0.03, 0, 0],
-            fromto=list(np.r_[-0.06 * e, 0.06 * e]),
-            rgba=[0.2, 0.2, 0.25, 1],
-            mass=0,
-        )
-        rotor.add_geom(
-            name=f"{a}_motor_rotor_marker",
-            type=mujoco.mjtGeom.mjGEOM_BOX,
-            size=[0.004, 0.004, 0.0105],
-            pos=list(0.061 * e + [0, 0, 0.018]),
-            rgba=[1, 0.45, 0.1, 1],
-            mass=0,
-        )
+        _geom(rotor, "cylinder", [0.03], (0.2, 0.2, 0.25), fromto=list(np.r_[-0.06 * e, 0.06 * e]))
+        marker = 0.061 * e + [0, 0, 0.018]
+        _geom(rotor, "box", [0.004, 0.004, 0.0105], (1, 0.45, 0.1), name=f"{a}_motor_rotor_marker", pos=list(marker))
         mass = screw_mass_kg(2 * radius, length)
         screw = self._body(parent, f"{a}_screw", (0, 0, z - 0.05), mass, about_axis(screw_inertia, mass))
         screw.add_joint(name=f"{a}_screw", type=mujoco.mjtJoint.mjJNT_HINGE, axis=list(e))
-        screw.add_geom(
-            type=mujoco.mjtGeom.mjGEOM_CYLINDER,
-            size=[radius, 0, 0],
-            fromto=list(np.r_[-length / 2 * e, length / 2 * e]),
-            rgba=[0.7, 0.7, 0.7, 1],
-            mass=0,
-        )
-        screw.add_geom(
-            name=f"{a}_screw_marker",
-            type=mujoco.mjtGeom.mjGEOM_BOX,
-            size=[0.006, 0.006, 0.006],
-            pos=list(-0.4 * length * e + [0, 0, radius]),
-            rgba=[1, 0.45, 0.1, 1],
-            mass=0,
-        )
+        _geom(screw, "cylinder", [radius], (0.7, 0.7, 0.7), fromto=list(np.r_[-length / 2 * e, length / 2 * e]))
+        marker = -0.4 * length * e + [0, 0, radius]
+        _geom(screw, "box", [0.006, 0.006, 0.006], (1, 0.45, 0.1), name=f"{a}_screw_marker", pos=list(marker))
         table_mass = params[f"{a}_table_mass_kg"] + (0.0 if math.isfinite(k_axial) else nut)
         table = self._body(parent, f"{a}_table", (0, 0, z), table_mass, (0.2 * table_mass / 12,) * 3)
         self._slide(table, f"{a}_table", a, params)
-        table.add_geom(
-            type=mujoco.mjtGeom.mjGEOM_BOX,
-            size=[0.18 - 0.04 * k, 0.18 - 0.04 * k, 0.015],
-            rgba=[0.4 + 0.1 * k, 0.5 + 0.1 * k, 0.6 + 0.1 * k, 1],
-            mass=0,
-        )
-        table.add_geom(
-            type=mujoco.mjtGeom.mjGEOM_CYLINDER,
-            size=[radius * 1.8, 0, 0],
-            fromto=list(np.r_[-0.03 * e, 0.03 * e] + np.r_[0, 0, -0.05, 0, 0, -0.05]),
-            rgba=[0.55, 0.45, 0.3, 1],
-            mass=0,
-        )
-        links = (
-            (
-                f"{a}_gear",
-                k_torsion,
-                params[f"{a}_c_torsion_N_m_s_per_rad"],
-                f"{a}_motor",
-                f"{a}_screw",
-                n,
-                1.0 / n,
-                -1.0,
-            ),
-            (f"{a}_nut", k_axial, params[f"{a}_c_axial_N_s_per_m"], f"{a}_screw", f"{a}_table", 1.0 / lead, lead, -1.0),
-        )
-        for name, stiffness, damping, first, second, ratio, coef_first, coef_second in links:
-            if math.isinf(stiffness):
-                self._equality(spec, name, first, second, ratio)
-            else:  # a spring tendon over the two sides: its length is the spring's stretch
-                tendon = spec.add_tendon(name=f"{name}_spring")
-                tendon.wrap_joint(first, coef_first)
-                tendon.wrap_joint(second, coef_second)
-                tendon.stiffness = [stiffness, 0.0, 0.0]
-                tendon.damping = [damping, 0.0, 0.0]
-        spec.add_actuator(
-            name=f"{a}_drive",
-            target=f"{a}_motor",
-            trntype=mujoco.mjtTrn.mjTRN_JOINT,
-            gainprm=[self._drive_gain(params, a)] + [0] * 9,
-        )
+        half = 0.18 - 0.04 * k
+        _geom(table, "box", [half, half, 0.015], (0.4 + 0.1 * k, 0.5 + 0.1 * k, 0.6 + 0.1 * k))
+        nut_at = np.r_[-0.03 * e, 0.03 * e] + [0, 0, -0.05, 0, 0, -0.05]
+        _geom(table, "cylinder", [radius * 1.8], (0.55, 0.45, 0.3), fromto=list(nut_at))
+        coupling_damping = params[f"{a}_c_torsion_N_m_s_per_rad"]
+        _link(spec, f"{a}_gear", f"{a}_motor", f"{a}_screw", n, k_torsion, coupling_damping)
+        _link(spec, f"{a}_nut", f"{a}_screw", f"{a}_table", 1.0 / lead, k_axial, params[f"{a}_c_axial_N_s_per_m"])
+        _drive(spec, f"{a}_drive", f"{a}_motor", self._drive_gain(params, a))
         return table
-
-    @staticmethod
-    def _equality(spec, name: str, first: str, second: str, ratio: float) -> None:
-        """A gear: joint ``first`` = ``ratio`` x joint ``second``."""
-        eq = spec.add_equality(name=name, type=mujoco.mjtEq.mjEQ_JOINT, name1=first, name2=second)
-        eq.data = np.r_[0.0, ratio, 0.0, 0.0, 0.0, np.zeros(len(eq.data) - 5)]
-        eq.solref = list(EQUALITY_SOLREF)
-        eq.solimp = list(EQUALITY_SOLIMP)
 
 
 def _first_error(err: ValidationError, path: Path) -> TwinInputError:
