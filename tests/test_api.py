@@ -78,6 +78,7 @@ def test_bad_settings_and_divergence_are_the_twins_errors():
         ("run_and_plot.py", ["--duration", "0.3"], "run_and_plot.png"),
         ("compare_controllers.py", ["--duration", "0.3"], "MIMO H-infinity"),
         ("sweep_box.py", ["--samples", "4", "--workers", "1"], "4 samples in"),
+        ("tune_vs_papers.py", ["--duration", "0.3"], "tuned servo_cascade (ours)"),
         (
             "feed_override.py",
             ["--overrides", "0.8", "1.2", "--workers", "1", "--duration", "1.0"],
@@ -86,7 +87,7 @@ def test_bad_settings_and_divergence_are_the_twins_errors():
     ],
 )
 def test_examples_run(tmp_path, script, args, check):
-    extra = ["--out", str(tmp_path)] if script != "compare_controllers.py" else []
+    extra = ["--out", str(tmp_path)] if script not in ("compare_controllers.py", "tune_vs_papers.py") else []
     r = subprocess.run(
         [sys.executable, str(EXAMPLES / script), *args, *extra],
         capture_output=True,

@@ -1,8 +1,12 @@
 """Fidelity of the twins against their transfer functions (issue targets)."""
 
+from pathlib import Path
+
 import pytest
 
 from twin.fidelity import CASES, TARGETS, fidelity
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples" / "machines"
 
 
 def _check(r):
@@ -17,6 +21,15 @@ def test_fidelity_nominal(name):
     # a 2 s multisine period (0.5-50 Hz) keeps the test short; `twin fidelity` uses 10 s (0.1-50 Hz)
     r = fidelity(name, frf_period_s=2.0, frf_tones=15)
     assert r["frf_band_hz"] == [0.5, 50.0]
+    _check(r)
+
+
+def test_fidelity_of_a_compliant_machine_file():
+    """The example machine file, with its axial and torsional modes, against the multi-mass
+    transfer function derived from its values (`twin fidelity --machine FILE.toml`)."""
+    r = fidelity(str(EXAMPLES / "mid_size_xy.toml"), frf_period_s=2.0, frf_tones=15)
+    assert r["friction_forced_off"] == ["x_friction_coulomb_N", "y_friction_coulomb_N"]
+    assert len(r["tf"]["x"]["den"]) == 7  # three masses: six poles
     _check(r)
 
 

@@ -12,11 +12,11 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
-from twin.calibrate import calibrate, replay
+from twin.commissioning.calibration import calibrate, replay
+from twin.commissioning.frf import FrfSettings, excitation_signal, measure, peaks
+from twin.commissioning.tuning import tune
 from twin.fidelity import time_response_nrmse
-from twin.frf import FrfSettings, excitation_signal, measure, peaks
 from twin.machines import build, get_machine
-from twin.tune import tune
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples" / "machines"
 MID = str(EXAMPLES / "mid_size_xy.toml")

@@ -389,9 +389,9 @@ def program(file: str | Path, machine: str | None = None, **settings: Any) -> di
 
 def frf(machine: str, overrides: dict[str, float] | None = None, **settings: Any) -> dict:
     """An axis's FRF measured on the twin, as ``twin frf --json`` (plus ``run``, the
-    simulation); ``settings`` are :class:`twin.frf.FrfSettings`'s fields (``axis="y"``,
+    simulation); ``settings`` are :class:`twin.commissioning.frf.FrfSettings`'s fields (``axis="y"``,
     ``loop="open"``, ``sensor="motor"``, ``excitation="chirp"``, ``amplitude_V``, ...)."""
-    from twin.frf import FrfSettings, measure
+    from twin.commissioning.frf import FrfSettings, measure
 
     try:
         chosen = FrfSettings(**settings)
@@ -406,14 +406,14 @@ def calibrate(
     machine: str, trace: str | Path, fit: list[str], overrides: dict[str, float] | None = None, axis: str = "x"
 ) -> dict:
     """Fit machine parameters to a measured trace or FRF, as ``twin calibrate --json``."""
-    from twin.calibrate import calibrate as fit_machine
+    from twin.commissioning.calibration import calibrate as fit_machine
 
     return fit_machine(machine, trace, list(fit), overrides, axis)
 
 
 def tune(machine: str, overrides: dict[str, float] | None = None, control_period_s: float | None = None) -> dict:
     """Each axis's tuned cascade with its margins and bandwidth, as ``twin tune --json
-    --no-verify``; :func:`twin.tune.verify` runs it on the twin."""
-    from twin.tune import tune as design
+    --no-verify``; :func:`twin.commissioning.tuning.verify` runs it on the twin."""
+    from twin.commissioning.tuning import tune as design
 
     return design(machine, overrides, control_period_s)

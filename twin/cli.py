@@ -405,7 +405,7 @@ def frf(
 ):
     """Measure an axis's frequency response on the twin as a commissioning tool does (excite,
     H1 with coherence, resonances and anti-resonances) beside the model's."""
-    from twin.frf import FrfSettings, measure, write_bode
+    from twin.commissioning.frf import FrfSettings, measure, write_bode
 
     _check_output("--rrd", rrd, ".rrd")
     _check_plots_folder(plots)
@@ -455,7 +455,7 @@ def calibrate(
 ):
     """Fit named machine parameters to a measured time trace or FRF (least squares through the
     twin), with standard errors and the fit index before and after."""
-    from twin.calibrate import calibrate as fit_machine
+    from twin.commissioning.calibration import calibrate as fit_machine
     from twin.machines import get_machine, is_machine_file
     from twin.machines.datasheet import DatasheetMachine, machine_file_text
 
@@ -503,7 +503,7 @@ def tune(
     sampled loop with its delay), verify it on the twin and write it as a scenario."""
     import tempfile
 
-    from twin import tune as tuning
+    from twin.commissioning import tuning
 
     _check_output("--out", out, ".toml")
     if control_period is not None and not (1e-6 <= control_period <= 0.1):

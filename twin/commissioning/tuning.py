@@ -134,7 +134,7 @@ def tune(machine: str, overrides: dict[str, float] | None = None, control_period
         ``phase_margin_deg``, ``gain_margin_db`` (the smaller of the two loops'),
         ``bandwidth_hz`` (the closed position loop's -3 dB), the two loops' figures and ``gains``.
     """
-    from twin.frf import model_modes
+    from twin.commissioning.frf import model_modes
 
     spec = get_machine(machine)
     bm = build(machine, overrides)
