@@ -196,12 +196,28 @@ def test_bad_machine_files_give_one_error_line(tmp_path, edit, field):
     assert r.stderr.count("\n") == 1 and field in r.stderr
 
 
-def test_tuned_loops_meet_the_margins_checked_by_python_control():
+@pytest.fixture(scope="module")
+def tuned():
+    return tune(MID)
+
+
+def test_the_part_scenario_holds_the_tuned_gains(tuned):
+    """examples/machines/mid_size_part.toml carries `twin tune`'s gains, rounded to 4 digits."""
+    import tomllib
+
+    scenario = tomllib.loads((EXAMPLES / "mid_size_part.toml").read_text())
+    for axis, design in tuned["axes"].items():
+        written = scenario["controllers"][axis]["params"]
+        for key, value in design["gains"].items():
+            assert written.get(key, 0.0) == pytest.approx(value, rel=5e-4), (axis, key)
+
+
+def test_tuned_loops_meet_the_margins_checked_by_python_control(tuned):
     """The designer's margins, recomputed by python-control's stability_margins on the sampled
     velocity loop built from the returned gains."""
     from controllers.kinds.generic import velocity_filter
 
-    r = tune(MID)
+    r = tuned
     bm = build(MID)
     dt = r["control_period_s"]
     for i, design in enumerate(r["axes"].values()):

@@ -82,6 +82,7 @@ def tune_axis(bm: BuiltMachine, i: int, dt: float, resonances_hz: list[float]) -
     zs = np.exp(2j * math.pi * freqs * dt)
     g_resp = np.array([complex(gd(x)) for x in zs])
     d_resp = (zs - 1) / (dt * zs)
+    s_tustin = 2.0 / dt * (zs - 1) / (zs + 1)
     for f_c in np.geomspace(0.4 * nyquist, 2.0, 80):
         w = 2 * math.pi * f_c
         ti = 4.0 / w
@@ -89,8 +90,9 @@ def tune_axis(bm: BuiltMachine, i: int, dt: float, resonances_hz: list[float]) -
         for notch, lowpass in filters:
             f = velocity_filter(notch, 20.0, 0.5, lowpass)
             pi = SisoTf((ti, 1.0), (ti, 0.0))  # 1 + 1/(Ti s)
-            unit = _discrete(SisoTf(np.polymul(pi.num, f.num), np.polymul(pi.den, f.den)), dt, "tustin")
-            c_resp = np.array([complex(unit(x)) for x in zs])
+            num, den = np.polymul(pi.num, f.num), np.polymul(pi.den, f.den)
+            unit = _discrete(SisoTf(num, den), dt, "tustin")
+            c_resp = np.polyval(num, s_tustin) / np.polyval(den, s_tustin)  # what Tustin makes of it
             at = np.exp(2j * math.pi * f_c * dt)
             kv = 1.0 / abs(complex(unit(at)) * complex(gd(at)) * (at - 1) / (dt * at))
             lv = kv * c_resp * g_resp * d_resp

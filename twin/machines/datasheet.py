@@ -336,7 +336,7 @@ class DatasheetMachine(Machine):
                 if value is None:
                     continue
                 field = type(ax).model_fields[key]
-                positive = any(getattr(c, "gt", None) == 0 for c in field.metadata) or key == "screw_inertia_kg_m2"
+                positive = field.default != 0.0  # the keys that may be 0 default to 0 (friction, damping, ...)
                 out[f"{a}_{key}"] = Parameter(
                     float(value),
                     _unit(key),
