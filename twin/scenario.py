@@ -30,7 +30,7 @@ from twin.process.machining import StockSpec, ToolSpec, program_milling
 from twin.references import REFERENCES, ReferenceContext, ReferenceSpecBase
 from twin.sim.drive import Drive, Encoder, substeps_per_tick
 from twin.sim.runner import MAX_PHYSICS_STEPS, RunResult, simulate
-from twin.spec import StrictSpec, tagged_union
+from twin.spec import StrictSpec, read_toml, tagged_union
 
 
 class ObserverSpec(StrictSpec):
@@ -219,14 +219,7 @@ def read_scenario_data(source: str | Path) -> dict:
         path = bundled[str(source)]
     if not path.is_file():
         raise TwinInputError("scenario", str(source), "not a file")
-    try:
-        return _relative_to(tomllib.loads(path.read_bytes().decode("utf-8")), path.parent)
-    except UnicodeDecodeError as exc:
-        raise TwinInputError("scenario file", str(path), f"not UTF-8 text (byte {exc.start})") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise TwinInputError("scenario file", str(path), f"malformed TOML: {exc}") from None
-    except OSError as exc:
-        raise TwinInputError("scenario file", str(path), f"cannot be read ({exc.strerror})") from None
+    return _relative_to(read_toml(path, "scenario file"), path.parent)
 
 
 def _relative_to(data: dict, folder: Path) -> dict:

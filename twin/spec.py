@@ -2,11 +2,33 @@
 
 from __future__ import annotations
 
+import tomllib
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Annotated, Union
 
 from pydantic import BaseModel, ConfigDict, Field
+
+
+def read_toml(path: Path, what: str) -> dict:
+    """The TOML file ``path`` as a dict.
+
+    Raises
+    ------
+    TwinInputError
+        Under ``what`` (``"scenario file"``): not UTF-8 text, malformed TOML, or unreadable.
+    """
+    from twin.errors import TwinInputError
+
+    try:
+        return tomllib.loads(path.read_bytes().decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        raise TwinInputError(what, str(path), f"not UTF-8 text (byte {exc.start})") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise TwinInputError(what, str(path), f"malformed TOML: {exc}") from None
+    except OSError as exc:
+        raise TwinInputError(what, str(path), f"cannot be read ({exc.strerror})") from None
 
 
 class StrictSpec(BaseModel):

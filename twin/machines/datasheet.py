@@ -41,7 +41,6 @@ carriage ``a_table`` on the slide ``a_table`` with the drive's force on it.
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Literal
@@ -53,7 +52,7 @@ from pydantic import Field, NonNegativeFloat, PositiveFloat, ValidationError, mo
 from controllers.lti import SisoTf
 from twin.errors import TwinInputError
 from twin.machines.base import Axis, Machine, MotionLimits, Parameter, diagonal_plant
-from twin.spec import StrictSpec
+from twin.spec import StrictSpec, read_toml
 
 #: Density of screw steel (kg/m^3), for a screw inertia the file does not give.
 STEEL_DENSITY_KG_PER_M3 = 7850.0
@@ -566,14 +565,7 @@ def read_machine_file(path: str | Path) -> MachineFile:
     path = Path(path)
     if not path.is_file():
         raise TwinInputError("machine", str(path), "no such machine file")
-    try:
-        data = tomllib.loads(path.read_bytes().decode("utf-8"))
-    except UnicodeDecodeError as exc:
-        raise TwinInputError("machine file", str(path), f"not UTF-8 text (byte {exc.start})") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise TwinInputError("machine file", str(path), f"malformed TOML: {exc}") from None
-    except OSError as exc:
-        raise TwinInputError("machine file", str(path), f"cannot be read ({exc.strerror})") from None
+    data = read_toml(path, "machine file")
     try:
         return MachineFile.model_validate(data)
     except ValidationError as exc:
