@@ -98,12 +98,16 @@ def test_compliant_modes_at_the_closed_forms():
     assert r["antiresonances_hz"] == [pytest.approx(model_dip[0], rel=0.015)] == [pytest.approx(anti, rel=0.02)]
 
 
-def test_frf_of_a_rigid_machine_equals_its_transfer_function():
-    r = measure("linear_motor_xy", FrfSettings(), {})
+@pytest.mark.parametrize("machine", ["cncmt", "googol_xy", "sabau_xy", "linear_motor_xy"])
+def test_frf_of_a_rigid_machine_equals_its_transfer_function(machine):
+    """The papers' machines (no friction by default): the measured FRF within 0.6 dB of the
+    transfer function on every coherent line, 1.2 Hz - 1 kHz (the largest departures are the
+    lowest lines, where the 20 Hz loop leaves the least response), and no peaks."""
+    r = measure(machine, FrfSettings(), {})
     assert r["coherent_share"] > 0.95
     assert r["max_model_error_db"] < 0.6
     assert r["resonances_hz"] == [] and r["antiresonances_hz"] == []
-    assert set(r["parameters"]) == set(get_machine("linear_motor_xy").parameters)
+    assert set(r["parameters"]) == set(get_machine(machine).parameters)
 
 
 @pytest.mark.parametrize("kind", ["prbs", "chirp", "multisine"])

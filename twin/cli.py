@@ -552,7 +552,7 @@ def list_things():
         names = list(kind.params.model_fields)
         return f" [params: {', '.join(names)}]" if names else ""
 
-    typer.echo("machines:")
+    typer.echo("machines (or a machine file of datasheet values, FILE.toml: examples/machines/):")
     for name, m in MACHINES.items():
         typer.echo(f"  {name:<22} {m.summary}")
     typer.echo("controllers (type = ...):")
