@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import signal
+import sys
 from functools import wraps
 from pathlib import Path
 
@@ -462,13 +463,13 @@ def calibrate(
     _check_output("--out", out, ".toml")
     if out is not None and not is_machine_file(machine):
         raise TwinInputError("--out", str(out), "writes a machine file: calibrate a machine file (FILE.toml)")
-    result = fit_machine(
-        machine, trace, [s.strip() for s in fit.split(",") if s.strip()], _parse_sets(sets or []), axis
-    )
+    symbols = [s.strip() for s in fit.split(",") if s.strip()]
+    result = fit_machine(machine, trace, symbols, _parse_sets(sets or []), axis, progress=sys.stderr.isatty())
     if as_json:
         typer.echo(json.dumps(result, indent=2, allow_nan=False))
     else:
-        typer.echo(f"{machine}: {result['kind']} trace {trace}, {result['evaluations']} twin evaluations")
+        what = "twin runs" if result["kind"] == "time" else "model evaluations"
+        typer.echo(f"{machine}: {result['kind']} trace {trace}, {result['evaluations']} {what}")
         for s, v in result["fitted"].items():
             unit = get_machine(machine).parameters[s].unit
             typer.echo(

@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 from scipy import optimize
+from tqdm import tqdm
 
 from controllers.blocks import open_loop
 from twin.errors import TwinInputError
@@ -162,6 +163,7 @@ def calibrate(
     fit: list[str],
     overrides: dict[str, float] | None = None,
     axis: str = "x",
+    progress: bool = False,
 ) -> dict:
     """Fit ``fit`` (parameter symbols) to a measured trace or FRF (see the module docstring).
 
@@ -171,7 +173,8 @@ def calibrate(
         ``machine``, ``trace``, ``kind`` ("time" or "frf"), ``fitted`` (symbol: value),
         ``nominal``, ``standard_errors``, ``unidentifiable`` (symbol: reason),
         ``fit_index_pct`` (``before``, ``after``, and ``twin``: a twin run with the fitted
-        values), ``evaluations``, ``parameters`` (all values in effect after the fit).
+        values), ``evaluations`` (of the model, finite differences included), ``parameters``
+        (all values in effect after the fit). ``progress`` shows a bar of the evaluations.
 
     Raises
     ------
@@ -218,11 +221,22 @@ def calibrate(
             return (model_vector(x) - measured_vector()).ravel() / np.std(measured_vector())
 
     x0 = np.maximum(nominal / scale, lower + 0.01)  # a value on its bound starts just inside
+    runs = tqdm(desc=f"calibrating {', '.join(fit)}", unit="run", disable=not progress, leave=False)
+    evaluations = []
+
+    def counted(x):
+        """The residual; each evaluation (a twin run for a time trace) counted, and on the bar."""
+        evaluations.append(1)
+        runs.update(1)
+        return residual(x)
+
     try:
         before = model_vector(x0)
-        sol = optimize.least_squares(residual, x0, bounds=(lower, np.inf), diff_step=1e-4, x_scale="jac", max_nfev=60)
+        sol = optimize.least_squares(counted, x0, bounds=(lower, np.inf), diff_step=1e-4, x_scale="jac", max_nfev=60)
     except TwinInputError as exc:
         raise TwinInputError(exc.field, exc.value, f"{exc.reason} (during the fit)") from None
+    finally:
+        runs.close()
     J = sol.jac
     dof = max(1, J.shape[0] - len(fit))
     s2 = 2 * sol.cost / dof
@@ -265,7 +279,7 @@ def calibrate(
         "standard_errors": {s: float(std[i]) for i, s in enumerate(fit) if s not in unidentifiable},
         "unidentifiable": unidentifiable,
         "fit_index_pct": fit_index_pct,
-        "evaluations": int(sol.nfev),
+        "evaluations": len(evaluations),
         "parameters": {k: float(v) for k, v in values(fitted_x).items()},
     }
 
