@@ -275,3 +275,37 @@ def test_velocity_filter_notch_depth_and_low_pass():
     assert gain(notch, 200.0) == pytest.approx(0.1, rel=1e-12)
     assert gain(notch, 2.0) == pytest.approx(1.0, abs=1e-3) and gain(notch, 20000.0) == pytest.approx(1.0, abs=1e-3)
     assert gain(velocity_filter(0.0, 20.0, 0.5, 300.0), 300.0) == pytest.approx(1 / 1.4, rel=1e-12)
+
+
+def test_calibration_from_a_measured_frf(tmp_path):
+    """An FRF (the model's, with hidden values and 1 % multiplicative noise) fitted through the
+    transfer function recovers the hidden values within 1 %."""
+    hidden = {"x_table_mass_kg": 40.0, "x_friction_viscous_N_s_per_m": 250.0}
+    g = build(LINEAR, hidden).plant[0][0]
+    f = np.geomspace(0.5, 200.0, 300)
+    s = 2j * np.pi * f
+    h = np.polyval(g.num, s) / np.polyval(g.den, s)
+    h = h * (1 + 0.01 * np.random.default_rng(2).standard_normal(len(f)))
+    path = tmp_path / "frf.csv"
+    rows = [f"{a!r},{float(20 * np.log10(abs(b)))!r},{float(np.degrees(np.angle(b)))!r}" for a, b in zip(f.tolist(), h)]
+    path.write_text("frequency_hz,magnitude_db,phase_deg\n" + "\n".join(rows) + "\n")
+    r = calibrate(LINEAR, path, list(hidden))
+    assert r["kind"] == "frf"
+    for name, value in hidden.items():
+        assert r["fitted"][name] == pytest.approx(value, rel=0.01)
+    assert r["fit_index_pct"]["after"] > r["fit_index_pct"]["before"]
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["frf", MID, "--loop", "closed"], "--loop = 'closed'"),
+        (["frf", MID, "--excitation", "noise"], "--excitation = 'noise'"),
+        (["tune", MID, "--control-period", "3e-5"], "--control-period = 3e-05"),
+        (["calibrate", MID, "--trace", "nowhere.csv", "--fit", "x_table_mass_kg"], "--trace = 'nowhere.csv'"),
+    ],
+)
+def test_bad_options_give_one_error_line(args, message):
+    r = _twin(*args)
+    assert r.returncode == 2
+    assert r.stderr.count("\n") == 1 and message in r.stderr
