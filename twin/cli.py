@@ -420,12 +420,9 @@ def frf(
             f"{machine}: axis {axis}, {loop} loop, {sensor} sensor, {excitation} {amplitude:g} V, "
             f"{len(result['frequency_hz'])} lines {result['frequency_hz'][0]:.2f}-{result['frequency_hz'][-1]:.0f} Hz"
         )
-        listing = ", ".join(f"{f:.1f}" for f in result["resonances_hz"]) or "none"
-        model = ", ".join(f"{f:.1f}" for f in result["model_resonances_hz"]) or "none"
-        typer.echo(f"  resonances (Hz): {listing}   model: {model}")
-        listing = ", ".join(f"{f:.1f}" for f in result["antiresonances_hz"]) or "none"
-        model = ", ".join(f"{f:.1f}" for f in result["model_antiresonances_hz"]) or "none"
-        typer.echo(f"  anti-resonances (Hz): {listing}   model: {model}")
+        for label, key in (("resonances", "resonances_hz"), ("anti-resonances", "antiresonances_hz")):
+            measured, model = (", ".join(f"{f:.1f}" for f in result[k]) or "none" for k in (key, f"model_{key}"))
+            typer.echo(f"  {label} (Hz): {measured}   model: {model}")
         error = result["max_model_error_db"]
         typer.echo(
             f"  coherence >= 0.9 on {100 * result['coherent_share']:.0f} % of the lines; "
@@ -505,12 +502,13 @@ def tune(
     import tempfile
 
     from twin.commissioning import tuning
+    from twin.machines import is_machine_file
 
     _check_output("--out", out, ".toml")
     if control_period is not None and not (1e-6 <= control_period <= 0.1):
         raise TwinInputError("--control-period", control_period, "must be in [1e-6, 0.1] s")
     result = tuning.tune(machine, _parse_sets(sets or []), control_period)
-    where = str(Path(machine).resolve()) if machine.endswith(".toml") else machine
+    where = str(Path(machine).resolve()) if is_machine_file(machine) else machine
     if check:
         with tempfile.TemporaryDirectory() as folder:
             result["verification"] = tuning.verify(result, where, Path(folder))

@@ -77,6 +77,14 @@ def read_table(path: str | Path) -> dict[str, np.ndarray]:
     return out
 
 
+def _all_finite(columns: dict[str, np.ndarray], names: list[str]) -> None:
+    """Refuse the first NaN or inf of the columns ``names``, naming its column and row."""
+    for name in names:
+        bad = np.flatnonzero(~np.isfinite(columns[name]))
+        if bad.size:
+            raise TwinInputError(f"--trace column {name}", f"row {bad[0]}", "is not a finite number (NaN or inf)")
+
+
 def time_trace(columns: dict[str, np.ndarray], axes: list[str]) -> tuple[float, np.ndarray, np.ndarray, list[int]]:
     """Check a time trace: its sample period (s), inputs (n, axes) in V, positions (n, axes) in m
     and the indices of the axes it measures.
@@ -102,10 +110,7 @@ def time_trace(columns: dict[str, np.ndarray], axes: list[str]) -> tuple[float, 
         )
     if len(t) > MAX_SAMPLES:
         raise TwinInputError("--trace", f"{len(t)} samples", f"too long: at most {MAX_SAMPLES}")
-    for name, values in columns.items():
-        bad = np.flatnonzero(~np.isfinite(values))
-        if bad.size:
-            raise TwinInputError(f"--trace column {name}", f"row {bad[0]}", "is not a finite number (NaN or inf)")
+    _all_finite(columns, list(columns))
     steps = np.diff(t)
     if (steps <= 0).any():
         row = int(np.flatnonzero(steps <= 0)[0]) + 1
@@ -312,10 +317,7 @@ def _frf_problem(machine, columns, names, axis, values):
     f = columns["frequency_hz"]
     if len(f) < 10:
         raise TwinInputError("--trace", f"{len(f)} lines", "too short: an FRF needs 10 frequency lines")
-    for name in needed:
-        bad = np.flatnonzero(~np.isfinite(columns[name]))
-        if bad.size:
-            raise TwinInputError(f"--trace column {name}", f"row {bad[0]}", "is not a finite number (NaN or inf)")
+    _all_finite(columns, list(needed))
     if (f <= 0).any() or (np.diff(f) <= 0).any():
         raise TwinInputError("--trace column frequency_hz", f"{f.min():g} Hz", "frequencies must be > 0 and increase")
     g_meas = 10 ** (columns["magnitude_db"] / 20) * np.exp(1j * np.radians(columns["phase_deg"]))

@@ -129,7 +129,7 @@ def _loop_controller(bm: BuiltMachine, settings: FrfSettings, dt: float, k: int)
         loop = settings.loop if i == k else "position"
         if loop == "open":
             continue
-        mass = _rigid_mass_per_volt(bm, i)  # V s^2 / m: 1 V accelerates the axis by 1/mass
+        mass = rigid_body(bm.plant[i][i])[0]  # V s^2 / m: 1 V accelerates the axis by 1/mass
         if loop == "velocity":
             num = (mass * 2 * math.pi * 20.0, 0.0)
         else:
@@ -139,23 +139,33 @@ def _loop_controller(bm: BuiltMachine, settings: FrfSettings, dt: float, k: int)
     return parts
 
 
-def _rigid_mass_per_volt(bm: BuiltMachine, i: int) -> float:
-    """Axis ``i``'s rigid body (V s^2/m: 1 V accelerates it by the inverse): the s^2
-    coefficient of its transfer function's denominator over the numerator's constant, the
-    low-frequency asymptote of every plant here."""
-    g = bm.plant[i][i]
-    return g.den[-3] / g.num[-1]
+def rigid_body(g: SisoTf) -> tuple[float, float]:
+    """The rigid body of a plant ``g`` (drive input V to position m), its low-frequency
+    asymptote: the drive input per acceleration (V s^2/m: 1 V accelerates it by the inverse)
+    and per velocity (V s/m), the s^2 and s coefficients of the denominator over the
+    numerator's constant."""
+    return g.den[-3] / g.num[-1], g.den[-2] / g.num[-1]
+
+
+def discretized(g: SisoTf, dt: float, method: str):
+    """``g`` discretized at ``dt`` (``"zoh"``, ``"tustin"``) as a python-control state-space
+    model (a tf of a compliant drive train is too badly conditioned to discretize directly)."""
+    import control
+
+    return control.c2d(control.ss(control.tf(list(g.num), list(g.den))), dt, method)
+
+
+def zoh_response(g: SisoTf, dt: float, delay_s: float, freqs_hz: np.ndarray) -> np.ndarray:
+    """The frequency response of ``g``'s ZOH equivalent at ``dt``, with ``delay_s`` in whole
+    periods, at ``freqs_hz``: what a loop sampled at ``dt`` sees of the plant."""
+    gd = discretized(g, dt, "zoh")
+    z = np.exp(2j * math.pi * freqs_hz * dt)
+    return np.array([complex(gd(zi)) for zi in z]) * z ** (-round(delay_s / dt))
 
 
 def model_frf(bm: BuiltMachine, axis: int, sensor: str, freqs_hz: np.ndarray, dt: float) -> np.ndarray:
     """The model's FRF (m/V) at ``freqs_hz``: ZOH equivalent at ``dt`` with the drive delay."""
-    import control
-
-    g = sensor_plant(bm, axis, sensor)
-    gd = control.c2d(control.ss(control.tf(list(g.num), list(g.den))), dt, "zoh")
-    delay = round(bm.delay_s / dt)
-    z = np.exp(2j * math.pi * freqs_hz * dt)
-    return np.array([complex(gd(zi)) for zi in z]) * z ** (-delay)
+    return zoh_response(sensor_plant(bm, axis, sensor), dt, bm.delay_s, freqs_hz)
 
 
 def sensor_plant(bm: BuiltMachine, axis: int, sensor: str) -> SisoTf:

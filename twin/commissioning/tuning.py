@@ -17,6 +17,8 @@ delay, at the control period T:
 
 Every loop is evaluated exactly as the twin runs it: G by zero-order hold with the delay in
 whole periods, the controller and filter by Tustin, on a frequency grid up to Nyquist.
+(:mod:`controllers.design.cascade`, seed 003's procedure, solves for a PI with given margins
+exactly; this maximises the bandwidth with margins at least the targets, filter included.)
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ import numpy as np
 
 from controllers.kinds.generic import velocity_filter
 from controllers.lti import SisoTf
+from twin.commissioning.frf import discretized, model_modes, rigid_body, zoh_response
 from twin.errors import TwinInputError
 from twin.machines import BuiltMachine, build, get_machine
 
@@ -39,26 +42,22 @@ GAIN_MARGIN_DB = 6.0
 CONTROL_PERIOD_S = 1e-4
 
 
-def _discrete(g: SisoTf, dt: float, method: str):
-    """``g`` discretized at ``dt`` as a state-space model (a tf of a compliant drive train is
-    too badly conditioned to discretize directly)."""
-    return control.c2d(control.ss(control.tf(list(g.num), list(g.den))), dt, method)
-
-
-def margins(response: np.ndarray, freqs_hz: np.ndarray) -> tuple[float, float, float]:
-    """Phase margin (deg), gain margin (dB) and crossover (Hz) of an open-loop frequency
-    response on a grid: the smallest over every gain crossing and every -180 deg crossing."""
+def margins(response: np.ndarray) -> tuple[float, float]:
+    """Phase margin (deg) and gain margin (dB) of an open-loop frequency response on a grid:
+    the smallest over every gain crossing and every -180 deg crossing (not the first ones, as
+    :func:`controllers.design.loop_analysis.loop_margins` takes: a resonance above the
+    crossover, notched or not, can cross again)."""
     mag = np.abs(response)
     phase = np.unwrap(np.angle(response))
     cross = np.flatnonzero((mag[:-1] >= 1) & (mag[1:] < 1))
     if not cross.size:
-        return -math.inf, -math.inf, math.nan
+        return -math.inf, -math.inf
     pm = min(float(np.degrees(phase[i]) % 360.0 - 180.0) for i in cross)
     wrapped = (np.degrees(phase) + 180.0) % 360.0 - 180.0  # 0 at -180 deg (mod 360)
     signs = np.flatnonzero(np.sign(wrapped[:-1]) != np.sign(wrapped[1:]))
     flips = [i for i in signs if abs(wrapped[i] - wrapped[i + 1]) < 180.0]  # not the +-180 wrap
     gm = min((-20 * math.log10(mag[i]) for i in flips), default=math.inf)
-    return pm, gm, float(freqs_hz[cross[0]])
+    return pm, gm
 
 
 def _stable(loop) -> bool:
@@ -73,14 +72,14 @@ def tune_axis(bm: BuiltMachine, i: int, dt: float, resonances_hz: list[float]) -
     g = bm.plant[i][i]
     delay = round(bm.delay_s / dt)
     z = control.tf([1.0, 0.0], [1.0], dt)
-    gd = _discrete(g, dt, "zoh")
+    gd = discretized(g, dt, "zoh")
     if delay:
         gd = control.ss(control.tf([1.0], [1.0] + [0.0] * delay, dt)) * gd
     diff = control.ss((z - 1) / (dt * z))
     nyquist = 0.5 / dt
     freqs = np.geomspace(0.1, 0.999 * nyquist, 3000)
     zs = np.exp(2j * math.pi * freqs * dt)
-    g_resp = np.array([complex(gd(x)) for x in zs])
+    g_resp = zoh_response(g, dt, bm.delay_s, freqs)
     d_resp = (zs - 1) / (dt * zs)
     s_tustin = 2.0 / dt * (zs - 1) / (zs + 1)
     for f_c in np.geomspace(0.4 * nyquist, 2.0, 80):
@@ -91,17 +90,17 @@ def tune_axis(bm: BuiltMachine, i: int, dt: float, resonances_hz: list[float]) -
             f = velocity_filter(notch, 20.0, 0.5, lowpass)
             pi = SisoTf((ti, 1.0), (ti, 0.0))  # 1 + 1/(Ti s)
             num, den = np.polymul(pi.num, f.num), np.polymul(pi.den, f.den)
-            unit = _discrete(SisoTf(num, den), dt, "tustin")
+            unit = discretized(SisoTf(num, den), dt, "tustin")
             c_resp = np.polyval(num, s_tustin) / np.polyval(den, s_tustin)  # what Tustin makes of it
             at = np.exp(2j * math.pi * f_c * dt)
             kv = 1.0 / abs(complex(unit(at)) * complex(gd(at)) * (at - 1) / (dt * at))
             lv = kv * c_resp * g_resp * d_resp
-            pm_v, gm_v, _ = margins(lv, freqs)
+            pm_v, gm_v = margins(lv)
             if pm_v < PHASE_MARGIN_DEG or gm_v < GAIN_MARGIN_DB or not _stable(kv * unit * gd * diff):
                 continue
             for kp in w / 4.0 * np.geomspace(1.0, 0.02, 40):
                 lp = kp * kv * c_resp * g_resp / (1 + lv)
-                pm_p, gm_p, _ = margins(lp, freqs)
+                pm_p, gm_p = margins(lp)
                 cv = kv * unit
                 if pm_p >= PHASE_MARGIN_DEG and gm_p >= GAIN_MARGIN_DB and _stable(kp * cv * gd / (1 + cv * diff * gd)):
                     closed = np.abs(lp / (1 + lp))
@@ -117,8 +116,8 @@ def tune_axis(bm: BuiltMachine, i: int, dt: float, resonances_hz: list[float]) -
                             "kp_vel": float(kv),
                             "ti_vel_s": float(ti),
                             "velocity_ff": 1.0,
-                            "acceleration_ff": float(g.den[-3] / g.num[-1]),
-                            "friction_ff": float(g.den[-2] / g.num[-1]),
+                            "acceleration_ff": float(rigid_body(g)[0]),
+                            "friction_ff": float(rigid_body(g)[1]),
                             "notch_hz": float(notch),
                             "lowpass_hz": float(lowpass),
                         },
@@ -136,8 +135,6 @@ def tune(machine: str, overrides: dict[str, float] | None = None, control_period
         ``phase_margin_deg``, ``gain_margin_db`` (the smaller of the two loops'),
         ``bandwidth_hz`` (the closed position loop's -3 dB), the two loops' figures and ``gains``.
     """
-    from twin.commissioning.frf import model_modes
-
     spec = get_machine(machine)
     bm = build(machine, overrides)
     step = float(bm.model.opt.timestep)

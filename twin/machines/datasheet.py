@@ -43,7 +43,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated, ClassVar, Literal
 
 import mujoco
 import numpy as np
@@ -117,6 +117,18 @@ class AxisSpec(StrictSpec):
     encoder_resolution_m: NonNegativeFloat = 0.0
     limits: LimitsSpec
 
+    #: The drive's gain keys: (the drive's own V-to-torque/force gain, the motor's constant,
+    #: the amplifier's gain); a file gives the first or the other two.
+    drive_keys: ClassVar[tuple[str, str, str]]
+
+    @model_validator(mode="after")
+    def _one_drive_gain(self):
+        direct, constant, amplifier = self.drive_keys
+        given = [getattr(self, k) is not None for k in self.drive_keys]
+        if given not in ([True, False, False], [False, True, True]):
+            raise ValueError(f"give {direct}, or {constant} and {amplifier} (not both)")
+        return self
+
 
 class BallScrewSpec(AxisSpec):
     """A rotary servo motor, an optional gearbox or belt, a coupling, a ball screw and its nut."""
@@ -140,14 +152,7 @@ class BallScrewSpec(AxisSpec):
     k_axial_N_per_m: Stiffness = math.inf
     c_axial_N_s_per_m: NonNegativeFloat = 0.0
 
-    @model_validator(mode="after")
-    def _one_drive_gain(self):
-        pair = (self.torque_constant_N_m_per_A, self.amplifier_gain_A_per_V)
-        if (self.drive_gain_N_m_per_V is None) == (None in pair) or (None in pair and pair != (None, None)):
-            raise ValueError(
-                "give drive_gain_N_m_per_V, or torque_constant_N_m_per_A and amplifier_gain_A_per_V (not both)"
-            )
-        return self
+    drive_keys: ClassVar = ("drive_gain_N_m_per_V", "torque_constant_N_m_per_A", "amplifier_gain_A_per_V")
 
 
 class LinearMotorSpec(AxisSpec):
@@ -158,12 +163,7 @@ class LinearMotorSpec(AxisSpec):
     amplifier_gain_A_per_V: PositiveFloat | None = None
     drive_gain_N_per_V: PositiveFloat | None = Field(None, description="a force-mode drive, instead of the two")
 
-    @model_validator(mode="after")
-    def _one_drive_gain(self):
-        pair = (self.force_constant_N_per_A, self.amplifier_gain_A_per_V)
-        if (self.drive_gain_N_per_V is None) == (None in pair) or (None in pair and pair != (None, None)):
-            raise ValueError("give drive_gain_N_per_V, or force_constant_N_per_A and amplifier_gain_A_per_V (not both)")
-        return self
+    drive_keys: ClassVar = ("drive_gain_N_per_V", "force_constant_N_per_A", "amplifier_gain_A_per_V")
 
 
 class MachineSpec(StrictSpec):
@@ -348,11 +348,10 @@ class DatasheetMachine(Machine):
 
     def _drive_gain(self, params, a: str) -> float:
         """Torque (N m/V) or force (N/V) per volt of drive input."""
-        for gain in ("drive_gain_N_m_per_V", "drive_gain_N_per_V"):
-            if f"{a}_{gain}" in params:
-                return params[f"{a}_{gain}"]
-        constant = "torque_constant_N_m_per_A" if self.spec.axes[a].type == "ball_screw" else "force_constant_N_per_A"
-        return params[f"{a}_{constant}"] * params[f"{a}_amplifier_gain_A_per_V"]
+        direct, constant, amplifier = self.spec.axes[a].drive_keys
+        if f"{a}_{direct}" in params:
+            return params[f"{a}_{direct}"]
+        return params[f"{a}_{constant}"] * params[f"{a}_{amplifier}"]
 
     def _riding_mass_kg(self, params, a: str) -> float:
         """Mass (kg) of everything an axis's own moving parts carry: the axes above it and the workpiece."""
