@@ -174,6 +174,7 @@ def test_twin_gcode_prints_moves_and_the_plan(tmp_path):
         "feed_mm_per_min": 600.0,
         "spindle": "off",
         "spindle_rpm": 0.0,
+        "coolant": "off",
         "plane": "zx",
         "center_mm": [0.0, 5.0],
         "turns": -1,

@@ -336,47 +336,47 @@ def gcode(
     ),
 ):
     """Read a part program as LinuxCNC reads it and print its moves; with --machine, plan it
-    (look-ahead, jerk-limited) and print the cycle time, the limits and the largest values."""
-    from twin.gcode.planner import PlanningError, plan
-    from twin.gcode.reader import GcodeError, read_program
-    from twin.gcode.report import planned_summary
-    from twin.machines import build
-    from twin.references.gcode import program_settings
-    from twin.scenario import parse_settings
+    (look-ahead, jerk-limited) and print the cycle time, the limits and the largest values.
 
-    reference, planner = program_settings(str(file), parse_settings(settings or []))
+    Nothing is printed on stdout for a program that is refused: the listing is written to a
+    temporary file and copied out once the whole program has been read (and planned)."""
+    import shutil
+    import tempfile
+
+    from twin.gcode.listing import HEADER, move_json, move_row
+    from twin.gcode.reader import Settings, read_program
+
     if not file.is_file():
-        raise TwinInputError("file", str(file), "is a folder" if Path(file).is_dir() else "no such file")
-    limits = planner.limits(build(machine).motion_limits) if machine is not None else None
-    kept = []
-    first = True
-    try:
-        if as_json:
-            typer.echo(f'{{"file": {json.dumps(str(file))}, "moves": [')
-        else:
-            typer.echo(f"{'line':>6}  {'kind':<6} {'end_mm (x, y, z)':<34} {'feed mm/min':>11}  spindle")
-        for move in read_program(file, reference.reader_settings()):
-            if limits is not None:
+        raise TwinInputError("file", str(file), "is a folder" if file.is_dir() else "no such file")
+    reader_settings, planner = Settings(), None
+    if settings or machine is not None:  # the settings' schema (pydantic) only where it is used
+        from twin.references.gcode import program_settings
+        from twin.scenario import parse_settings
+
+        reference, planner = program_settings(str(file), parse_settings(settings or []))
+        reader_settings = reference.reader_settings()
+    row = move_json if as_json else move_row
+    with tempfile.SpooledTemporaryFile(max_size=64 << 20, mode="w+") as out:
+        out.write(f'{{"file": {json.dumps(str(file))}, "moves": [\n' if as_json else HEADER + "\n")
+        separator = ",\n" if as_json else "\n"
+        kept: list | None = [] if machine is not None else None
+        first = True
+        for move in read_program(file, reader_settings):
+            if kept is not None:
                 kept.append(move)
-            if as_json:
-                typer.echo(("" if first else ",\n") + json.dumps(move.as_dict()), nl=False)
-            else:
-                end = ", ".join(f"{v:.4f}" for v in move.end_mm)
-                extra = f"  arc {move.plane} turns {move.turns}" if move.kind == "arc" else ""
-                spindle = f"{move.spindle} {move.spindle_rpm:g}" if move.spindle != "off" else "off"
-                typer.echo(f"{move.line:>6}  {move.kind:<6} {end:<34} {move.feed_mm_per_min:>11.1f}  {spindle}{extra}")
+            out.write(row(move) if first else separator + row(move))
             first = False
-        planned = planned_summary(plan(kept, limits, planner), limits) if limits is not None else None
-    except GcodeError as exc:
+        planned = None
+        if kept is not None:
+            planned = _planned(file, kept, machine, planner)
         if as_json:
-            typer.echo("")
-        raise TwinInputError(f"{exc.source}:{exc.line}", exc.text.strip(), exc.reason) from None
-    except PlanningError as exc:
-        raise TwinInputError("file", str(file), str(exc)) from None
-    if as_json:
-        tail = "" if planned is None else f', "planned": {json.dumps(planned, indent=1)}'
-        typer.echo(f"\n]{tail}}}")
-    elif planned is not None:
+            tail = "" if planned is None else f', "planned": {json.dumps(planned, indent=1, allow_nan=False)}'
+            out.write(f"\n]{tail}}}\n")
+        elif not first:
+            out.write("\n")
+        out.seek(0)
+        shutil.copyfileobj(out, sys.stdout)
+    if planned is not None and not as_json:
         typer.echo(f"planned for {machine}:")
         _print_summary("", {k: v for k, v in planned.items() if k not in ("limits", "max")})
         for axis in "xyz":
@@ -386,6 +386,19 @@ def gcode(
                 f"a {top['acceleration_m_per_s2']:.4g}/{lim['acceleration_m_per_s2']:.4g} m/s^2, "
                 f"j {top['jerk_m_per_s3']:.4g}/{lim['jerk_m_per_s3']:.4g} m/s^3 (largest/limit)"
             )
+
+
+def _planned(file: Path, moves: list, machine: str, planner) -> dict:
+    """The ``planned`` table of ``twin gcode --machine``."""
+    from twin.gcode.planner import PlanningError, plan
+    from twin.gcode.report import planned_summary
+    from twin.machines import build
+
+    limits = planner.limits(build(machine).motion_limits)
+    try:
+        return planned_summary(plan(moves, limits, planner), limits)
+    except PlanningError as exc:
+        raise TwinInputError("file", str(file), str(exc)) from None
 
 
 @app.command()

@@ -145,10 +145,10 @@ class GcodeRef(ReferenceSpecBase):
         """The settings the reader takes from this table, and the tool numbers a T word may
         select (None: any)."""
         return Settings(
-            {WORK_SYSTEMS.index(k) + 1: v for k, v in self.work_offsets_mm.items()},
-            dict(self.tool_lengths_mm),
-            self.g28_home_mm,
-            tools,
+            work_offsets_mm={WORK_SYSTEMS.index(k) + 1: v for k, v in self.work_offsets_mm.items()},
+            tool_lengths_mm=dict(self.tool_lengths_mm),
+            g28_home_mm=self.g28_home_mm,
+            tools=tools,
         )
 
 
