@@ -4,6 +4,7 @@ the same depth, air moves nothing), the stock and tool tables' errors, and seed 
 cutting a stock against the built-in cutting circle."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -98,7 +99,7 @@ def test_air_moves_and_a_stopped_spindle_cut_nothing():
         ({"tools": [{"number": 1, "diameter_mm": 6, "n_flutes": 0}]}, "tools.0.n_flutes", "greater than or equal to 1"),
         (
             {"tools": [{"number": 2, "diameter_mm": 6, "n_flutes": 2}]},
-            "reference.file",
+            str(Path(__file__).resolve().parent.parent / "twin" / "scenarios" / "programs" / "test_piece.ngc:8"),
             "T1: no such tool (tools: [2])",
         ),
     ],

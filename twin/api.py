@@ -366,7 +366,7 @@ def program(file: str | Path, machine: str | None = None, **settings: Any) -> di
         The program's first bad line (``file:line``, its text and the reason), or a bad setting.
     """
     from twin.gcode.planner import PlanningError, plan
-    from twin.gcode.reader import GcodeError, read_program
+    from twin.gcode.reader import read_program
     from twin.gcode.report import planned_summary
     from twin.machines import build
     from twin.references.gcode import program_settings
@@ -374,16 +374,14 @@ def program(file: str | Path, machine: str | None = None, **settings: Any) -> di
     reference, planner = program_settings(str(file), _paths(settings))
     if not Path(file).is_file():
         raise TwinInputError("file", str(file), "is a folder" if Path(file).is_dir() else "no such file")
-    try:
-        moves = list(read_program(file, reference.reader_settings()))
-        out: dict[str, Any] = {"file": str(file), "moves": [m.as_dict() for m in moves]}
-        if machine is not None:
-            limits = planner.limits(build(machine).motion_limits)
+    moves = list(read_program(file, reference.reader_settings()))  # a bad line: GcodeError, a TwinInputError
+    out: dict[str, Any] = {"file": str(file), "moves": [m.as_dict() for m in moves]}
+    if machine is not None:
+        limits = planner.limits(build(machine).motion_limits)
+        try:
             out["planned"] = planned_summary(plan(moves, limits, planner), limits)
-    except GcodeError as exc:
-        raise TwinInputError(f"{exc.source}:{exc.line}", exc.text.strip(), exc.reason) from None
-    except PlanningError as exc:
-        raise TwinInputError("file", str(file), str(exc)) from None
+        except PlanningError as exc:
+            raise TwinInputError("file", str(file), str(exc)) from None
     return out
 
 

@@ -368,7 +368,7 @@ def prepare(scn: Scenario):
         ctrls = [_controller(scn.controller, "controller", base)]
     numbers = frozenset(t.number for t in scn.tools if t.number is not None) if scn.tools else None
     reference = REFERENCES[scn.reference.type].build(
-        scn.reference, ReferenceContext(names, machine, scn.planner, numbers)
+        scn.reference, ReferenceContext(names, machine, scn.planner, numbers, scn.stock is not None)
     )
     duration_s = scn.duration_s if scn.duration_s is not None else getattr(reference, "duration_s", None)
     if duration_s is None:

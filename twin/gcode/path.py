@@ -1,24 +1,28 @@
 """The programmed path as geometry in machine coordinates (m): lines and arcs (helical where the
-normal axis moves), with corner blends between lines, each a function of its arc length.
+normal axis moves, spiral where the end radius differs from the start radius, as LinuxCNC moves
+an arc whose end its arc rule lets lie off the circle), with corner blends between lines, each a
+function of its arc length; and the exact distance of points to them.
 
-Corners between two feed lines (or two rapids) get a tangent blend arc whose distance to the
-corner is at most the blend tolerance (LinuxCNC's G64 P rule; we put the arc in the plane of the
-two lines); other corners, rapid-to-feed changes, dwells and the ends stop the motion.
+Corners between two feed lines (or two rapids) under G64 get a tangent blend arc whose distance
+to the corner is at most the blend tolerance (LinuxCNC's G64 P rule; we put the arc in the plane
+of the two lines); what the other junctions do is the planner's (:mod:`twin.gcode.planner`).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from twin.gcode.reader import PLANES, Move
 
-#: Moves shorter than this (m) are dropped: rs274 emits null moves (G28 to where the tool is).
+#: Moves shorter than this (m) are dropped: rs274 emits null moves (a bare G0, G28 where the tool is).
 MIN_LENGTH_M = 1e-9
 #: Two unit tangents closer than this (rad) meet without a corner.
-TANGENT_TOLERANCE_RAD = 1e-4
+TANGENT_TOLERANCE_RAD = 1e-6
+#: Newton steps that put a spiral's angle at an arc length (each squares the error).
+SPIRAL_NEWTON_STEPS = 4
 
 
 @dataclass
@@ -43,13 +47,21 @@ class Segment:
         Arcs: centre, and the in-plane unit vectors from the centre to the start and a quarter
         turn further in the direction of motion.
     radius, sweep, rise : float
-        Arcs: radius (m), swept angle (rad, > 0), travel along the normal (m).
+        Arcs: start radius (m), swept angle (rad, > 0), travel along the normal (m).
     normal : ndarray (3,)
-        Arcs: unit normal (u x v).
+        Arcs: unit normal (u x v) signed with the rise.
+    radius_end : float
+        Arcs: the end radius (m); it differs from ``radius`` on a spiral.
     dwell_s : float
         Dwells: the time.
     blend : bool
         An arc the planner put in a corner (not programmed).
+    mode : {"G64", "G61", "G61.1"}
+        The path control of the move (it governs the junction at the segment's end).
+    tolerance_m : float
+        How far the path may leave the programmed one here (m): G64's tolerance, which a blend
+        at the segment's end takes half of; under G61 and G61.1 (no blend) what the smoothing
+        filter's rounding of arcs may take.
     """
 
     line: int
@@ -66,15 +78,34 @@ class Segment:
     radius: float = 0.0
     sweep: float = 0.0
     rise: float = 0.0
+    radius_end: float = 0.0
     dwell_s: float = 0.0
     blend: bool = False
+    mode: str = "G64"
+    tolerance_m: float = 0.0
 
     @property
     def curvature(self) -> float:
-        """Curvature (1/m) of the path: 0 on lines."""
+        """The largest curvature (1/m) of the path along the segment: 0 on lines."""
         if self.kind != "arc":
             return 0.0
-        return self.radius / (self.radius**2 + (self.rise / self.sweep) ** 2)
+        r = min(self.radius, self.radius_end)
+        return r / (r * r + (self.rise / self.sweep) ** 2)
+
+    def _angle_of(self, s: np.ndarray) -> np.ndarray:
+        """The angle (rad) at arc lengths ``s``: linear on circles and helices, by Newton's
+        method on spirals (whose arc length has the closed form of :func:`_spiral_length`)."""
+        frac = s / self.length
+        angle = frac * self.sweep
+        if self.radius_end == self.radius:
+            return angle
+        k = (self.radius_end - self.radius) / self.sweep
+        h = self.rise / self.sweep
+        for _ in range(SPIRAL_NEWTON_STEPS):
+            r = self.radius + k * angle
+            length = _spiral_length(self.radius, k, h, angle)
+            angle = np.clip(angle - (length - s) / np.sqrt(r * r + k * k + h * h), 0.0, self.sweep)
+        return angle
 
     def points(self, s: np.ndarray) -> np.ndarray:
         """Points (m) at arc lengths ``s`` (m), shape (len(s), 3)."""
@@ -85,13 +116,17 @@ class Segment:
         if self.kind == "dwell":
             return np.broadcast_to(self.start, (s.size, 3)).copy()
         assert self.center is not None and self.u is not None and self.v is not None and self.normal is not None
-        frac = s / self.length
-        angle = frac * self.sweep
-        return (
+        angle = self._angle_of(s)
+        frac = angle / self.sweep
+        r = self.radius + (self.radius_end - self.radius) * frac
+        out = (
             self.center
-            + self.radius * (np.cos(angle)[:, None] * self.u + np.sin(angle)[:, None] * self.v)
+            + r[:, None] * (np.cos(angle)[:, None] * self.u + np.sin(angle)[:, None] * self.v)
             + (frac * self.rise)[:, None] * self.normal
         )
+        if s.size and s[-1] >= self.length:
+            out[s >= self.length] = self.end  # the programmed end exactly
+        return out
 
     def tangent(self, at_end: bool) -> np.ndarray:
         """Unit tangent at the start or the end."""
@@ -100,8 +135,20 @@ class Segment:
             return d / np.linalg.norm(d)
         assert self.u is not None and self.v is not None and self.normal is not None
         angle = self.sweep if at_end else 0.0
-        t = self.radius * self.sweep * (-math.sin(angle) * self.u + math.cos(angle) * self.v) + self.rise * self.normal
+        r = self.radius_end if at_end else self.radius
+        radial = math.cos(angle) * self.u + math.sin(angle) * self.v
+        along = -math.sin(angle) * self.u + math.cos(angle) * self.v
+        t = r * along + (self.radius_end - self.radius) / self.sweep * radial + self.rise / self.sweep * self.normal
         return t / np.linalg.norm(t)
+
+    def acceleration_direction(self, at_end: bool) -> np.ndarray:
+        """The curvature vector (1/m) at the start or the end: towards the centre, 0 on lines."""
+        if self.kind != "arc":
+            return np.zeros(3)
+        assert self.u is not None and self.v is not None
+        angle = self.sweep if at_end else 0.0
+        inward = -(math.cos(angle) * self.u + math.sin(angle) * self.v)
+        return inward * self.curvature
 
     def axis_share(self) -> np.ndarray:
         """The largest share of the path speed each axis takes anywhere on the segment, (3,):
@@ -109,8 +156,96 @@ class Segment:
         if self.kind == "line":
             return np.abs(self.tangent(False))
         assert self.u is not None and self.v is not None and self.normal is not None
-        in_plane = self.radius * self.sweep / self.length
+        in_plane = max(self.radius, self.radius_end) * self.sweep / self.length
         return np.minimum(1.0, in_plane * np.hypot(self.u, self.v) + self.rise / self.length * np.abs(self.normal))
+
+    def split(self, s: float) -> tuple[Segment, Segment]:
+        """The segment cut at arc length ``s`` (0 < s < length) into two that make it up."""
+        point = self.points(np.array([s]))[0]
+        if self.kind == "line":
+            return replace(self, end=point, length=s, mode="G64"), replace(self, start=point, length=self.length - s)
+        assert self.u is not None and self.v is not None and self.normal is not None
+        angle = float(self._angle_of(np.array([s]))[0])
+        frac = angle / self.sweep
+        r_mid = self.radius + (self.radius_end - self.radius) * frac
+        first = replace(self, end=point, length=s, sweep=angle, rise=self.rise * frac, radius_end=r_mid, mode="G64")
+        u2 = math.cos(angle) * self.u + math.sin(angle) * self.v
+        v2 = -math.sin(angle) * self.u + math.cos(angle) * self.v
+        second = replace(
+            self,
+            start=point,
+            length=self.length - s,
+            center=self.center + self.normal * self.rise * frac if self.center is not None else None,
+            u=u2,
+            v=v2,
+            sweep=self.sweep - angle,
+            rise=self.rise * (1.0 - frac),
+            radius=r_mid,
+        )
+        return first, second
+
+    def distance(self, p: np.ndarray) -> np.ndarray:
+        """The exact distance (m) of each point of ``p`` (n, 3) to the segment."""
+        if self.kind == "dwell":
+            return np.linalg.norm(p - self.start, axis=1)
+        if self.kind == "line":
+            d = self.end - self.start
+            f = np.clip((p - self.start) @ d / max(float(d @ d), 1e-300), 0.0, 1.0)
+            return np.linalg.norm(p - (self.start + f[:, None] * d), axis=1)
+        return _arc_distance(self, p)
+
+
+def _spiral_length(r0: float, k: float, h: float, angle):
+    """Arc length of ``r = r0 + k phi``, ``z = h phi`` from 0 to ``angle``: the integral of
+    ``sqrt(r^2 + k^2 + h^2)`` in closed form (``q^2 = k^2 + h^2``)."""
+    q2 = k * k + h * h
+    if abs(k) < 1e-15:
+        return angle * math.sqrt(r0 * r0 + q2)
+
+    def primitive(x):
+        root = np.sqrt(x * x + q2)
+        return 0.5 * x * root + 0.5 * q2 * np.log(x + root)
+
+    return (primitive(r0 + k * angle) - primitive(r0)) / k
+
+
+def _arc_distance(seg: Segment, p: np.ndarray) -> np.ndarray:
+    """Distance to an arc: the nearest of its end points and, at each turn the point's angle
+    falls on, the point of the arc at that angle refined by Newton's method on the squared
+    distance (exact for a circle in one step, a helix or spiral in a few)."""
+    assert seg.center is not None and seg.u is not None and seg.v is not None and seg.normal is not None
+    rel = p - seg.center
+    angle = np.mod(np.arctan2(rel @ seg.v, rel @ seg.u), 2 * math.pi)
+    best = np.minimum(np.linalg.norm(p - seg.start, axis=1), np.linalg.norm(p - seg.end, axis=1))
+    k = (seg.radius_end - seg.radius) / seg.sweep
+    h = seg.rise / seg.sweep
+    for turn in range(math.ceil(seg.sweep / (2 * math.pi)) + 1):
+        phi = angle + 2 * math.pi * turn
+        inside = phi <= seg.sweep
+        if not inside.any():
+            continue
+        phi = phi[inside]
+        q = p[inside]
+        for _ in range(SPIRAL_NEWTON_STEPS):
+            c, s = np.cos(phi), np.sin(phi)
+            r = seg.radius + k * phi
+            point = (
+                seg.center + r[:, None] * (c[:, None] * seg.u + s[:, None] * seg.v) + (h * phi)[:, None] * seg.normal
+            )
+            d1 = k * (c[:, None] * seg.u + s[:, None] * seg.v) + r[:, None] * (-s[:, None] * seg.u + c[:, None] * seg.v)
+            d1 += h * seg.normal
+            d2 = 2 * k * (-s[:, None] * seg.u + c[:, None] * seg.v) - r[:, None] * (
+                c[:, None] * seg.u + s[:, None] * seg.v
+            )
+            diff = point - q
+            grad = np.einsum("ij,ij->i", diff, d1)
+            curv = np.einsum("ij,ij->i", d1, d1) + np.einsum("ij,ij->i", diff, d2)
+            phi = np.clip(phi - grad / np.where(curv > 0, curv, 1.0), 0.0, seg.sweep)
+        c, s = np.cos(phi), np.sin(phi)
+        r = seg.radius + k * phi
+        point = seg.center + r[:, None] * (c[:, None] * seg.u + s[:, None] * seg.v) + (h * phi)[:, None] * seg.normal
+        best[inside] = np.minimum(best[inside], np.linalg.norm(point - q, axis=1))
+    return best
 
 
 def _unit(axis: int) -> np.ndarray:
@@ -119,18 +254,21 @@ def _unit(axis: int) -> np.ndarray:
     return e
 
 
-def move_segment(move: Move, start_m: np.ndarray) -> Segment | None:
-    """The segment of one move, starting at ``start_m`` (machine m); None for a null move."""
+def move_segment(move: Move, start_m: np.ndarray, tolerance_m: float) -> Segment | None:
+    """The segment of one move, starting at ``start_m`` (machine m), with the tolerance in
+    force (m); None for a null move."""
     offset = np.asarray(move.offset_mm) * 1e-3
     end = np.asarray(move.end_mm) * 1e-3 + offset
     feed = move.feed_mm_per_min * 1e-3 / 60.0
+    mode = move.path_mode
+    tol = tolerance_m
     if move.kind == "dwell":
-        return Segment(move.line, "dwell", False, 0.0, start_m, start_m, dwell_s=move.dwell_s)
+        return Segment(move.line, "dwell", False, 0.0, start_m, start_m, dwell_s=move.dwell_s, mode=mode)
     if move.kind in ("rapid", "feed"):
         length = float(np.linalg.norm(end - start_m))
         if length < MIN_LENGTH_M:
             return None
-        return Segment(move.line, "line", move.kind == "rapid", feed, start_m, end, length)
+        return Segment(move.line, "line", move.kind == "rapid", feed, start_m, end, length, mode=mode, tolerance_m=tol)
     first, second, normal_axis = PLANES[move.plane]
     e1, e2, n = _unit(first), _unit(second), _unit(normal_axis)
     center = start_m.copy()
@@ -141,6 +279,9 @@ def move_segment(move: Move, start_m: np.ndarray) -> Segment | None:
     a0 = math.atan2(rel0[second], rel0[first])
     a1 = math.atan2(rel1[second], rel1[first])
     radius = math.hypot(rel0[first], rel0[second])
+    radius_end = math.hypot(rel1[first], rel1[second])
+    if abs(radius_end - radius) < 1e-12:
+        radius_end = radius
     ccw = move.turns > 0
     sweep = (a1 - a0) % (2 * math.pi) if ccw else (a0 - a1) % (2 * math.pi)
     if sweep < 1e-12:
@@ -151,9 +292,35 @@ def move_segment(move: Move, start_m: np.ndarray) -> Segment | None:
     v = quarter if ccw else -quarter
     rise = float(end[normal_axis] - start_m[normal_axis])
     normal = n * (1.0 if rise >= 0 else -1.0)
-    length = math.hypot(radius * sweep, rise)
-    seg = Segment(move.line, "arc", False, feed, start_m, end, length, center, u, v, normal, radius, sweep, abs(rise))
-    return seg
+    if radius_end == radius:
+        length = math.hypot(radius * sweep, rise)
+    else:
+        k = (radius_end - radius) / sweep
+        length = float(_spiral_length(radius, k, abs(rise) / sweep, sweep))
+    return Segment(
+        move.line,
+        "arc",
+        False,
+        feed,
+        start_m,
+        end,
+        length,
+        center,
+        u,
+        v,
+        normal,
+        radius,
+        sweep,
+        abs(rise),
+        radius_end,
+        mode=mode,
+        tolerance_m=tol,
+    )
+
+
+def turn_angle(a: Segment, b: Segment) -> float:
+    """The angle (rad) between ``a``'s end tangent and ``b``'s start tangent."""
+    return math.acos(max(-1.0, min(1.0, float(a.tangent(True) @ b.tangent(False)))))
 
 
 def blend(a: Segment, b: Segment, tolerance_m: float) -> tuple[Segment, Segment, Segment] | None:
@@ -181,7 +348,7 @@ def blend(a: Segment, b: Segment, tolerance_m: float) -> tuple[Segment, Segment,
     normal = np.cross(u, v)
     arc = Segment(b.line, "arc", a.rapid, min(a.feed_m_per_s, b.feed_m_per_s), p0, p1, radius * turn)
     arc.center, arc.u, arc.v, arc.normal, arc.radius, arc.sweep = center, u, v, normal, radius, turn
-    arc.blend = True
-    short_a = Segment(a.line, "line", a.rapid, a.feed_m_per_s, a.start, p0, a.length - reach)
-    short_b = Segment(b.line, "line", b.rapid, b.feed_m_per_s, p1, b.end, b.length - reach)
+    arc.radius_end, arc.blend, arc.mode, arc.tolerance_m = radius, True, "G64", a.tolerance_m
+    short_a = replace(a, end=p0, length=a.length - reach, mode="G64")
+    short_b = replace(b, start=p1, length=b.length - reach)
     return short_a, arc, short_b

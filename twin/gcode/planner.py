@@ -1,40 +1,51 @@
 """The interpolator: a part program's moves planned into a jerk-limited reference, as a CNC's
-trajectory planner does it, sampled at a fixed period.
+trajectory planner does it, sampled at a fixed period and streamed in windows of look-ahead.
 
 How (our design; the docs page ``gcode.md`` says why):
 
-1. The path (:mod:`twin.gcode.path`): lines and arcs in machine coordinates; corners between
-   lines blended by tangent arcs within half the tolerance (LinuxCNC's G64 P rule).
-2. Speed limits along it: the programmed feed times the override (rapids: the axis limits),
-   each axis's velocity limit over its share of the tangent, and on arcs the centripetal
-   acceleration ``v <= sqrt(a R)``, the jerk of the turning acceleration ``v <= (j R^2)^(1/3)``
-   and the contour shrink of the smoothing filter (``v^2 T^2 / (24 R)`` within half the
-   tolerance); stops at the ends, dwells, rapid/feed changes and corners that are not blended.
-3. Look-ahead: backward and forward passes over the whole path on a grid of arc length with
-   the tangential acceleration the axes have left beside the centripetal one
-   (``a - v^2 / R``): the time-optimal acceleration-limited speed profile.
-4. Jerk: each axis's position passes a moving-average filter of length ``T = max(a_i / j_i)``
-   (FIR interpolation, Tajima and Sencer 2016): a trapezoidal acceleration becomes an S-curve,
-   so a long straight move takes exactly ``L/v + v/a + a/j``, and an acceleration step (where the
-   curvature changes) becomes a ramp of jerk ``<= a/T``.
-5. Check: every axis's velocity, acceleration and jerk on the sampled reference are measured;
-   where the filter's window holds an acceleration swing from +a to -a (short moves), the jerk
-   can reach ``2a/T``: the whole reference is then slowed by the time scale that brings every
-   axis within its limits (``time_scale`` in the result).
+1. The path (:mod:`twin.gcode.path`): lines, arcs, helices and spirals in machine coordinates;
+   corners between lines blended by tangent arcs within half the tolerance in force (LinuxCNC's
+   G64 P rule). Each move's path mode governs the junction at its end: G64 blends, G61 stops
+   at every corner that is not tangent, G61.1 stops at every junction.
+2. Junctions that are not blended (an arc meeting a line or an arc at a kink) are passed at the
+   speed the smoothing filter below can absorb: its rounding of the kink within half the
+   tolerance, the velocity step per axis within half of what the filter turns into the axis's
+   acceleration and sampled jerk; junctions where the curvature jumps (an S between two arcs)
+   at the speed whose acceleration step the filter ramps within the jerk limit.
+3. Speed limits along the path: the programmed feed times the override (rapids: the axis
+   limits), each axis's velocity limit over its share of the tangent, and on arcs the
+   centripetal acceleration ``v <= sqrt(a R)``, the jerk of the turning acceleration ``v <= (j
+   R^2)^(1/3)`` and the contour shrink of the filter (``v^2 T^2 / (24 R)`` within half the
+   tolerance).
+4. Look-ahead: backward and forward passes over an arc-length grid with the tangential
+   acceleration the axes have left beside the centripetal one (the time-optimal
+   acceleration-limited speed profile), over a window of the path: the part of the window whose
+   speeds a stop at the window's end and full speed there agree on is final and handed on (cut
+   at a cruise, where the speed is constant for the filter's length), the rest planned again
+   with more of the path. Neither the program nor the reference is ever held whole.
+5. Jerk: each axis's position passes a moving-average filter of length ``T = max(a_i / j_i)``
+   (FIR interpolation, Tajima and Sencer 2016): a trapezoidal acceleration becomes an S-curve.
+   Where the profile turns from accelerating to braking (or back) in less than ``T`` the filter
+   would see a swing of twice the acceleration, so the speed there is lowered until a cruise of
+   ``T`` separates the two.
+6. Check: every axis's velocity, acceleration and jerk on the sampled reference are measured
+   before a window is handed on; where one exceeds its limit the window is planned again with
+   the speed lowered there (locally, not the whole program), and what still exceeds after
+   :data:`MAX_REPAIRS` tries is reported with its line and axis (:attr:`Plan.violations`).
 """
 
 from __future__ import annotations
 
-import itertools
 import math
-from collections.abc import Iterable
+from collections.abc import Generator, Iterable, Iterator
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numba
 import numpy as np
 from pydantic import Field, field_validator
 
-from twin.gcode.path import TANGENT_TOLERANCE_RAD, Segment, blend, move_segment
+from twin.gcode.path import TANGENT_TOLERANCE_RAD, Segment, blend, move_segment, turn_angle
 from twin.gcode.reader import Move
 from twin.numba_cache import configure as configure_numba_cache
 from twin.spec import StrictSpec
@@ -43,12 +54,35 @@ configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_ca
 
 #: Planning and sampling period of the reference (s): positions are Hermite-interpolated between.
 SAMPLE_PERIOD_S = 1e-3
-#: Most samples a planned reference may hold (about 33 minutes of motion at 1 ms): bounded memory.
+#: Most samples a reference held whole may have (``plan()``; about 33 minutes at 1 ms). A run
+#: without a stock streams its reference and has no such limit.
 MAX_SAMPLES = 2_000_000
 #: Arc-length grid of the look-ahead (m): finer on short segments (at least 4 points each).
 GRID_M = 5e-5
-#: Most grid points of the look-ahead over a whole program.
-MAX_GRID_POINTS = 4_000_000
+#: Grid points the look-ahead plans at once before it looks for a cruise to hand on at.
+WINDOW_POINTS = 40_000
+#: Motion (s) the look-ahead plans at once at most before it looks for a cruise to hand on at
+#: (bounds the samples a window makes: a slow feed along a long move).
+WINDOW_TIME_S = 20.0
+#: Grid points of a piece at most: a longer segment enters the look-ahead in pieces (so that a
+#: window over a long, slow move plans no more than it hands on).
+PIECE_POINTS = 4_000
+#: Samples a program's reference may have (10 hours at 1 ms; ours: a run streams it, but its
+#: length is counted first, and a program longer than this is refused).
+MAX_PROGRAM_SAMPLES = 36_000_000
+#: Most grid points the look-ahead window may grow to; a path with no cruise over that length
+#: (more than 50 m of continuous motion without one) comes to a stop there, reported.
+MAX_WINDOW_POINTS = 1_000_000
+#: Tolerance (mm) for G64 without P (LinuxCNC's "best speed": no bound, which a twin cannot
+#: check a path against; ours), unless the scenario's ``[planner] tolerance_mm`` gives one.
+DEFAULT_TOLERANCE_MM = 0.01
+#: Share of each axis's acceleration and sampled jerk a kink's velocity step may take (ours).
+KINK_SHARE = 0.5
+#: Tries at planning a window again slower where its sampled reference exceeds a limit.
+MAX_REPAIRS = 8
+#: A sampled value counts as over its limit beyond this ratio (floating-point noise of the
+#: differences below it).
+LIMIT_SLACK = 1.0 + 1e-6
 
 
 @dataclass(frozen=True)
@@ -70,6 +104,15 @@ class Limits:
             for i, axis in enumerate("xyz")
         }
 
+    def scaled(self, factor: float) -> Limits:
+        """The limits a stretch of time ``factor`` (> 1: slower) keeps: velocity / k,
+        acceleration / k^2, jerk / k^3."""
+        return Limits(
+            tuple(v / factor for v in self.velocity_m_per_s),
+            tuple(a / factor**2 for a in self.acceleration_m_per_s2),
+            tuple(j / factor**3 for j in self.jerk_m_per_s3),
+        )
+
 
 class PlannerSettings(StrictSpec):
     """The scenario's ``[planner]`` table (``twin gcode --set planner.KEY=VALUE``).
@@ -79,7 +122,11 @@ class PlannerSettings(StrictSpec):
     """
 
     tolerance_mm: float | None = Field(
-        None, gt=0.0, le=10.0, description="how far the path may leave the programmed one, mm (default: G64 P)"
+        None,
+        gt=0.0,
+        le=10.0,
+        description="how far the path may leave the programmed one, mm, for every G64 block (default: "
+        "each block's G64 P, 0.01 where G64 has none)",
     )
     feed_override: float = Field(1.0, gt=0.0, le=10.0, description="factor on every programmed feed")
     velocity_m_per_s: dict[str, float] = Field(default_factory=dict, description="axis velocity limits, m/s")
@@ -105,18 +152,58 @@ class PlannerSettings(StrictSpec):
             tuple(self.jerk_m_per_s3.get(a, machine_limits[a].jerk_m_per_s3) for a in "xyz"),
         )
 
-
-#: Tolerance (mm) where neither the scenario nor the program's G64 P gives one (ours).
-DEFAULT_TOLERANCE_MM = 0.01
+    def tolerance_m(self, move: Move) -> float:
+        """The tolerance (m) in force on ``move``: this table's, else its G64 P, else (G64
+        without P, G61, G61.1) :data:`DEFAULT_TOLERANCE_MM`."""
+        if self.tolerance_mm is not None:
+            return self.tolerance_mm * 1e-3
+        return (move.tolerance_mm if move.tolerance_mm is not None else DEFAULT_TOLERANCE_MM) * 1e-3
 
 
 class PlanningError(ValueError):
     """A program the planner cannot turn into a bounded reference."""
 
 
+class Violation(NamedTuple):
+    """A limit the sampled reference exceeds after every repair: the program line, the axis,
+    the quantity (``velocity``, ``acceleration``, ``jerk``) and how far over (ratio)."""
+
+    line: int
+    axis: str
+    quantity: str
+    ratio: float
+
+    def as_dict(self) -> dict:
+        return {"line": self.line, "axis": self.axis, "quantity": self.quantity, "ratio": round(self.ratio, 6)}
+
+
+class Chunk(NamedTuple):
+    """A stretch of the planned reference, every ``period_s`` from sample ``first``.
+
+    Attributes
+    ----------
+    first : int
+        Index of its first sample in the whole reference.
+    position, velocity, acceleration : ndarray (n, 3)
+        Machine axes x, y, z (m, m/s, m/s^2).
+    line : ndarray (n,) of int
+        The program line of each sample (before the filter's delay of half its window, which
+        the reference leads by).
+    tolerance_m : ndarray (n,)
+        The tolerance in force at each sample (m; 0 under G61 / G61.1).
+    """
+
+    first: int
+    position: np.ndarray
+    velocity: np.ndarray
+    acceleration: np.ndarray
+    line: np.ndarray
+    tolerance_m: np.ndarray
+
+
 @dataclass
 class Plan:
-    """A planned reference sampled every ``period_s``.
+    """A planned reference sampled every ``period_s``, held whole (:func:`plan`).
 
     Attributes
     ----------
@@ -127,14 +214,16 @@ class Plan:
     line : ndarray (n,) of int
         The program line each sample is on (before the smoothing filter's delay of half its
         window, which the reference leads by).
+    sample_tolerance_m : ndarray (n,)
+        The tolerance in force at each sample (m).
     feed_only_time_s : float
         The program at its programmed feeds alone (rapids at the axis limits, dwells).
     time_scale : float
-        The slow-down applied to keep every axis within its limits (1: none).
+        The largest local slow-down the check needed (1: none).
     filter_s : float
         The smoothing filter's length (s).
     tolerance_m : float
-        The path tolerance used (m).
+        The largest tolerance in force anywhere in the program (m).
     segments : list of Segment
         The programmed path (unblended), for deviation checks.
     texts : dict of int to str
@@ -145,6 +234,10 @@ class Plan:
         The tool in the spindle on each line (0: none).
     feeds : dict of int to float
         The programmed feed of each line's moves (mm/min; 0 for rapids and dwells).
+    violations : list of Violation
+        Limits the reference still exceeds (empty: every axis within its limits).
+    notes : list of str
+        What the planner had to do that a user should know (a stop it added).
     """
 
     period_s: float
@@ -152,6 +245,7 @@ class Plan:
     velocity: np.ndarray
     acceleration: np.ndarray
     line: np.ndarray
+    sample_tolerance_m: np.ndarray
     feed_only_time_s: float
     time_scale: float
     filter_s: float
@@ -161,6 +255,8 @@ class Plan:
     spindle_rpm: dict[int, float] = field(default_factory=dict, repr=False)
     tools: dict[int, int] = field(default_factory=dict, repr=False)
     feeds: dict[int, float] = field(default_factory=dict, repr=False)
+    violations: list[Violation] = field(default_factory=list, repr=False)
+    notes: list[str] = field(default_factory=list, repr=False)
 
     def per_sample(self, by_line: dict, default) -> np.ndarray:
         """A per-line value (``spindle_rpm``, ``tools``) at each sample."""
@@ -185,7 +281,116 @@ class Plan:
         return out
 
 
-def _segment_speed_limit(seg: Segment, limits: Limits, override: float, filter_s: float, tolerance_m: float) -> float:
+class ProgramFacts:
+    """What the stream learns of the program as it goes (line texts, feeds, spindle, tools,
+    the programmed segments, the feed-only time), gathered from the moves as they pass."""
+
+    def __init__(self, limits: Limits):
+        self.limits = limits
+        self.texts: dict[int, str] = {}
+        self.spindle_rpm: dict[int, float] = {}
+        self.tools: dict[int, int] = {}
+        self.feeds: dict[int, float] = {}
+        self.feed_only_time_s = 0.0
+        self.violations: list[Violation] = []
+        self.notes: list[str] = []
+        self.time_scale = 1.0
+
+    def record(self, move: Move, seg: Segment | None) -> None:
+        self.texts[move.line] = move.text
+        self.spindle_rpm[move.line] = move.spindle_rpm if move.spindle != "off" else 0.0
+        self.tools[move.line] = move.tool
+        self.feeds[move.line] = move.feed_mm_per_min
+        if seg is not None:
+            self.feed_only_time_s += _feed_only_time(seg, self.limits)
+
+
+def _feed_only_time(seg: Segment, limits: Limits) -> float:
+    """The time (s) of a segment at its programmed feed alone (rapids at the axis limits)."""
+    if seg.kind == "dwell":
+        return seg.dwell_s
+    if seg.rapid:
+        share = seg.axis_share()
+        return seg.length / min(v / s for v, s in zip(limits.velocity_m_per_s, share) if s > 1e-12)
+    return seg.length / seg.feed_m_per_s
+
+
+def _filter_length(limits: Limits) -> tuple[float, int]:
+    """The smoothing filter's length (s) and samples: ``max(a_i / j_i)``."""
+    filter_s = max(a / j for a, j in zip(limits.acceleration_m_per_s2, limits.jerk_m_per_s3))
+    n = max(1, round(filter_s / SAMPLE_PERIOD_S))
+    return (n * SAMPLE_PERIOD_S if n > 1 else 0.0), n
+
+
+# --- path ---------------------------------------------------------------------------------
+
+
+def _programmed(moves: Iterable[Move], settings: PlannerSettings, facts: ProgramFacts) -> Iterator[Segment]:
+    """The programmed segments (machine m), null moves dropped; the facts gathered."""
+    position = None
+    for move in moves:
+        if position is None:
+            position = (np.asarray(move.start_mm) + np.asarray(move.offset_mm)) * 1e-3
+        seg = move_segment(move, position, settings.tolerance_m(move))
+        facts.record(move, seg)
+        if seg is None:
+            continue
+        position = seg.end
+        yield seg
+
+
+def _blended(programmed: Iterable[Segment]) -> Iterator[Segment]:
+    """The path: G64 corners between lines (both feeds or both rapids) blended within half the
+    tolerance of the move that ends there."""
+    previous: Segment | None = None
+    for seg in programmed:
+        if previous is None:
+            previous = seg
+            continue
+        pieces = None
+        if previous.kind == "line" and seg.kind == "line" and previous.rapid == seg.rapid and previous.mode == "G64":
+            pieces = blend(previous, seg, 0.5 * previous.tolerance_m)
+        if pieces is not None:
+            yield pieces[0]
+            yield pieces[1]
+            previous = pieces[2]
+        else:
+            yield previous
+            previous = seg
+    if previous is not None:
+        yield previous
+
+
+def _junction_speed(a: Segment, b: Segment, limits: Limits, filter_s: float) -> float:
+    """The speed (m/s) the motion may keep through the junction of ``a`` and ``b``; 0: a stop."""
+    if a.kind == "dwell" or b.kind == "dwell" or a.rapid != b.rapid or a.mode == "G61.1":
+        return 0.0
+    window = max(filter_s, SAMPLE_PERIOD_S)
+    dt = SAMPLE_PERIOD_S
+    speed = math.inf
+    turn = turn_angle(a, b)
+    if turn >= TANGENT_TOLERANCE_RAD:
+        if a.mode != "G64" or turn > math.pi / 2:
+            return 0.0
+        # the filter rounds the kink by (v T / 8) sin(turn) between straight legs: within 90 % of
+        # half the tolerance (an arc's leg adds its own rounding, which has the other half)
+        speed = 0.9 * 4.0 * a.tolerance_m / (window * math.sin(turn))
+        step = np.abs(b.tangent(False) - a.tangent(True))
+        for i in range(3):
+            if step[i] > 0:
+                budget = KINK_SHARE * min(
+                    limits.acceleration_m_per_s2[i] * window, limits.jerk_m_per_s3[i] * window * dt
+                )
+                speed = min(speed, budget / step[i])
+    # an acceleration step of v^2 |d(kappa n)| the filter ramps within the jerk limit
+    jump = np.abs(b.acceleration_direction(False) - a.acceleration_direction(True))
+    for i in range(3):
+        if jump[i] > 1e-12:
+            speed = min(speed, math.sqrt(limits.jerk_m_per_s3[i] * window / jump[i]))
+    return speed
+
+
+def _segment_speed_limit(seg: Segment, limits: Limits, override: float, filter_s: float) -> float:
     """The highest path speed (m/s) on ``seg``."""
     share = seg.axis_share()
     v_axis = min(v / s for v, s in zip(limits.velocity_m_per_s, share) if s > 1e-12)
@@ -198,11 +403,7 @@ def _segment_speed_limit(seg: Segment, limits: Limits, override: float, filter_s
         v = min(v, math.sqrt(a * r), (j * r * r) ** (1.0 / 3.0))
         if filter_s > 0:
             # the filter shrinks an arc by v^2 T^2 / (24 R): within half the tolerance
-            v = min(v, math.sqrt(24.0 * r * 0.5 * tolerance_m) / filter_s)
-            if seg.blend:
-                # a blend shorter than the window: the filter cuts the corner as a sharp one,
-                # by (v T / 8) sin(turn) (Tajima and Sencer 2016): within the other half
-                v = min(v, 4.0 * tolerance_m / (filter_s * (math.sin(seg.sweep) if seg.sweep < math.pi / 2 else 1.0)))
+            v = min(v, math.sqrt(24.0 * r * 0.5 * seg.tolerance_m) / filter_s)
     return v
 
 
@@ -221,40 +422,7 @@ def _arc_damping(seg: Segment, v_limit: float, filter_s: float) -> float:
     return 1.0 / (1.0 + 3.0 * v_limit * filter_s * seg.curvature)
 
 
-def build_path(moves: Iterable[Move], tolerance_m: float) -> tuple[list[Segment], list[Segment]]:
-    """The programmed segments and the path with corners blended (machine m)."""
-    programmed: list[Segment] = []
-    position = None
-    for move in moves:
-        if position is None:
-            position = (np.asarray(move.start_mm) + np.asarray(move.offset_mm)) * 1e-3
-        seg = move_segment(move, position)
-        if seg is None:
-            continue
-        programmed.append(seg)
-        position = seg.end
-    path: list[Segment] = []
-    for seg in programmed:
-        prev = path[-1] if path else None
-        if (
-            prev is not None
-            and prev.kind == "line"
-            and seg.kind == "line"
-            and prev.rapid == seg.rapid
-            and (blended := blend(prev, seg, 0.5 * tolerance_m)) is not None
-        ):
-            path[-1] = blended[0]
-            path += [blended[1], blended[2]]
-        else:
-            path.append(seg)
-    return programmed, path
-
-
-def _junction_continues(a: Segment, b: Segment) -> bool:
-    """Whether the motion may go through the junction of ``a`` and ``b`` without stopping."""
-    if a.kind == "dwell" or b.kind == "dwell" or a.rapid != b.rapid:
-        return False
-    return math.acos(max(-1.0, min(1.0, float(a.tangent(True) @ b.tangent(False))))) < TANGENT_TOLERANCE_RAD
+# --- the look-ahead ---------------------------------------------------------------------------
 
 
 @numba.njit(cache=True)
@@ -274,61 +442,136 @@ def _passes(ds, vmax, a_t, damping, curvature):  # pragma: no cover - compiled
     return v
 
 
-def blocks_of(path: list[Segment]) -> list[list[Segment]]:
-    """The path cut where the motion stops: at dwells (each a block of its own), rapid/feed
-    changes and corners that are not blended; each block starts and ends at rest."""
-    blocks: list[list[Segment]] = []
-    for seg in path:
-        if seg.kind == "dwell" or not blocks or blocks[-1][-1].kind == "dwell":
-            blocks.append([seg])
-        elif _junction_continues(blocks[-1][-1], seg):
-            blocks[-1].append(seg)
+@numba.njit(cache=True)
+def _swings(s, v, filter_s, budget):  # pragma: no cover - compiled
+    """Where the profile's acceleration changes by more than ``budget`` within ``filter_s``
+    (the filter would turn that into more than the jerk limit): for each such place the grid
+    index of the speed's extremum between the two and +1 (a peak) or -1 (a valley)."""
+    n = v.size
+    acc = np.zeros(n - 1)
+    t = np.zeros(n)
+    for k in range(n - 1):
+        ds = s[k + 1] - s[k]
+        mean = 0.5 * (v[k] + v[k + 1])
+        if ds > 0.0 and mean > 0.0:
+            acc[k] = (v[k + 1] * v[k + 1] - v[k] * v[k]) / (2.0 * ds)
+            t[k + 1] = t[k] + ds / mean
         else:
-            blocks.append([seg])
-    return blocks
+            t[k + 1] = t[k]
+    out_index = []
+    out_kind = []
+    m = 0
+    last = -1
+    for k in range(n - 1):
+        while t[m + 1] < t[k] - filter_s:
+            m += 1
+        for q in range(m, k):
+            if abs(acc[k] - acc[q]) > budget and acc[k] * acc[q] < 0.0:
+                kind = 1 if acc[q] > 0.0 else -1
+                best = q + 1
+                for r in range(q + 1, k + 1):
+                    if (kind > 0 and v[r] > v[best]) or (kind < 0 and v[r] < v[best]):
+                        best = r
+                if best != last:
+                    out_index.append(best)
+                    out_kind.append(kind)
+                    last = best
+                break
+    return np.array(out_index, dtype=np.int64), np.array(out_kind, dtype=np.int64)
 
 
-def _speed_profile(block: list[Segment], limits: Limits, override: float, filter_s: float, tolerance_m: float):
-    """The look-ahead over one block: arc-length grid (cumulative s, m), speed at each point
-    (m/s, 0 at both ends) and the index in ``block`` of the segment each point lies on.
+class _Grid:
+    """The look-ahead's arc-length grid over some segments: cumulative s (m), speed limit,
+    acceleration, damping and curvature at each point, and the segment each lies on."""
 
-    A blend's speed is held on the lines either side for the filter's window (``v T``): every
-    window around the corner then sees no acceleration, and the filter cuts the corner only
-    as :func:`_segment_speed_limit` allows (the grid gets points where that hold ends)."""
-    limit = [_segment_speed_limit(seg, limits, override, filter_s, tolerance_m) for seg in block]
-    hold = [limit[i] * filter_s if seg.blend else 0.0 for i, seg in enumerate(block)]
-    s_parts, v_parts, a_parts, d_parts, k_parts, index = [], [], [], [], [], []
-    s0 = 0.0
-    for i, seg in enumerate(block):
-        n = max(4, math.ceil(seg.length / GRID_M) + 1)
-        grid = np.linspace(0.0, seg.length, n)
-        vmax = np.full(n, limit[i])
-        before = hold[i - 1] if i > 0 else 0.0  # a blend ends where this segment starts
-        after = hold[i + 1] if i + 1 < len(block) else 0.0
-        cuts = [c for c in (min(before, seg.length), max(seg.length - after, 0.0)) if 0.0 < c < seg.length]
-        if cuts:
-            grid = np.union1d(grid, cuts)
+    def __init__(self, segments: list[Segment], junctions: list[float], v_start: float, v_end: float, ctx):
+        limits, override, filter_s = ctx.limits, ctx.override, ctx.filter_s
+        limit = [_segment_speed_limit(seg, limits, override, filter_s) for seg in segments]
+        # a junction passed below the speeds around it is held for v T on either side (grid
+        # points put where the hold ends), so every window of the filter around it sees no
+        # change of speed and it rounds the junction no more than the junction's speed allows
+        held = [(v if math.isfinite(v) else 0.0) for v in junctions]
+        s_parts, v_parts, a_parts, d_parts, k_parts, index = [], [], [], [], [], []
+        s0 = 0.0
+        for i, seg in enumerate(segments):
+            n = max(4, math.ceil(seg.length / GRID_M) + 1)
+            grid = np.linspace(0.0, seg.length, n)
+            before = min(held[i - 1] * filter_s, seg.length) if i > 0 else 0.0
+            after = min(held[i] * filter_s, seg.length) if i + 1 < len(segments) else 0.0
+            cuts = [c for c in (before, seg.length - after) if 0.0 < c < seg.length]
+            if cuts:
+                grid = np.union1d(grid, cuts)
             vmax = np.full(grid.size, limit[i])
-        if before > 0:
-            vmax[grid <= before] = np.minimum(vmax[grid <= before], limit[i - 1])
-        if after > 0:
-            vmax[grid >= seg.length - after] = np.minimum(vmax[grid >= seg.length - after], limit[i + 1])
-        s_parts.append(s0 + grid)
-        v_parts.append(vmax)
-        a_parts.append(np.full(grid.size, _path_acceleration(seg, limits)))
-        d_parts.append(np.full(grid.size, _arc_damping(seg, limit[i], filter_s)))
-        k_parts.append(np.full(grid.size, seg.curvature))
-        index.append(np.full(grid.size, i))
-        s0 += seg.length
-    vmax = np.concatenate(v_parts)
-    vmax[0] = vmax[-1] = 0.0
-    s = np.concatenate(s_parts)
-    a_t, damping, curvature = np.concatenate(a_parts), np.concatenate(d_parts), np.concatenate(k_parts)
-    v = _passes(np.diff(s), vmax, a_t, damping, curvature)
-    return s, v, np.concatenate(index)
+            if i > 0:
+                vmax[grid <= before] = np.minimum(vmax[grid <= before], junctions[i - 1])
+            if i + 1 < len(segments):
+                vmax[grid >= seg.length - after] = np.minimum(vmax[grid >= seg.length - after], junctions[i])
+            s_parts.append(s0 + grid)
+            v_parts.append(vmax)
+            a_parts.append(np.full(grid.size, _path_acceleration(seg, limits)))
+            d_parts.append(np.full(grid.size, _arc_damping(seg, limit[i], filter_s)))
+            k_parts.append(np.full(grid.size, seg.curvature))
+            index.append(np.full(grid.size, i))
+            s0 += seg.length
+        self.segments = segments
+        self.s = np.concatenate(s_parts)
+        self.vmax = np.concatenate(v_parts)
+        self.vmax[0] = min(self.vmax[0], v_start)
+        self.vmax[-1] = min(self.vmax[-1], v_end)
+        self.a_t = np.concatenate(a_parts)
+        self.damping = np.concatenate(d_parts)
+        self.curvature = np.concatenate(k_parts)
+        self.index = np.concatenate(index)
+
+    def speeds(self, filter_s: float, budget: float) -> np.ndarray:
+        """The profile: passes, then the speed lowered at every swing the filter cannot take
+        (peaks until a cruise of ``T`` tops them, valleys held for ``T``)."""
+        ds = np.diff(self.s)
+        for _ in range(64):
+            v = _passes(ds, self.vmax, self.a_t, self.damping, self.curvature)
+            if filter_s <= 0:
+                return v
+            where, kinds = _swings(self.s, v, filter_s, budget)
+            if where.size == 0:
+                return v
+            for k, kind in zip(where, kinds):
+                if kind > 0:
+                    self._cap_peak(v, int(k), filter_s)
+                else:
+                    reach = 0.5 * v[k] * filter_s + GRID_M
+                    near = np.abs(self.s - self.s[k]) <= reach
+                    self.vmax[near] = np.minimum(self.vmax[near], v[k])
+        return _passes(ds, self.vmax, self.a_t, self.damping, self.curvature)
+
+    def _cap_peak(self, v: np.ndarray, k: int, filter_s: float) -> None:
+        """Lower the peak at grid point ``k`` to the speed whose plateau lasts ``filter_s``."""
+        lo, hi = 0.0, float(v[k])
+        left, right = k, k
+        while left > 0 and v[left - 1] <= v[left]:
+            left -= 1
+        while right < v.size - 1 and v[right + 1] <= v[right]:
+            right += 1
+        for _ in range(40):
+            cap = 0.5 * (lo + hi)
+            above = np.nonzero(v[left : right + 1] >= cap)[0]
+            span = self.s[left + above[-1]] - self.s[left + above[0]] if above.size else 0.0
+            if cap > 0 and span / cap >= filter_s:
+                lo = cap
+            else:
+                hi = cap
+        above = np.nonzero(v[left : right + 1] >= lo)[0] + left
+        if above.size:
+            self.vmax[above[0] : above[-1] + 1] = np.minimum(self.vmax[above[0] : above[-1] + 1], lo)
+
+    def lower(self, s_lo: float, s_hi: float, speed: float, acceleration: float) -> None:
+        """A repair: the speed limit and the acceleration between ``s_lo`` and ``s_hi`` times
+        these factors."""
+        near = (self.s >= s_lo) & (self.s <= s_hi)
+        self.vmax[near] *= speed
+        self.a_t[near] *= acceleration
 
 
-def _time_of(s: np.ndarray, v: np.ndarray) -> np.ndarray:
+def _time_of(s: np.ndarray, v: np.ndarray, v0: float = 0.0) -> np.ndarray:
     """Time (s) at each grid point: ``ds / mean(v)`` per interval (exact for constant
     acceleration, where ``v^2`` is linear in s)."""
     ds = np.diff(s)
@@ -348,166 +591,426 @@ def _sample_arc_length(t, t_grid, s_grid, v_grid):
     return s_grid[k] + np.minimum(v0 * tau + 0.5 * acc * tau * tau, ds), k
 
 
-def _moving_average(x: np.ndarray, n: int) -> np.ndarray:
-    """Each column of ``x`` averaged over windows of ``n`` samples, the ends held: the output is
-    ``n - 1`` samples longer (the filter's delay)."""
-    if n <= 1:
-        return x.copy()
-    padded = np.concatenate([np.repeat(x[:1], n - 1, axis=0), x, np.repeat(x[-1:], n - 1, axis=0)])
-    c = np.cumsum(padded, axis=0)
-    c = np.concatenate([np.zeros((1, x.shape[1])), c])
-    return (c[n:] - c[:-n])[: x.shape[0] + n - 1] / n
+class _Context(NamedTuple):
+    limits: Limits
+    override: float
+    filter_s: float
+    n_filter: int
+    budget: float
 
 
-def _derivatives(p: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
-    """Velocity (central first difference) and acceleration (central second difference) of
-    sampled positions, the reference at rest before the first sample and after the last."""
-    q = np.concatenate([p[:1], p, p[-1:]])  # at rest before the first sample and after the last
-    return (q[2:] - q[:-2]) / (2 * dt), (q[2:] - 2 * q[1:-1] + q[:-2]) / (dt * dt)
+@dataclass
+class _Raw:
+    """Raw (unfiltered) samples of a stretch: positions (n, 3), line and tolerance of each."""
+
+    position: np.ndarray
+    line: np.ndarray
+    tolerance: np.ndarray
 
 
-def feed_only_time(path: list[Segment], limits: Limits) -> float:
-    """The time (s) at the programmed feeds alone: feeds at F, rapids at the axis limits, dwells."""
-    total = 0.0
-    for seg in path:
-        if seg.kind == "dwell":
-            total += seg.dwell_s
-        elif seg.rapid:
-            share = seg.axis_share()
-            total += seg.length / min(v / s for v, s in zip(limits.velocity_m_per_s, share) if s > 1e-12)
+def _sample(grid: _Grid, v: np.ndarray, phase: float, to_end: bool) -> tuple[_Raw, float]:
+    """Positions every :data:`SAMPLE_PERIOD_S` along the planned stretch from time ``phase``
+    after its start; the phase of the next stretch. ``to_end``: a stretch that ends at rest
+    gets a sample at its end (the last one clipped to it)."""
+    dt = SAMPLE_PERIOD_S
+    t_grid = _time_of(grid.s, v)
+    total = float(t_grid[-1])
+    if to_end:
+        n = max(1, math.ceil((total - phase) / dt - 1e-9) + 1)
+    else:
+        n = max(0, math.ceil((total - phase) / dt - 1e-9))
+    t = phase + np.arange(n) * dt
+    s_t, k = _sample_arc_length(np.minimum(t, total), t_grid, grid.s, v)
+    seg_t = grid.index[k]
+    segments = grid.segments
+    offsets = np.concatenate([[0.0], np.cumsum([seg.length for seg in segments])])
+    position = np.empty((n, 3))
+    bounds = np.searchsorted(seg_t, np.arange(len(segments) + 1))  # seg_t never decreases
+    for i in range(len(segments)):
+        lo, hi = bounds[i], bounds[i + 1]
+        if hi > lo:
+            position[lo:hi] = segments[i].points(np.clip(s_t[lo:hi] - offsets[i], 0.0, segments[i].length))
+    lines = np.array([seg.line for seg in segments])[seg_t]
+    tolerance = np.array([seg.tolerance_m for seg in segments])[seg_t]
+    next_phase = 0.0 if to_end else phase + n * dt - total
+    return _Raw(position, lines, tolerance), next_phase
+
+
+class _Smoother:
+    """The moving-average filter over the raw sample stream, and the central differences of
+    its output (velocity, acceleration), one stretch at a time; what a stretch completes is
+    given back, the filter's and the differences' look-back kept."""
+
+    def __init__(self, n_filter: int, start: np.ndarray, line: int):
+        self.n = n_filter
+        self.tail = np.repeat(start[None, :], n_filter - 1, axis=0)  # raw samples before the next
+        self.tail_line = np.full(n_filter - 1, line)
+        self.tail_tolerance = np.zeros(n_filter - 1)
+        self.held = np.repeat(start[None, :], 2, axis=0)  # the last two filtered samples
+        self.held_line = np.full(2, line)
+        self.held_tolerance = np.zeros(2)
+        self.previous_acceleration = np.zeros(3)
+        self.emitted = 0
+
+    def smooth(self, raw: _Raw):
+        """The filtered samples ``raw`` completes: (position, line, tolerance), and the look-back
+        after it (to keep with :meth:`accept`)."""
+        n = self.n
+        x = np.concatenate([self.tail, raw.position]) if n > 1 else raw.position
+        lines = np.concatenate([self.tail_line, raw.line]) if n > 1 else raw.line
+        tolerance = np.concatenate([self.tail_tolerance, raw.tolerance]) if n > 1 else raw.tolerance
+        if n > 1:
+            c = np.concatenate([np.zeros((1, 3)), np.cumsum(x, axis=0)])
+            out = (c[n:] - c[:-n]) / n
+            centre = (n - 1) // 2
+            out_line = lines[n - 1 - centre : len(lines) - centre]
+            out_tol = tolerance[n - 1 - centre : len(tolerance) - centre]
+            tail = (x[-(n - 1) :], lines[-(n - 1) :], tolerance[-(n - 1) :])
         else:
-            total += seg.length / seg.feed_m_per_s
-    return total
+            out, out_line, out_tol = x.copy(), lines, tolerance
+            tail = (self.tail, self.tail_line, self.tail_tolerance)
+        return (out, out_line, out_tol), tail
+
+    def differences(self, filtered: np.ndarray, last: bool):
+        """Velocity and acceleration of the held samples and ``filtered`` (the reference at rest
+        after the last sample when ``last``): positions, velocities, accelerations of the samples
+        now complete, and the new held samples."""
+        p = np.concatenate([self.held, filtered])
+        if last:
+            p = np.concatenate([p, p[-1:]])
+        dt = SAMPLE_PERIOD_S
+        velocity = (p[2:] - p[:-2]) / (2 * dt)
+        acceleration = (p[2:] - 2 * p[1:-1] + p[:-2]) / (dt * dt)
+        return p[1:-1], velocity, acceleration
+
+    def accept(self, tail, filtered) -> None:
+        out, out_line, out_tol = filtered
+        self.tail, self.tail_line, self.tail_tolerance = tail
+        if len(out):
+            held = np.concatenate([self.held, out])[-2:]
+            self.held_line = np.concatenate([self.held_line, out_line])[-2:]
+            self.held_tolerance = np.concatenate([self.held_tolerance, out_tol])[-2:]
+            self.held = held
+
+
+def _excess(velocity: np.ndarray, acceleration: np.ndarray, previous_acceleration: np.ndarray, limits: Limits):
+    """Per sample and axis, the ratio of each quantity to its limit: (velocity, acceleration,
+    jerk) arrays (n, 3); jerk from the acceleration before the first sample."""
+    jerk = np.diff(np.concatenate([previous_acceleration[None, :], acceleration]), axis=0) / SAMPLE_PERIOD_S
+    return (
+        np.abs(velocity) / np.array(limits.velocity_m_per_s),
+        np.abs(acceleration) / np.array(limits.acceleration_m_per_s2),
+        np.abs(jerk) / np.array(limits.jerk_m_per_s3),
+    )
+
+
+class _Stream:
+    """The planner over a stream of moves (:func:`plan_stream`)."""
+
+    def __init__(self, moves: Iterable[Move], limits: Limits, settings: PlannerSettings, keep_programmed: bool):
+        self.limits, self.settings = limits, settings
+        filter_s, n_filter = _filter_length(limits)
+        window = max(filter_s, SAMPLE_PERIOD_S)
+        budget = min(j * window for j in limits.jerk_m_per_s3)
+        self.ctx = _Context(limits, settings.feed_override, filter_s, n_filter, budget)
+        self.facts = ProgramFacts(limits)
+        self.programmed: list[Segment] | None = [] if keep_programmed else None
+        self.path = _blended(self._keep(_programmed(moves, settings, self.facts)))
+        self.smoother: _Smoother | None = None
+        self.first = 0
+
+    def _keep(self, segments: Iterator[Segment]) -> Iterator[Segment]:
+        """The programmed segments, kept for :attr:`Plan.segments` while asked."""
+        for seg in segments:
+            if self.programmed is not None:
+                self.programmed.append(seg)
+            yield seg
+
+    def _pieces(self) -> Iterator[Segment]:
+        """The path with its long segments cut into pieces of :data:`PIECE_POINTS` grid points."""
+        for seg in self.path:
+            while seg.kind != "dwell" and _grid_points(seg) > 2 * PIECE_POINTS:
+                piece, seg = seg.split(PIECE_POINTS * GRID_M)
+                yield piece
+            yield seg
+
+    def chunks(self) -> Iterator[Chunk]:
+        buffer: list[Segment] = []
+        junctions: list[float] = []  # the speed through each junction of the buffer's segments
+        points = 0
+        v_start = phase = least_time = 0.0
+        for seg in self._pieces():
+            if self.smoother is None:
+                self.smoother = _Smoother(self.ctx.n_filter, seg.start, seg.line)
+                yield from self._rest(seg.start, seg.line, 2)
+            speed = _junction_speed(buffer[-1], seg, self.limits, self.ctx.filter_s) if buffer else 0.0
+            if buffer and speed == 0.0:  # a stop: the buffer is planned to rest
+                yield from self._stretch(buffer, junctions, v_start, 0.0, phase, to_end=True)
+                buffer, junctions, points, v_start, phase, least_time = [], [], 0, 0.0, 0.0, 0.0
+            if seg.kind == "dwell":
+                yield from self._rest(seg.start, seg.line, max(1, round(seg.dwell_s / SAMPLE_PERIOD_S)))
+                continue
+            if buffer:
+                junctions.append(speed)
+            buffer.append(seg)
+            points += _grid_points(seg)
+            least_time += seg.length / _segment_speed_limit(seg, self.limits, self.ctx.override, self.ctx.filter_s)
+            while points >= WINDOW_POINTS or least_time >= WINDOW_TIME_S:
+                rest = yield from self._hand_on(buffer, junctions, v_start, phase, full=points >= MAX_WINDOW_POINTS)
+                if rest is None:
+                    break
+                buffer, junctions, v_start, phase = rest
+                points = sum(_grid_points(s) for s in buffer)
+                least_time = sum(
+                    s.length / _segment_speed_limit(s, self.limits, self.ctx.override, self.ctx.filter_s)
+                    for s in buffer
+                )
+        if buffer:
+            yield from self._stretch(buffer, junctions, v_start, 0.0, phase, to_end=True)
+        if self.smoother is not None:
+            yield from self._finish()
+
+    def _rest(self, position: np.ndarray, line: int, count: int) -> Iterator[Chunk]:
+        """``count`` raw samples at rest (a dwell, the ends, the filter's settling after a stop),
+        in pieces of at most a window's time."""
+        piece = round(WINDOW_TIME_S / SAMPLE_PERIOD_S)
+        for start in range(0, count, piece):
+            n = min(piece, count - start)
+            yield from self._emit(_Raw(np.repeat(position[None, :], n, axis=0), np.full(n, line), np.zeros(n)))
+
+    def _stretch(self, segments, junctions, v_start, v_end, phase, to_end) -> Generator[Chunk, None, float]:
+        """Plan, sample, check (and repair) and emit one stretch of the path; return the phase
+        of the next one. A stretch that ends at rest is followed by the filter's window of rest."""
+        ctx = self.ctx
+        grid = _Grid(segments, junctions, v_start, v_end, ctx)
+        settle = ctx.n_filter - 1 if to_end else 0  # after a stop, the filter's window of rest
+        for attempt in range(MAX_REPAIRS + 1):
+            v = grid.speeds(ctx.filter_s, ctx.budget)
+            raw, next_phase = _sample(grid, v, phase, to_end)
+            if settle:
+                raw = _Raw(
+                    np.concatenate([raw.position, np.repeat(raw.position[-1:], settle, axis=0)]),
+                    np.concatenate([raw.line, np.full(settle, raw.line[-1])]),
+                    np.concatenate([raw.tolerance, np.full(settle, raw.tolerance[-1])]),
+                )
+            over = self._check(raw, record=attempt == MAX_REPAIRS)
+            if not over:
+                break
+            t_grid = _time_of(grid.s, v)
+            reach_t = 2.0 * max(ctx.filter_s, SAMPLE_PERIOD_S)
+            for raw_index, (v_ratio, a_ratio, j_ratio) in over:
+                t = phase + raw_index * SAMPLE_PERIOD_S
+                lo = min(int(np.searchsorted(t_grid, t - reach_t)), len(grid.s) - 1)
+                hi = min(int(np.searchsorted(t_grid, t + reach_t)), len(grid.s) - 1)
+                # velocity scales with the speed; acceleration with it squared and with the
+                # profile's acceleration; jerk with the speed cubed and the acceleration's steps
+                speed = min(1.0, 0.99 / v_ratio, (0.99 / a_ratio) ** 0.5, (0.99 / j_ratio) ** (1 / 3))
+                acceleration = min(1.0, 0.99 / a_ratio, 0.99 / j_ratio)
+                grid.lower(float(grid.s[lo]) - GRID_M, float(grid.s[hi]) + GRID_M, speed, acceleration)
+                self.facts.time_scale = max(self.facts.time_scale, 1.0 / speed)
+        yield from self._emit(raw)
+        return next_phase
+
+    def _hand_on(self, buffer, junctions, v_start, phase, full: bool) -> Generator[Chunk, None, tuple | None]:
+        """Plan the window; hand on what is final up to a cruise and return the rest (its
+        segments, junctions, start speed and phase), or None to read more of the path first.
+        ``full``: the window may grow no more: with no cruise it is planned to rest (a stop the
+        program did not ask for, noted)."""
+        ctx = self.ctx
+        grid = _Grid(buffer, junctions, v_start, 0.0, ctx)
+        v_stop = grid.speeds(ctx.filter_s, ctx.budget)
+        v_go = _Grid(buffer, junctions, v_start, math.inf, ctx).speeds(ctx.filter_s, ctx.budget)
+        differ = np.nonzero(np.abs(v_go - v_stop) > 1e-9 * np.maximum(v_go, 1e-9))[0]
+        final = int(differ[0]) if differ.size else len(v_stop)
+        final = min(final, int(np.searchsorted(_time_of(grid.s, v_stop), WINDOW_TIME_S)) + 1)
+        cut = self._cruise(grid, v_stop, final)
+        if cut is None:
+            if not full:
+                return None
+            self.facts.notes.append(
+                f"line {buffer[-1].line}: the look-ahead window is full ({MAX_WINDOW_POINTS:,} grid points) with "
+                "no cruise to hand on at: the motion stops there"
+            )
+            yield from self._stretch(buffer, junctions, v_start, 0.0, phase, to_end=True)
+            return [], [], 0.0, 0.0
+        index = int(grid.index[cut])
+        first, second = buffer[index].split(float(grid.s[cut] - grid.s[grid.index == index][0]))
+        speed = float(v_stop[cut])
+        next_phase = yield from self._stretch(
+            [*buffer[:index], first], junctions[:index], v_start, speed, phase, to_end=False
+        )
+        return [second, *buffer[index + 1 :]], junctions[index:], speed, next_phase
+
+    def _cruise(self, grid: _Grid, v: np.ndarray, final: int) -> int | None:
+        """The last grid point inside a segment, before ``final`` by more than any later change
+        of the path can reach back, where the speed is constant over the filter's length on
+        either side; None if there is none."""
+        ctx = self.ctx
+        window = max(ctx.filter_s, SAMPLE_PERIOD_S)
+        top = float(v[:final].max()) if final else 0.0
+        reach_back = top * top / (2 * min(ctx.limits.acceleration_m_per_s2)) + 2 * top * window
+        hold = 2 * top * window + 2 * GRID_M
+        flat = np.abs(np.diff(v)) <= 1e-9 * np.maximum(v[1:], 1e-9)
+        end = np.searchsorted(grid.s, grid.s[final - 1] - reach_back) if final else 0
+        for k in range(min(end, len(v) - 2), 0, -25):
+            if v[k] <= 0 or grid.index[k - 1] != grid.index[k] or grid.index[k + 1] != grid.index[k]:
+                continue
+            lo = np.searchsorted(grid.s, grid.s[k] - hold)
+            hi = np.searchsorted(grid.s, grid.s[k] + hold)
+            if lo > 0 and hi < len(v) - 1 and flat[lo:hi].all():
+                return int(k)
+        return None
+
+    def _check(self, raw: _Raw, record: bool) -> list[tuple[int, tuple[float, ...]]]:
+        """The places over a limit once ``raw`` is filtered: (raw sample index, the velocity,
+        acceleration and jerk ratios to their limits there) each; with
+        ``record``, what is over is recorded as violations instead (and nothing returned)."""
+        assert self.smoother is not None
+        filtered, _tail = self.smoother.smooth(raw)
+        _positions, velocity, acceleration = self.smoother.differences(filtered[0], last=False)
+        if len(velocity) == 0:
+            return []
+        ratios = _excess(velocity, acceleration, self.smoother.previous_acceleration, self.limits)
+        over = np.nonzero(np.maximum.reduce([r.max(axis=1) for r in ratios]) > LIMIT_SLACK)[0]
+        if over.size == 0:
+            return []
+        if record:
+            lines = np.concatenate([self.smoother.held_line[1:], filtered[1]])[: len(velocity)]
+            for quantity, r in zip(("velocity", "acceleration", "jerk"), ratios):
+                for axis in range(3):
+                    bad = np.nonzero(r[:, axis] > LIMIT_SLACK)[0]
+                    if bad.size:
+                        at = bad[np.argmax(r[bad, axis])]
+                        self.facts.violations.append(
+                            Violation(int(lines[at]), "xyz"[axis], quantity, float(r[at, axis]))
+                        )
+            return []
+        centre = (self.ctx.n_filter - 1) // 2
+        return [
+            (max(int(sample) - 1 - centre, 0), tuple(max(float(r[sample].max()), 1.0) for r in ratios))
+            for sample in over
+        ]
+
+    def _emit(self, raw: _Raw) -> Iterator[Chunk]:
+        """Filter ``raw`` and hand on the samples it completes."""
+        assert self.smoother is not None
+        filtered, tail = self.smoother.smooth(raw)
+        positions, velocity, acceleration = self.smoother.differences(filtered[0], last=False)
+        lines = np.concatenate([self.smoother.held_line[1:], filtered[1]])[: len(velocity)]
+        tolerance = np.concatenate([self.smoother.held_tolerance[1:], filtered[2]])[: len(velocity)]
+        if len(velocity):
+            self.smoother.previous_acceleration = acceleration[-1]
+        self.smoother.accept(tail, filtered)
+        if len(velocity):
+            yield Chunk(self.first, positions, velocity, acceleration, lines, tolerance)
+            self.first += len(velocity)
+
+    def _finish(self) -> Iterator[Chunk]:
+        """Two samples at rest after the last, and the last held sample's differences."""
+        assert self.smoother is not None
+        yield from self._rest(self.smoother.held[-1], int(self.smoother.held_line[-1]), 2)
+        positions, velocity, acceleration = self.smoother.differences(np.zeros((0, 3)), last=True)
+        yield Chunk(
+            self.first, positions, velocity, acceleration, self.smoother.held_line[1:], self.smoother.held_tolerance[1:]
+        )
+        self.first += len(velocity)
+
+
+def _grid_points(seg: Segment) -> int:
+    return max(4, math.ceil(seg.length / GRID_M) + 1)
+
+
+def plan_stream(moves: Iterable[Move], limits: Limits, settings: PlannerSettings | None = None):
+    """The planned reference of a program as it is read, in :class:`Chunk` s, and the facts
+    gathered on the way (complete once the chunks are exhausted): memory stays bounded for any
+    program length.
+
+    Returns
+    -------
+    chunks : iterator of Chunk
+    facts : ProgramFacts
+    """
+    stream = _Stream(moves, limits, settings or PlannerSettings(), keep_programmed=False)
+    return stream.chunks(), stream.facts
 
 
 def plan(moves: Iterable[Move], limits: Limits, settings: PlannerSettings | None = None) -> Plan:
-    """Plan a program's moves into a reference sampled every :data:`SAMPLE_PERIOD_S`.
+    """Plan a program's moves into a reference sampled every :data:`SAMPLE_PERIOD_S`, held whole.
 
     Raises
     ------
     PlanningError
         A program with no motion, or one too long to hold (:data:`MAX_SAMPLES`).
     """
-    settings = settings or PlannerSettings()
-    moves = list(moves)
-    if settings.tolerance_mm is not None:
-        tolerance_mm = settings.tolerance_mm
-    else:
-        given = [m.tolerance_mm for m in moves if m.tolerance_mm]
-        tolerance_mm = given[0] if given else DEFAULT_TOLERANCE_MM
-    tolerance_m = tolerance_mm * 1e-3
-    programmed, path = build_path(moves, tolerance_m)
-    if not path:
-        raise PlanningError("the program has no motion")
-    dt = SAMPLE_PERIOD_S
-    start = path[0].start
-    positions, lines, scales, total = [start[None, :], start[None, :]], [np.array([path[0].line] * 2)], [1.0], 2
-    grid_points = 0
-    for block in blocks_of(path):
-        if block[0].kind == "dwell":
-            n = max(1, round(block[0].dwell_s / dt))
-            if total + n > MAX_SAMPLES:
-                raise PlanningError(f"a dwell of {block[0].dwell_s:g} s is longer than a reference holds: split it")
-            positions.append(np.repeat(positions[-1][-1:], n, axis=0))
-            lines.append(np.full(n, block[0].line))
-        else:
-            grid_points += sum(max(4, math.ceil(seg.length / GRID_M) + 1) for seg in block)
-            if grid_points > MAX_GRID_POINTS:
-                raise PlanningError(f"the path is too long to plan at once ({MAX_GRID_POINTS} grid points): split it")
-            p, line, scale = _plan_block(block, limits, settings.feed_override, tolerance_m)
-            positions.append(p)
-            lines.append(line)
-            scales.append(scale)
-        total += len(positions[-1])
-        if total > MAX_SAMPLES:
-            raise PlanningError(
-                f"the program runs longer than {MAX_SAMPLES * dt:.0f} s of motion, which a reference holds at once: "
-                "split it"
-            )
-    positions.append(positions[-1][-1:].repeat(2, axis=0))
-    lines.append(np.repeat(lines[-1][-1:], 2))
-    position = np.concatenate(positions)
-    velocity, acceleration = _derivatives(position, dt)
-    return Plan(
-        dt,
-        position,
-        velocity,
-        acceleration,
-        np.concatenate(lines),
-        feed_only_time(programmed, limits),
-        max(scales),
-        _filter_length(limits)[0],
-        tolerance_m,
-        programmed,
-        {m.line: m.text for m in moves},
-        {m.line: (m.spindle_rpm if m.spindle != "off" else 0.0) for m in moves},
-        {m.line: m.tool for m in moves},
-        {m.line: m.feed_mm_per_min for m in moves},
-    )
-
-
-def _filter_length(limits: Limits) -> tuple[float, int]:
-    """The smoothing filter's length (s) and samples: ``max(a_i / j_i)``."""
-    filter_s = max(a / j for a, j in zip(limits.acceleration_m_per_s2, limits.jerk_m_per_s3))
-    n = max(1, round(filter_s / SAMPLE_PERIOD_S))
-    return (n * SAMPLE_PERIOD_S if n > 1 else 0.0), n
-
-
-def _plan_block(block: list[Segment], limits: Limits, override: float, tolerance_m: float):
-    """One rest-to-rest block: smoothed positions (n, 3), the program line of each, and the
-    time scale it needed (1: none; the block is re-planned slower until every axis is within
-    its limits: velocity scales by 1/k, acceleration 1/k^2, jerk 1/k^3)."""
-    scale = 1.0
-    for _attempt in range(4):
-        scaled = Limits(
-            tuple(v / scale for v in limits.velocity_m_per_s),
-            tuple(a / scale**2 for a in limits.acceleration_m_per_s2),
-            tuple(j / scale**3 for j in limits.jerk_m_per_s3),
-        )
-        position, lines = _sample_block(block, scaled, override / scale, tolerance_m)
-        velocity, acceleration = _derivatives(position, SAMPLE_PERIOD_S)
-        excess = _excess(velocity, acceleration, SAMPLE_PERIOD_S, limits)
-        if excess <= 1.0005:
-            break
-        scale *= excess * 1.001
-    return position, lines, scale
-
-
-def _sample_block(block: list[Segment], limits: Limits, override: float, tolerance_m: float):
-    """Positions (n, 3) of one block every :data:`SAMPLE_PERIOD_S`, smoothed by the moving
-    average (so ``n`` includes the filter's length), and the program line of each."""
-    dt = SAMPLE_PERIOD_S
-    filter_s, n_filter = _filter_length(limits)
-    s, v, index = _speed_profile(block, limits, override, filter_s, tolerance_m)
-    t_grid = _time_of(s, v)
-    n = math.ceil(t_grid[-1] / dt) + 1
-    if n + n_filter > MAX_SAMPLES:
+    held, _facts, _samples = hold_or_count(moves, limits, settings, MAX_SAMPLES, MAX_SAMPLES)
+    if held is None:
         raise PlanningError(
-            f"a block of the program runs {t_grid[-1]:.0f} s: longer than {MAX_SAMPLES * dt:.0f} s, which a "
-            "reference holds at once; split it"
+            f"the program runs longer than the {MAX_SAMPLES * SAMPLE_PERIOD_S:.0f} s of motion a reference held "
+            "whole may hold: run it without a stock (the run then streams it) or split it"
         )
-    s_t, k = _sample_arc_length(np.arange(n) * dt, t_grid, s, v)
-    seg_t = index[k]
-    offsets = np.concatenate([[0.0], np.cumsum([seg.length for seg in block])])
-    position = np.empty((n, 3))
-    bounds = np.searchsorted(seg_t, np.arange(len(block) + 1))  # seg_t never decreases
-    for i, (lo, hi) in enumerate(itertools.pairwise(bounds)):
-        if hi > lo:
-            position[lo:hi] = block[i].points(np.clip(s_t[lo:hi] - offsets[i], 0.0, block[i].length))
-    smooth = _moving_average(position, n_filter)
-    # the line of each output sample: that of the input at its window's centre
-    line_of_input = np.array([seg.line for seg in block])[seg_t]
-    centre = np.clip(np.arange(smooth.shape[0]) - (n_filter - 1) // 2, 0, n - 1)
-    return smooth, line_of_input[centre]
+    return held
 
 
-def _excess(velocity: np.ndarray, acceleration: np.ndarray, dt: float, limits: Limits) -> float:
-    """The slow-down k that would bring every axis within its limits (velocity scales by 1/k,
-    acceleration 1/k^2, jerk 1/k^3 when time is stretched by k); 1 when all are within."""
-    jerk = np.diff(acceleration, axis=0, prepend=0.0, append=0.0) / dt
-    ratios = [1.0]
-    for i in range(3):
-        ratios.append(float(np.abs(velocity[:, i]).max()) / limits.velocity_m_per_s[i])
-        ratios.append(math.sqrt(float(np.abs(acceleration[:, i]).max()) / limits.acceleration_m_per_s2[i]))
-        ratios.append((float(np.abs(jerk[:, i]).max()) / limits.jerk_m_per_s3[i]) ** (1.0 / 3.0))
-    return max(ratios)
+def hold_or_count(
+    moves: Iterable[Move],
+    limits: Limits,
+    settings: PlannerSettings | None,
+    most: int,
+    count_to: int = MAX_PROGRAM_SAMPLES,
+) -> tuple[Plan | None, ProgramFacts, int]:
+    """Plan a program: held whole (a :class:`Plan`) if it has at most ``most`` samples, else
+    only counted (memory stays bounded; a second pass, :func:`plan_stream`, gives the samples),
+    up to ``count_to`` samples (a longer program counts as ``count_to + 1``).
+
+    Returns
+    -------
+    plan : Plan or None
+    facts : ProgramFacts
+    samples : int
+        The reference's length.
+
+    Raises
+    ------
+    PlanningError
+        A program with no motion.
+    """
+    stream = _Stream(moves, limits, settings or PlannerSettings(), keep_programmed=True)
+    parts: list[Chunk] | None = []
+    total = 0
+    for chunk in stream.chunks():
+        total += len(chunk.position)
+        if total > count_to:
+            return None, stream.facts, count_to + 1
+        if parts is not None:
+            if total > most:
+                parts, stream.programmed = None, None  # too long: counted from here on
+            else:
+                parts.append(chunk)
+    facts = stream.facts
+    if not facts.texts or total == 0:
+        raise PlanningError("the program has no motion")
+    if parts is None:
+        return None, facts, total
+    assert stream.programmed is not None
+    if not stream.programmed:
+        raise PlanningError("the program has no motion")
+    held = Plan(
+        SAMPLE_PERIOD_S,
+        np.concatenate([c.position for c in parts]),
+        np.concatenate([c.velocity for c in parts]),
+        np.concatenate([c.acceleration for c in parts]),
+        np.concatenate([c.line for c in parts]),
+        np.concatenate([c.tolerance_m for c in parts]),
+        facts.feed_only_time_s,
+        facts.time_scale,
+        stream.ctx.filter_s,
+        max(seg.tolerance_m for seg in stream.programmed),
+        stream.programmed,
+        facts.texts,
+        facts.spindle_rpm,
+        facts.tools,
+        facts.feeds,
+        facts.violations,
+        facts.notes,
+    )
+    return held, facts, total

@@ -1,49 +1,65 @@
-"""What ``twin gcode`` and :func:`twin.api.gcode` report of a program: its moves as read and,
-for a machine, the planned reference's cycle time, limits and largest values per axis, and how
-far it leaves the programmed path."""
+"""What ``twin gcode`` and :func:`twin.api.program` report of a program: its moves as read and,
+for a machine, the planned reference's cycle time, limits and largest values per axis, the
+limits it could not keep, and how far it leaves the programmed path (the exact distance of each
+sample to the nearest programmed line or arc, against the tolerance in force there)."""
 
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from twin.gcode.planner import Limits, Plan
 
-#: Spacing (m) of the points the programmed path is sampled at for the deviation check.
-PATH_SPACING_M = 2e-5
+#: Spacing (m) of the points of the programmed path that find each sample's nearest segments.
+PATH_SPACING_M = 2e-4
 #: Most points of that sampling (coarser spacing beyond).
-MAX_PATH_POINTS = 5_000_000
+MAX_PATH_POINTS = 2_000_000
+#: Nearest path points whose segments each sample is measured against exactly.
+NEAREST = 6
 
 
-def programmed_points(plan: Plan) -> np.ndarray:
-    """The programmed path (unblended) as a dense polyline (m), shape (n, 3)."""
+def path_deviation_m(plan: Plan) -> np.ndarray:
+    """The exact distance (m) of every sample of the planned reference to the programmed path
+    (unblended): to the nearest of the segments whose points lie nearest it."""
+    from scipy.spatial import cKDTree
+
     drawn = [seg for seg in plan.segments if seg.kind != "dwell"]
+    if not drawn:
+        return np.linalg.norm(plan.position - plan.position[:1], axis=1)
     total = sum(seg.length for seg in drawn)
     spacing = max(PATH_SPACING_M, total / MAX_PATH_POINTS)
-    parts = [seg.points(np.linspace(0.0, seg.length, max(2, int(seg.length / spacing) + 2))) for seg in drawn]
-    return np.concatenate(parts) if parts else plan.position[:1]
+    points, owner = [], []
+    for i, seg in enumerate(drawn):
+        s = np.linspace(0.0, seg.length, max(2, int(seg.length / spacing) + 2))
+        points.append(seg.points(s))
+        owner.append(np.full(s.size, i))
+    path, owners = np.concatenate(points), np.concatenate(owner)
+    tree = cKDTree(path)
+    best = np.full(len(plan.position), np.inf)
+    rows = np.arange(len(plan.position))
+    for k in (NEAREST, 8 * NEAREST, 64 * NEAREST):
+        # where the path passes near itself the nearest points can all be another segment's:
+        # the samples not yet within their tolerance are looked at again with more of them
+        k = min(k, len(path))
+        _, nearest = tree.query(plan.position[rows], k=k)
+        candidates = owners[nearest.reshape(len(rows), k)]
+        for i in np.unique(candidates):
+            mine = rows[(candidates == i).any(axis=1)]
+            best[mine] = np.minimum(best[mine], drawn[i].distance(plan.position[mine]))
+        rows = rows[best[rows] > plan.sample_tolerance_m[rows]]
+        if rows.size == 0 or k == len(path):
+            break
+    return best
 
 
 def max_path_deviation_m(plan: Plan) -> float:
-    """The largest distance (m) from a sample of the planned reference to the programmed path:
-    the nearest point of :func:`programmed_points` refined onto the chords around it."""
-    path = programmed_points(plan)
-    if len(path) < 2:
-        return float(np.linalg.norm(plan.position - path[0], axis=1).max())
-    _, nearest = cKDTree(path).query(plan.position)
-    best = np.full(len(plan.position), np.inf)
-    for lo in (nearest - 2, nearest - 1, nearest, nearest + 1):  # junction points appear twice
-        lo = np.clip(lo, 0, len(path) - 2)
-        a, b = path[lo], path[lo + 1]
-        d = b - a
-        length2 = np.einsum("ij,ij->i", d, d)
-        f = np.clip(np.einsum("ij,ij->i", plan.position - a, d) / np.where(length2 > 0, length2, 1.0), 0.0, 1.0)
-        best = np.minimum(best, np.linalg.norm(plan.position - (a + f[:, None] * d), axis=1))
-    return float(best.max())
+    """The largest distance (m) from a sample of the planned reference to the programmed path."""
+    return float(path_deviation_m(plan).max())
 
 
 def planned_summary(plan: Plan, limits: Limits) -> dict:
     """The ``planned`` table of ``twin gcode --json``."""
+    deviation = path_deviation_m(plan)
+    tolerance = np.where(plan.sample_tolerance_m > 0, plan.sample_tolerance_m, np.inf)
     return {
         "cycle_time_s": round(plan.cycle_time_s, 6),
         "feed_only_time_s": round(plan.feed_only_time_s, 6),
@@ -52,5 +68,8 @@ def planned_summary(plan: Plan, limits: Limits) -> dict:
         "tolerance_mm": plan.tolerance_m * 1e3,
         "limits": limits.as_dict(),
         "max": plan.max_abs(),
-        "max_path_deviation_mm": round(max_path_deviation_m(plan) * 1e3, 6),
+        "max_path_deviation_mm": round(float(deviation.max()) * 1e3, 6),
+        "max_deviation_over_tolerance": round(float((deviation / tolerance).max()), 6),
+        "violations": [v.as_dict() for v in plan.violations],
+        "notes": list(plan.notes),
     }

@@ -15,71 +15,79 @@ from typing import ClassVar, Literal
 import numpy as np
 from pydantic import Field
 
-from twin.gcode.planner import Plan, PlannerSettings, PlanningError, plan
-from twin.gcode.reader import GcodeError, Reader, Settings, program_lines
+from twin.gcode.planner import (
+    MAX_PROGRAM_SAMPLES,
+    MAX_SAMPLES,
+    SAMPLE_PERIOD_S,
+    Plan,
+    PlannerSettings,
+    PlanningError,
+    hold_or_count,
+    plan_stream,
+)
+from twin.gcode.reader import Reader, Settings
 from twin.references.kinds import ReferenceContext, ReferenceSpecBase, register, two_axes
 
 #: The work coordinate systems a program may select.
 WORK_SYSTEMS = ("G54", "G55", "G56", "G57", "G58", "G59")
 
 
-class GcodeReference:
-    """A planned program sampled at any time: position by cubic Hermite interpolation between
-    the plan's samples (its velocity as slopes), velocity and acceleration linearly; at rest
-    before the start and after the end.
+#: Samples (1 ms each) a run's reference holds whole at most; a longer program without a stock
+#: is planned again as the run asks for it (a second pass: memory stays bounded).
+HELD_SAMPLES = 600_000
 
-    Parameters
-    ----------
-    planned : Plan
-        The interpolator's output (machine axes x, y, z).
-    axes : tuple of int
-        Which of x, y, z (indices) the machine's axes follow, in its order.
-    n_lines : int
-        The program's lines read, to its end (M2, M30, the second %) (for the progress bar).
-    """
 
-    def __init__(self, planned: Plan, axes: tuple[int, ...], n_lines: int):
-        self.plan, self.axes, self.n_lines = planned, axes, n_lines
-        self.n_axes = len(axes)
-        #: With a stock: the engagement at each sample (:func:`twin.process.machining.engagement_table`)
-        #: and the stock's height map as the program leaves it.
-        self.engagement: np.ndarray | None = None
-        self.height_map = None
+def _hermite(p: np.ndarray, v: np.ndarray, k: np.ndarray, f: np.ndarray, dt: float) -> np.ndarray:
+    """Cubic Hermite interpolation of positions ``p`` with slopes ``v`` between samples ``k`` and
+    ``k + 1`` at fractions ``f`` (column)."""
+    h00, h10 = 2 * f**3 - 3 * f**2 + 1, f**3 - 2 * f**2 + f
+    h01, h11 = -2 * f**3 + 3 * f**2, f**3 - f**2
+    return h00 * p[k] + h10 * dt * v[k] + h01 * p[k + 1] + h11 * dt * v[k + 1]
 
-    @property
-    def duration_s(self) -> float:
-        """The program's cycle time (s)."""
-        return self.plan.cycle_time_s
+
+class _Samples:
+    """The common reading of a planned reference over a stretch of its samples: position by
+    cubic Hermite interpolation between them (velocity as slopes), velocity and acceleration
+    linearly; at rest before the start and after the end."""
+
+    axes: tuple[int, ...]
+    n_axes: int
+    period_s: float
+    n_samples: int
+
+    def _window(self, t: np.ndarray):
+        """The samples covering times ``t``: (first index, position, velocity, acceleration, line)."""
+        raise NotImplementedError
 
     def _at(self, t: np.ndarray):
-        dt = self.plan.period_s
-        x = np.clip(np.asarray(t, float) / dt, 0.0, len(self.plan.position) - 1)
-        k = np.minimum(x.astype(int), len(self.plan.position) - 2)
+        dt = self.period_s
+        x = np.clip(np.asarray(t, float) / dt, 0.0, self.n_samples - 1)
+        k = np.minimum(x.astype(int), max(self.n_samples - 2, 0))
         return k, x - k, dt
 
     def positions(self, t) -> np.ndarray:
         """Positions of x, y, z (m) at times ``t``, shape (len(t), 3)."""
-        p, v = self.plan.position, self.plan.velocity
-        if len(p) < 2:
-            return np.broadcast_to(p[0], (np.size(t), 3)).copy()
+        t = np.atleast_1d(np.asarray(t, float))
+        first, p, v, _a, _l = self._window(t)
+        if self.n_samples < 2:
+            return np.broadcast_to(p[0], (t.size, 3)).copy()
         k, f, dt = self._at(t)
-        f = f[:, None]
-        h00, h10 = 2 * f**3 - 3 * f**2 + 1, f**3 - 2 * f**2 + f
-        h01, h11 = -2 * f**3 + 3 * f**2, f**3 - f**2
-        return h00 * p[k] + h10 * dt * v[k] + h01 * p[k + 1] + h11 * dt * v[k + 1]
+        return _hermite(p, v, k - first, f[:, None], dt)
 
     def sample(self, t) -> np.ndarray:
         """Position, velocity and acceleration of the machine's axes, shape (len(t), n_axes, 3)."""
-        t = np.asarray(t, float)
+        t = np.atleast_1d(np.asarray(t, float))
         out = np.zeros((t.size, self.n_axes, 3))
-        pos = self.positions(t)
-        if len(self.plan.position) < 2:
-            out[:, :, 0] = pos[:, list(self.axes)]
+        first, p, v, a, _l = self._window(t)
+        if self.n_samples < 2:
+            out[:, :, 0] = p[0, list(self.axes)]
             return out
-        k, f, _ = self._at(t)
+        k, f, dt = self._at(t)
+        k = k - first
         f = f[:, None]
-        vel = (1 - f) * self.plan.velocity[k] + f * self.plan.velocity[k + 1]
-        acc = (1 - f) * self.plan.acceleration[k] + f * self.plan.acceleration[k + 1]
+        pos = _hermite(p, v, k, f, dt)
+        vel = (1 - f) * v[k] + f * v[k + 1]
+        acc = (1 - f) * a[k] + f * a[k + 1]
         for i, axis in enumerate(self.axes):
             out[:, i] = np.stack([pos[:, axis], vel[:, axis], acc[:, axis]], axis=1)
         return out
@@ -95,8 +103,42 @@ class GcodeReference:
 
     def lines_at(self, t) -> np.ndarray:
         """The program line at each time of ``t`` (s)."""
-        k = np.clip(np.rint(np.asarray(t, float) / self.plan.period_s).astype(int), 0, len(self.plan.line) - 1)
-        return self.plan.line[k]
+        t = np.atleast_1d(np.asarray(t, float))
+        first, _p, _v, _a, line = self._window(t)
+        k = np.clip(np.rint(t / self.period_s).astype(int), 0, self.n_samples - 1)
+        return line[k - first]
+
+
+class GcodeReference(_Samples):
+    """A planned program held whole, sampled at any time.
+
+    Parameters
+    ----------
+    planned : Plan
+        The interpolator's output (machine axes x, y, z).
+    axes : tuple of int
+        Which of x, y, z (indices) the machine's axes follow, in its order.
+    n_lines : int
+        The program's lines read, to its end (M2, M30, the second %) (for the progress bar).
+    """
+
+    def __init__(self, planned: Plan, axes: tuple[int, ...], n_lines: int):
+        self.plan, self.axes, self.n_lines = planned, axes, n_lines
+        self.n_axes = len(axes)
+        self.period_s = planned.period_s
+        self.n_samples = len(planned.position)
+        #: With a stock: the engagement at each sample (:func:`twin.process.machining.engagement_table`)
+        #: and the stock's height map as the program leaves it.
+        self.engagement: np.ndarray | None = None
+        self.height_map = None
+
+    def _window(self, t):
+        return 0, self.plan.position, self.plan.velocity, self.plan.acceleration, self.plan.line
+
+    @property
+    def duration_s(self) -> float:
+        """The program's cycle time (s)."""
+        return self.plan.cycle_time_s
 
     def engagement_at(self, t) -> np.ndarray:
         """The engaged angle (deg) and axial depth (mm) at times ``t`` (s), shape (len(t), 2);
@@ -111,9 +153,7 @@ class GcodeReference:
 
     def feeds_at(self, t) -> np.ndarray:
         """The programmed feed (mm/min; 0 on rapids and dwells) at times ``t`` (s)."""
-        lines = self.lines_at(t)
-        known, where = np.unique(lines, return_inverse=True)
-        return np.array([self.plan.feeds.get(int(line), 0.0) for line in known])[where]
+        return _by_line(self.lines_at(t), self.plan.feeds)
 
     @cached_property
     def outlines(self) -> dict[str, list[np.ndarray]]:
@@ -125,6 +165,83 @@ class GcodeReference:
     def texts(self) -> dict[int, str]:
         """The text of each program line that moved or dwelt."""
         return self.plan.texts
+
+
+class StreamedGcodeReference(_Samples):
+    """A planned program too long to hold, planned again as the run asks for its samples
+    (times only ever increase): a window of samples is kept, so memory stays bounded.
+
+    Parameters
+    ----------
+    moves : callable
+        A fresh stream of the program's moves (it is read again).
+    limits, settings
+        What it was planned with.
+    facts : ProgramFacts
+        What the first pass learnt (line texts, feeds).
+    n_samples : int
+        The reference's length (the first pass's count).
+    axes : tuple of int
+        Which of x, y, z the machine's axes follow.
+    n_lines : int
+        The program's lines read, to its end.
+    """
+
+    def __init__(self, moves, limits, settings, facts, n_samples: int, axes: tuple[int, ...], n_lines: int):
+        self.axes, self.n_axes, self.n_lines = axes, len(axes), n_lines
+        self.period_s = SAMPLE_PERIOD_S
+        self.n_samples = n_samples
+        self.facts = facts
+        self.chunks, _facts = plan_stream(moves(), limits, settings)
+        self.first = 0
+        self.held = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, int))
+
+    def _window(self, t):
+        dt = self.period_s
+        lo = max(int(np.floor(float(np.min(t)) / dt)) - 2, 0)
+        hi = min(int(np.ceil(float(np.max(t)) / dt)) + 2, self.n_samples)
+        if lo < self.first:
+            raise ValueError(f"the streamed reference has moved past t = {float(np.min(t)):.6f} s")
+        p, v, a, line = self.held
+        drop = lo - self.first
+        parts = [(p[drop:], v[drop:], a[drop:], line[drop:])]
+        end = self.first + len(p)
+        while end < hi:
+            chunk = next(self.chunks)
+            parts.append((chunk.position, chunk.velocity, chunk.acceleration, chunk.line))
+            end += len(chunk.position)
+        if len(parts) > 1 or drop:
+            self.held = tuple(np.concatenate(column) for column in zip(*parts))
+            self.first = lo
+        p, v, a, line = self.held
+        return self.first, p, v, a, line
+
+    @property
+    def duration_s(self) -> float:
+        """The program's cycle time (s)."""
+        return (self.n_samples - 1) * self.period_s
+
+    def engagement_at(self, t) -> np.ndarray:
+        """No stock: empty."""
+        return np.zeros((0, 2))
+
+    def feeds_at(self, t) -> np.ndarray:
+        """The programmed feed (mm/min; 0 on rapids and dwells) at times ``t`` (s)."""
+        return _by_line(self.lines_at(t), self.facts.feeds)
+
+    @property
+    def outlines(self) -> dict[str, list[np.ndarray]]:
+        return {}
+
+    @property
+    def texts(self) -> dict[int, str]:
+        return self.facts.texts
+
+
+def _by_line(lines: np.ndarray, by_line: dict) -> np.ndarray:
+    """A per-line value at each of ``lines``."""
+    known, where = np.unique(lines, return_inverse=True)
+    return np.array([by_line.get(int(line), 0.0) for line in known])[where]
 
 
 class GcodeRef(ReferenceSpecBase):
@@ -152,7 +269,7 @@ class GcodeRef(ReferenceSpecBase):
         )
 
 
-def build(spec: GcodeRef, ctx: ReferenceContext) -> GcodeReference:
+def build(spec: GcodeRef, ctx: ReferenceContext) -> GcodeReference | StreamedGcodeReference:
     """Read and plan the program for the machine of ``ctx``.
 
     Raises
@@ -172,16 +289,40 @@ def build(spec: GcodeRef, ctx: ReferenceContext) -> GcodeReference:
     path = Path(spec.file)
     if not path.is_file():
         raise TwinInputError("reference.file", spec.file, "is a folder" if path.is_dir() else "no such file")
-    reader = Reader(program_lines(path), spec.reader_settings(ctx.tools), str(path))
+    reader_settings = spec.reader_settings(ctx.tools)
+    limits = settings.limits(ctx.machine.motion_limits)
+    axes = tuple("xyz".index(a) for a in ctx.axis_names)
+    reader = Reader(None, reader_settings, str(path), path=path)
     try:
-        planned = plan(reader.moves(), settings.limits(ctx.machine.motion_limits), settings)
-    except GcodeError as exc:
-        raise TwinInputError(
-            "reference.file", f"{exc.source}:{exc.line}", f"{exc.text.strip()!r}: {exc.reason}"
-        ) from None
+        held, facts, samples = hold_or_count(
+            reader.moves(), limits, settings, MAX_SAMPLES if ctx.stock else HELD_SAMPLES
+        )
     except PlanningError as exc:
         raise TwinInputError("reference.file", spec.file, str(exc)) from None
-    return GcodeReference(planned, tuple("xyz".index(a) for a in ctx.axis_names), reader.lines_read)
+    if held is not None:
+        return GcodeReference(held, axes, reader.lines_read)
+    if samples > MAX_PROGRAM_SAMPLES:
+        raise TwinInputError(
+            "reference.file",
+            spec.file,
+            f"the program runs longer than {MAX_PROGRAM_SAMPLES * SAMPLE_PERIOD_S / 3600:.0f} hours of motion",
+        )
+    if ctx.stock:
+        raise TwinInputError(
+            "reference.file",
+            spec.file,
+            f"the program runs {samples * SAMPLE_PERIOD_S:.0f} s: a program cut in a stock is planned whole, at most "
+            f"{MAX_SAMPLES * SAMPLE_PERIOD_S:.0f} s; split it, or run it without the stock",
+        )
+    return StreamedGcodeReference(
+        lambda: Reader(None, reader_settings, str(path), path=path).moves(),
+        limits,
+        settings,
+        facts,
+        samples,
+        axes,
+        reader.lines_read,
+    )
 
 
 register("gcode", GcodeRef, build)

@@ -35,12 +35,15 @@ class ReferenceContext:
         dict of its fields).
     tools : frozenset of int or None
         The T numbers of the scenario's ``[[tools]]`` (None: no list, any T word).
+    stock : bool
+        Whether the scenario cuts a stock (a program's plan is then held whole).
     """
 
     axis_names: list[str]
     machine: Any = None
     planner: Any = field(default_factory=dict)
     tools: frozenset[int] | None = None
+    stock: bool = False
 
 
 def register(name: str, spec: type[KindSpec], build: Callable) -> Kind:

@@ -330,6 +330,26 @@ def simulate(
             )
         return loop.python_ticks(k0, k1, model, data, program, mj, sensor, drive_args, force, chunk, rec, acc)
 
+    is_program = hasattr(reference, "lines_at")
+    # what a program's reference says of the recorded ticks, gathered chunk by chunk as the run
+    # goes (a long program's reference is planned as it is asked for and keeps no past)
+    recorded: dict[str, list] = {"extra": [], "lines": [], "engagement": [], "feeds": []}
+
+    def record_program(k0: int, k1: int) -> None:
+        if record_every == 0:
+            return
+        ticks = np.arange(-(-k0 // record_every) * record_every, k1, record_every)
+        t_rec = ticks * control_period_s
+        if hasattr(reference, "extra_series"):
+            recorded["extra"].append(reference.extra_series(t_rec))
+        if is_program:
+            recorded["lines"].append(reference.lines_at(t_rec))
+            recorded["engagement"].append(reference.engagement_at(t_rec))
+            recorded["feeds"].append(reference.feeds_at(t_rec))
+
+    def gathered(name: str, rows: int, empty: np.ndarray) -> np.ndarray:
+        return np.concatenate(recorded[name])[:rows] if recorded[name] else empty
+
     def result(ticks: int, accumulated: int) -> RunResult:
         """The run's first ``ticks`` ticks (metrics over the ``accumulated`` ones)."""
         rows = 0 if record_every == 0 else -(-ticks // record_every)
@@ -337,8 +357,11 @@ def simulate(
         meas, u, ua, force_N = rec.meas[:rows], rec.u[:rows], rec.ua[:rows], rec.workpiece_force[:rows]
         error, force_max = acc.error, acc.force_max
         t_rec = np.arange(rows) * record_every * control_period_s
-        extra = reference.extra_series(t_rec) if hasattr(reference, "extra_series") else {}
-        program = hasattr(reference, "lines_at")
+        extra = (
+            {name: np.concatenate([part[name] for part in recorded["extra"]])[:rows] for name in recorded["extra"][0]}
+            if recorded["extra"]
+            else {}
+        )
         return RunResult(
             machine,
             t_rec,
@@ -358,13 +381,13 @@ def simulate(
                 "loop": "compiled" if use_compiled else "python",
                 "record_every": int(record_every),
                 "completed_ticks": ticks,
-                **({"program_cycle_time_s": reference.duration_s} if program else {}),
+                **({"program_cycle_time_s": reference.duration_s} if is_program else {}),
             },
             reference_extra=extra,
-            program_lines=reference.lines_at(t_rec) if program else np.zeros(0, int),
-            program_texts=reference.texts if program else {},
-            engagement=reference.engagement_at(t_rec) if program else np.zeros((0, 2)),
-            program_feed_mm_per_min=reference.feeds_at(t_rec) if program else np.zeros(0),
+            program_lines=gathered("lines", rows, np.zeros(0, int)),
+            program_texts=reference.texts if is_program else {},
+            engagement=gathered("engagement", rows, np.zeros((0, 2))),
+            program_feed_mm_per_min=gathered("feeds", rows, np.zeros(0)),
             part_outlines=outlines,
         )
 
@@ -395,6 +418,7 @@ def simulate(
                     )
                     exc.result = result(k0, k0)
                     raise exc
+                record_program(k0, k1)
                 chunk = loop.Chunk(ref, draw_noise(k1 - k0), u_dist)
                 status, k, s = run_chunk(k0, k1, chunk)
                 try:
