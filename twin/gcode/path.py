@@ -263,7 +263,9 @@ def move_segment(move: Move, start_m: np.ndarray, tolerance_m: float) -> Segment
     mode = move.path_mode
     tol = tolerance_m
     if move.kind == "dwell":
-        return Segment(move.line, "dwell", False, 0.0, start_m, start_m, dwell_s=move.dwell_s, mode=mode)
+        return Segment(
+            move.line, "dwell", False, 0.0, start_m, start_m, dwell_s=move.dwell_s, mode=mode, tolerance_m=tol
+        )
     if move.kind in ("rapid", "feed"):
         length = float(np.linalg.norm(end - start_m))
         if length < MIN_LENGTH_M:

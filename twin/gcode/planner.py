@@ -114,6 +114,17 @@ class Limits:
         )
 
 
+class _Context(NamedTuple):
+    """What the planner plans with: the limits, the feed override, the smoothing filter's length
+    (s) and samples, and the acceleration change (m/s^2) the filter may see within its length."""
+
+    limits: Limits
+    override: float
+    filter_s: float
+    n_filter: int
+    budget: float
+
+
 class PlannerSettings(StrictSpec):
     """The scenario's ``[planner]`` table (``twin gcode --set planner.KEY=VALUE``).
 
@@ -361,10 +372,15 @@ def _blended(programmed: Iterable[Segment]) -> Iterator[Segment]:
         yield previous
 
 
-def _junction_speed(a: Segment, b: Segment, limits: Limits, filter_s: float) -> float:
-    """The speed (m/s) the motion may keep through the junction of ``a`` and ``b``; 0: a stop."""
+def _junction_speed(a: Segment, b: Segment, ctx: _Context) -> float:
+    """The speed (m/s) the motion may keep through the junction of ``a`` and ``b``; 0: a stop.
+    Into and out of a corner blend: the blend's speed (held on the lines around it)."""
     if a.kind == "dwell" or b.kind == "dwell" or a.rapid != b.rapid or a.mode == "G61.1":
         return 0.0
+    limits, filter_s = ctx.limits, ctx.filter_s
+    blended = [seg for seg in (a, b) if seg.blend]
+    if blended:
+        return min(_segment_speed_limit(seg, limits, ctx.override, filter_s) for seg in blended)
     window = max(filter_s, SAMPLE_PERIOD_S)
     dt = SAMPLE_PERIOD_S
     speed = math.inf
@@ -404,6 +420,10 @@ def _segment_speed_limit(seg: Segment, limits: Limits, override: float, filter_s
         if filter_s > 0:
             # the filter shrinks an arc by v^2 T^2 / (24 R): within half the tolerance
             v = min(v, math.sqrt(24.0 * r * 0.5 * seg.tolerance_m) / filter_s)
+            if seg.blend:
+                # a blend shorter than the filter's window: the filter cuts the corner as a sharp
+                # one, by (v T / 8) sin(turn) (Tajima and Sencer 2016): within 90 % of the other half
+                v = min(v, 0.9 * 4.0 * seg.tolerance_m / (filter_s * math.sin(min(seg.sweep, math.pi / 2))))
     return v
 
 
@@ -591,14 +611,6 @@ def _sample_arc_length(t, t_grid, s_grid, v_grid):
     return s_grid[k] + np.minimum(v0 * tau + 0.5 * acc * tau * tau, ds), k
 
 
-class _Context(NamedTuple):
-    limits: Limits
-    override: float
-    filter_s: float
-    n_filter: int
-    budget: float
-
-
 @dataclass
 class _Raw:
     """Raw (unfiltered) samples of a stretch: positions (n, 3), line and tolerance of each."""
@@ -641,14 +653,14 @@ class _Smoother:
     its output (velocity, acceleration), one stretch at a time; what a stretch completes is
     given back, the filter's and the differences' look-back kept."""
 
-    def __init__(self, n_filter: int, start: np.ndarray, line: int):
+    def __init__(self, n_filter: int, start: np.ndarray, line: int, tolerance: float):
         self.n = n_filter
         self.tail = np.repeat(start[None, :], n_filter - 1, axis=0)  # raw samples before the next
         self.tail_line = np.full(n_filter - 1, line)
-        self.tail_tolerance = np.zeros(n_filter - 1)
+        self.tail_tolerance = np.full(n_filter - 1, tolerance)
         self.held = np.repeat(start[None, :], 2, axis=0)  # the last two filtered samples
         self.held_line = np.full(2, line)
-        self.held_tolerance = np.zeros(2)
+        self.held_tolerance = np.full(2, tolerance)
         self.previous_acceleration = np.zeros(3)
         self.emitted = 0
 
@@ -664,7 +676,9 @@ class _Smoother:
             out = (c[n:] - c[:-n]) / n
             centre = (n - 1) // 2
             out_line = lines[n - 1 - centre : len(lines) - centre]
-            out_tol = tolerance[n - 1 - centre : len(tolerance) - centre]
+            # the tolerance a filtered sample answers to: the largest in its window (it averages
+            # the raw samples there; a corner blended under one tolerance reaches into the next move)
+            out_tol = np.lib.stride_tricks.sliding_window_view(tolerance, n).max(axis=1)
             tail = (x[-(n - 1) :], lines[-(n - 1) :], tolerance[-(n - 1) :])
         else:
             out, out_line, out_tol = x.copy(), lines, tolerance
@@ -741,14 +755,16 @@ class _Stream:
         v_start = phase = least_time = 0.0
         for seg in self._pieces():
             if self.smoother is None:
-                self.smoother = _Smoother(self.ctx.n_filter, seg.start, seg.line)
-                yield from self._rest(seg.start, seg.line, 2)
-            speed = _junction_speed(buffer[-1], seg, self.limits, self.ctx.filter_s) if buffer else 0.0
+                self.smoother = _Smoother(self.ctx.n_filter, seg.start, seg.line, seg.tolerance_m)
+                yield from self._rest(seg.start, seg.line, 2, seg.tolerance_m)
+            speed = _junction_speed(buffer[-1], seg, self.ctx) if buffer else 0.0
             if buffer and speed == 0.0:  # a stop: the buffer is planned to rest
                 yield from self._stretch(buffer, junctions, v_start, 0.0, phase, to_end=True)
                 buffer, junctions, points, v_start, phase, least_time = [], [], 0, 0.0, 0.0, 0.0
             if seg.kind == "dwell":
-                yield from self._rest(seg.start, seg.line, max(1, round(seg.dwell_s / SAMPLE_PERIOD_S)))
+                yield from self._rest(
+                    seg.start, seg.line, max(1, round(seg.dwell_s / SAMPLE_PERIOD_S)), seg.tolerance_m
+                )
                 continue
             if buffer:
                 junctions.append(speed)
@@ -770,13 +786,13 @@ class _Stream:
         if self.smoother is not None:
             yield from self._finish()
 
-    def _rest(self, position: np.ndarray, line: int, count: int) -> Iterator[Chunk]:
-        """``count`` raw samples at rest (a dwell, the ends, the filter's settling after a stop),
-        in pieces of at most a window's time."""
+    def _rest(self, position: np.ndarray, line: int, count: int, tolerance: float) -> Iterator[Chunk]:
+        """``count`` raw samples at rest (a dwell, the ends), in pieces of at most a window's time."""
         piece = round(WINDOW_TIME_S / SAMPLE_PERIOD_S)
         for start in range(0, count, piece):
             n = min(piece, count - start)
-            yield from self._emit(_Raw(np.repeat(position[None, :], n, axis=0), np.full(n, line), np.zeros(n)))
+            raw = _Raw(np.repeat(position[None, :], n, axis=0), np.full(n, line), np.full(n, tolerance))
+            yield from self._emit(raw)
 
     def _stretch(self, segments, junctions, v_start, v_end, phase, to_end) -> Generator[Chunk, None, float]:
         """Plan, sample, check (and repair) and emit one stretch of the path; return the phase
@@ -908,7 +924,9 @@ class _Stream:
     def _finish(self) -> Iterator[Chunk]:
         """Two samples at rest after the last, and the last held sample's differences."""
         assert self.smoother is not None
-        yield from self._rest(self.smoother.held[-1], int(self.smoother.held_line[-1]), 2)
+        yield from self._rest(
+            self.smoother.held[-1], int(self.smoother.held_line[-1]), 2, float(self.smoother.held_tolerance[-1])
+        )
         positions, velocity, acceleration = self.smoother.differences(np.zeros((0, 3)), last=True)
         yield Chunk(
             self.first, positions, velocity, acceleration, self.smoother.held_line[1:], self.smoother.held_tolerance[1:]
