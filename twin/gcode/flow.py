@@ -58,6 +58,7 @@ class ProgramText:
         self.kept_from: int | None = None
         self.pulled = 0
         self.offset, self.number = 0, 0
+        self.line_offset = 0  # where the line last read starts
         if path is not None:
             self.handle = Path(path).open("rb")  # noqa: SIM115 - held for the program's reading, closed by close()
         elif isinstance(lines, Sequence) and not isinstance(lines, str):
@@ -94,6 +95,7 @@ class ProgramText:
             A line longer than :data:`MAX_LINE_CHARS` (at most that much of it is read) or
             with a NUL byte.
         """
+        self.line_offset = self.offset
         if self.handle is not None:
             raw = self.handle.readline(MAX_LINE_CHARS + 3)
             if not raw:
@@ -179,7 +181,6 @@ class Flow:
         self.skip: _Skip | None = None
         self.defining: str | None = None
         self.searching: tuple[str, tuple[float, ...], Position] | None = None
-        self.line_start = Position(0, 1)
         self.iterations = 0
         self.return_value = 0.0
         self.value_returned = 0.0
@@ -190,13 +191,17 @@ class Flow:
         return self.skip is not None
 
     @property
+    def line_start(self) -> Position:
+        """Where the line last read starts."""
+        return Position(self.text.line_offset, self.text.number)
+
+    @property
     def depth(self) -> int:
         """Subroutine calls in progress (LinuxCNC's ``_call_level``)."""
         return len(self.frames) - 1
 
     def next_line(self) -> str | None:
         """The text of the next line to read (None at the end of the file)."""
-        self.line_start = self.text.tell()
         text = self.text.next_line()
         if text is None:
             if self.searching is not None:

@@ -23,6 +23,7 @@ depth, subroutines, named parameters) has a limit with an error line of its own.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -32,7 +33,16 @@ from twin.errors import TwinInputError
 from twin.gcode.cycles import CYCLES, REFUSED_CYCLES, CycleMemory, cycle_calls
 from twin.gcode.flow import Flow, ProgramText
 from twin.gcode.parameters import Parameters
-from twin.gcode.words import G_GROUPS, M_GROUPS, Block, BlockError, read_block
+from twin.gcode.words import (
+    G_GROUPS,
+    M_GROUPS,
+    MAX_VALUE,
+    MOTION_LINE,
+    Block,
+    BlockError,
+    normalize,
+    read_block,
+)
 
 MM_PER_INCH = 25.4
 #: LinuxCNC's arc tolerances (interp_internal.hh) in program units: the R-arc and zero-radius
@@ -211,9 +221,10 @@ class Settings:
 class _State:
     """The interpreter's modal state, in program units (LinuxCNC's ``setup``)."""
 
-    def __init__(self):
+    def __init__(self) -> None:
         self.position = [0.0, 0.0, 0.0]  # the current point, work coordinates
         self.inch = False
+        self.mm_per_unit = 1.0  # 25.4 under G20
         self.incremental = False
         self.arc_incremental = True
         self.plane = 170
@@ -313,7 +324,7 @@ class Reader:
             if 5401 <= key <= 5409:
                 return self._tool_length(s.tool_in_spindle) if key == 5403 else 0.0
             return None
-        scale = MM_PER_INCH if s.inch else 1.0
+        scale = s.mm_per_unit
         values = {
             "_x": s.position[0],
             "_y": s.position[1],
@@ -384,6 +395,7 @@ class Reader:
             The first block the reader cannot take, with its line number, text and reason.
         """
         flow = self.flow
+        plain_motion_line = MOTION_LINE.fullmatch
         opened = started = False  # the file opened with a % line; a line other than blanks was read
         try:
             while True:
@@ -404,7 +416,16 @@ class Reader:
                     continue
                 started = started or bool(self.text)
                 try:
-                    block = read_block(text, self.params, flow.skipping)
+                    body = None
+                    if flow.skip is None:
+                        body = normalize(text)
+                        plain = plain_motion_line(body)
+                        if plain is not None:
+                            move = self._plain_motion(plain)
+                            if move is not None:
+                                yield move
+                                continue
+                    block = read_block(text, self.params, flow.skipping, body)
                     if block is None:
                         continue
                     if block.o is not None:
@@ -441,14 +462,8 @@ class Reader:
         """Run one block; its moves go to :attr:`out`."""
         s = self.state
         words = block.words
-        for code in block.g:
-            if code in REFUSED_G:
-                raise BlockError(REFUSED_G[code])
-        for code in block.m:
-            if code in REFUSED_M:
-                raise BlockError(REFUSED_M[code])
-        g_modes = _modes(block.g, G_GROUPS, "g") if block.g else _NO_MODES
-        m_modes = _modes(block.m, M_GROUPS, "m") if block.m else _NO_MODES
+        g_modes = _modes(block.g, G_GROUPS, REFUSED_G, "g") if block.g else _NO_MODES
+        m_modes = _modes(block.m, M_GROUPS, REFUSED_M, "m") if block.m else _NO_MODES
         odd = words.keys() - _UNCHECKED_WORDS
         if odd:
             for letter in _OTHER_AXES:
@@ -459,16 +474,8 @@ class Reader:
         motion = self._motion_to_be(g_modes, words)
         if odd:
             _check_words(words, g_modes, m_modes, motion)
-        mode0 = g_modes.get(0)
-        if mode0 == 40 and "p" not in words:
-            raise BlockError("dwell time missing with G4 (give P, seconds)")
-        if mode0 == 40 and motion in (20, 30):
-            raise BlockError("G4 not allowed with G2 or G3 because they both use P")
-        if mode0 == 530:
-            if motion not in (0, 10):
-                raise BlockError("must use G0 or G1 with G53")
-            if g_modes.get(3) == 910 or (g_modes.get(3) != 900 and s.incremental):
-                raise BlockError("cannot use G53 incremental")
+        if 0 in g_modes:
+            self._check_modal_0(g_modes, words, motion)
         if "f" in words:
             if words["f"] < 0:
                 raise BlockError(f"F = {words['f']:g}: a feed cannot be negative")
@@ -489,6 +496,69 @@ class Reader:
         if stop in (2, 30):
             s.ended = True
         # M0, M1, M60 (program pause) read as an operator pressing cycle start at once
+
+    def _plain_motion(self, plain: re.Match) -> Move | None:
+        """A line of :data:`~twin.gcode.words.MOTION_LINE` run at once, as :meth:`_execute` would
+        run it, and its move; None (nothing done) where a word needs the general path's checks."""
+        s = self.state
+        plane, code, x, y, z, i, j, k, r, f = plain.group("plane", "g", "x", "y", "z", "i", "j", "k", "r", "f")
+        motion = s.motion if code is None else int(code) * 10
+        centre = i is not None or j is not None or k is not None or r is not None
+        if motion == 0 or motion == 10:
+            if centre or (code is None and x is None and y is None and z is None):
+                return None
+        elif motion != 20 and motion != 30:
+            return None  # no motion in force (or a cycle): the general path says why
+        elif code is None and not centre and x is None and y is None and z is None:
+            return None
+        feed = s.feed if f is None else float(f)
+        if not 0.0 <= feed <= MAX_VALUE:
+            return None
+        if motion == 0 or motion == 10:
+            wx = 0.0 if x is None else float(x)
+            wy = 0.0 if y is None else float(y)
+            wz = 0.0 if z is None else float(z)
+            if not (abs(wx) <= MAX_VALUE and abs(wy) <= MAX_VALUE and abs(wz) <= MAX_VALUE):
+                return None
+            s.feed = feed
+            if plane is not None:
+                s.plane = int(plane) * 10
+            if motion == 10 and feed <= 0:
+                raise BlockError("cannot do G1 with zero feed rate (give F)")
+            px, py, pz = s.position
+            if s.incremental:
+                end = [px + wx, py + wy, pz + wz]
+            else:
+                end = [px if x is None else wx, py if y is None else wy, pz if z is None else wz]
+            move = self._linear_move(motion == 10, end)
+        else:
+            words = {}
+            for letter, number in (("x", x), ("y", y), ("z", z), ("i", i), ("j", j), ("k", k), ("r", r)):
+                if number is not None:
+                    value = float(number)
+                    if not -MAX_VALUE <= value <= MAX_VALUE:
+                        return None
+                    words[letter] = value
+            s.feed = feed
+            if plane is not None:
+                s.plane = int(plane) * 10
+            move = self._arc_move(motion, words)
+        s.motion = motion
+        self.cycle.initial = None
+        return move
+
+    def _check_modal_0(self, g_modes: dict[int, int], words: dict[str, float], motion: int | None) -> None:
+        """LinuxCNC's ``check_g_codes`` (G4 needs P; G53 goes with G0 or G1, not incremental)."""
+        mode0 = g_modes[0]
+        if mode0 == 40 and "p" not in words:
+            raise BlockError("dwell time missing with G4 (give P, seconds)")
+        if mode0 == 40 and motion in (20, 30):
+            raise BlockError("G4 not allowed with G2 or G3 because they both use P")
+        if mode0 == 530:
+            if motion not in (0, 10):
+                raise BlockError("must use G0 or G1 with G53")
+            if g_modes.get(3) == 910 or (g_modes.get(3) != 900 and self.state.incremental):
+                raise BlockError("cannot use G53 incremental")
 
     def _motion_to_be(self, g_modes: dict[int, int], words: dict[str, float]) -> int | None:
         """LinuxCNC's ``enhance_block``: the motion the block makes, and its checks."""
@@ -641,7 +711,7 @@ class Reader:
         ``convert_length_units``; the feed too, as its canonical layer keeps it physical)."""
         s = self.state
         factor = 1.0 / MM_PER_INCH if inch else MM_PER_INCH
-        s.inch = inch
+        s.inch, s.mm_per_unit = inch, MM_PER_INCH if inch else 1.0
         s.position = [v * factor for v in s.position]
         s.origin = [v * factor for v in s.origin]
         s.axis_offset = [v * factor for v in s.axis_offset]
@@ -687,7 +757,7 @@ class Reader:
         )
 
     def _offset_tuple(self) -> tuple[float, float, float]:
-        scale = MM_PER_INCH if self.state.inch else 1.0
+        scale = self.state.mm_per_unit
         ox, oy, oz = self._machine_offset()
         return (ox * scale, oy * scale, oz * scale)
 
@@ -848,19 +918,30 @@ class Reader:
             end[0], end[1] = polar_end(end[0], end[1], words.get("@"), words.get("^"), s.incremental)
         return end
 
-    def _move(self, kind: str, end: list[float], **extra) -> Move:
+    def _move(
+        self,
+        kind: str,
+        end: list[float],
+        feed_mm_per_min: float = 0.0,
+        plane: str = "",
+        center_mm: tuple[float, float] = (0.0, 0.0),
+        turns: int = 0,
+        dwell_s: float = 0.0,
+    ) -> Move:
         """A move from the current point to ``end`` (program units) with the modal state."""
         s = self.state
-        scale = MM_PER_INCH if s.inch else 1.0
+        scale = s.mm_per_unit
         x, y, z = s.position
         x1, y1, z1 = end
         end_mm = (x1 * scale, y1 * scale, z1 * scale)
-        ox, oy, oz = self._offset_mm
-        if not (abs(x1 * scale + ox) <= MAX_COORDINATE_MM and abs(y1 * scale + oy) <= MAX_COORDINATE_MM) or not (
-            abs(z1 * scale + oz) <= MAX_COORDINATE_MM
+        ox, oy, oz = offset_mm = self._offset_mm
+        if not (
+            abs(end_mm[0] + ox) <= MAX_COORDINATE_MM
+            and abs(end_mm[1] + oy) <= MAX_COORDINATE_MM
+            and abs(end_mm[2] + oz) <= MAX_COORDINATE_MM
         ):
             raise BlockError(
-                f"the move ends at {[round(v + o, 6) for v, o in zip(end_mm, self._offset_mm)]} mm "
+                f"the move ends at {[round(v + o, 6) for v, o in zip(end_mm, offset_mm)]} mm "
                 f"(machine coordinates), beyond {MAX_COORDINATE_MM:g} mm"
             )
         return Move(
@@ -868,24 +949,35 @@ class Reader:
             kind=kind,
             start_mm=(x * scale, y * scale, z * scale),
             end_mm=end_mm,
-            offset_mm=self._offset_mm,
+            offset_mm=offset_mm,
+            feed_mm_per_min=feed_mm_per_min,
             spindle_rpm=s.spindle_rpm,
             spindle=s.spindle,
+            plane=plane,
+            center_mm=center_mm,
+            turns=turns,
+            dwell_s=dwell_s,
             tolerance_mm=None if s.tolerance is None else s.tolerance * scale,
             text=self.text,
             tool=s.tool_in_spindle,
             coolant=s.coolant,
             path_mode=s.path_mode,
-            **extra,
         )
 
     def _linear(self, kind: str, end: list[float]) -> None:
+        self.out.append(self._linear_move(kind == "feed", end))
+
+    def _linear_move(self, feeding: bool, end: list[float]) -> Move:
+        """G1 (``feeding``) or G0 to ``end`` (program units), made the current point."""
         s = self.state
-        feed = s.feed * (MM_PER_INCH if s.inch else 1.0) if kind == "feed" else 0.0
-        self.out.append(self._move(kind, end, feed_mm_per_min=feed))
+        move = self._move("feed", end, s.feed * s.mm_per_unit) if feeding else self._move("rapid", end)
         s.position = end
+        return move
 
     def _arc(self, motion: int, words: dict[str, float]) -> None:
+        self.out.append(self._arc_move(motion, words))
+
+    def _arc_move(self, motion: int, words: dict[str, float]) -> Move:
         """G2 / G3: LinuxCNC's ``convert_arc2`` with ``arc_data_ijk`` / ``arc_data_r``."""
         s = self.state
         if s.feed <= 0:
@@ -917,7 +1009,7 @@ class Reader:
             ci, cj = words.get(i_word, 0.0), words.get(j_word, 0.0)
             center = (a0 + ci, b0 + cj) if s.arc_incremental else (ci, cj)
             _check_arc_radii(center, a0, b0, a1, b1, tolerance, CENTER_ARC_RADIUS_TOLERANCE[s.inch])
-        scale = MM_PER_INCH if s.inch else 1.0
+        scale = s.mm_per_unit
         move = self._move(
             "arc",
             end,
@@ -926,8 +1018,8 @@ class Reader:
             center_mm=(center[0] * scale, center[1] * scale),
             turns=-turns if clockwise else turns,
         )
-        self.out.append(move)
         s.position = end
+        return move
 
     def _cycle(self, motion: int, words: dict[str, float]) -> None:
         """A canned cycle's moves, at exact path (LinuxCNC runs its moves in G61)."""
@@ -973,10 +1065,13 @@ _NO_MODES: dict[int, int] = {}
 _SYSTEMS = {540: 1, 550: 2, 560: 3, 570: 4, 580: 5, 590: 6, 591: 7, 592: 8, 593: 9}
 
 
-def _modes(codes: list[int], groups: dict[int, int], letter: str) -> dict[int, int]:
-    """The block's codes by modal group (LinuxCNC's ``read_g`` / ``read_m`` checks)."""
+def _modes(codes: list[int], groups: dict[int, int], refused: dict[int, str], letter: str) -> dict[int, int]:
+    """The block's codes by modal group (LinuxCNC's ``read_g`` / ``read_m`` checks); a code the
+    twin does not take is refused with why."""
     modes: dict[int, int] = {}
     for code in codes:
+        if code in refused:
+            raise BlockError(refused[code])
         group = groups.get(code)
         if group is None:
             shown = f"G{code / 10:g}" if letter == "g" else f"M{code}"
@@ -1010,8 +1105,8 @@ def _check_words(words: dict[str, float], g_modes: dict[int, int], m_modes: dict
         raise BlockError("J word with no G2, G3 or G10 to use it")
     if "k" in words and not arc:
         raise BlockError("K word with no G2 or G3 to use it")
-    if "l" in words and not (cycle or mode0 == 100):
-        raise BlockError("L word with no G10 or canned cycle to use it")
+    if "l" in words and not (cycle or mode0 == 100 or m_modes.get(5) == 66):
+        raise BlockError("L word with no G10, canned cycle or M66 to use it")
     if "p" in words and not (
         orient
         or mode0 in (40, 100)

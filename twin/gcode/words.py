@@ -103,7 +103,8 @@ PRECEDENCE = {
     "]": 0,
 }
 
-_FAST_BLOCK = re.compile(r"(?:n[0-9]+(?:\.[0-9]+)?)?(?:[a-mp-z][-+]?[0-9.]+)*")
+_FAST_BLOCK = re.compile(r"(?:n[0-9]+(?:\.[0-9]+)?)?\(?(?:[a-mp-z][-+]?[0-9.]+\(?)*")
+_COMMENT = re.compile(r"\([^()]*\)")
 _FAST_WORD = re.compile(r"([a-mp-z])([-+]?[0-9.]+)")
 _NUMBER = re.compile(r"[-+]*[0-9.]*")
 _DIGITS = re.compile(r"[0-9]+")
@@ -154,7 +155,7 @@ class Block:
 
     __slots__ = ("g", "m", "o", "settings", "words")
 
-    def __init__(self):
+    def __init__(self) -> None:
         self.g: list[int] = []
         self.m: list[int] = []
         self.words: dict[str, float] = {}
@@ -172,10 +173,20 @@ def normalize(text: str) -> str:
     BlockError
         A comment not closed, nested, or a ``)`` with no ``(``.
     """
-    if "(" not in text and ")" not in text:
-        body = text.split(";", 1)[0] if ";" in text else text
-        body = body.replace(" ", "").replace("\t", "").replace("\r", "")
-        return body.lower() if body.isascii() else body.translate(_ASCII_LOWER)
+    if "(" in text or ")" in text:
+        body, count = _COMMENT.subn("(", text)
+        if body.count("(") != count or ")" in body:
+            return _normalize_by_character(text)  # unclosed, nested or stray: LinuxCNC's walk says which
+    else:
+        body = text
+    if ";" in body:
+        body = body.split(";", 1)[0]
+    body = body.replace(" ", "").replace("\t", "").replace("\r", "")
+    return body.lower() if body.isascii() else body.translate(_ASCII_LOWER)
+
+
+def _normalize_by_character(text: str) -> str:
+    """:func:`normalize` character by character, as LinuxCNC's ``close_and_downcase`` walks."""
     out: list[str] = []
     i, n = 0, len(text)
     while i < n:
@@ -197,7 +208,18 @@ def normalize(text: str) -> str:
     return "".join(out).translate(_ASCII_LOWER)
 
 
-def read_block(text: str, params: ParameterSource, skipping: bool = False) -> Block | None:
+#: A line of one motion and its words in the usual order (what most CAM output is), read at
+#: once: a plane (G17-G19), G0-G3 or none (the modal motion), X Y Z I J K R F, a trailing
+#: comment; other lines, and these where a word needs a check, take the reader's general path.
+_NUMBER_WORD = r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)"
+MOTION_LINE = re.compile(
+    r"(?:n[0-9]+(?:\.[0-9]+)?)?(?:g(?P<plane>1[789]))?(?:g0?(?P<g>[0-3]))?"
+    + "".join(f"(?:{c}(?P<{c}>{_NUMBER_WORD}))?" for c in "xyzijkrf")
+    + r"\(?"
+)
+
+
+def read_block(text: str, params: ParameterSource, skipping: bool = False, body: str | None = None) -> Block | None:
     """The block of one line, or None for a line with nothing on it.
 
     Parameters
@@ -215,7 +237,8 @@ def read_block(text: str, params: ParameterSource, skipping: bool = False) -> Bl
     BlockError
         What LinuxCNC's reader refuses, with its reason.
     """
-    body = normalize(text)
+    if body is None:
+        body = normalize(text)
     if not skipping and "(" in body and "abort" in text.lower():
         _abort_comment(text)
     if not body or body == "/":
@@ -244,12 +267,18 @@ def _fast_block(body: str) -> Block | None:
     words = block.words
     try:
         for letter, number in _FAST_WORD.findall(body):
-            value = float(number)
             if letter == "g":
-                block.g.append(_g_code(value, number))
-            elif letter == "m":
-                block.m.append(_integer(value, f"m{number}"))
-            elif letter in words:
+                # G1, G01, G17: whole numbers (most codes) without the float arithmetic
+                whole = number.isdigit() and len(number) <= 3
+                block.g.append(int(number) * 10 if whole else _g_code(float(number), number))
+                continue
+            if letter == "m":
+                block.m.append(
+                    int(number) if number.isdigit() and len(number) <= 3 else _integer(float(number), f"m{number}")
+                )
+                continue
+            value = float(number)
+            if letter in words:
                 raise BlockError(f"multiple {letter} words on one line")
             else:
                 if not -MAX_VALUE <= value <= MAX_VALUE:
