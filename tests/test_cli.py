@@ -4,6 +4,7 @@ import json
 import re
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -135,9 +136,12 @@ def test_list_and_bench():
         "npid_googol",
     ]
     gcode = figures["gcode"]
-    assert gcode["gcode_lines"] == 3000 and gcode["moves_read"] == 2999 and gcode["read_lines_per_s"] > 0
+    # the CAM program: 7 header lines (2 moves), 748 groups of 4 moves, M30 and %
+    assert gcode["gcode_lines"] == 3000 and gcode["moves_read"] == 2 + 4 * 748 and gcode["read_lines_per_s"] > 0
     assert gcode["plan_moves"] == 502 and gcode["plan_s"] > 0 and gcode["plan_cycle_time_s"] > 40
-    assert gcode["engagement_s"] > 0
+    assert gcode["plan_moves_per_s"] == pytest.approx(502 / gcode["plan_s"]) and gcode["engagement_s"] > 0
+    once, four_times = gcode["stream_peak_mb"].values()  # the stream's memory does not grow with its length
+    assert len(gcode["stream_peak_mb"]) == 2 and four_times < 1.5 * once
     for figures in cases.values():  # a ratio of medians can differ from the median of ratios, not by 3x
         assert figures["loop"] == "compiled" and figures["raw_steps_per_s"] > 0
         assert figures["closed_loop_steps_per_s"] * figures["timestep_s"] == pytest.approx(figures["realtime_factor"])
@@ -394,3 +398,50 @@ def test_run_imports_only_what_it_needs(scenario):
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr
     assert r.stdout.strip().splitlines()[-1] == "[]"
+
+
+LAUNCHER = [sys.executable, "-m", "twin.launcher"]
+
+
+def test_launcher_lists_a_program_with_the_reader_alone(tmp_path):
+    """``twin gcode FILE --json`` (the console script's fast path): the JSON of every move is
+    the reader's ``as_dict()``; a refused program prints nothing on stdout and one error line;
+    a pipe closed early ends it quietly; any other command line goes to the full CLI."""
+    from twin.gcode.reader import read_program
+    from twin.launcher import plain_listing
+
+    program = tmp_path / "part.ngc"
+    program.write_text("G21 G90 (cam)\nG0 X1 Y2 Z3\nG1 X4 F600 M8\nG2 X6 Y2 I1 J0\nG4 P0.5\nM30\n")
+    r = subprocess.run([*LAUNCHER, "gcode", str(program), "--json"], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0 and r.stderr == ""
+    assert json.loads(r.stdout)["moves"] == [move.as_dict() for move in read_program(program)]
+    assert len(json.loads(r.stdout)["moves"]) == 4
+    r = subprocess.run([*LAUNCHER, "gcode", str(program)], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0 and r.stdout.splitlines()[3].split()[:2] == ["4", "arc"]
+
+    program.write_text("G21\nG0 X1\nG1 X2 F100\nG41 X3\n")
+    r = subprocess.run([*LAUNCHER, "gcode", str(program), "--json"], capture_output=True, text=True, timeout=60)
+    assert (r.returncode, r.stdout) == (2, "")
+    assert r.stderr.splitlines() == [
+        f"error: {program}:4 = 'G41 X3': cutter radius compensation (G41) is not supported: give the tool-centre path"
+    ]
+
+    program.write_text("G21 G0 X0\n" + "G1 X1 F100\nX0\n" * 20_000)
+    r = subprocess.run(
+        f"{sys.executable} -m twin.launcher gcode {program} | head -c 100", shell=True, capture_output=True, text=True
+    )
+    assert len(r.stdout) == 100 and r.stderr == ""
+
+    assert plain_listing(["gcode", "a.ngc", "--json"]) == (Path("a.ngc"), True)
+    assert plain_listing(["gcode", "--json", "a.ngc"]) == (Path("a.ngc"), True)
+    assert plain_listing(["gcode", "a.ngc"]) == (Path("a.ngc"), False)
+    for argv in (
+        ["gcode", "a.ngc", "--machine", "x"],
+        ["gcode", "--help"],
+        ["gcode"],
+        ["run", "a"],
+        ["gcode", "a", "b"],
+    ):
+        assert plain_listing(argv) is None
+    r = subprocess.run([*LAUNCHER, "gcode", "--help"], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0 and "--machine" in r.stdout

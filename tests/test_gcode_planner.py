@@ -321,11 +321,9 @@ def test_the_deviation_is_the_exact_distance_to_the_arc():
     assert middle.max() == pytest.approx(r * (1 - math.sin(x) / x), rel=1e-3)
 
 
-@pytest.mark.parametrize("seed", range(4))
-def test_no_axis_exceeds_its_limits_on_hostile_paths_or_the_plan_says_where(seed):
-    """Random short moves, reversals, tiny and large arcs, changes of tolerance and path mode:
-    every sampled velocity, acceleration and jerk within the limits, or the plan names the line
-    and axis that is over (never a number over the limit said nothing about)."""
+def _hostile_program(seed: int) -> list[str]:
+    """60 random blocks: short moves, reversals, tiny and large arcs, changes of tolerance and
+    path mode."""
     rng = np.random.default_rng(seed)
     lines, x, y = ["G21 G90 G0 X0 Y0", "F6000"], 0.0, 0.0
     for _ in range(60):
@@ -341,6 +339,15 @@ def test_no_axis_exceeds_its_limits_on_hostile_paths_or_the_plan_says_where(seed
             x += step
             y += float(rng.normal()) * abs(step)
             lines.append(f"G1 X{x:.4f} Y{y:.4f}")
+    return lines
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_no_axis_exceeds_its_limits_on_hostile_paths_or_the_plan_says_where(seed):
+    """Random short moves, reversals, tiny and large arcs, changes of tolerance and path mode:
+    every sampled velocity, acceleration and jerk within the limits, or the plan names the line
+    and axis that is over (never a number over the limit said nothing about)."""
+    lines = _hostile_program(seed)
     limits = PlannerSettings().limits(build("googol_xy").motion_limits)
     p = _plan(lines, limits)
     over = [
@@ -383,3 +390,25 @@ def test_a_streamed_reference_is_the_held_one_in_bounded_memory(monkeypatch):
         assert (streamed.lines_at(t[:700]) == held_reference.lines_at(t[:700])).all()
         window = max(window, len(streamed.held[0]))
     assert window < len(held.position) / 3
+
+
+def test_twin_gcode_says_which_line_and_axis_is_over_a_limit(tmp_path, monkeypatch):
+    """With the repairs turned off, a hostile path's reference is over the jerk limit in places:
+    the text and the JSON of ``twin gcode --machine`` name each line and axis, as the plan does."""
+    import twin.gcode.planner as planner
+
+    monkeypatch.setattr(planner, "MAX_REPAIRS", 0)
+    lines = _hostile_program(1)
+    program = tmp_path / "hostile.ngc"
+    program.write_text("\n".join(lines) + "\n")
+    limits = PlannerSettings().limits(build("googol_xy").motion_limits)
+    violations = _plan(lines, limits).violations
+    assert violations and all(v.ratio > 1 for v in violations)
+    out = CliRunner().invoke(app, ["gcode", str(program), "--machine", "googol_xy"])
+    assert out.exit_code == 0, out.output
+    said = [line.strip() for line in out.output.splitlines() if "over a limit" in line]
+    assert said == [f"over a limit: line {v.line}, {v.axis} {v.quantity} x{v.ratio:.4f}" for v in violations]
+    out = CliRunner().invoke(app, ["gcode", str(program), "--machine", "googol_xy", "--json"])
+    assert [(v["line"], v["axis"]) for v in json.loads(out.output)["planned"]["violations"]] == [
+        (v.line, v.axis) for v in violations
+    ]

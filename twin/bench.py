@@ -18,11 +18,14 @@ Cases:
 (e) ``gcode_test_piece_linear_motor``: the bundled ``gcode_test_piece`` (the part program planned
     once, before the timing; its reference sampled by Hermite interpolation every tick).
 
-G-code (``gcode``): the reader's lines per second on a generated program of ``gcode_lines``
-lines read from a file on one core (``read_lines_per_s``), and the planner's wall time for a
-generated pocket raster of ``plan_moves`` moves (``gcode_moves``, default 10 000), lines with
-tangent arc turnarounds (``plan_s``, median of the repeats) on ``linear_motor_xy``'s limits, and
-the engagement along it through a 7 mm wide stock with a 1 mm cutter (``engagement_s``).
+G-code (``gcode``): the reader's lines per second on a generated CAM-like program of
+``gcode_lines`` lines read from a file on one core (``read_lines_per_s``: inches, four decimals,
+modal words, arcs in G17, G18 and G19, as the 169 220-line program of issue 30), the planner's
+wall time for a generated pocket raster of ``plan_moves`` moves (``gcode_moves``, default 10 000),
+lines with tangent arc turnarounds (``plan_s``, median of the repeats, and ``plan_moves_per_s``) on
+``linear_motor_xy``'s limits, the engagement along it through a 7 mm wide stock with a 1 mm cutter
+(``engagement_s``), and the peak memory (tracemalloc) of the planner streaming the raster once
+and four times over (``stream_peak_mb``, by reference length in s): bounded, not growing with it.
 
 Start-up (``startup``): wall time of ``twin run seed004_cutting_circle --json`` (2.2 s simulated)
 as a new Python process (``python -m twin.cli``, as the ``twin`` script), alternating with the
@@ -37,6 +40,7 @@ import statistics
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from typing import Any
 
 import mujoco
@@ -103,22 +107,53 @@ def raster_program(n_moves: int) -> list[str]:
     return lines
 
 
+def cam_program(n_lines: int) -> Iterator[str]:
+    """A CAM-like program of ``n_lines`` lines: G20, four decimals, modal motion words, arcs in
+    the G17, G18 and G19 planes (their end radius within LinuxCNC's tolerance), comments; the
+    words of a block in the order posts write them (X Y Z I J K F)."""
+    yield "%"
+    yield "(generated for twin bench: CAM-style output)"
+    yield "G20 G90 G17 G40 G80 G94 G91.1"
+    yield "T1 M6"
+    yield "S12000 M3"
+    yield "G0 X0.0000 Y0.0000 Z0.2000"
+    yield "G1 Z-0.0500 F20.0"
+    planes = (("G17", "X", "Y", "I", "J"), ("G18", "Z", "X", "K", "I"), ("G19", "Y", "Z", "J", "K"))
+    order = "XYZIJKF"
+
+    def block(code: str, **words: str) -> str:
+        return " ".join([code, *(f"{letter}{words[letter]}" for letter in order if letter in words)]).strip()
+
+    n = 7
+    while n < n_lines - 2:
+        plane, a, b, i, j = planes[(n // 60) % 3]
+        step = (n % 97) * 0.0013
+        far, back = f"{0.3 - step / 7:.4f}", f"{0.6 + step:.4f}"
+        yield block(f"{plane} G1", **{a: f"{0.5 + step:.4f}", b: "0.2500", "F": "40.0"})
+        yield block("", **{a: back, b: far})
+        yield block("G2", **{a: f"{0.7 + step:.4f}", b: far, i: "0.0500", j: "0.0000"})
+        yield block("G3", **{a: back, b: far, i: "-0.0500", j: "0.0000"}) + " (return)"
+        n += 4
+    yield "M30"
+    yield "%"
+
+
 def gcode_figures(lines: int = 1_000_000, repeats: int = 5, moves: int = 10_000) -> dict:
-    """The reader's throughput and the planner's time (see the module docstring)."""
+    """The reader's throughput, the planner's time and the stream's memory (see the module
+    docstring)."""
     import tempfile
+    import tracemalloc
     from pathlib import Path
 
-    from twin.gcode.planner import PlannerSettings, plan
+    from twin.gcode.planner import PlannerSettings, plan, plan_stream
     from twin.gcode.reader import Reader, read_program
     from twin.process.machining import StockSpec, ToolSpec, program_milling
 
-    pattern = ["G1 X{i}.5 Y{j}.25 Z-1.5 F1200", "G2 X{i}.5 Y{j}.25 I-0.5 J0", "N{n} G0 X{i} Y{j} (rapid)"]
     with tempfile.TemporaryDirectory() as folder:
-        path = Path(folder) / "long.ngc"
+        path = Path(folder) / "cam.ngc"
         with path.open("w") as out:
-            out.write("G21 G90 G94\n")
-            for n in range(lines - 1):
-                out.write(pattern[n % 3].format(i=(n // 3) % 97, j=(n // 3) % 89, n=n) + "\n")
+            for text in cam_program(lines):
+                out.write(text + "\n")
         t0 = time.perf_counter()
         read = sum(1 for _ in read_program(path))
         read_s = time.perf_counter() - t0
@@ -135,14 +170,24 @@ def gcode_figures(lines: int = 1_000_000, repeats: int = 5, moves: int = 10_000)
         t0 = time.perf_counter()
         program_milling(planned, stock, ToolSpec(diameter_mm=1.0, n_flutes=2), [], 0)
         engagement.append(time.perf_counter() - t0)
+    peaks = {}
+    for times in (1, 4):
+        tracemalloc.start()
+        chunks, _facts = plan_stream(Reader(raster_program(moves * times)).moves(), limits, settings)
+        samples = sum(len(chunk.position) for chunk in chunks)
+        peaks[f"{samples / 1e3:.0f}"] = tracemalloc.get_traced_memory()[1] / 1e6
+        tracemalloc.stop()
+    plan_s = statistics.median(timings)
     return {
         "gcode_lines": lines,
         "moves_read": read,
         "read_lines_per_s": lines / read_s,
         "plan_moves": len(program),
-        "plan_s": statistics.median(timings),
+        "plan_s": plan_s,
+        "plan_moves_per_s": len(program) / plan_s,
         "plan_cycle_time_s": planned.cycle_time_s,
         "engagement_s": statistics.median(engagement),
+        "stream_peak_mb": peaks,
     }
 
 

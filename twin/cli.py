@@ -86,7 +86,7 @@ def _print_summary(name: str, summary: dict) -> None:
             value = "  ".join(f"{a}: {v:.3f}" for a, v in value.items())
         elif isinstance(value, float):
             value = f"{value:.3f}"
-        typer.echo(f"  {key:<24} {value}")
+        typer.echo(f"  {key:<28} {value}")
 
 
 def _run(
@@ -340,14 +340,9 @@ def gcode(
 
     Nothing is printed on stdout for a program that is refused: the listing is written to a
     temporary file and copied out once the whole program has been read (and planned)."""
-    import shutil
-    import tempfile
+    from twin.gcode.listing import list_program
+    from twin.gcode.reader import Settings
 
-    from twin.gcode.listing import HEADER, move_json, move_row
-    from twin.gcode.reader import Settings, read_program
-
-    if not file.is_file():
-        raise TwinInputError("file", str(file), "is a folder" if file.is_dir() else "no such file")
     reader_settings, planner = Settings(), None
     if settings or machine is not None:  # the settings' schema (pydantic) only where it is used
         from twin.references.gcode import program_settings
@@ -355,30 +350,15 @@ def gcode(
 
         reference, planner = program_settings(str(file), parse_settings(settings or []))
         reader_settings = reference.reader_settings()
-    row = move_json if as_json else move_row
-    with tempfile.SpooledTemporaryFile(max_size=64 << 20, mode="w+") as out:
-        out.write(f'{{"file": {json.dumps(str(file))}, "moves": [\n' if as_json else HEADER + "\n")
-        separator = ",\n" if as_json else "\n"
-        kept: list | None = [] if machine is not None else None
-        first = True
-        for move in read_program(file, reader_settings):
-            if kept is not None:
-                kept.append(move)
-            out.write(row(move) if first else separator + row(move))
-            first = False
-        planned = None
-        if kept is not None:
-            planned = _planned(file, kept, machine, planner)
-        if as_json:
-            tail = "" if planned is None else f', "planned": {json.dumps(planned, indent=1, allow_nan=False)}'
-            out.write(f"\n]{tail}}}\n")
-        elif not first:
-            out.write("\n")
-        out.seek(0)
-        shutil.copyfileobj(out, sys.stdout)
+    plan = None if machine is None else (lambda moves: _planned(file, moves, machine, planner))
+    planned = list_program(file, reader_settings, as_json, plan)
     if planned is not None and not as_json:
         typer.echo(f"planned for {machine}:")
-        _print_summary("", {k: v for k, v in planned.items() if k not in ("limits", "max")})
+        _print_summary("", {k: v for k, v in planned.items() if k not in ("limits", "max", "violations", "notes")})
+        for over in planned["violations"]:
+            typer.echo(f"  over a limit: line {over['line']}, {over['axis']} {over['quantity']} x{over['ratio']:.4f}")
+        for note in planned["notes"]:
+            typer.echo(f"  note: {note}")
         for axis in "xyz":
             lim, top = planned["limits"][axis], planned["max"][axis]
             typer.echo(
@@ -637,9 +617,11 @@ def bench(
     )
     g = figures["gcode"]
     typer.echo(
-        f"G-code: read {g['gcode_lines']:,} lines at {g['read_lines_per_s']:,.0f} lines/s; "
-        f"planned {g['plan_moves']:,} moves in {g['plan_s']:.2f} s "
-        f"(cycle time {g['plan_cycle_time_s']:.0f} s), their engagement in {g['engagement_s']:.2f} s"
+        f"G-code: read {g['gcode_lines']:,} CAM-like lines at {g['read_lines_per_s']:,.0f} lines/s; "
+        f"planned {g['plan_moves']:,} moves in {g['plan_s']:.2f} s ({g['plan_moves_per_s']:,.0f} moves/s, "
+        f"cycle time {g['plan_cycle_time_s']:.0f} s), their engagement in {g['engagement_s']:.2f} s; "
+        "the streamed plan's peak memory "
+        + ", ".join(f"{mb:.1f} MB for {length} s" for length, mb in g["stream_peak_mb"].items())
     )
 
 
@@ -678,7 +660,7 @@ def _terminate(signum, frame):
 
 
 def main() -> None:
-    """Console-script entry point."""
+    """The command line (:mod:`twin.launcher` runs it for every command but a plain listing)."""
     signal.signal(signal.SIGTERM, _terminate)
     app(prog_name="twin")
 
