@@ -412,3 +412,25 @@ def test_twin_gcode_says_which_line_and_axis_is_over_a_limit(tmp_path, monkeypat
     assert [(v["line"], v["axis"]) for v in json.loads(out.output)["planned"]["violations"]] == [
         (v.line, v.axis) for v in violations
     ]
+
+
+def test_the_look_ahead_plans_each_window_a_bounded_number_of_times(monkeypatch):
+    """googol_xy's pocket raster (5 mm lines at 50 mm/s between 0.5 mm arcs at 9.8 mm/s): the
+    window is handed on at the arcs' cruise, about every 20 s of motion, and a window with no
+    cruise is planned again only once it is half as long again (before: at every new segment,
+    two look-aheads per move, 140 times slower on 2000 moves)."""
+    import twin.gcode.planner as planner
+    from twin.bench import raster_program
+
+    grids = []
+    grid_init = planner._Grid.__init__
+
+    def counted(self, *args, **kwargs):
+        grids.append(1)
+        grid_init(self, *args, **kwargs)
+
+    monkeypatch.setattr(planner._Grid, "__init__", counted)
+    limits = PlannerSettings().limits(build("googol_xy").motion_limits)
+    p = _plan(raster_program(400), limits)
+    assert p.cycle_time_s >= p.feed_only_time_s and not p.violations
+    assert len(grids) <= 0.2 * p.cycle_time_s + 2, len(grids)

@@ -21,8 +21,9 @@ How (our design; the docs page ``gcode.md`` says why):
    acceleration the axes have left beside the centripetal one (the time-optimal
    acceleration-limited speed profile), over a window of the path: the part of the window whose
    speeds a stop at the window's end and full speed there agree on is final and handed on (cut
-   at a cruise, where the speed is constant for the filter's length), the rest planned again
-   with more of the path. Neither the program nor the reference is ever held whole.
+   at a cruise, where the speed is constant for twice the filter's reach at that speed), the
+   rest planned again with more of the path (a window with no cruise yet: once it is half as long
+   again, so that planning stays linear in the program's length). Neither the program nor the reference is ever held whole.
 5. Jerk: each axis's position passes a moving-average filter of length ``T = max(a_i / j_i)``
    (FIR interpolation, Tajima and Sencer 2016): a trapezoidal acceleration becomes an S-curve.
    Where the profile turns from accelerating to braking (or back) in less than ``T`` the filter
@@ -506,42 +507,47 @@ class _Grid:
 
     def __init__(self, segments: list[Segment], junctions: list[float], v_start: float, v_end: float, ctx):
         limits, override, filter_s = ctx.limits, ctx.override, ctx.filter_s
-        limit = [_segment_speed_limit(seg, limits, override, filter_s) for seg in segments]
+        n = len(segments)
+        length = np.array([seg.length for seg in segments])
+        limit = np.array([_segment_speed_limit(seg, limits, override, filter_s) for seg in segments])
+        # each segment's points: at least 4, GRID_M apart at most (numpy's linspace, vectorized)
+        counts = np.maximum(4, np.ceil(length / GRID_M).astype(np.int64) + 1)
+        owner = np.repeat(np.arange(n), counts)
+        first = np.cumsum(counts) - counts
+        local = (np.arange(owner.size) - first[owner]) * (length / (counts - 1))[owner]
+        local[first + counts - 1] = length
         # a junction passed below the speeds around it is held for v T on either side (grid
         # points put where the hold ends), so every window of the filter around it sees no
         # change of speed and it rounds the junction no more than the junction's speed allows
-        held = [(v if math.isfinite(v) else 0.0) for v in junctions]
-        s_parts, v_parts, a_parts, d_parts, k_parts, index = [], [], [], [], [], []
-        s0 = 0.0
-        for i, seg in enumerate(segments):
-            n = max(4, math.ceil(seg.length / GRID_M) + 1)
-            grid = np.linspace(0.0, seg.length, n)
-            before = min(held[i - 1] * filter_s, seg.length) if i > 0 else 0.0
-            after = min(held[i] * filter_s, seg.length) if i + 1 < len(segments) else 0.0
-            cuts = [c for c in (before, seg.length - after) if 0.0 < c < seg.length]
-            if cuts:
-                grid = np.union1d(grid, cuts)
-            vmax = np.full(grid.size, limit[i])
-            if i > 0:
-                vmax[grid <= before] = np.minimum(vmax[grid <= before], junctions[i - 1])
-            if i + 1 < len(segments):
-                vmax[grid >= seg.length - after] = np.minimum(vmax[grid >= seg.length - after], junctions[i])
-            s_parts.append(s0 + grid)
-            v_parts.append(vmax)
-            a_parts.append(np.full(grid.size, _path_acceleration(seg, limits)))
-            d_parts.append(np.full(grid.size, _arc_damping(seg, limit[i], filter_s)))
-            k_parts.append(np.full(grid.size, seg.curvature))
-            index.append(np.full(grid.size, i))
-            s0 += seg.length
+        into = np.array([math.inf, *junctions])  # the junction each segment starts at (none: inf)
+        out_of = np.array([*junctions, math.inf])
+        held = np.nan_to_num(np.array(junctions, dtype=float), posinf=0.0) * filter_s
+        before = np.minimum(np.concatenate([[0.0], held]), length)
+        after = np.minimum(np.concatenate([held, [0.0]]), length)
+        cut_owner = np.concatenate([np.arange(n), np.arange(n)])
+        cut = np.concatenate([before, length - after])
+        inside = (cut > 0.0) & (cut < length[cut_owner])
+        owner = np.concatenate([owner, cut_owner[inside]])
+        local = np.concatenate([local, cut[inside]])
+        order = np.lexsort((local, owner))
+        owner, local = owner[order], local[order]
+        fresh = np.concatenate([[True], (owner[1:] != owner[:-1]) | (local[1:] != local[:-1])])
+        owner, local = owner[fresh], local[fresh]
+        vmax = limit[owner]
+        at_start = local <= before[owner]
+        vmax[at_start] = np.minimum(vmax[at_start], into[owner[at_start]])
+        at_end = local >= (length - after)[owner]
+        vmax[at_end] = np.minimum(vmax[at_end], out_of[owner[at_end]])
+        offset = np.concatenate([[0.0], np.cumsum(length)[:-1]])  # as a running sum adds them
         self.segments = segments
-        self.s = np.concatenate(s_parts)
-        self.vmax = np.concatenate(v_parts)
+        self.s = offset[owner] + local
+        self.vmax = vmax
         self.vmax[0] = min(self.vmax[0], v_start)
         self.vmax[-1] = min(self.vmax[-1], v_end)
-        self.a_t = np.concatenate(a_parts)
-        self.damping = np.concatenate(d_parts)
-        self.curvature = np.concatenate(k_parts)
-        self.index = np.concatenate(index)
+        self.a_t = np.array([_path_acceleration(seg, limits) for seg in segments])[owner]
+        self.damping = np.array([_arc_damping(seg, v, filter_s) for seg, v in zip(segments, limit)])[owner]
+        self.curvature = np.array([seg.curvature for seg in segments])[owner]
+        self.index = owner
 
     def speeds(self, filter_s: float, budget: float) -> np.ndarray:
         """The profile: passes, then the speed lowered at every swing the filter cannot take
@@ -753,6 +759,7 @@ class _Stream:
         junctions: list[float] = []  # the speed through each junction of the buffer's segments
         points = 0
         v_start = phase = least_time = 0.0
+        window_points, window_time = float(WINDOW_POINTS), WINDOW_TIME_S  # the window is planned at this size
         for seg in self._pieces():
             if self.smoother is None:
                 self.smoother = _Smoother(self.ctx.n_filter, seg.start, seg.line, seg.tolerance_m)
@@ -761,6 +768,7 @@ class _Stream:
             if buffer and speed == 0.0:  # a stop: the buffer is planned to rest
                 yield from self._stretch(buffer, junctions, v_start, 0.0, phase, to_end=True)
                 buffer, junctions, points, v_start, phase, least_time = [], [], 0, 0.0, 0.0, 0.0
+                window_points, window_time = float(WINDOW_POINTS), WINDOW_TIME_S
             if seg.kind == "dwell":
                 yield from self._rest(
                     seg.start, seg.line, max(1, round(seg.dwell_s / SAMPLE_PERIOD_S)), seg.tolerance_m
@@ -771,10 +779,12 @@ class _Stream:
             buffer.append(seg)
             points += _grid_points(seg)
             least_time += seg.length / _segment_speed_limit(seg, self.limits, self.ctx.override, self.ctx.filter_s)
-            while points >= WINDOW_POINTS or least_time >= WINDOW_TIME_S:
+            while points >= window_points or least_time >= window_time:
                 rest = yield from self._hand_on(buffer, junctions, v_start, phase, full=points >= MAX_WINDOW_POINTS)
-                if rest is None:
+                if rest is None:  # no cruise yet: planned again once the window is half as long again
+                    window_points, window_time = min(1.5 * points, MAX_WINDOW_POINTS), 1.5 * least_time
                     break
+                window_points, window_time = float(WINDOW_POINTS), WINDOW_TIME_S
                 buffer, junctions, v_start, phase = rest
                 points = sum(_grid_points(s) for s in buffer)
                 least_time = sum(
@@ -865,12 +875,12 @@ class _Stream:
         window = max(ctx.filter_s, SAMPLE_PERIOD_S)
         top = float(v[:final].max()) if final else 0.0
         reach_back = top * top / (2 * min(ctx.limits.acceleration_m_per_s2)) + 2 * top * window
-        hold = 2 * top * window + 2 * GRID_M
         flat = np.abs(np.diff(v)) <= 1e-9 * np.maximum(v[1:], 1e-9)
         end = np.searchsorted(grid.s, grid.s[final - 1] - reach_back) if final else 0
         for k in range(min(end, len(v) - 2), 0, -25):
             if v[k] <= 0 or grid.index[k - 1] != grid.index[k] or grid.index[k + 1] != grid.index[k]:
                 continue
+            hold = 2 * float(v[k]) * window + 2 * GRID_M  # twice the filter's reach at this speed
             lo = np.searchsorted(grid.s, grid.s[k] - hold)
             hi = np.searchsorted(grid.s, grid.s[k] + hold)
             if lo > 0 and hi < len(v) - 1 and flat[lo:hi].all():
