@@ -142,6 +142,7 @@ def test_list_and_bench():
     assert gcode["plan_moves_per_s"] == pytest.approx(502 / gcode["plan_s"]) and gcode["engagement_s"] > 0
     once, four_times = gcode["stream_peak_mb"].values()  # the stream's memory does not grow with its length
     assert len(gcode["stream_peak_mb"]) == 2 and four_times < 1.5 * once
+    assert len(gcode["run_peak_mb"]) == 2 and all(mb > 0 for mb in gcode["run_peak_mb"].values())
     for figures in cases.values():  # a ratio of medians can differ from the median of ratios, not by 3x
         assert figures["loop"] == "compiled" and figures["raw_steps_per_s"] > 0
         assert figures["closed_loop_steps_per_s"] * figures["timestep_s"] == pytest.approx(figures["realtime_factor"])

@@ -24,8 +24,11 @@ modal words, arcs in G17, G18 and G19, as the 169 220-line program of issue 30),
 wall time for a generated pocket raster of ``plan_moves`` moves (``gcode_moves``, default 10 000),
 lines with tangent arc turnarounds (``plan_s``, median of the repeats, and ``plan_moves_per_s``) on
 ``linear_motor_xy``'s limits, the engagement along it through a 7 mm wide stock with a 1 mm cutter
-(``engagement_s``), and the peak memory (tracemalloc) of the planner streaming the raster once
-and four times over (``stream_peak_mb``, by reference length in s): bounded, not growing with it.
+(``engagement_s``), the peak memory (tracemalloc) of the planner streaming the raster once and
+four times over (``stream_peak_mb``, by reference length in s: what grows is each line's text,
+feed, spindle and tool, which the per-line results report), and of a whole run of the bundled
+``gcode_seed004_circle`` scenario on a twelfth of the raster and four times that
+(``run_peak_mb``, by cycle time in s: the recording keeps at most 100 000 ticks).
 
 Start-up (``startup``): wall time of ``twin run seed004_cutting_circle --json`` (2.2 s simulated)
 as a new Python process (``python -m twin.cli``, as the ``twin`` script), alternating with the
@@ -145,6 +148,7 @@ def gcode_figures(lines: int = 1_000_000, repeats: int = 5, moves: int = 10_000)
     import tracemalloc
     from pathlib import Path
 
+    from twin import api
     from twin.gcode.planner import PlannerSettings, plan, plan_stream
     from twin.gcode.reader import Reader, read_program
     from twin.process.machining import StockSpec, ToolSpec, program_milling
@@ -180,6 +184,18 @@ def gcode_figures(lines: int = 1_000_000, repeats: int = 5, moves: int = 10_000)
             samples = sum(len(chunk.position) for chunk in chunks)
             peaks[f"{samples / 1e3:.0f}"] = tracemalloc.get_traced_memory()[1] / 1e6
             tracemalloc.stop()
+    run_peaks = {}
+    with tempfile.TemporaryDirectory() as folder:
+        # the bundled circle's scenario (no stock: its reference streamed) on the raster, after a
+        # run that loads what a first run loads; then the raster and four times the raster
+        for times in (0, 1, 4):
+            path = Path(folder) / f"run{times}.ngc"
+            path.write_text("\n".join(raster_program(max(2, moves // 12 * times))) + "\n")
+            tracemalloc.start()
+            run = api.run(api.load("gcode_seed004_circle", **{"reference.file": str(path)}))
+            if times:
+                run_peaks[f"{run.summary['cycle_time_s']:.0f}"] = tracemalloc.get_traced_memory()[1] / 1e6
+            tracemalloc.stop()
     plan_s = statistics.median(timings)
     return {
         "gcode_lines": lines,
@@ -191,6 +207,7 @@ def gcode_figures(lines: int = 1_000_000, repeats: int = 5, moves: int = 10_000)
         "plan_cycle_time_s": planned.cycle_time_s,
         "engagement_s": statistics.median(engagement),
         "stream_peak_mb": peaks,
+        "run_peak_mb": run_peaks,
     }
 
 

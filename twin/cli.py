@@ -622,6 +622,8 @@ def bench(
         f"cycle time {g['plan_cycle_time_s']:.0f} s), their engagement in {g['engagement_s']:.2f} s; "
         "the streamed plan's peak memory "
         + ", ".join(f"{mb:.1f} MB for {length} s" for length, mb in g["stream_peak_mb"].items())
+        + "; a run's "
+        + ", ".join(f"{mb:.1f} MB for {length} s" for length, mb in g["run_peak_mb"].items())
     )
 
 

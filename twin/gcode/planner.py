@@ -22,8 +22,9 @@ How (our design; the docs page ``gcode.md`` says why):
    acceleration-limited speed profile), over a window of the path: the part of the window whose
    speeds a stop at the window's end and full speed there agree on is final and handed on (cut
    at a cruise, where the speed is constant for twice the filter's reach at that speed), the
-   rest planned again with more of the path (a window with no cruise yet: once it is half as long
-   again, so that planning stays linear in the program's length). Neither the program nor the reference is ever held whole.
+   rest planned again with more of the path (a window with no cruise yet: once it is half as
+   long again, so that planning stays linear in the program's length). Neither the program nor
+   the reference is ever held whole.
 5. Jerk: each axis's position passes a moving-average filter of length ``T = max(a_i / j_i)``
    (FIR interpolation, Tajima and Sencer 2016): a trapezoidal acceleration becomes an S-curve.
    Where the profile turns from accelerating to braking (or back) in less than ``T`` the filter
