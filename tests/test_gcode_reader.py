@@ -254,3 +254,14 @@ def test_every_word_and_coordinate_is_bounded():
         _read("G1 X" + "9" * 200 + " F100")
     with pytest.raises(GcodeError, match="beyond 1e"):
         _read("G21 F100\n#1 = 999999\no1 repeat [3]\nG91 G1 X#1\no1 endrepeat")
+
+
+def test_an_error_in_a_file_deep_in_folders_keeps_its_name_and_line(tmp_path):
+    deep = tmp_path / ("a_folder_with_a_long_name_" * 4) / "part.ngc"
+    deep.parent.mkdir()
+    deep.write_text("G21\nG0 X1\nG41 X2\n")
+    with pytest.raises(GcodeError) as err:
+        list(read_program(deep))
+    field = str(err.value).split(" = ")[0]
+    assert field.startswith("...") and field.endswith("_name_/part.ngc:3") and len(field) <= 80
+    assert str(err.value).startswith(f"{field} = 'G41 X2': cutter radius compensation")

@@ -56,6 +56,8 @@ SPIRAL_RELATIVE_TOLERANCE = 0.001
 MAX_ARC_TURNS = 1000
 #: Largest coordinate of any move (mm; ours: a kilometre, far beyond any machine).
 MAX_COORDINATE_MM = 1e6
+#: Characters of a program's path an error line shows (its end: the file's name).
+SOURCE_CHARS = 68
 
 #: The in-plane axes (LinuxCNC's order) and the normal axis of each plane, as indices of x, y, z.
 PLANES = {"xy": (0, 1, 2), "zx": (2, 0, 1), "yz": (1, 2, 0)}
@@ -116,7 +118,9 @@ class GcodeError(TwinInputError):
 
     def __init__(self, line: int, text: str, reason: str, source: str = "program"):
         self.line, self.text, self.source = line, text, source
-        super().__init__(f"{source}:{line}", text.strip(), reason)
+        # a long path loses its start, never the file's name and line (the field has 80 characters)
+        shown = source if len(source) <= SOURCE_CHARS else "..." + source[3 - SOURCE_CHARS :]
+        super().__init__(f"{shown}:{line}", text.strip(), reason)
 
 
 class Move(NamedTuple):
