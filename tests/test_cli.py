@@ -172,12 +172,11 @@ def test_reproduce_seed000_small_counts(tmp_path):
     assert len(list((tmp_path / "plots").glob("*.png"))) == 4
     counts = read_back(rrd)
     assert counts["/hinf/actual/x"] == 20_000 + 1  # 12 s at 10 kHz, decimated; + the legend entry
+    # the text report (what `twin reproduce seed000` prints without --json) of the same results
+    from twin.reproductions import reproduction
 
-
-def test_reproduce_seed000_text_report():
-    r = _twin("reproduce", "seed000", "--samples", "3", "--twin-samples", "0")
-    assert r.returncode == 0, r.stderr
-    assert "Table 2" in r.stdout and "38.33" in r.stdout  # the paper's Kp beside ours
+    report = reproduction("seed000").format_report(res)
+    assert "Table 2" in report and "38.33" in report  # the paper's Kp beside ours
 
 
 def test_reproduce_unknown_source_exits_2():
@@ -421,10 +420,12 @@ def test_launcher_lists_a_program_with_the_reader_alone(tmp_path):
     assert r.returncode == 0 and r.stdout.splitlines()[3].split()[:2] == ["4", "arc"]
 
     program.write_text("G21\nG0 X1\nG1 X2 F100\nG41 X3\n")
-    r = subprocess.run([*LAUNCHER, "gcode", str(program), "--json"], capture_output=True, text=True, timeout=60)
+    r = subprocess.run(
+        [*LAUNCHER, "gcode", "part.ngc", "--json"], capture_output=True, text=True, timeout=60, cwd=tmp_path
+    )
     assert (r.returncode, r.stdout) == (2, "")
     assert r.stderr.splitlines() == [
-        f"error: {program}:4 = 'G41 X3': cutter radius compensation (G41) is not supported: give the tool-centre path"
+        "error: part.ngc:4 = 'G41 X3': cutter radius compensation (G41) is not supported: give the tool-centre path"
     ]
 
     program.write_text("G21 G0 X0\n" + "G1 X1 F100\nX0\n" * 20_000)
