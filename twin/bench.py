@@ -28,7 +28,8 @@ lines with tangent arc turnarounds (``plan_s``, median of the repeats, and ``pla
 four times over (``stream_peak_mb``, by reference length in s: what grows is each line's text,
 feed, spindle and tool, which the per-line results report), and of a whole run of the bundled
 ``gcode_seed004_circle`` scenario on a twelfth of the raster and four times that
-(``run_peak_mb``, by cycle time in s: the recording keeps at most 100 000 ticks).
+(``run_peak_mb``, by cycle time in s: both under the 600 s of motion a run holds whole, so it
+grows with them; a longer program is streamed, and the recording keeps at most 100 000 ticks).
 
 Start-up (``startup``): wall time of ``twin run seed004_cutting_circle --json`` (2.2 s simulated)
 as a new Python process (``python -m twin.cli``, as the ``twin`` script), alternating with the
