@@ -38,6 +38,7 @@ How (our design; the docs page ``gcode.md`` says why):
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Generator, Iterable, Iterator
 from dataclasses import dataclass, field
@@ -550,6 +551,14 @@ class _Grid:
         self.curvature = np.array([seg.curvature for seg in segments])[owner]
         self.index = owner
 
+    def ending_at(self, v_end: float) -> _Grid:
+        """The same grid, with speed limits and accelerations of its own (what planning changes)
+        and the end's speed at most ``v_end`` (m/s)."""
+        other = copy.copy(self)
+        other.vmax, other.a_t = self.vmax.copy(), self.a_t.copy()
+        other.vmax[-1] = min(other.vmax[-1], v_end)
+        return other
+
     def speeds(self, filter_s: float, budget: float) -> np.ndarray:
         """The profile: passes, then the speed lowered at every swing the filter cannot take
         (peaks until a cruise of ``T`` tops them, valleys held for ``T``)."""
@@ -844,9 +853,10 @@ class _Stream:
         ``full``: the window may grow no more: with no cruise it is planned to rest (a stop the
         program did not ask for, noted)."""
         ctx = self.ctx
-        grid = _Grid(buffer, junctions, v_start, 0.0, ctx)
+        go = _Grid(buffer, junctions, v_start, math.inf, ctx)
+        grid = go.ending_at(0.0)
         v_stop = grid.speeds(ctx.filter_s, ctx.budget)
-        v_go = _Grid(buffer, junctions, v_start, math.inf, ctx).speeds(ctx.filter_s, ctx.budget)
+        v_go = go.speeds(ctx.filter_s, ctx.budget)
         differ = np.nonzero(np.abs(v_go - v_stop) > 1e-9 * np.maximum(v_go, 1e-9))[0]
         final = int(differ[0]) if differ.size else len(v_stop)
         final = min(final, int(np.searchsorted(_time_of(grid.s, v_stop), WINDOW_TIME_S)) + 1)
