@@ -421,7 +421,7 @@ class Reader:
                 started = started or bool(self.text)
                 try:
                     body = None
-                    if flow.skip is None:
+                    if not flow.skipping:
                         body = normalize(text)
                         plain = plain_motion_line(body)
                         if plain is not None:
@@ -527,8 +527,6 @@ class Reader:
             s.feed = feed
             if plane is not None:
                 s.plane = int(plane) * 10
-            if motion == 10 and feed <= 0:
-                raise BlockError("cannot do G1 with zero feed rate (give F)")
             px, py, pz = s.position
             if s.incremental:
                 end = [px + wx, py + wy, pz + wz]
@@ -891,8 +889,6 @@ class Reader:
             return
         if motion in (0, 10):
             end = self._ends(words, machine=g_modes.get(0) == 530)
-            if motion == 10 and s.feed <= 0:
-                raise BlockError("cannot do G1 with zero feed rate (give F)")
             self._linear("feed" if motion == 10 else "rapid", end)
         else:
             self._arc(motion, words)
@@ -974,6 +970,8 @@ class Reader:
     def _linear_move(self, feeding: bool, end: list[float]) -> Move:
         """G1 (``feeding``) or G0 to ``end`` (program units), made the current point."""
         s = self.state
+        if feeding and s.feed <= 0:
+            raise BlockError("cannot do G1 with zero feed rate (give F)")
         move = self._move("feed", end, s.feed * s.mm_per_unit) if feeding else self._move("rapid", end)
         s.position = end
         return move
