@@ -276,7 +276,7 @@ def test_cli_interrupted_sweep_keeps_its_parts_and_resume_completes_it(tmp_path)
         "--workers",
         "1",
         "--set",
-        "duration_s=0.05",
+        "duration_s=0.2",  # 300 samples take 20 s: a loaded machine's test process sees a part before the end
         "--out",
         str(out),
     ]
