@@ -37,7 +37,8 @@ def test_a_slot_engages_half_the_circle_at_the_full_depth():
     planned, table = _engagement(STRAIGHT, StockSpec(corners_mm=((0, -10), (40, 10)), top_mm=0, bottom_mm=-10))
     rows = _steady(planned, table)
     assert engaged_degrees(rows) == pytest.approx(180.0, abs=1.0)
-    assert rows[:, 4] == pytest.approx(2.0, abs=1e-6)  # stock top 0, tool tip at Z-2
+    assert rows[:, 2] == pytest.approx(2.0, abs=1e-6)  # stock top 0, tool tip at Z-2
+    assert rows[:, 6] == pytest.approx(2.0, abs=1e-6)
 
 
 @pytest.mark.parametrize("radial_mm", [0.5, 1.5, 3.0, 4.5])
@@ -97,6 +98,11 @@ def test_air_moves_and_a_stopped_spindle_cut_nothing():
         ),
         ({"tools": [{"number": 1, "diameter_mm": 0, "n_flutes": 2}]}, "tools.0.diameter_mm", "greater than 0"),
         ({"tools": [{"number": 1, "diameter_mm": 6, "n_flutes": 0}]}, "tools.0.n_flutes", "greater than or equal to 1"),
+        (
+            {"tools": [{"number": 1, "diameter_mm": 6, "n_flutes": 2, "corner_radius_mm": 3.5}]},
+            "tools.0",
+            "corner_radius_mm = 3.5 is over half the diameter",
+        ),
         (
             {"tools": [{"number": 2, "diameter_mm": 6, "n_flutes": 2}]},
             str(Path(__file__).resolve().parent.parent / "twin" / "scenarios" / "programs" / "test_piece.ngc:8"),

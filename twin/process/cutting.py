@@ -372,9 +372,9 @@ AVERAGE_FORCE_SLOTS = ("k_il", "k_c", "harmonic_fraction", "omega", "phase", "lo
 #: Jacobian (2 x nq), each tool's ``K_tc .. K_ae, n_flutes`` (7 values), and the engagement table
 #: of ``n_table`` rows of :data:`PM_COLUMNS`, one every ``table_period`` seconds.
 PROGRAM_MILLING_SLOTS = ("n_tools", "table_period", "n_table", "dt", "n_hist", "n_jac")
-#: The table's columns: the two engaged arcs (rad), axial depth (mm), spindle speed (rad/s),
-#: spindle angle at the row's start (rad), tool index.
-PM_COLUMNS = ("phi_st1", "phi_ex1", "phi_st2", "phi_ex2", "axial_depth_mm", "omega", "angle", "tool")
+#: The table's columns: the two engaged arcs (rad) each with its mean axial depth (mm), spindle
+#: speed (rad/s), spindle angle at the row's start (rad), tool index.
+PM_COLUMNS = ("phi_st1", "phi_ex1", "depth1_mm", "phi_st2", "phi_ex2", "depth2_mm", "omega", "angle", "tool")
 _PM = {name: i for i, name in enumerate(PROGRAM_MILLING_SLOTS)}
 PM_N_TOOLS, PM_PERIOD, PM_N_TABLE, PM_DT = _PM["n_tools"], _PM["table_period"], _PM["n_table"], _PM["dt"]
 PM_N_HIST, PM_N_JAC, PM_JACOBIAN, PM_WIDTH = _PM["n_hist"], _PM["n_jac"], len(PROGRAM_MILLING_SLOTS), len(PM_COLUMNS)
@@ -476,20 +476,20 @@ def _program_milling(par, state, qpos, t, out):  # pragma: no cover - compiled
     table = par[PM_JACOBIAN + n_jac + 7 * n_tools :].reshape((n_table, PM_WIDTH))
     i, hist = _record_position(jac, qpos, state, n)
     row = min(max(int(t / period), 0), n_table - 1)
-    a, omega = table[row, 4], table[row, 5]
-    if a <= 0.0 or omega <= 0.0:
+    omega = table[row, 6]
+    if (table[row, 2] <= 0.0 and table[row, 5] <= 0.0) or omega <= 0.0:
         return
-    tool = int(table[row, 7])
+    tool = int(table[row, 8])
     k = tools[tool, :6]
     n_flutes = int(tools[tool, 6])
     lag_steps = 2.0 * math.pi / (omega * n_flutes) / dt
     lag_lo = int(lag_steps)
     c_m, ux, uy = _chip(hist, i, n, lag_lo, lag_steps - lag_lo, state)
-    angle = table[row, 6] + omega * (t - row * period)
+    angle = table[row, 7] + omega * (t - row * period)
     fx = fy = fz = 0.0
     for arc in range(2):
-        st, ex = table[row, 2 * arc], table[row, 2 * arc + 1]
-        if ex > st:
+        st, ex, a = table[row, 3 * arc], table[row, 3 * arc + 1], table[row, 3 * arc + 2]
+        if ex > st and a > 0.0:
             gx, gy, gz = step_tool_forces_N(k, n_flutes, a, c_m * 1e3, st, ex, angle, omega * dt)
             fx, fy, fz = fx + gx, fy + gy, fz + gz
     _on_workpiece(fx, fy, fz, ux, uy, out)

@@ -42,8 +42,29 @@ MAX_CELLS = 40_000_000
 ANGLE_STEP_DEG = 1.0
 #: Material thinner than this above the tool tip (mm) is not cut (rounding of heights).
 MIN_DEPTH_MM = 1e-6
-#: Columns of the engagement table, per sample of the planned reference.
-COLUMNS = ("phi_st1", "phi_ex1", "phi_st2", "phi_ex2", "axial_depth_mm", "radius_mm")
+#: Columns of the engagement table, per sample of the planned reference: two engaged arcs
+#: (entry and exit, rad) each with the mean axial extent of the edge over it (mm), the largest
+#: extent at any angle (mm) and the tool's radius (mm).
+COLUMNS = ("phi_st1", "phi_ex1", "depth1_mm", "phi_st2", "phi_ex2", "depth2_mm", "max_depth_mm", "radius_mm")
+#: The map is cut this many cells beyond the tool's radius (half a cell's diagonal): a cell any
+#: part of which the tool passes over is cut, so that a wall the tool left reads as cut at the
+#: tool's own radius whichever way the cells fall.
+CUT_MARGIN_CELLS = 0.71
+#: The engagement reads the map this many cells outside the tool's surface, just ahead of it
+#: along the feed: beyond the cells the tool's own cut (with its margin) has reached.
+TEST_MARGIN_CELLS = 1.5
+#: The leading half circle is read every this many angle steps; the steps between are read too
+#: where the two readings differ (an edge of the material, a change of depth over
+#: :data:`SMOOTH_EXTENT_M`), else filled in between them.  A feature narrower than the stride
+#: (3 degrees: 0.16 mm on a 6 mm tool) between two like readings is missed.
+COARSE_STEPS = 3
+#: Extents (m) at two readings this close are filled in linearly between them.
+SMOOTH_EXTENT_M = 1e-6
+#: Axial discs over a ball or bull-nose tool's corner.
+CORNER_DISCS = 16
+#: Halvings of an interval where the engagement changes (an arc's end between two angle
+#: steps, a corner's material between two discs): 1/64 of the step.
+BISECTIONS = 6
 
 
 class StockSpec(StrictSpec):
@@ -102,6 +123,13 @@ class ToolSpec(StrictSpec):
     number: int | None = Field(None, ge=0, description="T number ([[tools]] only)")
     diameter_mm: PositiveFloat = Field(description="cutter diameter (mm)")
     n_flutes: int = Field(ge=1, le=MAX_FLUTES, description="teeth")
+    corner_radius_mm: float = Field(
+        0.0, ge=0.0, description="corner radius (mm): 0 a flat end mill, half the diameter a ball end mill"
+    )
+    flute_length_mm: PositiveFloat | None = Field(
+        None, description="length of the cutting edge from the tip (mm); material above it is not cut by the flutes"
+    )
+    shank_diameter_mm: PositiveFloat | None = Field(None, description="diameter of the shank above the flutes (mm)")
     helix_deg: float = Field(
         0.0, ge=0.0, lt=60.0, description="helix angle (deg); the straight-flute force kernel does not use it yet"
     )
@@ -109,6 +137,14 @@ class ToolSpec(StrictSpec):
     material: Literal[tuple(MATERIALS)] = Field(  # type: ignore[valid-type]
         "aluminium_7075_t6", description="cutting coefficients of: " + ", ".join(MATERIALS)
     )
+
+    @model_validator(mode="after")
+    def _corner(self):
+        if self.corner_radius_mm > self.diameter_mm / 2:
+            raise ValueError(
+                f"corner_radius_mm = {self.corner_radius_mm} is over half the diameter ({self.diameter_mm / 2}: a ball)"
+            )
+        return self
 
 
 def tool_for(tools: dict[int, ToolSpec], number: int, line: int) -> ToolSpec:
@@ -173,114 +209,248 @@ class HeightMap:
 
 
 @njit(cache=True)
-def _side_engagement(cx, cy, cz, r, ux, uy, heights, x0, y0, res, top, bottom, n_steps, step, row):  # pragma: no cover
-    """One sample's engaged arcs and axial depth into ``row`` (see :func:`_engage`)."""
-    nx, ny = heights.shape
-    # the leading half circle: phi from 0 (feed normal, left) through pi/2 (ahead) to pi
-    runs = 0
-    in_run = False
-    max_h = -np.inf
-    last = 0.0
-    # the circle is read three quarters of a cell outside the tool: the cells there are
-    # beyond the discs it has cut (their centres are over r from its path), while the tool's
-    # own edge would fall in cells it has just cut
-    reach = r + 0.75 * res
-    for s in range(n_steps):
-        phi = s * step
-        qx = cx + reach * (math.sin(phi) * ux - math.cos(phi) * uy)
-        qy = cy + reach * (math.sin(phi) * uy + math.cos(phi) * ux)
-        i = int((qx - x0) / res)
-        j = int((qy - y0) / res)
-        present = False
-        if 0 <= i < nx and 0 <= j < ny:
-            h = heights[i, j]
-            if h > cz + 1e-9:
-                present = True
-                if h > max_h:
-                    max_h = h
-        if present and not in_run:
-            in_run = True
-            if runs < 2:
-                row[2 * runs] = phi
-        elif not present and in_run:
-            in_run = False
-            if runs < 2:
-                row[2 * runs + 1] = last
-            runs += 1
-        last = phi
-    if in_run:
-        if runs < 2:
-            row[2 * runs + 1] = last
-        runs += 1
-    if runs > 0:
-        depth = min(max_h, top) - max(cz, bottom)
-        row[4] = max(0.0, min(depth, top - bottom)) * 1e3
+def _height_at(grid, x, y):  # pragma: no cover - compiled
+    """The height (m) in the cell holding the point (x, y) (m) of ``grid`` (heights, x0, y0,
+    res, top, bottom: see :func:`_engage`); -inf off the map."""
+    heights, x0, y0, res = grid[0], grid[1], grid[2], grid[3]
+    i = math.floor((x - x0) / res)
+    j = math.floor((y - y0) / res)
+    if 0 <= i < heights.shape[0] and 0 <= j < heights.shape[1]:
+        return heights[i, j]
+    return -np.inf
 
 
 @njit(cache=True)
-def _engage(pos, vel, radius, cutting, heights, x0, y0, res, top, bottom, step, out):  # pragma: no cover
-    """The engagement table ``out`` (n, 6: :data:`COLUMNS`, angles in rad, depth in mm) along
-    tool centres ``pos`` (n, 3, m) moving at ``vel`` (n, 3), tool radius ``radius`` (n, m),
-    cutting where ``cutting`` (n) is true; cuts ``heights`` (m) as it goes."""
+def _ahead(rho, sin_phi, margin):  # pragma: no cover - compiled
+    """How far ahead along the feed (m) the test point on the circle of radius ``rho`` at angle
+    phi is moved so that it lies ``margin`` outside that circle: ``e`` with
+    ``rho^2 + 2 rho e sin(phi) + e^2 = (rho + margin)^2``."""
+    b = rho * sin_phi
+    return -b + math.sqrt(b * b + 2.0 * rho * margin + margin * margin)
+
+
+@njit(cache=True)
+def _corner_has_material(u, pose, tool, nx_, ny_, sp, grid):  # pragma: no cover - compiled
+    """Whether there is material at the corner's surface a fraction ``u`` of its height up, at
+    the angle of direction (nx_, ny_) and sine ``sp``."""
+    cx, cy, cz, ux, uy = pose
+    r, rc = tool[0], tool[1]
+    margin = TEST_MARGIN_CELLS * grid[3]
+    rho = r - rc + math.sqrt(max(rc * rc - (rc - u * rc) ** 2, 0.0))
+    e = _ahead(rho, sp, margin)
+    return _height_at(grid, cx + rho * nx_ + e * ux, cy + rho * ny_ + e * uy) > cz + u * rc
+
+
+@njit(cache=True)
+def _extent_at(phi, pose, tool, grid):  # pragma: no cover - compiled
+    """The engaged axial extent (m) of the edge at angle ``phi``: the material just ahead of the
+    tool's surface (:data:`TEST_MARGIN_CELLS` outside it, along the feed) between the tip, the
+    stock's bottom and the flute length.  The cylinder takes one reading; a corner (ball or bull
+    nose) :data:`CORNER_DISCS` discs, each change between two discs found by bisection."""
+    cx, cy, cz, ux, uy = pose
+    r, rc, flute = tool
+    top, bottom = grid[4], grid[5]
+    margin = TEST_MARGIN_CELLS * grid[3]
+    sp, cp = math.sin(phi), math.cos(phi)
+    nx_, ny_ = sp * ux - cp * uy, sp * uy + cp * ux  # the edge's direction at phi
+    e = _ahead(r, sp, margin)
+    h = _height_at(grid, cx + r * nx_ + e * ux, cy + r * ny_ + e * uy)
+    total = max(min(h, top, cz + flute) - max(cz + rc, bottom), 0.0)
+    if rc > 0.0:
+        # the corner's height fractions that count: above the stock's bottom, under the flutes
+        u_lo = min(max((bottom - cz) / rc, 0.0), 1.0)
+        u_hi = min(max(flute / rc, 0.0), 1.0)
+        if u_hi > u_lo:
+            n = CORNER_DISCS
+            du = (u_hi - u_lo) / n
+            prev = _corner_has_material(u_lo + 0.5 * du, pose, tool, nx_, ny_, sp, grid)
+            start = u_lo  # where the current run of material (if any) began
+            for k in range(1, n + 1):
+                if k < n:
+                    u = u_lo + (k + 0.5) * du
+                    now = _corner_has_material(u, pose, tool, nx_, ny_, sp, grid)
+                else:
+                    now = not prev  # the corner's top closes a run
+                if now == prev:
+                    continue
+                if k < n:
+                    a, b = u - du, u  # bisect between the two discs' centres
+                    for _ in range(BISECTIONS):
+                        m = 0.5 * (a + b)
+                        if _corner_has_material(m, pose, tool, nx_, ny_, sp, grid) == prev:
+                            a = m
+                        else:
+                            b = m
+                    edge = 0.5 * (a + b)
+                else:
+                    edge = u_hi
+                if prev:
+                    total += (edge - start) * rc
+                else:
+                    start = edge
+                prev = now
+    return total if total > MIN_DEPTH_MM * 1e-3 else 0.0  # rounding of heights: no material
+
+
+@njit(cache=True)
+def _edge_angle(lo, hi, engaged_at_lo, pose, tool, grid):  # pragma: no cover - compiled
+    """The angle (rad) between ``lo`` and ``hi`` where the engagement changes, by bisection."""
+    for _ in range(BISECTIONS):
+        m = 0.5 * (lo + hi)
+        if (_extent_at(m, pose, tool, grid) > 0.0) == engaged_at_lo:
+            lo = m
+        else:
+            hi = m
+    return 0.5 * (lo + hi)
+
+
+@njit(cache=True)
+def _side_engagement(pose, tool, grid, n_steps, step, extent, row):  # pragma: no cover - compiled
+    """One sample's engagement into ``row`` (:data:`COLUMNS`): the extent at each angle step of
+    the leading half circle (into ``extent``), the engaged arcs (up to two) with their ends found
+    by bisection and the mean extent over each (mm), and the largest extent (mm)."""
+    last = n_steps - 1
+    extent[0] = _extent_at(0.0, pose, tool, grid)
+    for lo in range(0, last, COARSE_STEPS):
+        hi = min(lo + COARSE_STEPS, last)
+        extent[hi] = _extent_at(hi * step, pose, tool, grid)
+        a, b = extent[lo], extent[hi]
+        if (a > 0.0) == (b > 0.0) and abs(b - a) <= SMOOTH_EXTENT_M:
+            for s in range(lo + 1, hi):  # alike at both ends: the steps between filled in
+                extent[s] = a + (b - a) * (s - lo) / (hi - lo)
+        else:
+            for s in range(lo + 1, hi):
+                extent[s] = _extent_at(s * step, pose, tool, grid)
+    largest = 0.0
+    for s in range(n_steps):
+        largest = max(largest, extent[s])
+    row[6] = largest * 1e3
+    runs = 0
+    start = 0
+    for s in range(n_steps + 1):
+        engaged = s < n_steps and extent[s] > 0.0
+        was = s > 0 and extent[s - 1] > 0.0
+        if engaged and not was:
+            start = s
+        elif was and not engaged:
+            if runs < 2:
+                total = 0.0
+                for q in range(start, s):
+                    total += extent[q]
+                entry = 0.0
+                if start > 0:
+                    entry = _edge_angle((start - 1) * step, start * step, False, pose, tool, grid)
+                leave = (n_steps - 1) * step
+                if s < n_steps:
+                    leave = _edge_angle((s - 1) * step, s * step, True, pose, tool, grid)
+                row[3 * runs] = entry
+                row[3 * runs + 1] = leave
+                row[3 * runs + 2] = total / (s - start) * 1e3
+            runs += 1
+
+
+@njit(cache=True)
+def _cut(heights, x0, y0, res, cx, cy, cz, r, rc, crescent, px, py, pr):  # pragma: no cover - compiled
+    """Lower the height map to the tool's surface at (cx, cy) with tip cz (m): every cell whose
+    centre lies within the tool's radius and the map's margin (:data:`CUT_MARGIN_CELLS`) goes
+    down to the tool's bottom there (flat inside ``r - rc``, the corner's arc outside it, the
+    corner's top beyond ``r``).  With ``crescent`` (a flat tool at the height of its last cut, at
+    (px, py) with radius pr) only the cells the disc newly covers on each row are visited."""
     nx, ny = heights.shape
+    reach = r + CUT_MARGIN_CELLS * res
+    j_lo = max(int((cy - reach - y0) / res), 0)
+    j_hi = min(int((cy + reach - y0) / res) + 1, ny)
+    for j in range(j_lo, j_hi):
+        yc = y0 + (j + 0.5) * res
+        dy = yc - cy
+        if abs(dy) > reach:
+            continue
+        w = math.sqrt(reach * reach - dy * dy)
+        a = max(math.ceil((cx - w - x0) / res - 0.5), 0)
+        b = min(math.floor((cx + w - x0) / res - 0.5), nx - 1)
+        old_a, old_b = 1, 0  # empty
+        if crescent:
+            reach_old = pr + CUT_MARGIN_CELLS * res
+            dyo = yc - py
+            if abs(dyo) <= reach_old:
+                wo = math.sqrt(reach_old * reach_old - dyo * dyo)
+                old_a = math.ceil((px - wo - x0) / res - 0.5)
+                old_b = math.floor((px + wo - x0) / res - 0.5)
+        for i in range(a, b + 1):
+            if old_a <= i <= old_b:
+                continue
+            floor = cz
+            if rc > 0.0:
+                rho = math.hypot(x0 + (i + 0.5) * res - cx, dy)
+                out = min(max(rho - (r - rc), 0.0), rc)
+                floor = cz + rc - math.sqrt(rc * rc - out * out)
+            if heights[i, j] > floor:
+                heights[i, j] = floor
+
+
+@njit(cache=True)
+def _engage(pos, vel, radius, corner, flute, cutting, heights, x0, y0, res, top, bottom, step, out):  # pragma: no cover
+    """The engagement table ``out`` (n, :data:`COLUMNS`, angles in rad, lengths in mm) along
+    tool tips ``pos`` (n, 3, m) moving at ``vel`` (n, 3), tool radius, corner radius and flute
+    length ``radius``, ``corner``, ``flute`` (n, m), cutting where ``cutting`` (n) is true;
+    cuts ``heights`` (m) as it goes: each sample is read before the tool's surface there is cut."""
     n = pos.shape[0]
     ux, uy = 1.0, 0.0
     n_steps = round(math.pi / step) + 1
+    extent = np.zeros(n_steps)
     have_prev = False
-    px_prev = py_prev = pz_prev = r_prev = 0.0
+    px = py = pz = pr = 0.0
     for k in range(n):
-        cx, cy, cz, r = pos[k, 0], pos[k, 1], pos[k, 2], radius[k]
+        cx, cy, cz, r, rc = pos[k, 0], pos[k, 1], pos[k, 2], radius[k], corner[k]
         speed = math.hypot(vel[k, 0], vel[k, 1])
         if speed > 1e-6:
             ux, uy = vel[k, 0] / speed, vel[k, 1] / speed
-        for c in range(6):
+        for c in range(out.shape[1]):
             out[k, c] = 0.0
-        out[k, 5] = r * 1e3
+        out[k, 7] = r * 1e3
         if not cutting[k] or cz >= top:
             continue
         # side milling: the tool must move in XY (a plunge's bottom cutting is not modelled,
         # though it removes the material under the tool)
         if speed > 1e-6:
-            _side_engagement(cx, cy, cz, r, ux, uy, heights, x0, y0, res, top, bottom, n_steps, step, out[k])
-        # cut the tool's disc to its tip height: the whole disc where the tool went deeper or
-        # changed, else only the cells the disc newly covers on each row (a crescent)
-        full = (not have_prev) or cz < pz_prev - 1e-12 or r != r_prev
-        j_lo = max(int((cy - r - y0) / res), 0)
-        j_hi = min(int((cy + r - y0) / res) + 1, ny)
-        for j in range(j_lo, j_hi):
-            yc = y0 + (j + 0.5) * res
-            dy = yc - cy
-            if abs(dy) > r:
-                continue
-            w = math.sqrt(r * r - dy * dy)
-            a = max(math.ceil((cx - w - x0) / res - 0.5), 0)
-            b = min(math.floor((cx + w - x0) / res - 0.5), nx - 1)
-            if b < a:
-                continue
-            old_a, old_b = 1, 0  # empty
-            if not full:
-                dyo = yc - py_prev
-                if abs(dyo) <= r_prev:
-                    wo = math.sqrt(r_prev * r_prev - dyo * dyo)
-                    old_a = math.ceil((px_prev - wo - x0) / res - 0.5)
-                    old_b = math.floor((px_prev + wo - x0) / res - 0.5)
-            for i in range(a, b + 1):
-                if old_a <= i <= old_b:
-                    continue
-                if heights[i, j] > cz:
-                    heights[i, j] = cz
+            grid = (heights, x0, y0, res, top, bottom)
+            _side_engagement((cx, cy, cz, ux, uy), (r, rc, flute[k]), grid, n_steps, step, extent, out[k])
+        crescent = have_prev and rc == 0.0 and cz >= pz - 1e-12 and r == pr
+        _cut(heights, x0, y0, res, cx, cy, cz, r, rc, crescent, px, py, pr)
         have_prev = True
-        px_prev, py_prev, pz_prev, r_prev = cx, cy, cz, r
+        px, py, pz, pr = cx, cy, cz, r
 
 
-def engagement_table(position_m, velocity_m_per_s, radius_m, cutting, height_map: HeightMap) -> np.ndarray:
-    """The engagement along a planned path (see the module docstring), shape (n, 6):
-    :data:`COLUMNS`, angles in rad, depth and radius in mm.  Cuts ``height_map`` as it goes."""
-    out = np.zeros((len(position_m), len(COLUMNS)))
+def engagement_table(
+    position_m, velocity_m_per_s, radius_m, cutting, height_map: HeightMap, corner_m=None, flute_m=None
+) -> np.ndarray:
+    """The engagement along a planned path (see the module docstring), shape (n, 8):
+    :data:`COLUMNS`, angles in rad, lengths in mm.  Cuts ``height_map`` as it goes.
+
+    Parameters
+    ----------
+    position_m, velocity_m_per_s : ndarray (n, 3)
+        The tool tip's path and velocity relative to the stock (m, m/s).
+    radius_m : ndarray (n,)
+        The tool's radius at each sample (m).
+    cutting : ndarray (n,) of bool
+        Where the spindle turns.
+    height_map : HeightMap
+    corner_m, flute_m : ndarray (n,) or None
+        The tool's corner radius (m; 0 a flat end mill, the radius a ball) and flute length
+        (m); None: flat, and flutes longer than any depth.
+    """
+    n = len(position_m)
+    radius = np.ascontiguousarray(radius_m, float)
+    corner = np.zeros(n) if corner_m is None else np.ascontiguousarray(corner_m, float)
+    flute = np.full(n, np.inf) if flute_m is None else np.ascontiguousarray(flute_m, float)
+    out = np.zeros((n, len(COLUMNS)))
     _engage(
         np.ascontiguousarray(position_m, float),
         np.ascontiguousarray(velocity_m_per_s, float),
-        np.ascontiguousarray(radius_m, float),
+        radius,
+        corner,
+        flute,
         np.ascontiguousarray(cutting, np.bool_),
         height_map.heights,
         height_map.x0_m,
@@ -296,7 +466,7 @@ def engagement_table(position_m, velocity_m_per_s, radius_m, cutting, height_map
 
 def engaged_degrees(table: np.ndarray) -> np.ndarray:
     """The engaged angle of each row (degrees, both arcs together)."""
-    return np.degrees((table[:, 1] - table[:, 0]) + (table[:, 3] - table[:, 2]))
+    return np.degrees((table[:, 1] - table[:, 0]) + (table[:, 4] - table[:, 3]))
 
 
 class ProgramMilling:
@@ -334,7 +504,7 @@ class ProgramMilling:
         turning = self.spindle_rpm >= MIN_SPINDLE_RPM
         lag = np.max(2.0 * math.pi / (omega[turning] * flutes[turning]) / dt) if turning.any() else 1.0
         n_hist = int(lag) + 2
-        rows = np.column_stack([self.table[:, :5], omega, angle, self.tool_index]).astype(float)
+        rows = np.column_stack([self.table[:, :6], omega, angle, self.tool_index]).astype(float)
         assert rows.shape[1] == len(PM_COLUMNS)
         tools = [np.concatenate([MATERIALS[t.material].as_array(), [t.n_flutes]]) for t in self.tools]
         jacobian = np.asarray(machine.workpiece_jacobian(), float).ravel()
@@ -390,8 +560,10 @@ def program_milling(plan, stock: StockSpec, tool: ToolSpec | None, tools: list[T
         chosen.append(spec)
         index[numbers == number] = len(chosen) - 1
     radius = np.array([t.diameter_mm for t in chosen])[index] * 0.5e-3
+    corner = np.array([t.corner_radius_mm for t in chosen])[index] * 1e-3
+    flute = np.array([math.inf if t.flute_length_mm is None else t.flute_length_mm for t in chosen])[index] * 1e-3
     rpm = plan.per_sample(plan.spindle_rpm, 0.0)
     height_map = HeightMap(stock, max(t.diameter_mm for t in chosen) + 1.0)
-    table = engagement_table(plan.position, plan.velocity, radius, rpm > 0, height_map)
+    table = engagement_table(plan.position, plan.velocity, radius, rpm > 0, height_map, corner, flute)
     model = ProgramMilling(table, rpm, index, chosen, plan.period_s, _spindle_phase(None, seed))
     return model, table, height_map

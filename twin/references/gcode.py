@@ -149,7 +149,7 @@ class GcodeReference(_Samples):
 
         k = np.clip(np.rint(np.asarray(t, float) / self.plan.period_s).astype(int), 0, len(self.engagement) - 1)
         rows = self.engagement[k]
-        return np.column_stack([engaged_degrees(rows), rows[:, 4]])
+        return np.column_stack([engaged_degrees(rows), rows[:, 6]])
 
     def feeds_at(self, t) -> np.ndarray:
         """The programmed feed (mm/min; 0 on rapids and dwells) at times ``t`` (s)."""
