@@ -23,7 +23,7 @@ STRAIGHT = ["G21 G90 G0 X-10 Y0 Z5", "M3 S10000", "G1 Z-2 F300", "G1 X30 F600", 
 
 def _engagement(lines, stock, tool=TOOL, tools=()):
     planned = plan(Reader(lines).moves(), LIMITS, PlannerSettings(tolerance_mm=0.01))
-    _, table, _ = program_milling(planned, stock, tool, list(tools), 0)
+    table = program_milling(planned, stock, tool, list(tools), 0).table
     return planned, table
 
 
@@ -69,12 +69,18 @@ def test_an_inside_arc_engages_more_than_a_straight_cut_as_the_two_circles_say()
     assert closed > straight + 3.0
 
 
-def test_air_moves_and_a_stopped_spindle_cut_nothing():
+def test_air_moves_engage_nothing_and_a_stopped_spindle_no_force():
+    """Above the top nothing is engaged; a tool that does not turn (no M3) still meets the
+    material it is moved through (a crash: :mod:`twin.process.misuse` warns of it), but the
+    force model's table carries no spindle speed there, so no cutting force."""
     stock = StockSpec(corners_mm=((0, -10), (40, 10)), top_mm=0, bottom_mm=-10)
     _, air = _engagement(["G21 G90 G0 X-10 Y0 Z5", "M3 S10000", "G1 X30 F600"], stock)  # above the top
-    assert not air[:, :5].any()
-    _, stopped = _engagement(["G21 G90 G0 X-10 Y0 Z5", "G1 Z-2 F300", "G1 X30 F600"], stock)  # no M3
-    assert not stopped[:, :5].any()
+    assert not air[:, :7].any()
+    lines = ["G21 G90 G0 X-10 Y0 Z5", "G1 Z-2 F300", "G1 X30 F600"]  # no M3
+    planned = plan(Reader(lines).moves(), LIMITS, PlannerSettings(tolerance_mm=0.01))
+    cut = program_milling(planned, stock, TOOL, [], 0)
+    assert cut.table[:, 6].max() == pytest.approx(2.0)
+    assert not cut.milling.spindle_rpm.any()
 
 
 @pytest.mark.parametrize(

@@ -79,6 +79,23 @@ def _print_worst_lines(rows: list[dict]) -> None:
         typer.echo(f"    {row['line']:>6}  {badness(row):>9.3f}  {span}  {row['text']}")
 
 
+#: Machining warnings the text summary prints (all are in --json).
+SHOWN_WARNINGS = 20
+
+
+def _print_warnings(summary: dict) -> None:
+    """The machining warnings (crashes and misuse), a line each, by program line."""
+    rows = summary.get("machining_warnings", [])
+    if not rows:
+        return
+    total = summary.get("machining_warnings_total", len(rows))
+    typer.echo(f"  machining warnings ({total}):")
+    for row in rows[:SHOWN_WARNINGS]:
+        typer.echo(f"    line {row['line']:>6}  {row['message']}  {row['text']}")
+    if total > SHOWN_WARNINGS:
+        typer.echo(f"    ... {total - SHOWN_WARNINGS} more (--json lists {len(rows)})")
+
+
 def _print_summary(name: str, summary: dict) -> None:
     typer.echo(f"{name}")
     for key, value in summary.items():
@@ -97,9 +114,11 @@ def _run(
     max_steps: int | None = None,
     plots: Path | None = None,
     lines: Path | None = None,
+    strict: bool = False,
 ) -> None:
     """Run a scenario and report it; a run that diverges or is interrupted still reports,
-    records and plots what it computed before the error line."""
+    records and plots what it computed before the error line.  With ``strict``, machining
+    warnings end it with exit code 4 (after the report)."""
     from twin import api
     from twin.scenario import load_scenario
 
@@ -120,6 +139,15 @@ def _run(
             _report(api.Run(scn, exc.result, status, {"sim_time_s": exc.sim_time_s}), rrd, as_json, plots, lines)
         raise
     _report(done, rrd, as_json, plots, lines)
+    warnings = done.summary.get("machining_warnings", [])
+    if strict and warnings:
+        first = warnings[0]
+        total = done.summary.get("machining_warnings_total", len(warnings))
+        typer.echo(
+            f"error: {total} machining warning(s) under --strict; the first: line {first['line']}: {first['message']}",
+            err=True,
+        )
+        raise typer.Exit(4)
 
 
 #: Lines of a program the text summary names, worst first.
@@ -135,9 +163,10 @@ def _report(done, rrd: Path | None, as_json: bool, plots: Path | None, lines: Pa
     else:
         _print_summary(
             f"{done.scenario.name}: {done.scenario.description}",
-            {k: v for k, v in summary.items() if k not in ("scenario", "machine", "lines")},
+            {k: v for k, v in summary.items() if k not in ("scenario", "machine", "lines", "machining_warnings")},
         )
         _print_worst_lines(summary.get("lines", []))
+        _print_warnings(summary)
     if lines is not None:
         done.lines_to_parquet(lines)
         typer.echo(f"per-line table written to {lines}", err=as_json)
@@ -165,9 +194,12 @@ def run(
         None, "--plots", help="Write PNG plots (errors, inputs, forces, contour) to this folder"
     ),
     lines: Path = typer.Option(None, "--lines", help="A G-code run: write its per-line table to this .parquet"),
+    strict: bool = typer.Option(
+        False, "--strict", help="Exit with code 4 if the program crashes or misuses the tool (machining warnings)"
+    ),
 ):
     """Run a closed-loop scenario and print its tracking metrics (a G-code run: per program line too)."""
-    _run(scenario, rrd, as_json, sets, max_steps, plots, lines)
+    _run(scenario, rrd, as_json, sets, max_steps, plots, lines, strict)
 
 
 @app.command()

@@ -182,6 +182,10 @@ def tracking_summary(result) -> dict:
         if result.engagement.size:  # with a stock: the share of the recorded time the tool cuts
             cutting = (result.engagement[:, 0] > 0) & (result.engagement[:, 1] > 0)
             out["cutting_share"] = round(float(cutting.mean()), 4)
+            out["machining_warnings"] = result.machining_warnings
+            total = result.info.get("machining_warnings_total", 0)
+            if total > len(result.machining_warnings):
+                out["machining_warnings_total"] = total
         out["lines"] = line_table(result, ce)
     return out
 

@@ -393,9 +393,10 @@ def prepare(scn: Scenario):
             raise TwinInputError(
                 "stock", "...", f"a stock is cut by a G-code program, not a {scn.reference.type} reference"
             )
-        milling, table, height_map = program_milling(reference.plan, scn.stock, scn.tool, scn.tools, scn.seed)
-        reference.engagement, reference.height_map = table, height_map
-        disturbances.append(milling)
+        cut = program_milling(reference.plan, scn.stock, scn.tool, scn.tools, scn.seed)
+        reference.engagement, reference.height_map = cut.table, cut.height_map
+        reference.warnings, reference.warnings_total = cut.warnings, cut.warnings_total
+        disturbances.append(cut.milling)
     return {
         "machine": machine,
         "controllers": ctrls,

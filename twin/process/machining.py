@@ -20,6 +20,7 @@ angle ``arccos(1 - 2 a/D)`` comes out within about a degree (tested).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Annotated, Literal
 
 import numpy as np
@@ -40,12 +41,19 @@ MAX_POLYGON_POINTS = 100_000
 MAX_CELLS = 40_000_000
 #: Angular step of the engagement test on the tool's leading half circle (degrees).
 ANGLE_STEP_DEG = 1.0
+#: XY speed (m/s) over which the tool moves (a side cut, a feed direction).
+MOVING_M_PER_S = 1e-6
 #: Material thinner than this above the tool tip (mm) is not cut (rounding of heights).
 MIN_DEPTH_MM = 1e-6
 #: Columns of the engagement table, per sample of the planned reference: two engaged arcs
 #: (entry and exit, rad) each with the mean axial extent of the edge over it (mm), the largest
-#: extent at any angle (mm) and the tool's radius (mm).
-COLUMNS = ("phi_st1", "phi_ex1", "depth1_mm", "phi_st2", "phi_ex2", "depth2_mm", "max_depth_mm", "radius_mm")
+#: extent at any angle (mm), the tool's radius (mm), the material beside the tool above its
+#: flute length (mm: the shank or holder rubs) and the material under the tool's tip where it
+#: goes down (mm: a plunge or ramp into material), both before the sample's cut.
+COLUMNS = (
+    *("phi_st1", "phi_ex1", "depth1_mm", "phi_st2", "phi_ex2", "depth2_mm", "max_depth_mm", "radius_mm"),
+    *("over_flutes_mm", "under_tip_mm"),
+)
 #: The map is cut this many cells beyond the tool's radius (half a cell's diagonal): a cell any
 #: part of which the tool passes over is cut, so that a wall the tool left reads as cut at the
 #: tool's own radius whichever way the cells fall.
@@ -130,6 +138,12 @@ class ToolSpec(StrictSpec):
         None, description="length of the cutting edge from the tip (mm); material above it is not cut by the flutes"
     )
     shank_diameter_mm: PositiveFloat | None = Field(None, description="diameter of the shank above the flutes (mm)")
+    max_ramp_deg: float = Field(
+        90.0, ge=0.0, le=90.0, description="steepest descent into material (deg): 90 plunges (centre cutting), 0 none"
+    )
+    feed_per_tooth_mm: tuple[PositiveFloat, PositiveFloat] | None = Field(
+        None, description="the tool maker's feed per tooth range [min, max] (mm); outside it is a warning"
+    )
     helix_deg: float = Field(
         0.0, ge=0.0, lt=60.0, description="helix angle (deg); the straight-flute force kernel does not use it yet"
     )
@@ -140,6 +154,8 @@ class ToolSpec(StrictSpec):
 
     @model_validator(mode="after")
     def _corner(self):
+        if self.feed_per_tooth_mm is not None and self.feed_per_tooth_mm[0] > self.feed_per_tooth_mm[1]:
+            raise ValueError(f"feed_per_tooth_mm = {list(self.feed_per_tooth_mm)}: give [min, max]")
         if self.corner_radius_mm > self.diameter_mm / 2:
             raise ValueError(
                 f"corner_radius_mm = {self.corner_radius_mm} is over half the diameter ({self.diameter_mm / 2}: a ball)"
@@ -230,32 +246,91 @@ def _ahead(rho, sin_phi, margin):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _corner_has_material(u, pose, tool, nx_, ny_, sp, grid):  # pragma: no cover - compiled
+def _along(path, k, distance):  # pragma: no cover - compiled
+    """The tool centre (x, y, m) and feed direction ``distance`` (m) along the path in XY from
+    sample ``k``, or where the tool next stops if that is sooner (linear between samples).
+    ``path`` is (pos, travelled, dir_x, dir_y, run_end): the samples (n, 3), the XY distance
+    travelled to each (m), the feed direction held through stops, and the last sample of the
+    motion each one belongs to (:func:`_path_arrays`)."""
+    pos, travelled, dir_x, dir_y, run_end = path
+    goal = travelled[k] + distance
+    end = run_end[k]
+    if travelled[end] <= goal:
+        return pos[end, 0], pos[end, 1], dir_x[end], dir_y[end]
+    lo, step = k, 1
+    hi = min(k + step, end)
+    while travelled[hi] <= goal:  # galloping: the place is a few samples on, as a rule
+        lo = hi
+        step *= 2
+        hi = min(k + step, end)
+    while hi - lo > 1:  # travelled[lo] <= goal < travelled[hi]
+        mid = (lo + hi) // 2
+        if travelled[mid] <= goal:
+            lo = mid
+        else:
+            hi = mid
+    w = (goal - travelled[lo]) / (travelled[hi] - travelled[lo])
+    x = pos[lo, 0] + w * (pos[hi, 0] - pos[lo, 0])
+    y = pos[lo, 1] + w * (pos[hi, 1] - pos[lo, 1])
+    return x, y, dir_x[lo], dir_y[lo]
+
+
+@njit(cache=True)
+def _path_arrays(pos, vel):  # pragma: no cover - compiled
+    """What :func:`_along` walks: the XY distance travelled to each sample (m), the unit feed
+    direction (held through stops, +x before the first motion) and the last sample of each
+    motion (a run of samples moving in XY; a sample at rest is its own)."""
+    n = pos.shape[0]
+    travelled = np.zeros(n)
+    dir_x, dir_y = np.ones(n), np.zeros(n)
+    run_end = np.arange(n)
+    ux, uy = 1.0, 0.0
+    for k in range(n):
+        if k > 0:
+            travelled[k] = travelled[k - 1] + math.hypot(pos[k, 0] - pos[k - 1, 0], pos[k, 1] - pos[k - 1, 1])
+        speed = math.hypot(vel[k, 0], vel[k, 1])
+        if speed > MOVING_M_PER_S:
+            ux, uy = vel[k, 0] / speed, vel[k, 1] / speed
+        dir_x[k], dir_y[k] = ux, uy
+    for k in range(n - 2, -1, -1):
+        if math.hypot(vel[k + 1, 0], vel[k + 1, 1]) > MOVING_M_PER_S:
+            run_end[k] = run_end[k + 1]
+    return travelled, dir_x, dir_y, run_end
+
+
+@njit(cache=True)
+def _corner_has_material(u, ahead, tool, sp, cp, cz, grid):  # pragma: no cover - compiled
     """Whether there is material at the corner's surface a fraction ``u`` of its height up, at
-    the angle of direction (nx_, ny_) and sine ``sp``."""
-    cx, cy, cz, ux, uy = pose
+    the angle of sine ``sp`` and cosine ``cp`` of the tool at ``ahead`` (x, y, ux, uy)."""
+    fx, fy, ux, uy = ahead
     r, rc = tool[0], tool[1]
-    margin = TEST_MARGIN_CELLS * grid[3]
     rho = r - rc + math.sqrt(max(rc * rc - (rc - u * rc) ** 2, 0.0))
-    e = _ahead(rho, sp, margin)
-    return _height_at(grid, cx + rho * nx_ + e * ux, cy + rho * ny_ + e * uy) > cz + u * rc
+    nx_, ny_ = sp * ux - cp * uy, sp * uy + cp * ux
+    return _height_at(grid, fx + rho * nx_, fy + rho * ny_) > cz + u * rc
 
 
 @njit(cache=True)
 def _extent_at(phi, pose, tool, grid):  # pragma: no cover - compiled
-    """The engaged axial extent (m) of the edge at angle ``phi``: the material just ahead of the
-    tool's surface (:data:`TEST_MARGIN_CELLS` outside it, along the feed) between the tip, the
-    stock's bottom and the flute length.  The cylinder takes one reading; a corner (ball or bull
-    nose) :data:`CORNER_DISCS` discs, each change between two discs found by bisection."""
-    cx, cy, cz, ux, uy = pose
+    """The engaged axial extent (m) of the edge at angle ``phi`` and the material above the flute
+    length there (m): the material at the edge's place a little further along the path (where
+    that place lies :data:`TEST_MARGIN_CELLS` outside the tool's surface now, or where the tool
+    stops if sooner), between the tip, the stock's bottom and the flute length.  The cylinder
+    takes one reading; a corner (ball or bull nose) :data:`CORNER_DISCS` discs, each change
+    between two discs found by bisection.  ``pose`` is (path, k, cz): :func:`_along`'s path, the
+    sample and its tip height."""
+    path, k, cz = pose
     r, rc, flute = tool
     top, bottom = grid[4], grid[5]
     margin = TEST_MARGIN_CELLS * grid[3]
     sp, cp = math.sin(phi), math.cos(phi)
-    nx_, ny_ = sp * ux - cp * uy, sp * uy + cp * ux  # the edge's direction at phi
-    e = _ahead(r, sp, margin)
-    h = _height_at(grid, cx + r * nx_ + e * ux, cy + r * ny_ + e * uy)
+    # the corner's discs are nearer the axis: at the cylinder's distance ahead they are as far
+    # outside the tool now, or further
+    ahead = _along(path, k, _ahead(r, sp, margin))
+    fx, fy, ux, uy = ahead
+    nx_, ny_ = sp * ux - cp * uy, sp * uy + cp * ux  # the edge's direction at phi there
+    h = _height_at(grid, fx + r * nx_, fy + r * ny_)
     total = max(min(h, top, cz + flute) - max(cz + rc, bottom), 0.0)
+    over = max(min(h, top) - max(cz + flute, bottom), 0.0)
     if rc > 0.0:
         # the corner's height fractions that count: above the stock's bottom, under the flutes
         u_lo = min(max((bottom - cz) / rc, 0.0), 1.0)
@@ -263,12 +338,12 @@ def _extent_at(phi, pose, tool, grid):  # pragma: no cover - compiled
         if u_hi > u_lo:
             n = CORNER_DISCS
             du = (u_hi - u_lo) / n
-            prev = _corner_has_material(u_lo + 0.5 * du, pose, tool, nx_, ny_, sp, grid)
+            prev = _corner_has_material(u_lo + 0.5 * du, ahead, tool, sp, cp, cz, grid)
             start = u_lo  # where the current run of material (if any) began
             for k in range(1, n + 1):
                 if k < n:
                     u = u_lo + (k + 0.5) * du
-                    now = _corner_has_material(u, pose, tool, nx_, ny_, sp, grid)
+                    now = _corner_has_material(u, ahead, tool, sp, cp, cz, grid)
                 else:
                     now = not prev  # the corner's top closes a run
                 if now == prev:
@@ -277,7 +352,7 @@ def _extent_at(phi, pose, tool, grid):  # pragma: no cover - compiled
                     a, b = u - du, u  # bisect between the two discs' centres
                     for _ in range(BISECTIONS):
                         m = 0.5 * (a + b)
-                        if _corner_has_material(m, pose, tool, nx_, ny_, sp, grid) == prev:
+                        if _corner_has_material(m, ahead, tool, sp, cp, cz, grid) == prev:
                             a = m
                         else:
                             b = m
@@ -289,7 +364,9 @@ def _extent_at(phi, pose, tool, grid):  # pragma: no cover - compiled
                 else:
                     start = edge
                 prev = now
-    return total if total > MIN_DEPTH_MM * 1e-3 else 0.0  # rounding of heights: no material
+    if total <= MIN_DEPTH_MM * 1e-3:
+        total = 0.0  # rounding of heights: no material
+    return total, over
 
 
 @njit(cache=True)
@@ -297,7 +374,7 @@ def _edge_angle(lo, hi, engaged_at_lo, pose, tool, grid):  # pragma: no cover - 
     """The angle (rad) between ``lo`` and ``hi`` where the engagement changes, by bisection."""
     for _ in range(BISECTIONS):
         m = 0.5 * (lo + hi)
-        if (_extent_at(m, pose, tool, grid) > 0.0) == engaged_at_lo:
+        if (_extent_at(m, pose, tool, grid)[0] > 0.0) == engaged_at_lo:
             lo = m
         else:
             hi = m
@@ -308,23 +385,27 @@ def _edge_angle(lo, hi, engaged_at_lo, pose, tool, grid):  # pragma: no cover - 
 def _side_engagement(pose, tool, grid, n_steps, step, extent, row):  # pragma: no cover - compiled
     """One sample's engagement into ``row`` (:data:`COLUMNS`): the extent at each angle step of
     the leading half circle (into ``extent``), the engaged arcs (up to two) with their ends found
-    by bisection and the mean extent over each (mm), and the largest extent (mm)."""
+    by bisection and the mean extent over each (mm), the largest extent (mm) and the largest
+    material above the flute length (mm)."""
     last = n_steps - 1
-    extent[0] = _extent_at(0.0, pose, tool, grid)
+    extent[0], over = _extent_at(0.0, pose, tool, grid)
     for lo in range(0, last, COARSE_STEPS):
         hi = min(lo + COARSE_STEPS, last)
-        extent[hi] = _extent_at(hi * step, pose, tool, grid)
+        extent[hi], over_hi = _extent_at(hi * step, pose, tool, grid)
+        over = max(over, over_hi)
         a, b = extent[lo], extent[hi]
         if (a > 0.0) == (b > 0.0) and abs(b - a) <= SMOOTH_EXTENT_M:
             for s in range(lo + 1, hi):  # alike at both ends: the steps between filled in
                 extent[s] = a + (b - a) * (s - lo) / (hi - lo)
         else:
             for s in range(lo + 1, hi):
-                extent[s] = _extent_at(s * step, pose, tool, grid)
+                extent[s], over_s = _extent_at(s * step, pose, tool, grid)
+                over = max(over, over_s)
     largest = 0.0
     for s in range(n_steps):
         largest = max(largest, extent[s])
     row[6] = largest * 1e3
+    row[8] = over * 1e3
     runs = 0
     start = 0
     for s in range(n_steps + 1):
@@ -389,32 +470,39 @@ def _cut(heights, x0, y0, res, cx, cy, cz, r, rc, crescent, px, py, pr):  # prag
 
 
 @njit(cache=True)
-def _engage(pos, vel, radius, corner, flute, cutting, heights, x0, y0, res, top, bottom, step, out):  # pragma: no cover
+def _engage(pos, vel, radius, corner, flute, heights, x0, y0, res, top, bottom, step, out):  # pragma: no cover
     """The engagement table ``out`` (n, :data:`COLUMNS`, angles in rad, lengths in mm) along
     tool tips ``pos`` (n, 3, m) moving at ``vel`` (n, 3), tool radius, corner radius and flute
-    length ``radius``, ``corner``, ``flute`` (n, m), cutting where ``cutting`` (n) is true;
-    cuts ``heights`` (m) as it goes: each sample is read before the tool's surface there is cut."""
+    length ``radius``, ``corner``, ``flute`` (n, m), the spindle turning or not; cuts
+    ``heights`` (m) as it goes: each sample is read before the tool's surface there is cut."""
     n = pos.shape[0]
-    ux, uy = 1.0, 0.0
     n_steps = round(math.pi / step) + 1
     extent = np.zeros(n_steps)
+    travelled, dir_x, dir_y, run_end = _path_arrays(pos, vel)
+    path = (pos, travelled, dir_x, dir_y, run_end)
     have_prev = False
     px = py = pz = pr = 0.0
+    under = 0.0  # the depth (m) the tip has gone down into material, to the last sample
     for k in range(n):
         cx, cy, cz, r, rc = pos[k, 0], pos[k, 1], pos[k, 2], radius[k], corner[k]
-        speed = math.hypot(vel[k, 0], vel[k, 1])
-        if speed > 1e-6:
-            ux, uy = vel[k, 0] / speed, vel[k, 1] / speed
         for c in range(out.shape[1]):
             out[k, c] = 0.0
         out[k, 7] = r * 1e3
-        if not cutting[k] or cz >= top:
+        if cz >= top:
+            under = 0.0
             continue
+        grid = (heights, x0, y0, res, top, bottom)
+        if vel[k, 2] < 0.0:  # going down: the material under the tip, before this cut
+            fresh = min(_height_at(grid, cx, cy), top) - max(cz, bottom)
+            # straight down, the cell under the axis was cut to the last tip: the depth gone into
+            # the material adds up; moving sideways, each new cell gives the depth itself
+            if fresh > 0.0:
+                out[k, 9] = max(fresh, under + (pz - cz) if under > 0.0 else 0.0) * 1e3
+        under = out[k, 9] * 1e-3
         # side milling: the tool must move in XY (a plunge's bottom cutting is not modelled,
         # though it removes the material under the tool)
-        if speed > 1e-6:
-            grid = (heights, x0, y0, res, top, bottom)
-            _side_engagement((cx, cy, cz, ux, uy), (r, rc, flute[k]), grid, n_steps, step, extent, out[k])
+        if math.hypot(vel[k, 0], vel[k, 1]) > MOVING_M_PER_S:
+            _side_engagement((path, k, cz), (r, rc, flute[k]), grid, n_steps, step, extent, out[k])
         crescent = have_prev and rc == 0.0 and cz >= pz - 1e-12 and r == pr
         _cut(heights, x0, y0, res, cx, cy, cz, r, rc, crescent, px, py, pr)
         have_prev = True
@@ -422,10 +510,11 @@ def _engage(pos, vel, radius, corner, flute, cutting, heights, x0, y0, res, top,
 
 
 def engagement_table(
-    position_m, velocity_m_per_s, radius_m, cutting, height_map: HeightMap, corner_m=None, flute_m=None
+    position_m, velocity_m_per_s, radius_m, height_map: HeightMap, corner_m=None, flute_m=None
 ) -> np.ndarray:
-    """The engagement along a planned path (see the module docstring), shape (n, 8):
-    :data:`COLUMNS`, angles in rad, lengths in mm.  Cuts ``height_map`` as it goes.
+    """The engagement along a planned path (see the module docstring), shape (n, 10):
+    :data:`COLUMNS`, angles in rad, lengths in mm.  Cuts ``height_map`` as it goes, whether the
+    spindle turns or not (a tool that does not turn still goes where the program moves it).
 
     Parameters
     ----------
@@ -433,8 +522,6 @@ def engagement_table(
         The tool tip's path and velocity relative to the stock (m, m/s).
     radius_m : ndarray (n,)
         The tool's radius at each sample (m).
-    cutting : ndarray (n,) of bool
-        Where the spindle turns.
     height_map : HeightMap
     corner_m, flute_m : ndarray (n,) or None
         The tool's corner radius (m; 0 a flat end mill, the radius a ball) and flute length
@@ -451,7 +538,6 @@ def engagement_table(
         radius,
         corner,
         flute,
-        np.ascontiguousarray(cutting, np.bool_),
         height_map.heights,
         height_map.x0_m,
         height_map.y0_m,
@@ -513,8 +599,33 @@ class ProgramMilling:
         return PROGRAM_MILLING, params, np.zeros(3 + 2 * n_hist)
 
 
-def program_milling(plan, stock: StockSpec, tool: ToolSpec | None, tools: list[ToolSpec], seed: int):
-    """The stock cut by a planned program: the force model and its engagement table.
+@dataclass
+class ProgramCut:
+    """A planned program through its stock (:func:`program_milling`).
+
+    Attributes
+    ----------
+    milling : ProgramMilling
+        The force model for the run.
+    table : ndarray (n, len(COLUMNS))
+        The engagement at each sample of the plan.
+    height_map : HeightMap
+        The stock as the program leaves it.
+    warnings : list of dict
+        Crashes and misuse by line (:func:`twin.process.misuse.machining_warnings`).
+    warnings_total : int
+        Every warning, listed or not.
+    """
+
+    milling: ProgramMilling
+    table: np.ndarray
+    height_map: HeightMap
+    warnings: list[dict]
+    warnings_total: int
+
+
+def program_milling(plan, stock: StockSpec, tool: ToolSpec | None, tools: list[ToolSpec], seed: int) -> ProgramCut:
+    """The stock cut by a planned program: the force model, its engagement table and warnings.
 
     Parameters
     ----------
@@ -534,6 +645,7 @@ def program_milling(plan, stock: StockSpec, tool: ToolSpec | None, tools: list[T
         with no such tool (naming the program line).
     """
     from twin.process.cutting import _spindle_phase
+    from twin.process.misuse import machining_warnings
 
     if tool is None and not tools:
         raise TwinInputError("tool", None, "a stock is cut by a tool: give [tool] or [[tools]]")
@@ -564,6 +676,7 @@ def program_milling(plan, stock: StockSpec, tool: ToolSpec | None, tools: list[T
     flute = np.array([math.inf if t.flute_length_mm is None else t.flute_length_mm for t in chosen])[index] * 1e-3
     rpm = plan.per_sample(plan.spindle_rpm, 0.0)
     height_map = HeightMap(stock, max(t.diameter_mm for t in chosen) + 1.0)
-    table = engagement_table(plan.position, plan.velocity, radius, rpm > 0, height_map, corner, flute)
+    table = engagement_table(plan.position, plan.velocity, radius, height_map, corner, flute)
     model = ProgramMilling(table, rpm, index, chosen, plan.period_s, _spindle_phase(None, seed))
-    return model, table, height_map
+    warnings, total = machining_warnings(plan, table, chosen, index, stock)
+    return ProgramCut(model, table, height_map, warnings, total)

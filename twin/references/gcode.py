@@ -131,6 +131,9 @@ class GcodeReference(_Samples):
         #: and the stock's height map as the program leaves it.
         self.engagement: np.ndarray | None = None
         self.height_map = None
+        #: With a stock: crashes and misuse by line (:func:`twin.process.misuse.machining_warnings`).
+        self.warnings: list[dict] = []
+        self.warnings_total = 0
 
     def _window(self, t):
         return 0, self.plan.position, self.plan.velocity, self.plan.acceleration, self.plan.line

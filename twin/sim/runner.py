@@ -109,6 +109,10 @@ class RunResult:
         For a G-code reference, the programmed feed at each recorded tick (else empty).
     part_outlines : dict of str to list of ndarray
         With a stock: ``stock`` and ``machined`` outlines (mm), as the program leaves them.
+    machining_warnings : list of dict
+        With a stock: crashes and misuse by program line
+        (:func:`twin.process.misuse.machining_warnings`); ``info["machining_warnings_total"]``
+        counts them all.
     """
 
     machine: BuiltMachine
@@ -132,6 +136,7 @@ class RunResult:
     engagement: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     program_feed_mm_per_min: np.ndarray = field(default_factory=lambda: np.zeros(0))
     part_outlines: dict = field(default_factory=dict)
+    machining_warnings: list = field(default_factory=list)
 
     @property
     def axis_names(self) -> list[str]:
@@ -382,6 +387,7 @@ def simulate(
                 "record_every": int(record_every),
                 "completed_ticks": ticks,
                 **({"program_cycle_time_s": reference.duration_s} if is_program else {}),
+                **({"machining_warnings_total": warnings_total} if warnings_total else {}),
             },
             reference_extra=extra,
             program_lines=gathered("lines", rows, np.zeros(0, int)),
@@ -389,9 +395,12 @@ def simulate(
             engagement=gathered("engagement", rows, np.zeros((0, 2))),
             program_feed_mm_per_min=gathered("feeds", rows, np.zeros(0)),
             part_outlines=outlines,
+            machining_warnings=warnings,
         )
 
     outlines = reference.outlines if hasattr(reference, "outlines") else {}
+    warnings = getattr(reference, "warnings", [])
+    warnings_total = getattr(reference, "warnings_total", 0)
     show = progress if progress is not None else n * substeps > PROGRESS_STEPS
     size = max(1, min(CHUNK_TICKS, CHUNK_STEPS // substeps, n))
     warnings0 = [data.warning[w].number for w in FATAL_WARNINGS]
