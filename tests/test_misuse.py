@@ -75,3 +75,31 @@ def test_strict_turns_warnings_into_exit_code_4(tmp_path):
     assert strict.returncode == 4
     assert strict.stderr.count("\n") == 1 and strict.stderr.startswith("error: ") and "--strict" in strict.stderr
     assert "machining warnings" in strict.stdout
+
+
+def test_a_tools_material_and_the_users_own_coefficients_reach_the_force_model():
+    """The kernel's tool row is the material's coefficients with the user's over them."""
+    from twin.process.materials import MATERIALS
+
+    tool = ToolSpec(diameter_mm=6.0, n_flutes=3, material="aluminium_6082_t6", coefficients={"K_tc": 500.0})
+    expected = MATERIALS["aluminium_6082_t6"].coefficients.as_array()
+    expected[0] = 500.0
+    assert tool.cutting_coefficients().as_array() == pytest.approx(expected)
+    planned = plan(
+        Reader(["G21 G90 G0 X-10 Y0 Z5", "M3 S10000", "G1 Z-2 F300", "G1 X30 F600"]).moves(), LIMITS, PlannerSettings()
+    )
+    milling = program_milling(planned, BLOCK, tool, [], 0).milling
+    from twin.machines import build
+
+    _, params, _ = milling.kernel_arrays(build("linear_motor_xy"))
+    assert np.isin(np.append(expected, 3.0), params).all()
+
+
+def test_twin_list_shows_every_material_with_its_source():
+    from twin.process.materials import MATERIALS
+
+    listed = subprocess.run([sys.executable, "-m", "twin.cli", "list"], capture_output=True, text=True, timeout=300)
+    assert listed.returncode == 0
+    for name, material in MATERIALS.items():
+        line = next(row for row in listed.stdout.splitlines() if row.strip().startswith(name + " "))
+        assert material.source in line and material.alloy in line

@@ -564,10 +564,12 @@ def tune(
 
 @app.command("list")
 def list_things():
-    """Machines, controller kinds, observers, bundled scenarios and reproducible papers."""
+    """Machines, controller kinds, observers, disturbances, materials, references, bundled
+    scenarios and reproducible papers."""
     from controllers import CONTROLLERS, OBSERVERS
     from twin.machines import MACHINES
     from twin.process import DISTURBANCES
+    from twin.process.materials import MATERIALS
     from twin.references import REFERENCES
     from twin.reproductions import REPRODUCTIONS
     from twin.scenario import bundled_scenarios, load_scenario
@@ -588,6 +590,15 @@ def list_things():
     typer.echo("disturbances ([[disturbances]] type = ...):")
     for name, kind in DISTURBANCES.items():
         typer.echo(f"  {name:<22} {kind.doc.removeprefix(name + ': ')}")
+    typer.echo(
+        "materials ([tool] / [[tools]] / end_milling material = ...): K_tc K_rc K_ac N/mm^2, K_te K_re K_ae N/mm"
+    )
+    for name, material in MATERIALS.items():
+        k = material.coefficients
+        values = f"{k.K_tc:g} {k.K_rc:g} {k.K_ac:g}, {k.K_te:g} {k.K_re:g} {k.K_ae:g}"
+        typer.echo(
+            f"  {name:<24} {material.alloy}, {material.cutter}, {material.lubrication}: {values} ({material.source})"
+        )
     typer.echo("references ([reference] type = ...):")
     for name, kind in REFERENCES.items():
         typer.echo(f"  {name:<22} {kind.doc.removeprefix(name + ': ')}")

@@ -29,10 +29,8 @@ the drive:
     velocity (N s/m) as the paper's units say.
 
 Default cutting coefficients: aluminium Al7075-T6 with a carbide cutter, dry:
-K_tc 767.01, K_rc 168.8, K_ac 222 N/mm^2, K_te 27.7, K_re 26.6, K_ae 0.7 N/mm, as tabulated
-in Table 5 of "Milling force model for aviation aluminum alloy: academic insight and
-perspective analysis", Chinese J. Mech. Eng. 34 (2021) 98, doi:10.1186/s10033-021-00536-9
-(its ref. [190]).
+K_tc 767.01, K_rc 168.8, K_ac 222 N/mm^2, K_te 27.7, K_re 26.6, K_ae 0.7 N/mm
+(:mod:`twin.process.materials`, with the other materials and their sources).
 """
 
 from __future__ import annotations
@@ -48,33 +46,13 @@ from pydantic import Field, PositiveFloat
 from twin.errors import TwinInputError
 from twin.numba_cache import configure as configure_numba_cache
 from twin.process.kinds import DisturbanceSpecBase, register
+from twin.process.materials import ALUMINIUM_7075_T6, MATERIALS, CuttingCoefficients
 from twin.spec import StrictSpec
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
 
 #: Feed per tooth (m) below which the feed direction is held at its last value.
 MIN_FEED_M = 1e-9
-
-
-@dataclass(frozen=True)
-class CuttingCoefficients:
-    """Mechanistic cutting (N/mm^2) and edge (N/mm) force coefficients."""
-
-    K_tc: float
-    K_rc: float
-    K_ac: float
-    K_te: float
-    K_re: float
-    K_ae: float
-
-    def as_array(self) -> np.ndarray:
-        """``[K_tc, K_rc, K_ac, K_te, K_re, K_ae]``, the order the kernels take."""
-        return np.array([self.K_tc, self.K_rc, self.K_ac, self.K_te, self.K_re, self.K_ae])
-
-
-#: Al7075-T6, carbide, dry (see the module docstring for the source).
-ALUMINIUM_7075_T6 = CuttingCoefficients(K_tc=767.01, K_rc=168.8, K_ac=222.0, K_te=27.7, K_re=26.6, K_ae=0.7)
-MATERIALS = {"aluminium_7075_t6": ALUMINIUM_7075_T6}
 
 
 def immersion_angles(radial_depth_mm: float, diameter_mm: float, mode: str) -> tuple[float, float]:
@@ -614,7 +592,7 @@ class AverageForceSpec(DisturbanceSpecBase):
 
 
 def _end_milling_from(spec: EndMillingSpec, axis_names: list[str], seed: int, field: str) -> EndMilling:
-    coefficients = replace(MATERIALS[spec.material], **spec.coefficients.model_dump(exclude_none=True))
+    coefficients = replace(MATERIALS[spec.material].coefficients, **spec.coefficients.model_dump(exclude_none=True))
     return EndMilling(
         spec.spindle_rpm,
         spec.n_flutes,

@@ -20,7 +20,7 @@ angle ``arccos(1 - 2 a/D)`` comes out within about a degree (tested).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Annotated, Literal
 
 import numpy as np
@@ -30,7 +30,8 @@ from pydantic import Field, PositiveFloat, model_validator
 
 from twin.errors import TwinInputError
 from twin.numba_cache import configure as configure_numba_cache
-from twin.process.cutting import MATERIALS, MAX_FLUTES
+from twin.process.cutting import MAX_FLUTES, CoefficientsSpec
+from twin.process.materials import MATERIALS, CuttingCoefficients
 from twin.spec import StrictSpec
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
@@ -151,6 +152,13 @@ class ToolSpec(StrictSpec):
     material: Literal[tuple(MATERIALS)] = Field(  # type: ignore[valid-type]
         "aluminium_7075_t6", description="cutting coefficients of: " + ", ".join(MATERIALS)
     )
+    coefficients: CoefficientsSpec = Field(
+        default_factory=CoefficientsSpec, description="the user's own coefficients, over the material's"
+    )
+
+    def cutting_coefficients(self) -> CuttingCoefficients:
+        """The material's coefficients with the user's given ones in their place."""
+        return replace(MATERIALS[self.material].coefficients, **self.coefficients.model_dump(exclude_none=True))
 
     @model_validator(mode="after")
     def _corner(self):
@@ -592,7 +600,7 @@ class ProgramMilling:
         n_hist = int(lag) + 2
         rows = np.column_stack([self.table[:, :6], omega, angle, self.tool_index]).astype(float)
         assert rows.shape[1] == len(PM_COLUMNS)
-        tools = [np.concatenate([MATERIALS[t.material].as_array(), [t.n_flutes]]) for t in self.tools]
+        tools = [np.concatenate([t.cutting_coefficients().as_array(), [t.n_flutes]]) for t in self.tools]
         jacobian = np.asarray(machine.workpiece_jacobian(), float).ravel()
         head = dict(zip(PROGRAM_MILLING_SLOTS, (len(self.tools), self.period_s, len(rows), dt, n_hist, jacobian.size)))
         params = np.concatenate([[float(head[name]) for name in PROGRAM_MILLING_SLOTS], jacobian, *tools, rows.ravel()])
