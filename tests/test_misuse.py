@@ -103,3 +103,17 @@ def test_twin_list_shows_every_material_with_its_source():
     for name, material in MATERIALS.items():
         line = next(row for row in listed.stdout.splitlines() if row.strip().startswith(name + " "))
         assert material.source in line and material.alloy in line
+
+
+def test_the_docs_materials_table_is_the_library():
+    """Each row of the machining page's table holds its entry's six coefficients."""
+    from pathlib import Path
+
+    from twin.process.materials import MATERIALS
+
+    page = (Path(__file__).resolve().parent.parent / "docs" / "pages" / "machining.md").read_text()
+    rows = {line.split("`")[1]: line for line in page.splitlines() if line.startswith("| `aluminium")}
+    assert set(rows) == set(MATERIALS)
+    for name, material in MATERIALS.items():
+        cells = [c.strip().rstrip("*") for c in rows[name].split("|")[5:11]]
+        assert [float(c) for c in cells] == pytest.approx(material.coefficients.as_array().tolist()), name
