@@ -126,6 +126,9 @@ def write_plots(result, directory: Path, name: str = "run") -> list[Path]:
 
 #: Lines of a program the part plot labels, worst first.
 LABELLED_LINES = 5
+#: Window (s) of the centred moving average the feed plot's actual feed is shown through (the
+#: recording keeps the table's positions unfiltered).
+FEED_FILTER_S = 0.01
 
 
 def _program_plots(plt, result, directory: Path, name: str) -> list[Path]:
@@ -146,17 +149,34 @@ def _program_plots(plt, result, directory: Path, name: str) -> list[Path]:
     ax.add_collection(path)
     fig.colorbar(path, ax=ax, label="contour error (µm)")
     rows = sorted(line_table(result, error_um * 1e-6), key=lambda r: r["max_contour_error_um"], reverse=True)
-    for row in rows[:LABELLED_LINES]:
+    # numbered markers on the path and the lines' texts in a key beside the plot: passes that
+    # share XY put the worst lines on one spot, where labels would cover one another
+    legend_rows = []
+    for rank, row in enumerate(rows[:LABELLED_LINES], start=1):
         inside = (result.t_s >= row["t_start_s"]) & (result.t_s < row["t_end_s"])
         where = act[inside][np.argmax(error_um[inside])] if inside.any() else act[0]
+        angle = 2.0 * np.pi * rank / LABELLED_LINES
         ax.annotate(
-            f"line {row['line']}: {row['max_contour_error_um']:.1f} µm\n{row['text']}",
+            str(rank),
             where,
-            xytext=(12, 12),
+            xytext=(14 * np.cos(angle), 14 * np.sin(angle)),
             textcoords="offset points",
+            fontsize=8,
+            ha="center",
+            va="center",
+            arrowprops={"arrowstyle": "-", "linewidth": 0.6},
+            bbox={"boxstyle": "circle,pad=0.2", "fc": "white", "alpha": 0.9},
+        )
+        legend_rows.append(f"{rank}: line {row['line']}, {row['max_contour_error_um']:.1f} µm  {row['text'][:40]}")
+    if legend_rows:
+        ax.text(
+            1.28,
+            1.0,
+            "worst lines\n" + "\n".join(legend_rows),
+            transform=ax.transAxes,
             fontsize=7,
-            arrowprops={"arrowstyle": "->", "linewidth": 0.6},
-            bbox={"boxstyle": "round", "fc": "white", "alpha": 0.8},
+            va="top",
+            family="monospace",
         )
     ax.autoscale()
     ax.set(
@@ -175,10 +195,16 @@ def _program_plots(plt, result, directory: Path, name: str) -> list[Path]:
     t = result.t_s
     planned = np.hypot(result.ref[:, 0, 1], result.ref[:, 1, 1]) * 60e3
     velocity = np.gradient(result.table_position_m(), t, axis=0) if len(t) > 1 else np.zeros_like(act)
+    # the encoder's steps differentiated are noise over the feed (1 µm in 0.5 ms is 120 mm/min):
+    # each axis's velocity averaged over FEED_FILTER_S, centred, before the magnitude
+    width = max(1, round(FEED_FILTER_S / (t[1] - t[0]))) if len(t) > 1 else 1
+    smooth = np.stack([np.convolve(v, np.ones(width) / width, mode="same") for v in velocity.T], axis=1)
     ax.plot(t, result.program_feed_mm_per_min, color="0.5", linewidth=1.2, label="programmed F (0: rapid)")
     ax.plot(t, planned, color="tab:blue", linewidth=1.0, label="planned (reference)")
-    actual = np.hypot(velocity[:, 0], velocity[:, 1]) * 60e3
-    ax.plot(t, actual, color="tab:red", linewidth=0.7, label="actual (table)")
+    actual = np.hypot(smooth[:, 0], smooth[:, 1]) * 60e3
+    ax.plot(
+        t, actual, color="tab:red", linewidth=0.7, label=f"actual (table), {FEED_FILTER_S * 1e3:g} ms moving average"
+    )
     top_feed = float(result.program_feed_mm_per_min.max())
     if top_feed > 0:  # the feeds in view; rapids run off the top
         ax.set_ylim(0.0, 1.3 * top_feed)
