@@ -138,7 +138,9 @@ class ToolSpec(StrictSpec):
     flute_length_mm: PositiveFloat | None = Field(
         None, description="length of the cutting edge from the tip (mm); material above it is not cut by the flutes"
     )
-    shank_diameter_mm: PositiveFloat | None = Field(None, description="diameter of the shank above the flutes (mm)")
+    shank_diameter_mm: PositiveFloat | None = Field(
+        None, description="diameter of the shank above the flutes (mm); not used yet: the shank is taken as the cutter"
+    )
     max_ramp_deg: float = Field(
         90.0, ge=0.0, le=90.0, description="steepest descent into material (deg): 90 plunges (centre cutting), 0 none"
     )
