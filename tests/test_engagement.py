@@ -95,7 +95,7 @@ def _bottom(rho, r, rc):
         return np.where(rho <= r, rc - np.sqrt(np.clip(rc * rc - out * out, 0.0, None)), np.inf)
 
 
-def reference_row(path, velocity, k, r, rc, stock, n_corner=400):
+def reference_row(path, velocity, k, r, rc, stock, n_corner=200):
     """Extents (m) of the edge at 1-degree angles of the leading half at sample k, from every
     earlier sample's tool solid: material at a point of the tool's surface is there if it is
     inside the stock's box and below every earlier tool's bottom surface over it."""
@@ -103,6 +103,9 @@ def reference_row(path, velocity, k, r, rc, stock, n_corner=400):
     x0, y0, x1, y1 = (v * 1e-3 for v in (x0, y0, x1, y1))
     top, bottom = stock.top_mm * 1e-3, stock.bottom_mm * 1e-3
     c, earlier = path[k], path[:k]
+    # a tool over 2r away covers no point of this tool's surface: those are left out, and every
+    # fourth sample kept (0.04 mm apart at F600: their discs' scallops are 1e-4 mm deep)
+    earlier = earlier[np.hypot(earlier[:, 0] - c[0], earlier[:, 1] - c[1]) < 2.0 * r + 1e-9][::4]
     u = velocity[k, :2] / np.hypot(*velocity[k, :2])
     phi = np.radians(np.arange(181.0))
     normal = np.stack([np.sin(phi) * u[0] - np.cos(phi) * u[1], np.sin(phi) * u[1] + np.cos(phi) * u[0]], axis=1)
@@ -163,7 +166,7 @@ def test_engagement_matches_a_brute_force_reference_to_1_degree_and_1_percent(na
     checked = 0
     for line in check_lines:
         on = np.flatnonzero((planned.line == line + 2) & (x > 8.0) & (x < 28.0))
-        for k in on[:: max(len(on) // 4, 1)]:
+        for k in on[:: max(len(on) // 3, 1)]:
             arcs = _arcs(reference_row(planned.position, planned.velocity, k, r, rc, BLOCK))
             row = table[k]
             assert len(arcs) <= 2, (name, k, arcs)
@@ -174,4 +177,4 @@ def test_engagement_matches_a_brute_force_reference_to_1_degree_and_1_percent(na
                 assert math.degrees(ex) == pytest.approx(exit_, abs=1.0), (name, k, arcs, row)
                 assert depth == pytest.approx(mean, abs=0.01 * largest), (name, k, arcs, row)
             checked += 1
-    assert checked >= 4 * len(check_lines) - 2
+    assert checked >= 3 * len(check_lines)
