@@ -139,10 +139,10 @@ def _run(
             _report(api.Run(scn, exc.result, status, {"sim_time_s": exc.sim_time_s}), rrd, as_json, plots, lines)
         raise
     _report(done, rrd, as_json, plots, lines)
-    warnings = done.summary.get("machining_warnings", [])
+    warnings = done.result.machining_warnings  # what the report printed, not computed again
     if strict and warnings:
         first = warnings[0]
-        total = done.summary.get("machining_warnings_total", len(warnings))
+        total = done.result.info.get("machining_warnings_total", len(warnings))
         typer.echo(
             f"error: {total} machining warning(s) under --strict; the first: line {first['line']}: {first['message']}",
             err=True,

@@ -552,6 +552,11 @@ class CoefficientsSpec(StrictSpec):
     K_re: float | None = None
     K_ae: float | None = None
 
+    def applied_to(self, material: str) -> CuttingCoefficients:
+        """The coefficients of ``material`` (:data:`~twin.process.materials.MATERIALS`) with the
+        ones given here in their place."""
+        return replace(MATERIALS[material].coefficients, **self.model_dump(exclude_none=True))
+
 
 class EndMillingSpec(DisturbanceSpecBase):
     """end_milling: the mechanistic milling force on the workpiece (EndMilling), driven by its motion."""
@@ -592,7 +597,7 @@ class AverageForceSpec(DisturbanceSpecBase):
 
 
 def _end_milling_from(spec: EndMillingSpec, axis_names: list[str], seed: int, field: str) -> EndMilling:
-    coefficients = replace(MATERIALS[spec.material].coefficients, **spec.coefficients.model_dump(exclude_none=True))
+    coefficients = spec.coefficients.applied_to(spec.material)
     return EndMilling(
         spec.spindle_rpm,
         spec.n_flutes,

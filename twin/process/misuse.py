@@ -35,7 +35,9 @@ KINDS = {
 }
 
 
-def machining_warnings(plan, table: np.ndarray, tools: list[ToolSpec], tool_index: np.ndarray, stock: StockSpec):
+def machining_warnings(
+    plan, table: np.ndarray, tools: list[ToolSpec], tool_index: np.ndarray, spindle_rpm: np.ndarray, stock: StockSpec
+):
     """The warnings of a program through its stock, and how many there are in all.
 
     Parameters
@@ -45,6 +47,8 @@ def machining_warnings(plan, table: np.ndarray, tools: list[ToolSpec], tool_inde
         The engagement along ``plan`` (:func:`twin.process.machining.engagement_table`).
     tools : list of ToolSpec
         The tools in use; ``tool_index`` (n,) says which at each sample.
+    spindle_rpm : ndarray (n,)
+        The spindle speed at each sample (rev/min, 0 stopped).
     stock : StockSpec
 
     Returns
@@ -58,7 +62,6 @@ def machining_warnings(plan, table: np.ndarray, tools: list[ToolSpec], tool_inde
     touched = depth > MIN_MATERIAL_MM
     z_mm = plan.position[:, 2] * 1e3
     feed = plan.per_sample(plan.feeds, 0.0)
-    rpm = plan.per_sample(plan.spindle_rpm, 0.0)
     moving = np.linalg.norm(plan.velocity, axis=1) > 1e-9
     flutes = np.array([t.n_flutes for t in tools])[tool_index]
     over = table[:, _COLUMN["over_flutes_mm"]]
@@ -66,7 +69,7 @@ def machining_warnings(plan, table: np.ndarray, tools: list[ToolSpec], tool_inde
     # each kind: where, the value reported, and how bad (the worst of a line is listed)
     found: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] = {
         "rapid_through_material": (touched & moving & (feed == 0), depth, depth),
-        "spindle_off_in_material": (touched & (rpm == 0), depth, depth),
+        "spindle_off_in_material": (touched & (spindle_rpm == 0), depth, depth),
         "below_stock_bottom": (touched & (below > MIN_MATERIAL_MM), below, below),
         "deeper_than_flutes": (over > MIN_MATERIAL_MM, over, over),
     }
@@ -75,10 +78,10 @@ def machining_warnings(plan, table: np.ndarray, tools: list[ToolSpec], tool_inde
     down = table[:, _COLUMN["under_tip_mm"]] > MIN_MATERIAL_MM
     found["plunge_too_steep"] = (down & (descent > limit + RAMP_SLACK_DEG), descent, descent)
     with np.errstate(divide="ignore", invalid="ignore"):
-        per_tooth = np.where(rpm > 0, feed / (rpm * flutes), 0.0)
+        per_tooth = np.where(spindle_rpm > 0, feed / (spindle_rpm * flutes), 0.0)
     lo = np.array([-np.inf if t.feed_per_tooth_mm is None else t.feed_per_tooth_mm[0] for t in tools])[tool_index]
     hi = np.array([np.inf if t.feed_per_tooth_mm is None else t.feed_per_tooth_mm[1] for t in tools])[tool_index]
-    outside = touched & (rpm > 0) & (feed > 0) & ((per_tooth < lo) | (per_tooth > hi))
+    outside = touched & (spindle_rpm > 0) & (feed > 0) & ((per_tooth < lo) | (per_tooth > hi))
     # the worst is the farthest outside the range, in the range's own terms
     found["feed_per_tooth"] = (outside, per_tooth, np.maximum(lo - per_tooth, per_tooth - hi))
     rows = []

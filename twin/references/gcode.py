@@ -148,11 +148,11 @@ class GcodeReference(_Samples):
         empty without a stock."""
         if self.engagement is None:
             return np.zeros((0, 2))
-        from twin.process.machining import engaged_degrees
+        from twin.process.machining import COLUMNS, engaged_degrees
 
         k = np.clip(np.rint(np.asarray(t, float) / self.plan.period_s).astype(int), 0, len(self.engagement) - 1)
         rows = self.engagement[k]
-        return np.column_stack([engaged_degrees(rows), rows[:, 6]])
+        return np.column_stack([engaged_degrees(rows), rows[:, COLUMNS.index("max_depth_mm")]])
 
     def feeds_at(self, t) -> np.ndarray:
         """The programmed feed (mm/min; 0 on rapids and dwells) at times ``t`` (s)."""
