@@ -96,6 +96,32 @@ def _print_warnings(summary: dict) -> None:
         typer.echo(f"    ... {total - SHOWN_WARNINGS} more (--json lists {len(rows)})")
 
 
+def _print_part(summary: dict) -> None:
+    """The virtual part's wall error and each inspected feature, a line each."""
+    part = summary.get("part")
+    if part is None:
+        return
+    stats = part["surface_error_um"]
+    if stats:
+        typer.echo(
+            f"  virtual part: wall error {stats['min']:+.3f} to {stats['max']:+.3f} µm, RMS {stats['rms']:.3f} µm"
+            f" ({part['wall_points']} points at Z {', '.join(f'{z:g}' for z in part['wall_levels_mm'])} mm)"
+        )
+    for row in summary.get("inspection", []):
+        if "deviation_um" not in row:
+            typer.echo(f"    {row['name']:<20} {row['type']:<7} not found: {row['message']}")
+            continue
+        size = {"circle": "diameter_mm", "width": "width_mm"}.get(row["type"])
+        measured = f"{row[size]:.4f} mm" if size else f"at {row['position_mm'][0]:.4f}, {row['position_mm'][1]:.4f} mm"
+        form = row.get("roundness_um", row.get("straightness_um"))
+        verdict = "" if row["pass"] is None else ("  pass" if row["pass"] else "  FAIL")
+        typer.echo(
+            f"    {row['name']:<20} {row['type']:<7} {measured}  deviation {row['deviation_um']:+.3f} µm"
+            + ("" if form is None else f"  form {form:.3f} µm")
+            + verdict
+        )
+
+
 def _print_summary(name: str, summary: dict) -> None:
     typer.echo(f"{name}")
     for key, value in summary.items():
@@ -163,10 +189,15 @@ def _report(done, rrd: Path | None, as_json: bool, plots: Path | None, lines: Pa
     else:
         _print_summary(
             f"{done.scenario.name}: {done.scenario.description}",
-            {k: v for k, v in summary.items() if k not in ("scenario", "machine", "lines", "machining_warnings")},
+            {
+                k: v
+                for k, v in summary.items()
+                if k not in ("scenario", "machine", "lines", "machining_warnings", "part", "inspection")
+            },
         )
         _print_worst_lines(summary.get("lines", []))
         _print_warnings(summary)
+        _print_part(summary)
     if lines is not None:
         done.lines_to_parquet(lines)
         typer.echo(f"per-line table written to {lines}", err=as_json)

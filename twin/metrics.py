@@ -186,6 +186,9 @@ def tracking_summary(result) -> dict:
             total = result.info.get("machining_warnings_total", 0)
             if total > len(result.machining_warnings):
                 out["machining_warnings_total"] = total
+        if result.part is not None:
+            out["part"] = result.part.summary()
+            out["inspection"] = result.inspection
         out["lines"] = line_table(result, ce)
     return out
 
@@ -219,6 +222,7 @@ def line_table(result, contour_m: np.ndarray | None) -> list[dict]:
     if result.engagement.size:
         engaged = np.add.reduceat(result.engagement[:, 0], starts) / (ends - starts)
         depth = np.maximum.reduceat(result.engagement[:, 1], starts)
+    wall_error = result.part.line_errors() if result.part is not None else {}
     rows = []
     for i, (a, b) in enumerate(zip(starts, ends)):
         line = int(lines[a])
@@ -236,5 +240,7 @@ def line_table(result, contour_m: np.ndarray | None) -> list[dict]:
         if result.engagement.size:
             row["mean_engagement_deg"] = round(float(engaged[i]), 2)
             row["axial_depth_mm"] = round(float(depth[i]), 4)
+        if line in wall_error:
+            row["max_wall_error_um"] = wall_error[line]
         rows.append(row)
     return rows

@@ -214,4 +214,47 @@ def _program_plots(plt, result, directory: Path, name: str) -> list[Path]:
     written.append(directory / f"{name}_feed.png")
     fig.savefig(written[-1], dpi=120, bbox_inches="tight")
     plt.close(fig)
+    if result.part is not None and len(result.part.walls):
+        written.append(_wall_error_plot(plt, result, directory, name))
     return written
+
+
+def _wall_error_plot(plt, result, directory: Path, name: str) -> Path:
+    """The virtual part from above: its walls coloured by their signed error (µm, material left
+    red, overcut blue, one scale either side of zero), the inspected features' results beside."""
+    part = result.part
+    walls = part.walls
+    fig, ax = plt.subplots(figsize=(8, 7))
+    for i, ring in enumerate(result.part_outlines.get("stock", [])):
+        ax.plot(ring[:, 0], ring[:, 1], color="0.55", linewidth=1.0, label="stock" if i == 0 else None)
+    order = np.argsort(np.abs(walls[:, 3]))  # the largest errors drawn last, on top
+    limit = max(float(np.abs(walls[:, 3]).max()), 1e-3)
+    dots = ax.scatter(walls[order, 0], walls[order, 1], c=walls[order, 3], s=4, cmap="RdBu_r", vmin=-limit, vmax=limit)
+    fig.colorbar(dots, ax=ax, label="wall error (µm): + material left, − overcut")
+    report = [
+        f"{row['name']}: "
+        + (
+            f"{row['deviation_um']:+.1f} µm" + ("" if row["pass"] is None else (" pass" if row["pass"] else " FAIL"))
+            if "deviation_um" in row
+            else "not found"
+        )
+        for row in result.inspection
+    ]
+    if report:
+        ax.text(
+            1.28,
+            1.0,
+            "inspection\n" + "\n".join(report),
+            transform=ax.transAxes,
+            fontsize=7,
+            va="top",
+            family="monospace",
+        )
+    levels = ", ".join(f"{z:g}" for z in part.levels_mm)
+    ax.set(xlabel="x (mm)", ylabel="y (mm)", title=f"{name}: the virtual part's walls at Z {levels} mm")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.grid(True, alpha=0.3)
+    path = directory / f"{name}_walls.png"
+    fig.savefig(path, dpi=120, bbox_inches="tight")
+    plt.close(fig)
+    return path

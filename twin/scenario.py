@@ -26,7 +26,9 @@ from twin.errors import TwinInputError
 from twin.gcode.planner import PlannerSettings
 from twin.machines import build, is_machine_file
 from twin.process import DISTURBANCES, DisturbanceSpecBase
+from twin.process.inspection import InspectSpec, measure
 from twin.process.machining import StockSpec, ToolSpec, program_milling
+from twin.process.part import MachinedPart, Sweep, machined_part
 from twin.references import REFERENCES, ReferenceContext, ReferenceSpecBase
 from twin.sim.drive import Drive, Encoder, substeps_per_tick
 from twin.sim.runner import MAX_PHYSICS_STEPS, RunResult, simulate
@@ -89,6 +91,8 @@ MIN_TIMESTEP_S = 1e-7
 MAX_TIMESTEP_S = 1e-2
 #: Longest control period (s).
 MAX_CONTROL_PERIOD_S = 1.0
+#: ``[[inspect]]`` features at most.
+MAX_FEATURES = 100
 
 
 class Scenario(StrictSpec):
@@ -122,6 +126,9 @@ class Scenario(StrictSpec):
     stock: StockSpec | None = Field(None, description="a workpiece the G-code program cuts")
     tool: ToolSpec | None = Field(None, description="the cutter of a program without T words")
     tools: list[ToolSpec] = Field(default_factory=list, description="the cutters of a program, by T number")
+    inspect: list[InspectSpec] = Field(
+        default_factory=list, max_length=MAX_FEATURES, description="features of the part measured on the virtual part"
+    )
 
 
 def _first_error(err: ValidationError) -> TwinInputError:
@@ -388,12 +395,18 @@ def prepare(scn: Scenario):
         scn.sensors.velocity,
     )
     disturbances = [_disturbance(d, i, names, scn.seed) for i, d in enumerate(scn.disturbances)]
+    if scn.inspect and scn.stock is None:
+        raise TwinInputError("inspect", scn.inspect[0].name, "features are measured on a part: give [stock]")
     if scn.stock is not None:
         if scn.reference.type != "gcode":
             raise TwinInputError(
                 "stock", "...", f"a stock is cut by a G-code program, not a {scn.reference.type} reference"
             )
         cut = program_milling(reference.plan, scn.stock, scn.tool, scn.tools, scn.seed)
+        plan = reference.plan
+        reference.nominal_sweep = Sweep(
+            plan.position[:, :2] * 1e3, plan.position[:, 2] * 1e3, cut.radius_m * 1e3, cut.corner_m * 1e3, plan.line
+        )
         reference.engagement, reference.height_map = cut.table, cut.height_map
         reference.warnings, reference.warnings_total = cut.warnings, cut.warnings_total
         disturbances.append(cut.milling)
@@ -413,4 +426,24 @@ def prepare(scn: Scenario):
 def run_scenario(scn: Scenario, progress: bool | None = None, max_physics_steps: int = MAX_PHYSICS_STEPS) -> RunResult:
     """Validate and run a scenario (see :func:`twin.sim.runner.simulate`)."""
     kwargs = prepare(scn)
-    return simulate(kwargs.pop("machine"), **kwargs, progress=progress, max_physics_steps=max_physics_steps)
+    reference = kwargs["reference"]
+    result = simulate(kwargs.pop("machine"), **kwargs, progress=progress, max_physics_steps=max_physics_steps)
+    if scn.stock is not None and len(result.t_s):
+        result.part = _machined_part(result, reference, scn.stock)
+        result.inspection = [measure(f, result.part.actual.section(result.part.stock, f.z_mm)) for f in scn.inspect]
+    return result
+
+
+def _machined_part(result: RunResult, reference, stock: StockSpec) -> MachinedPart:
+    """The part the run's actual motion cut: the table's measured path at the recorded ticks,
+    the planned Z and the tool of the planned sample at each tick."""
+    nominal = reference.nominal_sweep
+    k = np.clip(np.rint(result.t_s / reference.plan.period_s).astype(int), 0, len(nominal.line) - 1)
+    actual = Sweep(
+        result.table_position_m()[:, :2] * 1e3,
+        nominal.tip_mm[k],
+        nominal.radius_mm[k],
+        nominal.corner_mm[k],
+        result.program_lines,
+    )
+    return machined_part(stock.polygon(), nominal, actual, stock.top_mm, stock.bottom_mm)

@@ -628,6 +628,8 @@ class ProgramCut:
         Crashes and misuse by line (:func:`twin.process.misuse.machining_warnings`).
     warnings_total : int
         Every warning, listed or not.
+    radius_m, corner_m : ndarray (n,)
+        The tool's radius and corner radius at each sample (m).
     """
 
     milling: ProgramMilling
@@ -635,6 +637,8 @@ class ProgramCut:
     height_map: HeightMap
     warnings: list[dict]
     warnings_total: int
+    radius_m: np.ndarray
+    corner_m: np.ndarray
 
 
 def program_milling(plan, stock: StockSpec, tool: ToolSpec | None, tools: list[ToolSpec], seed: int) -> ProgramCut:
@@ -692,4 +696,4 @@ def program_milling(plan, stock: StockSpec, tool: ToolSpec | None, tools: list[T
     table = engagement_table(plan.position, plan.velocity, radius, height_map, corner, flute)
     model = ProgramMilling(table, rpm, index, chosen, plan.period_s, _spindle_phase(None, seed))
     warnings, total = machining_warnings(plan, table, chosen, index, rpm, stock)
-    return ProgramCut(model, table, height_map, warnings, total)
+    return ProgramCut(model, table, height_map, warnings, total, radius, corner)

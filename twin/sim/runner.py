@@ -21,7 +21,7 @@ import math
 from collections.abc import Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import Any, Protocol
 
 import mujoco
 import numpy as np
@@ -113,6 +113,10 @@ class RunResult:
         With a stock: crashes and misuse by program line
         (:func:`twin.process.misuse.machining_warnings`); ``info["machining_warnings_total"]``
         counts them all.
+    part : twin.process.part.MachinedPart or None
+        With a stock: the part the actual motion cut, against the nominal one.
+    inspection : list of dict
+        The ``[[inspect]]`` features measured on it (:func:`twin.process.inspection.measure`).
     """
 
     machine: BuiltMachine
@@ -137,6 +141,8 @@ class RunResult:
     program_feed_mm_per_min: np.ndarray = field(default_factory=lambda: np.zeros(0))
     part_outlines: dict = field(default_factory=dict)
     machining_warnings: list = field(default_factory=list)
+    part: Any = None
+    inspection: list = field(default_factory=list)
 
     @property
     def axis_names(self) -> list[str]:

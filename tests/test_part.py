@@ -1,0 +1,146 @@
+"""The virtual part and its inspection: walls to a fraction of a micrometre whatever the height
+map's cell (closed forms of straight slots), a ball tool's radius by height, and a bore cut by
+the twin's actual motion measured against the envelope of that motion computed here."""
+
+import math
+
+import numpy as np
+import pytest
+import shapely
+
+from twin import api
+from twin.errors import TwinInputError
+from twin.process.inspection import CircleFeature, LineFeature, WidthFeature, measure
+from twin.process.part import Sweep, machined_part, swept_radius_mm, wall_levels
+
+STOCK = shapely.box(0.0, 0.0, 30.0, 20.0)
+R = 3.0  # a 6 mm flat end mill
+
+
+def slot(offset_y_mm: float, n: int = 400) -> Sweep:
+    """A slot 2 mm deep along X at Y 10 (+ offset) from X 5 to X 25."""
+    x = np.linspace(5.0, 25.0, n)
+    return Sweep(
+        np.column_stack([x, np.full(n, 10.0 + offset_y_mm)]),
+        np.full(n, -2.0),
+        np.full(n, R),
+        np.zeros(n),
+        np.full(n, 7),
+    )
+
+
+def test_wall_error_is_the_path_offset_on_each_wall():
+    # the actual path 3 µm towards +Y: the upper wall overcut by 3 µm, the lower one left 3 µm
+    part = machined_part(STOCK, slot(0.0), slot(0.003), 0.0, -10.0)
+    assert part.levels_mm == [-1.0]
+    walls = part.walls
+    straight = (walls[:, 0] > 5.5) & (walls[:, 0] < 24.5)  # the walls, not the slot's round ends
+    upper, lower = straight & (walls[:, 1] > 10.0), straight & (walls[:, 1] < 10.0)
+    assert upper.sum() > 300 and lower.sum() > 300
+    np.testing.assert_allclose(walls[upper, 3], -3.0, atol=0.01)
+    np.testing.assert_allclose(walls[lower, 3], 3.0, atol=0.01)
+    assert set(walls[:, 4]) == {7.0} and abs(part.line_errors()[7]) == pytest.approx(3.0, abs=0.05)
+
+
+def test_a_perfect_path_leaves_no_error():
+    part = machined_part(STOCK, slot(0.0), slot(0.0), 0.0, -10.0)
+    assert np.abs(part.walls[:, 3]).max() < 1e-3
+    assert part.summary()["surface_error_um"]["rms"] < 1e-3
+
+
+def test_line_and_width_of_a_slot():
+    part = machined_part(STOCK, slot(0.0), slot(0.003), 0.0, -10.0)
+    _, actual = part.sections(-1.0)
+    width = measure(
+        WidthFeature(type="width", name="slot", from_mm=(15, 5), to_mm=(15, 15), width_mm=6.0, z_mm=-1.0), actual
+    )
+    assert width["width_mm"] == pytest.approx(6.0, abs=1e-5) and width["deviation_um"] == pytest.approx(0.0, abs=0.01)
+    # the slot's upper wall (material above it) 3 µm further into the material: overcut
+    upper = measure(
+        LineFeature(type="line", name="upper", from_mm=(8, 13), to_mm=(22, 13), z_mm=-1.0, tolerance_um=2.0), actual
+    )
+    assert upper["deviation_um"] == pytest.approx(-3.0, abs=0.01) and upper["pass"] is False
+    assert upper["position_mm"][1] == pytest.approx(13.003, abs=1e-5) and upper["straightness_um"] < 0.01
+    lower = measure(LineFeature(type="line", name="lower", from_mm=(22, 7), to_mm=(8, 7), z_mm=-1.0), actual)
+    assert lower["deviation_um"] == pytest.approx(3.0, abs=0.01) and lower["pass"] is None
+
+
+def test_a_feature_not_on_the_part_says_so():
+    part = machined_part(STOCK, slot(0.0), slot(0.0), 0.0, -10.0)
+    _, actual = part.sections(-1.0)
+    row = measure(CircleFeature(type="circle", name="none", center_mm=(5, 5), diameter_mm=1.0, z_mm=-1.0), actual)
+    assert row["found"] is False and row["pass"] is False
+
+
+def test_ball_radius_by_height_and_levels():
+    # a 6 mm ball: at height h over its tip the radius is sqrt(2 R h - h^2), the full radius over R
+    h = np.array([0.0, 0.5, 1.0, 3.0, 4.0])
+    got = swept_radius_mm(-h, np.full(5, 3.0), np.full(5, 3.0), 0.0)
+    np.testing.assert_allclose(got, [0.0, math.sqrt(2.75), math.sqrt(5.0), 3.0, 3.0])
+    tips = np.concatenate([np.full(20, -0.5), np.full(20, -2.0), [-1.3] * 3])  # a ramp's few samples: no floor
+    assert wall_levels(tips, np.ones(43, bool), 0.0, -10.0) == [-0.25, -1.25]
+
+
+@pytest.fixture(scope="module")
+def bore():
+    scn = api.load("gcode_seed004_circle_stock")
+    features = [
+        CircleFeature(type="circle", name="bore", center_mm=(-28, 0), diameter_mm=66.0, z_mm=-1.5, tolerance_um=10)
+    ]
+    return api.run(scn.model_copy(update={"inspect": features})).result
+
+
+def test_bore_diameter_is_the_envelope_of_the_actual_motion(bore):
+    # independent of the polygons: the wall's radius at each angle is the furthest reach of the
+    # tool's discs (radius 5 mm) along that ray from the centre, over the actual path cut below
+    # Z -1.5; the diameter twice its mean over 1440 angles
+    xy = bore.table_position_m() * 1e3 - [-28.0, 0.0]
+    cut = bore.reference_extra["z"] * 1e3 < -1.5
+    rho, angle = np.hypot(*xy[cut].T), np.arctan2(xy[cut, 1], xy[cut, 0])
+    theta = np.linspace(-np.pi, np.pi, 1440, endpoint=False)[:, None]
+    along, across = rho * np.cos(angle - theta), rho * np.sin(angle - theta)
+    reach = np.where(np.abs(across) < 5.0, along + np.sqrt(np.maximum(25.0 - across**2, 0.0)), -np.inf).max(axis=1)
+    row = bore.inspection[0]
+    assert row["diameter_mm"] == pytest.approx(2 * reach.mean(), abs=1e-4)  # 0.1 µm
+    assert row["roundness_um"] == pytest.approx(np.ptp(reach) * 1e3, abs=1.5)
+    assert row["deviation_um"] == pytest.approx((row["diameter_mm"] - 66.0) * 1e3, abs=1e-3)
+    assert row["pass"] is (abs(row["deviation_um"]) <= 10)
+
+
+def test_bore_cut_by_the_perfect_loop_measures_its_size(bore):
+    # an exact circle of radius 28 mm with the 5 mm tool: a 66 mm bore
+    turn = np.linspace(0.0, 2 * np.pi, 20_001)
+    n = len(turn)
+    loop = Sweep(
+        np.column_stack([28 * np.cos(turn) - 28, 28 * np.sin(turn)]),
+        np.full(n, -3.0),
+        np.full(n, 5.0),
+        np.zeros(n),
+        np.ones(n),
+    )
+    stock = bore.part.stock
+    feature = CircleFeature(type="circle", name="bore", center_mm=(-28, 0), diameter_mm=66.0, z_mm=-1.5)
+    row = measure(feature, loop.section(stock, -1.5))
+    assert row["diameter_mm"] == pytest.approx(66.0, abs=5e-5) and row["roundness_um"] < 0.2
+    # the planned reference runs inside the programmed circle (by its mean radius here): the
+    # nominal part measures what it sweeps
+    plan = bore.part.nominal
+    on = plan.line == 12
+    radius = np.hypot(plan.xy_mm[on, 0] + 28, plan.xy_mm[on, 1]).mean()
+    row = measure(feature, plan.section(stock, -1.5))
+    assert row["diameter_mm"] == pytest.approx(2 * (radius + 5.0), abs=1e-4)
+
+
+def test_per_line_wall_error_is_the_run_s(bore):
+    lines = {row["line"]: row for row in api.Run(api.load("gcode_seed004_circle_stock"), bore).summary["lines"]}
+    walls = bore.part.walls
+    circle = walls[walls[:, 4] == 12, 3]  # the G3 line cuts the bore's wall
+    assert lines[12]["max_wall_error_um"] == pytest.approx(circle[np.argmax(np.abs(circle))], abs=1e-3)
+    assert bore.part.summary()["surface_error_um"]["max"] == pytest.approx(walls[:, 3].max(), abs=1e-3)
+
+
+def test_inspection_needs_a_stock():
+    scn = api.load("gcode_test_piece")
+    feature = CircleFeature(type="circle", name="b", center_mm=(0, 0), diameter_mm=1.0, z_mm=0.0)
+    with pytest.raises(TwinInputError, match="inspect"):
+        api.run(scn.model_copy(update={"inspect": [feature], "stock": None}))
