@@ -144,3 +144,12 @@ def test_inspection_needs_a_stock():
     feature = CircleFeature(type="circle", name="b", center_mm=(0, 0), diameter_mm=1.0, z_mm=0.0)
     with pytest.raises(TwinInputError, match="inspect"):
         api.run(scn.model_copy(update={"inspect": [feature], "stock": None}))
+
+
+def test_the_part_is_recorded_and_plotted(bore, tmp_path):
+    from twin.recording import read_back
+
+    run = api.Run(api.load("gcode_seed004_circle_stock"), bore)
+    counts = read_back(run.record(tmp_path / "part.rrd"))
+    assert counts.get("/contour/part_walls", 0) > 0 and counts.get("/contour/inspection", 0) > 0
+    assert "gcode_seed004_circle_stock_walls.png" in {p.name for p in run.plots(tmp_path / "plots")}

@@ -13,6 +13,14 @@ REFERENCE_COLOR, ACTUAL_COLOR, ERROR_COLOR, TOOL_COLOR = (150, 150, 150), (30, 1
 STOCK_COLOR, MACHINED_COLOR = (110, 110, 110), (235, 235, 235)
 #: The contour-error colour scale, low to high: blue, green, yellow, red.
 SCALE_STOPS = np.array([[40, 90, 220], [40, 190, 90], [250, 220, 40], [230, 40, 40]], float)
+#: The wall error's colours: overcut blue, exact white, material left red.
+OVERCUT_COLOR, EXACT_COLOR, LEFT_COLOR = (
+    np.array([40, 90, 220.0]),
+    np.array([235, 235, 235.0]),
+    np.array([230, 40, 40.0]),
+)
+#: The inspection's labels are this share of the part's height apart.
+LABEL_SPACING = 0.06
 #: Segments of the colour scale drawn beside the part.
 SCALE_STEPS = 10
 
@@ -23,6 +31,15 @@ def scale_colors(values: np.ndarray, top: float) -> np.ndarray:
     lo = np.minimum(x.astype(int), len(SCALE_STOPS) - 2)
     frac = (x - lo)[..., None]
     return ((1 - frac) * SCALE_STOPS[lo] + frac * SCALE_STOPS[lo + 1]).astype(np.uint8)
+
+
+def wall_colors(error_um: np.ndarray) -> np.ndarray:
+    """RGB (uint8) of signed wall errors: white at 0, red (material left) or blue (overcut) at
+    the largest magnitude of either sign."""
+    top = float(np.abs(error_um).max()) if error_um.size else 0.0
+    frac = (np.abs(error_um) / top if top > 0 else np.zeros_like(error_um))[:, None]
+    end = np.where((error_um >= 0)[:, None], LEFT_COLOR, OVERCUT_COLOR)
+    return ((1 - frac) * EXACT_COLOR + frac * end).astype(np.uint8)
 
 
 def _xyz(xy_mm: np.ndarray) -> np.ndarray:
@@ -74,6 +91,8 @@ def log_program(rec, result, root: str, rows: slice, ref: np.ndarray, act: np.nd
         rr.LineStrips3D(segments, colors=scale_colors(error_um[1:], top), radii=[-4.0]),
         static=True,
     )
+    if result.part is not None and len(result.part.walls):
+        log_part(rec, result, root)
     every = [r for rings in result.part_outlines.values() for r in rings] or [act]
     x_max, y_min, y_max = (
         max(r[:, 0].max() for r in every),
@@ -90,3 +109,31 @@ def log_program(rec, result, root: str, rows: slice, ref: np.ndarray, act: np.nd
         rr.Points3D([[x, y_min, 0.0], [x, y_max, 0.0]], labels=["0 µm", f"{top:.1f} µm contour error"], radii=[-1.0]),
         static=True,
     )
+
+
+def log_part(rec, result, root: str) -> None:
+    """The virtual part: its wall points at their heights coloured by the signed wall error
+    (``part_walls``, mm, :func:`wall_colors`) and each measured feature's result as a label
+    at its measured centre or position (``inspection``)."""
+    walls = result.part.walls
+    rec.log(
+        f"{root}/part_walls",
+        rr.Points3D(walls[:, :3], colors=wall_colors(walls[:, 3]), radii=[-3.0]),
+        static=True,
+    )
+    span = float(np.ptp(walls[:, 1])) if len(walls) else 1.0
+    places: list[list[float]] = []
+    labels: list[str] = []
+    for row in result.inspection:
+        verdict = "" if row["pass"] is None else (" pass" if row["pass"] else " FAIL")
+        text = (
+            f"{row['name']}: {row['deviation_um']:+.1f} µm{verdict}"
+            if "deviation_um" in row
+            else f"{row['name']}: not found"
+        )
+        place = row.get("center_mm") or row.get("position_mm")
+        if place is not None:  # each label a line lower than the last: features share centres
+            places.append([place[0], place[1] - LABEL_SPACING * span * len(places), row["z_mm"]])
+            labels.append(text)
+    if places:
+        rec.log(f"{root}/inspection", rr.Points3D(places, labels=labels, radii=[-6.0]), static=True)

@@ -41,6 +41,8 @@ def _contour_view(result, prefix: str, gain: int) -> rrb.Spatial3DView:
             f"part (mm, seen from above): path coloured by contour error (scale right), error x{gain} red, "
             "stock grey, machined outline white, tool yellow"
         )
+        if result.part is not None:
+            name += "; the virtual part's walls red where material is left, blue where overcut"
     return rrb.Spatial3DView(
         name=name,
         origin=f"{prefix}contour",
