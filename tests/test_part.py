@@ -153,3 +153,42 @@ def test_the_part_is_recorded_and_plotted(bore, tmp_path):
     counts = read_back(run.record(tmp_path / "part.rrd"))
     assert counts.get("/contour/part_walls", 0) > 0 and counts.get("/contour/inspection", 0) > 0
     assert "gcode_seed004_circle_stock_walls.png" in {p.name for p in run.plots(tmp_path / "plots")}
+
+
+def test_the_part_s_files_hold_the_cut(bore, tmp_path):
+    # the mesh's volume less the uncut stock's is the material the actual motion removed: the
+    # exact actual section's cut area (3 mm deep, one flat pass) times its depth
+    import pyarrow.parquet as pq
+    import trimesh
+
+    from twin.process.machining import HeightMap
+    from twin.process.part_map import PartMap
+
+    run = api.Run(api.load("gcode_seed004_circle_stock"), bore)
+    stl, parquet = run.write_part(tmp_path / "part")
+    assert [stl.name, parquet.name] == [
+        "gcode_seed004_circle_stock_part.stl",
+        "gcode_seed004_circle_stock_part_map.parquet",
+    ]
+    part = trimesh.load(stl)
+    stock = run.scenario.stock
+    uncut = HeightMap(stock, 1.0)
+    mesh = trimesh.Trimesh(*PartMap(stock, uncut, uncut).mesh(), process=False)
+    assert part.is_watertight and mesh.is_watertight
+    area = bore.part.stock.area - bore.part.actual.section(bore.part.stock, -1.5).area
+    assert mesh.volume - part.volume == pytest.approx(3.0 * area, abs=3.0)  # mm³, of 1 783
+    table = pq.read_table(parquet).to_pandas()
+    assert len(table) == np.isfinite(uncut.heights).sum()  # one row per cell of the stock
+    machined = table.actual_mm < -1.0
+    assert machined.sum() * stock.resolution_mm**2 == pytest.approx(area, rel=1e-3)
+
+
+def test_part_files_need_a_stock():
+    from typer.testing import CliRunner
+
+    from twin.cli import app
+
+    out = CliRunner().invoke(app, ["run", "seed004_pid_air_cut", "--part", "somewhere"])
+    assert out.exit_code == 2 and out.output.strip().splitlines() == [
+        "error: --part = 'somewhere': the virtual part is cut from a stock: the scenario has no [stock]"
+    ]

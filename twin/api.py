@@ -134,6 +134,28 @@ class Run:
         record(self.result, path)
         return path
 
+    def write_part(self, folder: str | Path) -> list[Path]:
+        """Write the virtual part of a run with a stock into ``folder`` (created if missing):
+        ``<scenario>_part.stl``, the actual part's closed mesh (mm), and
+        ``<scenario>_part_map.parquet``, the nominal and actual height maps and their
+        difference by cell (:mod:`twin.process.part_map`); their paths.
+
+        Raises
+        ------
+        TwinInputError
+            The run has no virtual part (no stock, or it stopped early).
+        """
+        from twin.process.part_map import part_map
+
+        part = self.result.part
+        if part is None or self.scenario.stock is None:
+            raise TwinInputError("part", str(folder), "the run has no virtual part: give [stock] and run to the end")
+        folder = Path(folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        maps = part_map(self.scenario.stock, part.nominal, part.actual)
+        name = self.scenario.name
+        return [maps.to_stl(folder / f"{name}_part.stl"), maps.to_parquet(folder / f"{name}_part_map.parquet")]
+
     def plots(self, folder: str | Path) -> list[Path]:
         """Write the PNG plots of ``twin run --plots`` into ``folder``; their paths."""
         from twin.plots import write_plots

@@ -58,10 +58,11 @@ def _check_output(option: str, path: Path | None, suffix: str | None = None) -> 
         raise TwinInputError(option, str(path), "is a folder")
 
 
-def _check_plots_folder(plots: Path | None) -> None:
-    """Refuse a ``--plots`` path that exists and is not a folder (a missing one is created)."""
+def _check_plots_folder(plots: Path | None, option: str = "--plots") -> None:
+    """Refuse a ``--plots`` (or ``option``) path that exists and is not a folder (a missing one
+    is created)."""
     if plots is not None and plots.exists() and not plots.is_dir():
-        raise TwinInputError("--plots", str(plots), "exists and is not a folder")
+        raise TwinInputError(option, str(plots), "exists and is not a folder")
 
 
 def _print_worst_lines(rows: list[dict]) -> None:
@@ -141,6 +142,7 @@ def _run(
     plots: Path | None = None,
     lines: Path | None = None,
     strict: bool = False,
+    part: Path | None = None,
 ) -> None:
     """Run a scenario and report it; a run that diverges or is interrupted still reports,
     records and plots what it computed before the error line.  With ``strict``, machining
@@ -151,7 +153,10 @@ def _run(
     _check_output("--rrd", rrd, ".rrd")
     _check_output("--lines", lines, ".parquet")
     _check_plots_folder(plots)
+    _check_plots_folder(part, "--part")
     scn = load_scenario(scenario, settings)
+    if part is not None and scn.stock is None:
+        raise TwinInputError("--part", str(part), "the virtual part is cut from a stock: the scenario has no [stock]")
     if lines is not None and scn.reference.type != "gcode":
         kind = scn.reference.type
         raise TwinInputError("--lines", str(lines), f"a per-line table needs a G-code reference, not {kind}")
@@ -162,9 +167,9 @@ def _run(
     except (SimulationDiverged, RunInterrupted) as exc:
         status = "diverged" if isinstance(exc, SimulationDiverged) else "interrupted"
         if exc.result is not None:
-            _report(api.Run(scn, exc.result, status, {"sim_time_s": exc.sim_time_s}), rrd, as_json, plots, lines)
+            _report(api.Run(scn, exc.result, status, {"sim_time_s": exc.sim_time_s}), rrd, as_json, plots, lines, part)
         raise
-    _report(done, rrd, as_json, plots, lines)
+    _report(done, rrd, as_json, plots, lines, part)
     warnings = done.result.machining_warnings  # what the report printed, not computed again
     if strict and warnings:
         first = warnings[0]
@@ -180,9 +185,11 @@ def _run(
 WORST_LINES = 5
 
 
-def _report(done, rrd: Path | None, as_json: bool, plots: Path | None, lines: Path | None = None) -> None:
+def _report(
+    done, rrd: Path | None, as_json: bool, plots: Path | None, lines: Path | None = None, part: Path | None = None
+) -> None:
     """Print the run's summary (text or JSON), write its recording, its plots and, for a
-    program, its per-line table."""
+    program, its per-line table and (with a stock) its virtual part's files."""
     summary = done.summary
     if as_json:
         typer.echo(json.dumps(summary, indent=2, allow_nan=False))
@@ -207,6 +214,9 @@ def _report(done, rrd: Path | None, as_json: bool, plots: Path | None, lines: Pa
     if plots is not None and len(done.result.t_s):
         for path in done.plots(plots):  # matplotlib is imported only when plots are asked for
             typer.echo(f"plot written to {path}", err=as_json)
+    if part is not None and done.result.part is not None:
+        for path in done.write_part(part):
+            typer.echo(f"part written to {path}", err=as_json)
 
 
 @app.command()
@@ -228,9 +238,14 @@ def run(
     strict: bool = typer.Option(
         False, "--strict", help="Exit with code 4 if the program crashes or misuses the tool (machining warnings)"
     ),
+    part: Path = typer.Option(
+        None,
+        "--part",
+        help="A run with a stock: write its virtual part to this folder (mesh .stl, height maps .parquet)",
+    ),
 ):
     """Run a closed-loop scenario and print its tracking metrics (a G-code run: per program line too)."""
-    _run(scenario, rrd, as_json, sets, max_steps, plots, lines, strict)
+    _run(scenario, rrd, as_json, sets, max_steps, plots, lines, strict, part)
 
 
 @app.command()

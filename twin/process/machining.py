@@ -444,14 +444,15 @@ def _side_engagement(pose, tool, grid, n_steps, step, extent, row):  # pragma: n
 
 
 @njit(cache=True)
-def _cut(heights, x0, y0, res, cx, cy, cz, r, rc, crescent, px, py, pr):  # pragma: no cover - compiled
+def _cut(heights, x0, y0, res, margin, cx, cy, cz, r, rc, crescent, px, py, pr):  # pragma: no cover - compiled
     """Lower the height map to the tool's surface at (cx, cy) with tip cz (m): every cell whose
-    centre lies within the tool's radius and the map's margin (:data:`CUT_MARGIN_CELLS`) goes
+    centre lies within the tool's radius and ``margin`` cells (the engagement's
+    :data:`CUT_MARGIN_CELLS`) goes
     down to the tool's bottom there (flat inside ``r - rc``, the corner's arc outside it, the
     corner's top beyond ``r``).  With ``crescent`` (a flat tool at the height of its last cut, at
     (px, py) with radius pr) only the cells the disc newly covers on each row are visited."""
     nx, ny = heights.shape
-    reach = r + CUT_MARGIN_CELLS * res
+    reach = r + margin * res
     j_lo = max(int((cy - reach - y0) / res), 0)
     j_hi = min(int((cy + reach - y0) / res) + 1, ny)
     for j in range(j_lo, j_hi):
@@ -464,7 +465,7 @@ def _cut(heights, x0, y0, res, cx, cy, cz, r, rc, crescent, px, py, pr):  # prag
         b = min(math.floor((cx + w - x0) / res - 0.5), nx - 1)
         old_a, old_b = 1, 0  # empty
         if crescent:
-            reach_old = pr + CUT_MARGIN_CELLS * res
+            reach_old = pr + margin * res
             dyo = yc - py
             if abs(dyo) <= reach_old:
                 wo = math.sqrt(reach_old * reach_old - dyo * dyo)
@@ -483,6 +484,26 @@ def _cut(heights, x0, y0, res, cx, cy, cz, r, rc, crescent, px, py, pr):  # prag
 
 
 @njit(cache=True)
+def _cut_sample(heights, x0, y0, res, margin, pos, radius, corner, k):  # pragma: no cover - compiled
+    """:func:`_cut` for sample ``k`` of tips ``pos`` (n, 3, m) with tools ``radius``, ``corner``
+    (n, m): a flat tool no lower than at sample k - 1 and of its radius cuts only the crescent
+    that sample's disc left."""
+    cx, cy, cz, r, rc = pos[k, 0], pos[k, 1], pos[k, 2], radius[k], corner[k]
+    crescent = k > 0 and rc == 0.0 and cz >= pos[k - 1, 2] - 1e-12 and r == radius[k - 1]
+    px, py = (pos[k - 1, 0], pos[k - 1, 1]) if k > 0 else (cx, cy)
+    _cut(heights, x0, y0, res, margin, cx, cy, cz, r, rc, crescent, px, py, radius[k - 1] if k > 0 else r)
+
+
+@njit(cache=True)
+def cut_path(heights, x0, y0, res, pos, radius, corner):  # pragma: no cover - compiled
+    """Cut ``heights`` (m, cells of ``res`` from (x0, y0)) along tool tips ``pos`` (n, 3, m)
+    with tool radius and corner radius ``radius``, ``corner`` (n, m): each cell whose centre
+    the tool's surface passes over goes down to it (no margin: the part as it is)."""
+    for k in range(pos.shape[0]):
+        _cut_sample(heights, x0, y0, res, 0.0, pos, radius, corner, k)
+
+
+@njit(cache=True)
 def _engage(pos, vel, radius, corner, flute, heights, x0, y0, res, top, bottom, step, out):  # pragma: no cover
     """The engagement table ``out`` (n, :data:`COLUMNS`, angles in rad, lengths in mm) along
     tool tips ``pos`` (n, 3, m) moving at ``vel`` (n, 3), tool radius, corner radius and flute
@@ -494,8 +515,6 @@ def _engage(pos, vel, radius, corner, flute, heights, x0, y0, res, top, bottom, 
     travelled, dir_x, dir_y, run_end = _path_arrays(pos, vel)
     path = (pos, travelled, dir_x, dir_y, run_end)
     grid = (heights, x0, y0, res, top, bottom)
-    have_prev = False
-    px = py = pz = pr = 0.0
     under = 0.0  # the depth (m) the tip has gone down into material, to the last sample
     for k in range(n):
         cx, cy, cz, r, rc = pos[k, 0], pos[k, 1], pos[k, 2], radius[k], corner[k]
@@ -510,16 +529,13 @@ def _engage(pos, vel, radius, corner, flute, heights, x0, y0, res, top, bottom, 
             # straight down, the cell under the axis was cut to the last tip: the depth gone into
             # the material adds up; moving sideways, each new cell gives the depth itself
             if fresh > 0.0:
-                out[k, 9] = max(fresh, under + (pz - cz) if under > 0.0 else 0.0) * 1e3
+                out[k, 9] = max(fresh, under + (pos[k - 1, 2] - cz) if under > 0.0 else 0.0) * 1e3
         under = out[k, 9] * 1e-3
         # side milling: the tool must move in XY (a plunge's bottom cutting is not modelled,
         # though it removes the material under the tool)
         if math.hypot(vel[k, 0], vel[k, 1]) > MOVING_M_PER_S:
             _side_engagement((path, k, cz), (r, rc, flute[k]), grid, n_steps, step, extent, out[k])
-        crescent = have_prev and rc == 0.0 and cz >= pz - 1e-12 and r == pr
-        _cut(heights, x0, y0, res, cx, cy, cz, r, rc, crescent, px, py, pr)
-        have_prev = True
-        px, py, pz, pr = cx, cy, cz, r
+        _cut_sample(heights, x0, y0, res, CUT_MARGIN_CELLS, pos, radius, corner, k)
 
 
 def engagement_table(

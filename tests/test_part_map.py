@@ -1,0 +1,77 @@
+"""The machined part's height maps and mesh: volumes of slots against closed forms (a flat end
+mill's rectangle, a ball's circular segment), a closed mesh (trimesh's own checks), and the
+error map's material left and overcut where the actual path moved."""
+
+import math
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+import trimesh
+
+import twin.process.part_map as part_map_module
+from twin.process.machining import StockSpec
+from twin.process.part import Sweep
+from twin.process.part_map import part_map
+
+RES = 0.05
+STOCK = StockSpec(corners_mm=[[0.0, 0.0], [30.0, 20.0]], top_mm=0.0, bottom_mm=-10.0, resolution_mm=RES)
+BLOCK_MM3 = 30.0 * 20.0 * 10.0
+
+
+def slot(y_mm: float, depth_mm: float = 2.0, corner_mm: float = 0.0, n: int = 2000, radius_mm: float = 3.0) -> Sweep:
+    """A tool (6 mm unless told) along X right across the stock (from X -5 to X 35) at Y ``y_mm``."""
+    x = np.linspace(-5.0, 35.0, n)
+    return Sweep(
+        np.column_stack([x, np.full(n, y_mm)]),
+        np.full(n, -depth_mm),
+        np.full(n, radius_mm),
+        np.full(n, corner_mm),
+        np.full(n, 7),
+    )
+
+
+def volume(maps) -> float:
+    mesh = trimesh.Trimesh(*maps.mesh(), process=False)
+    assert mesh.is_watertight and mesh.is_winding_consistent and mesh.volume > 0
+    return float(mesh.volume)
+
+
+def test_flat_slot_volume_and_closed_mesh():
+    # a 6.02 x 2 mm slot 30 mm long, walls at Y 7.003 and 13.023: the surface ramps between the
+    # cell centres either side of a wall, which holds the material of a step at the cells' common
+    # edge (7.0, 13.0): 0.003 mm less below the lower wall, 0.023 more above the upper one
+    maps = part_map(STOCK, slot(10.013, radius_mm=3.01), slot(10.013, radius_mm=3.01))
+    ramps = 2.0 * 30.0 * (0.023 - 0.003)
+    assert volume(maps) == pytest.approx(BLOCK_MM3 - 6.02 * 2.0 * 30.0 + ramps, abs=1e-6)
+
+
+def test_ball_slot_volume_is_the_circular_segment():
+    # a ball of radius 3 mm, 2 mm deep: the section R^2 acos((R - d)/R) - (R - d) sqrt(2 R d - d^2)
+    r, d = 3.0, 2.0
+    segment = r**2 * math.acos((r - d) / r) - (r - d) * math.sqrt(2 * r * d - d**2)
+    maps = part_map(STOCK, slot(10.0, d, r), slot(10.0, d, r))
+    assert BLOCK_MM3 - volume(maps) == pytest.approx(segment * 30.0, rel=5e-3)
+
+
+def test_error_map_signs_where_the_path_moved(tmp_path):
+    # the actual slot 0.2 mm towards +Y: a band 0.2 mm wide left (+2000 µm) along the lower wall
+    # and one overcut (-2000 µm) along the upper, each 30 mm long
+    maps = part_map(STOCK, slot(10.0), slot(10.2))
+    table = pq.read_table(maps.to_parquet(tmp_path / "map.parquet")).to_pandas()
+    assert len(table) == 600 * 400  # the cells inside the stock
+    left, over = table[table.error_um > 1.0], table[table.error_um < -1.0]
+    np.testing.assert_allclose(left.error_um, 2000.0)
+    np.testing.assert_allclose(over.error_um, -2000.0)
+    assert len(left) * RES**2 == pytest.approx(0.2 * 30.0, abs=RES * 30.0)
+    assert len(over) * RES**2 == pytest.approx(0.2 * 30.0, abs=RES * 30.0)
+    assert left.y_mm.between(7.0, 7.2).all() and over.y_mm.between(13.0, 13.2).all()
+
+
+def test_a_large_map_is_meshed_coarser_and_still_closed(monkeypatch, tmp_path):
+    monkeypatch.setattr(part_map_module, "MAX_MESH_CELLS", 10_000)
+    maps = part_map(STOCK, slot(10.0), slot(10.0))
+    assert len(maps.mesh().faces) < 3 * 10_000
+    assert volume(maps) == pytest.approx(BLOCK_MM3 - 6.0 * 2.0 * 30.0, rel=0.01)
+    mesh = trimesh.load(maps.to_stl(tmp_path / "part.stl"))  # read back from the file
+    assert mesh.is_watertight and mesh.volume == pytest.approx(volume(maps), rel=1e-6)
