@@ -54,6 +54,25 @@ def test_contour_error_follows_the_path_and_equals_the_full_search(stride):
     np.testing.assert_allclose(contour_error(actual, path), _brute_contour_error(actual, path), rtol=0, atol=1e-15)
 
 
+def test_contour_error_where_the_path_turns_back_over_itself():
+    """A line cut out and back and out again, further (step-downs over one XY path): leg A
+    X 0 -> 10 mm, leg B back at Y +2 µm, leg C X 0 -> 20 mm at Y 0, the tool on leg C at Y +5 µm
+    and 20 samples behind.  Leg B is nearer the tool than its own leg; the walk must still not
+    follow it backwards and lose the tool where leg C goes on past X 10: there the error is the
+    tool's 5 µm from leg C."""
+    a = np.linspace(0.0, 10.0, 2001)
+    c = np.linspace(0.0, 20.0, 4001)
+    x = np.concatenate([a, a[::-1][1:], c[1:]])
+    y = np.concatenate([np.zeros(2001), np.full(2000, 2e-3), np.zeros(4000)])
+    path = np.column_stack([x, y]) * 1e-3
+    on_c = np.arange(4001, len(x))
+    tool = np.column_stack([x[on_c - 20], np.full(len(on_c), 5e-3)]) * 1e-3
+    ce = contour_error(np.vstack([path[:4001], tool]), path)[4001:]
+    past_a = x[on_c - 20] > 10.5
+    assert past_a.sum() > 1500
+    np.testing.assert_allclose(ce[past_a], 5e-6, atol=1e-12)
+
+
 def test_circle_radius_and_feed():
     c = Circle(20.0, 2400.0)
     s = c.sample(np.linspace(0, c.period_s, 1000))

@@ -107,10 +107,11 @@ def contour_error(actual_xy: np.ndarray, path_xy: np.ndarray) -> np.ndarray:
     ndarray, shape (n,)
         Shortest distance from every actual point to the polyline's segments within a window
         around the segment nearest the previous point (the first point searches the whole
-        path).  The window is 64 segments plus four times the path's samples per point, so it
-        follows the path however the two are sampled; the work is linear in n + m.  Where the
-        path comes back near itself, this is the distance to the part of the path the tool
-        is on, as a contour error should be.
+        path), about the furthest segment the walk has found.  The window is 64
+        segments plus four times the path's samples per point, so it follows the path however
+        the two are sampled; the work is linear in n + m.  Where the path comes back near
+        itself, or over itself, this is the distance to the part of the path the tool is on,
+        as a contour error should be.
     """
     p = np.ascontiguousarray(actual_xy, float)
     path = np.asarray(path_xy, float)
@@ -144,7 +145,7 @@ def _segment_distance(px, py, path, j):  # pragma: no cover - compiled
 def _contour_walk(p, path, window, out):  # pragma: no cover - compiled
     """:func:`contour_error`'s search: segments within ``window`` of the last nearest one."""
     n_seg = path.shape[0] - 1
-    best_j, lo, hi = 0, 0, n_seg
+    best_j, furthest, lo, hi = 0, 0, 0, n_seg
     for i in range(p.shape[0]):
         best = math.inf
         for j in range(lo, hi):
@@ -154,7 +155,11 @@ def _contour_walk(p, path, window, out):  # pragma: no cover - compiled
             if d < best or (i > 0 and d == best):
                 best, best_j = d, j
         out[i] = best
-        lo, hi = max(best_j - window, 0), min(best_j + window + 1, n_seg)
+        # the window is about the furthest segment yet, not the last: where the
+        # path turns back over itself (a zig-zag, a line cut out and back) the walk cannot
+        # follow the earlier leg backwards, segment by segment, and lose the tool
+        furthest = max(furthest, best_j)
+        lo, hi = max(furthest - window, 0), min(furthest + window + 1, n_seg)
 
 
 def tracking_summary(result) -> dict:
