@@ -192,3 +192,30 @@ def test_part_files_need_a_stock():
     assert out.exit_code == 2 and out.output.strip().splitlines() == [
         "error: --part = 'somewhere': the virtual part is cut from a stock: the scenario has no [stock]"
     ]
+
+
+@pytest.fixture(scope="module")
+def pocket():
+    return api.run("gcode_pocket_ball_finish")
+
+
+def test_pocket_roughed_and_ball_finished(pocket):
+    # the program's floors: Z -2 and -4 (flat end mill), -4.2 (the ball's raster): walls are
+    # read in the middle of each band under the top
+    part = pocket.result.part
+    assert part.levels_mm == [-1.0, -3.0, -4.1]
+    # the pocket's length at Y 15, Z -0.5 from the actual motion alone: the furthest reach of the
+    # tool's discs (the ball's radius at that height over its tip) along the line Y 15, each way
+    xy = pocket.result.table_position_m() * 1e3
+    sweep = part.actual
+    radius = swept_radius_mm(sweep.tip_mm, sweep.radius_mm, sweep.corner_mm, -0.5)
+    half = np.sqrt(np.maximum(radius**2 - (xy[:, 1] - 15.0) ** 2, 0.0))
+    on = half > 0.0
+    length = (xy[on, 0] + half[on]).max() - (xy[on, 0] - half[on]).min()
+    row = next(r for r in pocket.result.inspection if r["name"] == "length")
+    assert row["width_mm"] == pytest.approx(length, abs=1e-4)  # 0.1 µm
+    assert row["deviation_um"] == pytest.approx((length - 24.0) * 1e3, abs=0.1)
+    assert {r["name"]: r["pass"] for r in pocket.result.inspection} == {
+        r["name"]: abs(r["deviation_um"]) <= 20.0 if r["type"] == "width" else abs(r["deviation_um"]) <= 10.0
+        for r in pocket.result.inspection
+    }

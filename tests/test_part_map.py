@@ -75,3 +75,22 @@ def test_a_large_map_is_meshed_coarser_and_still_closed(monkeypatch, tmp_path):
     assert volume(maps) == pytest.approx(BLOCK_MM3 - 6.0 * 2.0 * 30.0, rel=0.01)
     mesh = trimesh.load(maps.to_stl(tmp_path / "part.stl"))  # read back from the file
     assert mesh.is_watertight and mesh.volume == pytest.approx(volume(maps), rel=1e-6)
+
+
+def test_ball_scallop_between_two_passes():
+    # two passes of a 6 mm ball 0.2 mm deep, 1.6 mm apart: between them the floor rises to the
+    # ball's circle, z = tip + R - sqrt(R^2 - dy^2) from the nearer pass, at each cell centre
+    r, tip = 3.0, -0.2
+    first, second = slot(10.0, 0.2, r), slot(11.6, 0.2, r)
+    both = Sweep(**{k: np.concatenate([getattr(first, k), getattr(second, k)]) for k in vars(first)})
+    maps = part_map(STOCK, both, both)
+    hm = maps.actual
+    ys = (hm.y0_m + (np.arange(hm.heights.shape[1]) + 0.5) * hm.res_m) * 1e3
+    between = (ys > 10.0) & (ys < 11.6)
+    column = hm.heights[hm.heights.shape[0] // 2, between] * 1e3
+    dy = np.minimum(ys[between] - 10.0, 11.6 - ys[between])
+    # (to 20 nm: the passes are sampled every 0.02 mm, and between samples the sphere stands up
+    # to dx^2 / 2 rho higher over the cell, dx 0.01 mm and rho its radius there)
+    np.testing.assert_allclose(column, tip + r - np.sqrt(r**2 - dy**2), rtol=0, atol=2e-5)
+    cusp = tip + r - math.sqrt(r**2 - 0.8**2)  # the scallop's top, 0.109 mm over the tip
+    assert column.max() == pytest.approx(cusp, abs=0.3 * RES)
