@@ -50,7 +50,8 @@ if __name__ == "__main__":
         print(f"{row['scenario']} ({row['design']['machine']}, {1e3 * row['design']['control_period_s']:g} ms):")
         print(
             f"  tuned: position bandwidth {x['bandwidth_hz']:.1f} Hz, PM {x['phase_margin_deg']:.1f} deg, "
-            f"GM {x['gain_margin_db']:.1f} dB (first axis)"
+            + ("GM infinite" if x["gain_margin_db"] is None else f"GM {x['gain_margin_db']:.1f} dB")
+            + " (first axis)"
         )
         print(f"  max tracking error (um), {row['paper']:<34} {_errors(row['paper_run'])}")
         print(f"  max tracking error (um), {'tuned servo_cascade (ours)':<34} {_errors(row['tuned_run'])}")

@@ -3,7 +3,6 @@
 import math
 import subprocess
 import sys
-import warnings
 from pathlib import Path
 
 import control
@@ -216,31 +215,75 @@ def test_the_part_scenario_holds_the_tuned_gains(tuned):
             assert written.get(key, 0.0) == pytest.approx(value, rel=5e-4), (axis, key)
 
 
-def test_tuned_loops_meet_the_margins_checked_by_python_control(tuned):
-    """The designer's margins, recomputed by python-control's stability_margins on the sampled
-    velocity loop built from the returned gains."""
+def _velocity_loop(bm, i: int, gains: dict, dt: float):
+    """Axis ``i``'s sampled velocity loop from the tuned gains, built with python-control alone:
+    ZOH plant and delay, the PI and filter by Tustin, the backward-difference velocity."""
     from controllers.kinds.generic import velocity_filter
 
+    plant = bm.plant[i][i]
+    gd = control.c2d(control.ss(control.tf(list(plant.num), list(plant.den))), dt, "zoh")
+    delay = control.tf([1.0], [1.0] + [0.0] * round(bm.delay_s / dt), dt)
+    f = velocity_filter(gains["notch_hz"], 20.0, 0.5, gains["lowpass_hz"])
+    pi = control.tf([gains["kp_vel"] * gains["ti_vel_s"], gains["kp_vel"]], [gains["ti_vel_s"], 0.0])
+    c = control.c2d(pi * control.tf(list(f.num), list(f.den)), dt, "tustin")
+    z = control.tf([1.0, 0.0], [1.0], dt)
+    return control.minreal(c * control.tf(gd) * delay * (z - 1) / (dt * z), verbose=False)
+
+
+def test_tuned_loops_meet_the_margins_checked_by_python_control(tuned):
+    """The designer's margins over every crossing, recomputed by python-control's
+    stability_margins on the velocity loop built here from the returned gains, and its gain
+    margin checked by the closed loop's poles: stable at 0.8 and unstable at 1.25 times it."""
     r = tuned
     bm = build(MID)
     dt = r["control_period_s"]
     for i, design in enumerate(r["axes"].values()):
         g = design["gains"]
+        velocity = design["velocity_loop"]
         assert design["phase_margin_deg"] >= 45 and design["gain_margin_db"] >= 6
         assert g["notch_hz"] > 0 or g["lowpass_hz"] > 0  # the axial resonance needs a filter
-        plant = bm.plant[i][i]
-        gd = control.c2d(control.ss(control.tf(list(plant.num), list(plant.den))), dt, "zoh")
-        delay = control.tf([1.0], [1.0] + [0.0] * round(bm.delay_s / dt), dt)
-        f = velocity_filter(g["notch_hz"], 20.0, 0.5, g["lowpass_hz"])
-        pi = control.tf([g["kp_vel"] * g["ti_vel_s"], g["kp_vel"]], [g["ti_vel_s"], 0.0])
-        c = control.c2d(pi * control.tf(list(f.num), list(f.den)), dt, "tustin")
-        z = control.tf([1.0, 0.0], [1.0], dt)
-        loop = control.minreal(c * control.tf(gd) * delay * (z - 1) / (dt * z), verbose=False)
-        with warnings.catch_warnings():  # python-control says it falls back to its 'frd' method
-            warnings.simplefilter("ignore", UserWarning)
-            gm, pm, _, _ = control.margin(loop)
-        assert pm == pytest.approx(design["velocity_loop"]["phase_margin_deg"], abs=1.0)
-        assert 20 * math.log10(gm) >= 6
+        loop = _velocity_loop(bm, i, g, dt)
+        w = 2 * math.pi * np.geomspace(0.1, 0.49999 / dt, 20_000)
+        frd = control.frd(control.frequency_response(loop, w).complex.ravel(), w)
+        gm, pm, _, w_gm, _, _ = control.stability_margins(frd)
+        assert pm == pytest.approx(velocity["phase_margin_deg"], abs=0.05)
+        assert 20 * math.log10(gm) == pytest.approx(velocity["gain_margin_db"], abs=0.01)
+        assert w_gm / (2 * math.pi) == pytest.approx(velocity["gain_margin_hz"], rel=1e-3)
+        critical = 10 ** (velocity["gain_margin_db"] / 20)
+        for factor, stable in ((0.8, True), (1.25, False)):
+            poles = control.poles(control.feedback(factor * critical * loop))
+            # (a pole at z = 1 is the table's integrator the velocity's difference cancels)
+            outside = (np.abs(poles) > 1.0 + 1e-9) & (np.abs(poles - 1.0) > 1e-4)
+            assert (not outside.any()) is stable, (factor, np.abs(poles).max())
+
+
+def test_the_twin_goes_unstable_past_the_tuned_gain_margins(tuned, tmp_path):
+    """On the twin itself (MuJoCo, the servo cascade, a 10 mm circle at 2 m/min), one axis's
+    velocity gain (its position loop all but open) or position gain times 0.8 or 1.25 of the
+    reported gain margin: the first runs 0.5 s, the second diverges on that axis."""
+    import copy
+
+    from twin import api
+    from twin.commissioning.tuning import scenario_text
+    from twin.errors import SimulationDiverged
+
+    for axis in ("x", "y"):
+        for loop, gain in (("velocity_loop", "kp_vel"), ("position_loop", "kp_pos")):
+            for factor in (0.8, 1.25):
+                design = copy.deepcopy(tuned)
+                gains = design["axes"][axis]["gains"]
+                gains[gain] *= factor * 10 ** (design["axes"][axis][loop]["gain_margin_db"] / 20)
+                if loop == "velocity_loop":
+                    gains["kp_pos"] = 1e-3  # the velocity loop alone
+                path = tmp_path / f"{axis}_{gain}_{factor}.toml"
+                path.write_text(scenario_text(design, str(Path(MID).resolve()), "circle"))
+                if factor < 1:
+                    assert api.run(str(path), duration_s=0.5).status == "ok"
+                else:
+                    with pytest.raises(SimulationDiverged) as diverged:
+                        api.run(str(path), duration_s=0.5)
+                    position = diverged.value.result.table_position_m()[-1]
+                    assert abs(position[0 if axis == "x" else 1]) > abs(position[1 if axis == "x" else 0])
 
 
 def test_a_sweep_and_a_scenario_take_a_machine_file(tmp_path):

@@ -260,6 +260,13 @@ def demo(
     _run("seed004_mimo_cutting", rrd, as_json, plots=plots)
 
 
+def _gain_margin(loop: dict) -> str:
+    """A loop's gain margin for the text report: dB at its phase crossover, or infinite."""
+    if loop["gain_margin_db"] is None:
+        return "infinite"
+    return f"{loop['gain_margin_db']:.1f} dB at {loop['gain_margin_hz']:.0f} Hz"
+
+
 def _parse_sets(sets: list[str]) -> dict[str, float]:
     out = {}
     for item in sets:
@@ -584,7 +591,7 @@ def tune(
         with tempfile.TemporaryDirectory() as folder:
             result["verification"] = tuning.verify(result, where, Path(folder))
     if as_json:
-        typer.echo(json.dumps(result, indent=2, allow_nan=True))
+        typer.echo(json.dumps(result, indent=2, allow_nan=False))
     else:
         typer.echo(f"{machine}: control period {1e3 * result['control_period_s']:g} ms")
         for a, r in result["axes"].items():
@@ -599,7 +606,8 @@ def tune(
                 f"Ti {1e3 * g['ti_vel_s']:.3g} ms, {filt}; "
                 f"velocity loop {r['velocity_loop']['crossover_hz']:.1f} Hz, "
                 f"position bandwidth {r['bandwidth_hz']:.1f} Hz, "
-                f"PM {r['phase_margin_deg']:.1f} deg, GM {r['gain_margin_db']:.1f} dB"
+                f"PM {r['phase_margin_deg']:.1f} deg, "
+                f"GM {_gain_margin(r['velocity_loop'])} (velocity loop), {_gain_margin(r['position_loop'])} (position)"
             )
         for a, v in result.get("verification", {}).items():
             typer.echo(f"  verified on the twin, {a}: " + ", ".join(f"{k} {x:.4g}" for k, x in v.items()))

@@ -69,7 +69,9 @@ def loop_margins(L, w_min: float = W_MIN, w_max: float = W_MAX, n: int = N_GRID)
     """Gain and phase margins, peak sensitivity and sensitivity bandwidth of ``L(w)``.
 
     The phase crossover is where the unwrapped phase first passes -180 deg (refined where
-    Im L = 0); the gain crossover where |L| first passes 1.
+    Im L = 0); the gain crossover where |L| first passes 1: the first crossings, as the papers
+    report them.  A loop that crosses again (a resonance above the crossover) needs
+    :func:`crossing_margins`, every crossing's.
     """
     w = _grid(w_min, w_max, n)
     Lw = np.asarray(L(w), complex)
@@ -89,6 +91,84 @@ def loop_margins(L, w_min: float = W_MIN, w_max: float = W_MAX, n: int = N_GRID)
     i = _bracket(S_db + 3.0)
     w_bw = _refine(lambda x: -20 * math.log10(abs(1 + _at(L, x))) + 3.0, w, i) if i is not None else math.nan
     return LoopMargins(gm, w_gm, pm, w_pm, float(S_db[k]), float(w[k]), w_bw)
+
+
+#: A grid's last point this near -180 deg (mod 360, deg) is a phase crossing: a sampled loop's
+#: response is real at Nyquist, where its grid ends.
+END_CROSSING_DEG = 1e-6
+
+
+@dataclass(frozen=True)
+class CrossingMargins:
+    """A loop's margins over every crossing on a grid (None where there is no crossing: the
+    margin is infinite).  Of each kind the crossing nearest to instability is reported, as
+    ``control.stability_margins`` chooses: the smallest ``|phase margin|`` over every gain
+    crossover and the smallest ``|gain margin|`` (dB) over every -180 deg crossing (mod 360),
+    negative where the loop goes unstable when its gain falls by that much.
+
+    Attributes
+    ----------
+    pm_deg, f_pm_hz : float or None
+        Phase margin, 180 deg + arg L in [-180, 180) (deg), and its gain crossover (Hz).
+    gm_db, f_gm_hz : float or None
+        Gain margin, -20 log10 |L| (dB), and its phase crossover (Hz).
+    """
+
+    pm_deg: float | None
+    f_pm_hz: float | None
+    gm_db: float | None
+    f_gm_hz: float | None
+
+    def as_dict(self) -> dict:
+        """``phase_margin_deg``, ``phase_margin_hz``, ``gain_margin_db``, ``gain_margin_hz``;
+        an infinite margin is None with a ``..._note`` saying why (strict JSON)."""
+        out: dict = {
+            "phase_margin_deg": _rounded(self.pm_deg),
+            "phase_margin_hz": _rounded(self.f_pm_hz),
+            "gain_margin_db": _rounded(self.gm_db),
+            "gain_margin_hz": _rounded(self.f_gm_hz),
+        }
+        if self.pm_deg is None:
+            out["phase_margin_note"] = "infinite: |L| does not cross 1 on the grid"
+        if self.gm_db is None:
+            out["gain_margin_note"] = "infinite: the phase does not reach -180 deg (mod 360) on the grid"
+        return out
+
+
+def _rounded(value: float | None) -> float | None:
+    return None if value is None else round(value, 4)
+
+
+def crossing_margins(freqs_hz: np.ndarray, response: np.ndarray) -> CrossingMargins:
+    """:class:`CrossingMargins` of a loop's frequency ``response`` on an increasing grid
+    ``freqs_hz``: each crossing between two grid points is placed by linear interpolation of
+    log |L| and of the unwrapped phase in log f (points where L is 0 are left out)."""
+    nonzero = np.abs(response) > 0.0  # a zero on the grid (a ZOH's at Nyquist) has no phase
+    f = np.asarray(freqs_hz, float)[nonzero]
+    response = np.asarray(response)[nonzero]
+    log_f = np.log(f)
+    log_mag = np.log(np.abs(response))
+    phase = np.degrees(np.unwrap(np.angle(response)))
+
+    def between(i: int, frac: float, values: np.ndarray) -> float:
+        return float(values[i] + frac * (values[i + 1] - values[i]))
+
+    pm: list[tuple[float, float]] = []
+    for i in np.flatnonzero(np.sign(log_mag[:-1]) * np.sign(log_mag[1:]) < 0).tolist():
+        frac = log_mag[i] / (log_mag[i] - log_mag[i + 1])
+        margin = between(i, frac, phase) % 360.0 - 180.0
+        pm.append((margin, math.exp(between(i, frac, log_f))))
+    gm: list[tuple[float, float]] = []
+    turn = np.floor((phase + 180.0) / 360.0)  # the -180 deg (mod 360) lines passed
+    for i in np.flatnonzero(turn[:-1] != turn[1:]).tolist():
+        target = 360.0 * max(turn[i], turn[i + 1]) - 180.0
+        frac = (target - phase[i]) / (phase[i + 1] - phase[i])
+        gm.append((-20.0 * between(i, frac, log_mag) / math.log(10.0), math.exp(between(i, frac, log_f))))
+    if abs((phase[-1] % 360.0) - 180.0) < END_CROSSING_DEG:
+        gm.append((-20.0 * float(log_mag[-1]) / math.log(10.0), float(f[-1])))
+    best_pm = min(pm, key=lambda m: abs(m[0]), default=(None, None))
+    best_gm = min(gm, key=lambda m: abs(m[0]), default=(None, None))
+    return CrossingMargins(best_pm[0], best_pm[1], best_gm[0], best_gm[1])
 
 
 def popov_crossing(L, w_min: float = W_MIN, w_max: float = W_MAX, n: int = N_GRID) -> tuple[float, float]:

@@ -8,7 +8,10 @@ delay, at the control period T:
    w_c from high to low and each filter (none, a notch at each model resonance above w_c, a
    second-order low-pass at 4 w_c), kv puts |L_v| = 1 at w_c; the first design with a phase
    margin >= 45 deg, a gain margin >= 6 dB and a stable closed loop wins (the highest bandwidth
-   the resonances allow).
+   the resonances allow).  The margins are every crossing's (the gain crossovers' smallest
+   |phase margin|, the -180 deg crossings' smallest |gain margin|:
+   :func:`controllers.design.loop_analysis.crossing_margins`), so a resonance that crosses
+   again above the crossover counts.
 2. Position loop: a P gain kp, from w_c / 4 down, the first with the same margins on
    L_p = kp C_v G / (1 + C_v D G).
 3. Feedforward: the whole reference velocity into the velocity loop, and the drive input the
@@ -29,6 +32,7 @@ from pathlib import Path
 import control
 import numpy as np
 
+from controllers.design.loop_analysis import CrossingMargins, crossing_margins
 from controllers.kinds.generic import velocity_filter
 from controllers.lti import SisoTf
 from twin.commissioning.frf import discretized, model_modes, rigid_body, zoh_response
@@ -42,22 +46,16 @@ GAIN_MARGIN_DB = 6.0
 CONTROL_PERIOD_S = 1e-4
 
 
-def margins(response: np.ndarray) -> tuple[float, float]:
-    """Phase margin (deg) and gain margin (dB) of an open-loop frequency response on a grid:
-    the smallest over every gain crossing and every -180 deg crossing (not the first ones, as
-    :func:`controllers.design.loop_analysis.loop_margins` takes: a resonance above the
-    crossover, notched or not, can cross again)."""
-    mag = np.abs(response)
-    phase = np.unwrap(np.angle(response))
-    cross = np.flatnonzero((mag[:-1] >= 1) & (mag[1:] < 1))
-    if not cross.size:
-        return -math.inf, -math.inf
-    pm = min(float(np.degrees(phase[i]) % 360.0 - 180.0) for i in cross)
-    wrapped = (np.degrees(phase) + 180.0) % 360.0 - 180.0  # 0 at -180 deg (mod 360)
-    signs = np.flatnonzero(np.sign(wrapped[:-1]) != np.sign(wrapped[1:]))
-    flips = [i for i in signs if abs(wrapped[i] - wrapped[i + 1]) < 180.0]  # not the +-180 wrap
-    gm = min((-20 * math.log10(mag[i]) for i in flips), default=math.inf)
-    return pm, gm
+def _meets(m: CrossingMargins) -> bool:
+    """Whether the margins over every crossing meet the targets (an infinite one does)."""
+    return (m.pm_deg is None or abs(m.pm_deg) >= PHASE_MARGIN_DEG) and (
+        m.gm_db is None or abs(m.gm_db) >= GAIN_MARGIN_DB
+    )
+
+
+def _smaller(a: float | None, b: float | None) -> float | None:
+    """Of two margins the one nearer to instability (None: infinite)."""
+    return min((m for m in (a, b) if m is not None), key=abs, default=None)
 
 
 def _stable(loop) -> bool:
@@ -77,11 +75,12 @@ def tune_axis(bm: BuiltMachine, i: int, dt: float, resonances_hz: list[float]) -
         gd = control.ss(control.tf([1.0], [1.0] + [0.0] * delay, dt)) * gd
     diff = control.ss((z - 1) / (dt * z))
     nyquist = 0.5 / dt
-    freqs = np.geomspace(0.1, 0.999 * nyquist, 3000)
+    freqs = np.geomspace(0.1, nyquist, 3000)  # to Nyquist: a sampled loop often crosses there
     zs = np.exp(2j * math.pi * freqs * dt)
+    zs[-1] = -1.0
     g_resp = zoh_response(g, dt, bm.delay_s, freqs)
     d_resp = (zs - 1) / (dt * zs)
-    s_tustin = 2.0 / dt * (zs - 1) / (zs + 1)
+    s_tustin = 2.0 / dt * (zs[:-1] - 1) / (zs[:-1] + 1)  # Nyquist is s = infinity
     for f_c in np.geomspace(0.4 * nyquist, 2.0, 80):
         w = 2 * math.pi * f_c
         ti = 4.0 / w
@@ -91,26 +90,28 @@ def tune_axis(bm: BuiltMachine, i: int, dt: float, resonances_hz: list[float]) -
             pi = SisoTf((ti, 1.0), (ti, 0.0))  # 1 + 1/(Ti s)
             num, den = np.polymul(pi.num, f.num), np.polymul(pi.den, f.den)
             unit = discretized(SisoTf(num, den), dt, "tustin")
-            c_resp = np.polyval(num, s_tustin) / np.polyval(den, s_tustin)  # what Tustin makes of it
+            c_resp = np.append(np.polyval(num, s_tustin) / np.polyval(den, s_tustin), complex(unit(-1.0)))
             at = np.exp(2j * math.pi * f_c * dt)
             kv = 1.0 / abs(complex(unit(at)) * complex(gd(at)) * (at - 1) / (dt * at))
             lv = kv * c_resp * g_resp * d_resp
-            pm_v, gm_v = margins(lv)
-            if pm_v < PHASE_MARGIN_DEG or gm_v < GAIN_MARGIN_DB or not _stable(kv * unit * gd * diff):
+            velocity = crossing_margins(freqs, lv)
+            if not _meets(velocity) or not _stable(kv * unit * gd * diff):
                 continue
             for kp in w / 4.0 * np.geomspace(1.0, 0.02, 40):
                 lp = kp * kv * c_resp * g_resp / (1 + lv)
-                pm_p, gm_p = margins(lp)
+                position = crossing_margins(freqs, lp)
                 cv = kv * unit
-                if pm_p >= PHASE_MARGIN_DEG and gm_p >= GAIN_MARGIN_DB and _stable(kp * cv * gd / (1 + cv * diff * gd)):
+                if _meets(position) and _stable(kp * cv * gd / (1 + cv * diff * gd)):
                     closed = np.abs(lp / (1 + lp))
                     below = np.flatnonzero(closed < 10 ** (-3 / 20))
+                    worst = CrossingMargins(
+                        _smaller(velocity.pm_deg, position.pm_deg), None, _smaller(velocity.gm_db, position.gm_db), None
+                    ).as_dict()
                     return {
-                        "phase_margin_deg": min(pm_v, pm_p),
-                        "gain_margin_db": min(gm_v, gm_p),
+                        **{k: v for k, v in worst.items() if not k.endswith("_hz")},
                         "bandwidth_hz": float(freqs[below[0]]) if below.size else float(freqs[-1]),
-                        "velocity_loop": {"crossover_hz": float(f_c), "phase_margin_deg": pm_v, "gain_margin_db": gm_v},
-                        "position_loop": {"phase_margin_deg": pm_p, "gain_margin_db": gm_p},
+                        "velocity_loop": {"crossover_hz": float(f_c), **velocity.as_dict()},
+                        "position_loop": position.as_dict(),
                         "gains": {
                             "kp_pos": float(kp),
                             "kp_vel": float(kv),
@@ -132,7 +133,8 @@ def tune(machine: str, overrides: dict[str, float] | None = None, control_period
     -------
     dict
         ``machine``, ``control_period_s``, ``targets`` and per axis ``axes.<a>``:
-        ``phase_margin_deg``, ``gain_margin_db`` (the smaller of the two loops'),
+        ``phase_margin_deg``, ``gain_margin_db`` (of the two loops' the nearer to instability;
+        None with a ``..._note`` where infinite),
         ``bandwidth_hz`` (the closed position loop's -3 dB), the two loops' figures and ``gains``.
     """
     spec = get_machine(machine)
