@@ -219,3 +219,27 @@ def test_pocket_roughed_and_ball_finished(pocket):
         r["name"]: abs(r["deviation_um"]) <= 20.0 if r["type"] == "width" else abs(r["deviation_um"]) <= 10.0
         for r in pocket.result.inspection
     }
+
+
+def test_a_level_the_tool_ramps_through_is_skipped_not_swept_disc_by_disc(monkeypatch):
+    # a bull-nose tool (0.5 mm corner) ramping from Z -1 to -3: at Z -2 its corner sweeps a new
+    # radius at every sample of the ramp (50 of them); over the budget the level is not
+    # sectioned (memory and time stay bounded) and says so; at Z -0.5 it is its full radius
+    import twin.process.part as part_module
+
+    monkeypatch.setattr(part_module, "MAX_SECTION_RUNS", 20)
+    n = 400
+    x = np.linspace(5.0, 25.0, n)
+    ramp = Sweep(
+        np.column_stack([x, np.full(n, 10.0)]),
+        np.concatenate([np.full(100, -1.0), np.linspace(-1.0, -3.0, 200), np.full(100, -3.0)]),
+        np.full(n, 3.0),
+        np.full(n, 0.5),
+        np.full(n, 7),
+    )
+    part = machined_part(STOCK, ramp, ramp, 0.0, -10.0)
+    assert part.levels_mm == [-0.5] and part.skipped_levels_mm == [-2.0]
+    summary = part.summary()
+    assert summary["skipped_levels_mm"] == [-2.0] and "moves in Z" in summary["skipped_note"]
+    with pytest.raises(part_module.SectionTooComplex, match="radii at Z -2 mm"):
+        ramp.section(STOCK, -2.0)

@@ -94,3 +94,31 @@ def test_ball_scallop_between_two_passes():
     np.testing.assert_allclose(column, tip + r - np.sqrt(r**2 - dy**2), rtol=0, atol=2e-5)
     cusp = tip + r - math.sqrt(r**2 - 0.8**2)  # the scallop's top, 0.109 mm over the tip
     assert column.max() == pytest.approx(cusp, abs=0.3 * RES)
+
+
+def test_floor_error_leaves_walls_out_and_reads_scallops_moved():
+    # a flat slot moved 0.2 mm: its floor is exact (the walls' ±2000 µm cells are not floors)
+    moved = part_map(STOCK, slot(10.0), slot(10.2)).floor_error()
+    assert moved["cells"] > 0.9 * 30.0 * 5.6 / RES**2 and moved["min"] == moved["max"] == 0.0
+    # two 6 mm ball passes 1.6 mm apart, 0.2 mm deep, the actual ones 3 µm towards +Y: at each
+    # cell the floor is the nearer pass's sphere, z(y) = tip + R - sqrt(R^2 - dy^2), up to the
+    # top; its error z_actual - z_nominal at the cell centres the nominal passes cut: the most
+    # on the outer flanks, where the sphere is steepest (0.39)
+    r, tip = 3.0, -0.2
+
+    def passes(shift):
+        first, second = slot(10.0 + shift, 0.2, r), slot(11.6 + shift, 0.2, r)
+        return Sweep(**{k: np.concatenate([getattr(first, k), getattr(second, k)]) for k in vars(first)})
+
+    def floor(y, shift):
+        dy = np.minimum(np.abs(y - 10.0 - shift), np.abs(y - 11.6 - shift))
+        return np.minimum(tip + r - np.sqrt(np.maximum(r**2 - dy**2, 0.0)), 0.0)
+
+    got = part_map(STOCK, passes(0.0), passes(0.003)).floor_error()
+    y = np.arange(0.025, 20.0, RES)
+    err = (floor(y, 0.003) - floor(y, 0.0)) * 1e3
+    cut = floor(y, 0.0) < 0.0
+    assert got["max"] == pytest.approx(err[cut].max(), abs=0.02)
+    assert got["min"] == pytest.approx(err[cut].min(), abs=0.02)
+    assert got["rms"] == pytest.approx(np.sqrt(np.mean(err[cut] ** 2)), rel=0.01)
+    assert got["cells"] == (600 - 2) * cut.sum()  # the stock's edge columns are at its wall

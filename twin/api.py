@@ -152,7 +152,7 @@ class Run:
             raise TwinInputError("part", str(folder), "the run has no virtual part: give [stock] and run to the end")
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
-        maps = part_map(self.scenario.stock, part.nominal, part.actual)
+        maps = part.maps if part.maps is not None else part_map(self.scenario.stock, part.nominal, part.actual)
         name = self.scenario.name
         return [maps.to_stl(folder / f"{name}_part.stl"), maps.to_parquet(folder / f"{name}_part_map.parquet")]
 

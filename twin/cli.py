@@ -108,6 +108,16 @@ def _print_part(summary: dict) -> None:
             f"  virtual part: wall error {stats['min']:+.3f} to {stats['max']:+.3f} µm, RMS {stats['rms']:.3f} µm"
             f" ({part['wall_points']} points at Z {', '.join(f'{z:g}' for z in part['wall_levels_mm'])} mm)"
         )
+    floors = part.get("floor_error_um")
+    if floors:
+        typer.echo(
+            f"  floors and surfaces: error {floors['min']:+.3f} to {floors['max']:+.3f} µm, RMS {floors['rms']:.3f} µm"
+            f" ({floors['cells']} cells)"
+        )
+    if part.get("skipped_levels_mm"):
+        typer.echo(
+            f"  walls not read at Z {', '.join(f'{z:g}' for z in part['skipped_levels_mm'])} mm: {part['skipped_note']}"
+        )
     for row in summary.get("inspection", []):
         if "deviation_um" not in row:
             typer.echo(f"    {row['name']:<20} {row['type']:<7} not found: {row['message']}")

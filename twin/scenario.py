@@ -26,9 +26,10 @@ from twin.errors import TwinInputError
 from twin.gcode.planner import PlannerSettings
 from twin.machines import build, is_machine_file
 from twin.process import DISTURBANCES, DisturbanceSpecBase
-from twin.process.inspection import InspectSpec, measure
+from twin.process.inspection import InspectSpec, measure, not_found
 from twin.process.machining import StockSpec, ToolSpec, program_milling
-from twin.process.part import MachinedPart, Sweep, machined_part
+from twin.process.part import MachinedPart, SectionTooComplex, Sweep, machined_part
+from twin.process.part_map import part_map
 from twin.references import REFERENCES, ReferenceContext, ReferenceSpecBase
 from twin.sim.drive import Drive, Encoder, substeps_per_tick
 from twin.sim.runner import MAX_PHYSICS_STEPS, RunResult, simulate
@@ -430,8 +431,16 @@ def run_scenario(scn: Scenario, progress: bool | None = None, max_physics_steps:
     result = simulate(kwargs.pop("machine"), **kwargs, progress=progress, max_physics_steps=max_physics_steps)
     if scn.stock is not None and len(result.t_s):
         result.part = _machined_part(result, reference, scn.stock)
-        result.inspection = [measure(f, result.part.actual.section(result.part.stock, f.z_mm)) for f in scn.inspect]
+        result.inspection = [_inspect(f, result.part) for f in scn.inspect]
     return result
+
+
+def _inspect(feature, part: MachinedPart) -> dict:
+    """A feature measured on the actual part's section at its height, or why it cannot be."""
+    try:
+        return measure(feature, part.actual.section(part.stock, feature.z_mm))
+    except SectionTooComplex as exc:
+        return not_found(feature, str(exc))
 
 
 def _machined_part(result: RunResult, reference, stock: StockSpec) -> MachinedPart:
@@ -446,4 +455,7 @@ def _machined_part(result: RunResult, reference, stock: StockSpec) -> MachinedPa
         nominal.corner_mm[k],
         result.program_lines,
     )
-    return machined_part(stock.polygon(), nominal, actual, stock.top_mm, stock.bottom_mm)
+    part = machined_part(stock.polygon(), nominal, actual, stock.top_mm, stock.bottom_mm)
+    part.maps = part_map(stock, nominal, actual)
+    part.floor_error_um = part.maps.floor_error()
+    return part

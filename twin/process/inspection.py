@@ -94,6 +94,18 @@ def _verdict(deviation_um: float, tolerance_um: float | None) -> bool | None:
     return None if tolerance_um is None else bool(abs(deviation_um) <= tolerance_um)
 
 
+def not_found(feature, message: str) -> dict:
+    """The row of a feature that could not be measured, with why."""
+    return {
+        "name": feature.name,
+        "type": feature.type,
+        "z_mm": feature.z_mm,
+        "found": False,
+        "message": message,
+        "pass": False,
+    }
+
+
 def measure(feature, material: shapely.Geometry) -> dict:
     """One feature of ``inspection`` measured on the section ``material`` at its height."""
     row: dict = {"name": feature.name, "type": feature.type, "z_mm": feature.z_mm}
@@ -107,7 +119,7 @@ def measure(feature, material: shapely.Geometry) -> dict:
         )
         pts = points_along(shapely.intersection(material.boundary, zone), PROBE_STEP_MM)
         if len(pts) < MIN_POINTS:
-            return {**row, "found": False, "message": f"no wall within {band} mm of the circle", "pass": False}
+            return not_found(feature, f"no wall within {band} mm of the circle")
         fitted, radius, residual = fit_circle(pts)
         deviation = (2 * radius - feature.diameter_mm) * 1e3
         row |= {
@@ -118,13 +130,13 @@ def measure(feature, material: shapely.Geometry) -> dict:
     elif feature.type == "line":
         a, b = np.asarray(feature.from_mm), np.asarray(feature.to_mm)
         if np.allclose(a, b):
-            return {**row, "found": False, "message": "from_mm and to_mm are one point", "pass": False}
+            return not_found(feature, "from_mm and to_mm are one point")
         u = (b - a) / np.linalg.norm(b - a)
         n = np.array([-u[1], u[0]])
         zone = shapely.buffer(shapely.LineString([a, b]), BAND_MM, cap_style="flat")
         pts = points_along(shapely.intersection(material.boundary, zone), PROBE_STEP_MM)
         if len(pts) < MIN_POINTS:
-            return {**row, "found": False, "message": f"no wall within {BAND_MM} mm of the line", "pass": False}
+            return not_found(feature, f"no wall within {BAND_MM} mm of the line")
         mean = pts.mean(axis=0)
         direction = np.linalg.svd(pts - mean)[2][0]
         normal = np.array([-direction[1], direction[0]])
@@ -144,12 +156,7 @@ def measure(feature, material: shapely.Geometry) -> dict:
         gaps = shapely.get_parts(shapely.difference(shapely.LineString([a, b]), material))
         gap = min(gaps, key=lambda g: g.distance(middle), default=None) if len(gaps) else None
         if gap is None or gap.distance(middle) > 0.0 or gap.length == 0.0:
-            return {
-                **row,
-                "found": False,
-                "message": "the line's middle is in material: no gap across it",
-                "pass": False,
-            }
+            return not_found(feature, "the line's middle is in material: no gap across it")
         deviation = (gap.length - feature.width_mm) * 1e3
         row |= {
             "width_mm": round(gap.length, 6),

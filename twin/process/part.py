@@ -20,11 +20,15 @@ tool cut at (the floors of a 2.5-D part), so that each wall is read once per ste
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import shapely
 from scipy.spatial import cKDTree
+
+if TYPE_CHECKING:
+    from twin.process.part_map import PartMap
 
 #: The tool's circles are polygons within this of the true circle (mm): 0.05 µm.
 CIRCLE_TOLERANCE_MM = 5e-5
@@ -40,6 +44,15 @@ MIN_FLOOR_SAMPLES = 10
 SAME_RADIUS_MM = 1e-6
 #: A nominal boundary point this near the stock's own outline (mm) is not machined.
 ON_STOCK_MM = 1e-4
+#: Runs of one radius a section sweeps at most (about 5 s of GEOS buffering and union).  A
+#: tool that moves in Z through a level (a 3-D surface, a long ramp) sweeps a new radius at
+#: every sample there: such a level is not sectioned, and its surface is in the height maps'
+#: floor error instead (:mod:`twin.process.part_map`).
+MAX_SECTION_RUNS = 20_000
+
+
+class SectionTooComplex(ValueError):
+    """A section would sweep more than :data:`MAX_SECTION_RUNS` runs of one radius."""
 
 
 def quad_segs(radius_mm: float) -> int:
@@ -71,6 +84,11 @@ def section(stock: shapely.Geometry, xy_mm, tip_mm, radius_mm, corner_mm, z_mm: 
     tip_mm, radius_mm, corner_mm : ndarray (n,)
         The tool's tip height, radius and corner radius at each sample (mm).
     z_mm : float
+
+    Raises
+    ------
+    SectionTooComplex
+        More than :data:`MAX_SECTION_RUNS` runs of one radius.
     """
     r = swept_radius_mm(np.asarray(tip_mm), np.asarray(radius_mm), np.asarray(corner_mm), z_mm)
     on = r > 0.0
@@ -79,6 +97,11 @@ def section(stock: shapely.Geometry, xy_mm, tip_mm, radius_mm, corner_mm, z_mm: 
     change = np.union1d(change, np.flatnonzero(np.abs(np.diff(r)) > SAME_RADIUS_MM) + 1)
     starts = np.concatenate([[0], change])
     ends = np.concatenate([change, [len(r)]])
+    runs = int(np.count_nonzero(on[starts]))
+    if runs > MAX_SECTION_RUNS:
+        raise SectionTooComplex(
+            f"the tool sweeps {runs} radii at Z {z_mm:g} mm (it moves in Z there), over {MAX_SECTION_RUNS}"
+        )
     by_radius: dict[float, list] = {}
     for a, b in zip(starts, ends):
         if not on[a]:
@@ -162,6 +185,12 @@ class MachinedPart:
     walls : ndarray (m, 5)
         Wall points: x, y, z (mm), signed error (µm: material left positive, overcut negative)
         and the program line that formed them.
+    skipped_levels_mm : list of float
+        Levels not read: the tool moves in Z through them (:class:`SectionTooComplex`).
+    maps : PartMap or None
+        The nominal and actual height maps (:mod:`twin.process.part_map`), when computed.
+    floor_error_um : dict
+        Their error on the floors and 3-D surfaces (:meth:`PartMap.floor_error`).
     """
 
     stock: shapely.Geometry
@@ -169,6 +198,9 @@ class MachinedPart:
     actual: Sweep
     levels_mm: list[float]
     walls: np.ndarray
+    skipped_levels_mm: list[float] = field(default_factory=list)
+    maps: PartMap | None = None
+    floor_error_um: dict = field(default_factory=dict)
 
     def sections(self, z_mm: float) -> tuple[shapely.Geometry, shapely.Geometry]:
         """The nominal and the actual material at ``z_mm``."""
@@ -176,7 +208,7 @@ class MachinedPart:
 
     def summary(self) -> dict:
         """``part`` of ``twin run --json``: the wall error's min, max and RMS (µm), the levels
-        read and the points."""
+        read and the points, the floors' error and the levels skipped, where there are."""
         err = self.walls[:, 3]
         stats = (
             {
@@ -187,11 +219,20 @@ class MachinedPart:
             if err.size
             else {}
         )
-        return {
+        out = {
             "surface_error_um": stats,
             "wall_levels_mm": [round(z, 4) for z in self.levels_mm],
             "wall_points": int(err.size),
         }
+        if self.floor_error_um:
+            out["floor_error_um"] = self.floor_error_um
+        if self.skipped_levels_mm:
+            out["skipped_levels_mm"] = [round(z, 4) for z in self.skipped_levels_mm]
+            out["skipped_note"] = (
+                f"the tool moves in Z through these levels (over {MAX_SECTION_RUNS} swept radii): "
+                "their surfaces are in floor_error_um"
+            )
+        return out
 
     def line_errors(self) -> dict[int, float]:
         """Per program line, its wall points' error furthest from zero (µm, signed)."""
@@ -202,15 +243,21 @@ class MachinedPart:
         return out
 
 
-def wall_errors(stock, nominal: Sweep, actual: Sweep, levels_mm: list[float]) -> np.ndarray:
+def wall_errors(stock, nominal: Sweep, actual: Sweep, levels_mm: list[float]) -> tuple[np.ndarray, list[float]]:
     """Wall points of the nominal part at each of ``levels_mm`` with their signed error against
-    the actual part (µm) and line, shape (m, 5): see :class:`MachinedPart`."""
+    the actual part (µm) and line, shape (m, 5): see :class:`MachinedPart`; and the levels not
+    read (:class:`SectionTooComplex`)."""
     outline = stock.boundary
-    length = sum(nominal.section(stock, z).boundary.length for z in levels_mm) if levels_mm else 0.0
+    sections, skipped = {}, []
+    for z in levels_mm:
+        try:
+            sections[z] = (nominal.section(stock, z), actual.section(stock, z))
+        except SectionTooComplex:
+            skipped.append(z)
+    length = sum(want.boundary.length for want, _ in sections.values())
     step = max(WALL_STEP_MM, length / MAX_WALL_POINTS)
     rows = []
-    for z in levels_mm:
-        want, got = nominal.section(stock, z), actual.section(stock, z)
+    for z, (want, got) in sections.items():
         pts = points_along(want.boundary, step)
         if len(pts) == 0:
             continue
@@ -225,7 +272,7 @@ def wall_errors(stock, nominal: Sweep, actual: Sweep, levels_mm: list[float]) ->
         _, nearest = cKDTree(nominal.xy_mm[below]).query(pts)
         line = nominal.line[below][nearest]
         rows.append(np.column_stack([pts, np.full(len(pts), z), sign * distance * 1e3, line]))
-    return np.concatenate(rows) if rows else np.zeros((0, 5))
+    return (np.concatenate(rows) if rows else np.zeros((0, 5))), skipped
 
 
 def machined_part(stock, nominal: Sweep, actual: Sweep, top_mm: float, bottom_mm: float) -> MachinedPart:
@@ -234,4 +281,5 @@ def machined_part(stock, nominal: Sweep, actual: Sweep, top_mm: float, bottom_mm
     step = np.diff(nominal.xy_mm, axis=0, prepend=nominal.xy_mm[:1])
     moving = np.hypot(step[:, 0], step[:, 1]) > 1e-6
     levels = wall_levels(nominal.tip_mm, moving, top_mm, bottom_mm)
-    return MachinedPart(stock, nominal, actual, levels, wall_errors(stock, nominal, actual, levels))
+    walls, skipped = wall_errors(stock, nominal, actual, levels)
+    return MachinedPart(stock, nominal, actual, [z for z in levels if z not in skipped], walls, skipped)

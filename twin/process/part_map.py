@@ -33,6 +33,10 @@ from twin.process.part import Sweep
 MAX_MESH_CELLS = 500_000
 #: Cells per Parquet row group: what the writer holds in memory at once.
 ROW_GROUP_CELLS = 1_000_000
+#: A cell is on a floor or a 3-D surface where the material's top differs from each of its four
+#: neighbours' by at most this many cells' width (45 deg) in both maps, and the two maps by at
+#: most as much: else it is at a wall, or a wall moved across it (the walls' exact error).
+MAX_FLOOR_SLOPE = 1.0
 #: Columns of the Parquet map.
 MAP_COLUMNS = ("x_mm", "y_mm", "nominal_mm", "actual_mm", "error_um")
 
@@ -89,6 +93,42 @@ class PartMap:
         return np.clip(
             np.nan_to_num(heights * 1e3, neginf=self.stock.bottom_mm), self.stock.bottom_mm, self.stock.top_mm
         )
+
+    def floor_error(self) -> dict:
+        """The error of the machined floors and 3-D surfaces (µm, actual less nominal, material
+        left positive): ``{min, max, rms, cells}`` over the cells the nominal part cut that are
+        not at a wall (:data:`MAX_FLOOR_SLOPE`: at 0.05 mm cells, an error up to 50 µm), in
+        blocks of rows (memory stays bounded); empty
+        when there is no such cell.  The height at a cell centre is exact, so this resolves a
+        micrometre on a surface whatever the cell."""
+        nx, ny = self.actual.heights.shape
+        rows = max(1, ROW_GROUP_CELLS // ny)
+        low, high, squares, count = math.inf, -math.inf, 0.0, 0
+        step = MAX_FLOOR_SLOPE * self.stock.resolution_mm
+        for i in range(0, nx, rows):
+            block = slice(max(i - 1, 0), min(i + rows + 1, nx))  # a row each side: the neighbours
+            nominal = self._material_mm(self.nominal.heights[block])
+            actual = self._material_mm(self.actual.heights[block])
+            floor = np.isfinite(self.nominal.heights[block]) & (nominal < self.stock.top_mm - 1e-9)
+            for heights in (nominal, actual):
+                padded = np.pad(heights, 1, mode="edge")
+                for di, dj in ((0, 1), (2, 1), (1, 0), (1, 2)):
+                    shifted = padded[di : di + heights.shape[0], dj : dj + heights.shape[1]]
+                    floor &= np.abs(shifted - heights) <= step
+            floor &= np.abs(actual - nominal) <= step  # more: a wall moved across the cell
+            inner = slice(i - block.start, i - block.start + min(rows, nx - i))  # this block's own rows
+            err = ((actual - nominal) * 1e3)[inner][floor[inner]]
+            if err.size:
+                low, high = min(low, float(err.min())), max(high, float(err.max()))
+                squares, count = squares + float(np.sum(err**2)), count + int(err.size)
+        if not count:
+            return {}
+        return {
+            "min": round(low, 3),
+            "max": round(high, 3),
+            "rms": round(math.sqrt(squares / count), 3),
+            "cells": count,
+        }
 
     def to_parquet(self, path: str | Path) -> Path:
         """Write the cells inside the stock, one row each (:data:`MAP_COLUMNS`: the centre, the
