@@ -145,16 +145,16 @@ class Run:
         TwinInputError
             The run has no virtual part (no stock, or it stopped early).
         """
-        from twin.process.part_map import part_map
-
         part = self.result.part
-        if part is None or self.scenario.stock is None:
+        if part is None or part.maps is None:
             raise TwinInputError("part", str(folder), "the run has no virtual part: give [stock] and run to the end")
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
-        maps = part.maps if part.maps is not None else part_map(self.scenario.stock, part.nominal, part.actual)
         name = self.scenario.name
-        return [maps.to_stl(folder / f"{name}_part.stl"), maps.to_parquet(folder / f"{name}_part_map.parquet")]
+        return [
+            part.maps.to_stl(folder / f"{name}_part.stl"),
+            part.maps.to_parquet(folder / f"{name}_part_map.parquet"),
+        ]
 
     def plots(self, folder: str | Path) -> list[Path]:
         """Write the PNG plots of ``twin run --plots`` into ``folder``; their paths."""

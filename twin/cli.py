@@ -58,7 +58,7 @@ def _check_output(option: str, path: Path | None, suffix: str | None = None) -> 
         raise TwinInputError(option, str(path), "is a folder")
 
 
-def _check_plots_folder(plots: Path | None, option: str = "--plots") -> None:
+def _check_folder(plots: Path | None, option: str = "--plots") -> None:
     """Refuse a ``--plots`` (or ``option``) path that exists and is not a folder (a missing one
     is created)."""
     if plots is not None and plots.exists() and not plots.is_dir():
@@ -162,8 +162,8 @@ def _run(
 
     _check_output("--rrd", rrd, ".rrd")
     _check_output("--lines", lines, ".parquet")
-    _check_plots_folder(plots)
-    _check_plots_folder(part, "--part")
+    _check_folder(plots)
+    _check_folder(part, "--part")
     scn = load_scenario(scenario, settings)
     if part is not None and scn.stock is None:
         raise TwinInputError("--part", str(part), "the virtual part is cut from a stock: the scenario has no [stock]")
@@ -344,7 +344,7 @@ def reproduce(
     from twin.reproductions import reproduction
 
     _check_output("--rrd", rrd, ".rrd")
-    _check_plots_folder(plots)
+    _check_folder(plots)
     res = api.reproduce(source, samples=samples, twin_samples=twin_samples, random_seed=seed, progress=not as_json)
     paper = reproduction(source)
     typer.echo(json.dumps(res, indent=1, default=float) if as_json else paper.format_report(res))
@@ -385,7 +385,7 @@ def sweep(
     from twin.scenario import parse_settings
     from twin.sweeps.summary import format_summary
 
-    _check_plots_folder(plots)
+    _check_folder(plots)
     done = api.sweep(
         target,
         list(vary or []),
@@ -497,7 +497,7 @@ def frf(
     from twin.commissioning.frf import FrfSettings, measure, write_bode
 
     _check_output("--rrd", rrd, ".rrd")
-    _check_plots_folder(plots)
+    _check_folder(plots)
     settings = FrfSettings(axis, loop, sensor, excitation, amplitude, duration, f_max)  # type: ignore[arg-type]
     result = measure(machine, settings, _parse_sets(sets or []))
     run = result.pop("run")

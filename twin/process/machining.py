@@ -221,6 +221,14 @@ class HeightMap:
         self.x0_m, self.y0_m, self.res_m = x0 * 1e-3, y0 * 1e-3, res * 1e-3
         self.top_m, self.bottom_m = stock.top_mm * 1e-3, stock.bottom_mm * 1e-3
 
+    def centres_mm(self) -> tuple[np.ndarray, np.ndarray]:
+        """The cells' centres along X and along Y (mm)."""
+        nx, ny = self.heights.shape
+        return (
+            (self.x0_m + (np.arange(nx) + 0.5) * self.res_m) * 1e3,
+            (self.y0_m + (np.arange(ny) + 0.5) * self.res_m) * 1e3,
+        )
+
     def outlines(self) -> dict[str, list[np.ndarray]]:
         """The stock's outline and the outline of the material left at its full height (the
         part's top as machined), each a list of closed polylines (n, 2) in mm."""
@@ -229,9 +237,7 @@ class HeightMap:
         stock = [np.asarray(self.stock_polygon.exterior.coords)] + [
             np.asarray(ring.coords) for ring in self.stock_polygon.interiors
         ]
-        nx, ny = self.heights.shape
-        xs = (self.x0_m + (np.arange(nx) + 0.5) * self.res_m) * 1e3
-        ys = (self.y0_m + (np.arange(ny) + 0.5) * self.res_m) * 1e3
+        xs, ys = self.centres_mm()
         z = np.where(np.isfinite(self.heights), self.heights, self.bottom_m - 1.0).T
         lines = contourpy.contour_generator(xs, ys, z).lines(self.top_m - 1e-6)
         return {"stock": stock, "machined": [np.asarray(line) for line in lines]}

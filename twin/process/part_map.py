@@ -139,7 +139,7 @@ class PartMap:
 
         hm = self.actual
         nx, ny = hm.heights.shape
-        ys = (hm.y0_m + (np.arange(ny) + 0.5) * hm.res_m) * 1e3
+        all_xs, ys = hm.centres_mm()
         rows = max(1, ROW_GROUP_CELLS // ny)
         schema = pa.schema([(name, pa.float64()) for name in MAP_COLUMNS])
         with pq.ParquetWriter(Path(path), schema) as writer:
@@ -147,8 +147,7 @@ class PartMap:
                 stock = np.isfinite(self.nominal.heights[i : i + rows])  # -inf: no stock there
                 nominal = self._material_mm(self.nominal.heights[i : i + rows])
                 actual = self._material_mm(hm.heights[i : i + rows])
-                xs = (hm.x0_m + (np.arange(i, i + len(stock)) + 0.5) * hm.res_m) * 1e3
-                gx, gy = np.meshgrid(xs, ys, indexing="ij")
+                gx, gy = np.meshgrid(all_xs[i : i + len(stock)], ys, indexing="ij")
                 columns = (gx, gy, nominal, actual, (actual - nominal) * 1e3)
                 writer.write_table(
                     pa.table({name: col[stock] for name, col in zip(MAP_COLUMNS, columns)}, schema=schema)
@@ -164,9 +163,9 @@ class PartMap:
         z = np.pad(self._material_mm(cells[::stride, ::stride]), 1, mode="edge")
         hm = self.actual
         bx0, by0, bx1, by1 = hm.stock_polygon.bounds
-        centres_x = (hm.x0_m + (np.arange(rows.start, rows.stop)[::stride] + 0.5) * hm.res_m) * 1e3
-        centres_y = (hm.y0_m + (np.arange(cols.start, cols.stop)[::stride] + 0.5) * hm.res_m) * 1e3
-        xs, ys = np.concatenate([[bx0], centres_x, [bx1]]), np.concatenate([[by0], centres_y, [by1]])
+        centres_x, centres_y = hm.centres_mm()
+        xs = np.concatenate([[bx0], centres_x[rows][::stride], [bx1]])
+        ys = np.concatenate([[by0], centres_y[cols][::stride], [by1]])
         mx, my = z.shape
         gx, gy = np.meshgrid(xs, ys, indexing="ij")
         top = np.column_stack([gx.ravel(), gy.ravel(), z.ravel()])
