@@ -89,8 +89,66 @@ def test_step_average_carries_the_exact_impulse_over_a_revolution():
     st, ex = immersion_angles(4.0, D_MM, "down")
     n = 97  # a step that does not divide the revolution, with wrap-around past 2 pi
     step = 2 * math.pi / n
-    forces = np.array([step_tool_forces_N(K.as_array(), 3, 2.0, 0.1, st, ex, 0.3 + i * step, step) for i in range(n)])
+    forces = np.array(
+        [step_tool_forces_N(K.as_array(), 3, 2.0, 0.1, st, ex, 0.3 + i * step, step, 0.0) for i in range(n)]
+    )
     np.testing.assert_allclose(forces.mean(axis=0), mean_tool_forces_N(K, 3, 2.0, 0.1, st, ex), rtol=1e-12)
+
+
+def _helical_step_force_by_quadrature(a, c, st, ex, n_flutes, angle, step, lag, discs=400, angles=400):
+    """The step-averaged force of helical flutes by brute force, from the force law itself: the
+    depth cut into ``discs`` straight discs, each lagging its height's share of ``lag``, the step
+    into ``angles`` sub-angles (midpoint rule in both)."""
+    z = (np.arange(discs) + 0.5) / discs  # height / depth
+    t = angle + (np.arange(angles) + 0.5) / angles * step
+    phi = (t[:, None, None] - lag * z[None, :, None] - 2 * math.pi / n_flutes * np.arange(n_flutes)) % (2 * math.pi)
+    on = (phi >= st) & (phi <= ex)
+    h = c * np.sin(phi)
+    da = a / discs
+    ft, fr, fa = da * (K.K_tc * h + K.K_te), da * (K.K_rc * h + K.K_re), da * (K.K_ac * h + K.K_ae)
+    fx = np.where(on, -ft * np.cos(phi) - fr * np.sin(phi), 0.0)
+    fy = np.where(on, ft * np.sin(phi) - fr * np.cos(phi), 0.0)
+    fz = np.where(on, fa, 0.0)
+    return np.array([f.sum(axis=(1, 2)).mean() for f in (fx, fy, fz)])
+
+
+@pytest.mark.parametrize(
+    ("ae", "mode", "n_flutes", "angle", "step", "lag"),
+    [
+        (3.0, "up", 2, 0.2, 0.3, 0.7),  # the step crosses the entry, the edge spans it
+        (3.0, "down", 3, 6.1, 0.4, 1.3),  # wraps past 2 pi
+        (10.0, "up", 4, 1.0, 0.05, 2 * math.pi + 0.9),  # more than a whole turn of the edge
+        (6.0, "down", 1, 3.0, 1.5, 0.2),  # a step longer than the lag
+    ],
+)
+def test_helical_step_force_equals_brute_force_discs(ae, mode, n_flutes, angle, step, lag):
+    st, ex = immersion_angles(ae, D_MM, mode)
+    exact = step_tool_forces_N(K.as_array(), n_flutes, 4.0, 0.1, st, ex, angle, step, lag)
+    brute = _helical_step_force_by_quadrature(4.0, 0.1, st, ex, n_flutes, angle, step, lag)
+    scale = np.abs(mean_tool_forces_N(K, n_flutes, 4.0, 0.1, 0.0, math.pi)).max()
+    np.testing.assert_allclose(exact, brute, atol=2e-3 * scale)
+
+
+def test_helix_of_one_pitch_in_a_slot_gives_the_constant_mean_force():
+    """Altintas ch. 2.5: when the edge's lag over the depth is one flute pitch, every angle of a
+    slot is cut at every instant by one disc: the force is constant, the mean of straight flutes."""
+    for n_flutes in (2, 3, 4):
+        mean = mean_tool_forces_N(K, n_flutes, 3.0, 0.1, 0.0, math.pi)
+        for angle in np.linspace(0.0, 2 * math.pi, 11):
+            for lag in (2 * math.pi / n_flutes, 2 * math.pi + 2 * math.pi / n_flutes):
+                force = step_tool_forces_N(K.as_array(), n_flutes, 3.0, 0.1, 0.0, math.pi, angle, 0.01, lag)
+                np.testing.assert_allclose(force, mean, rtol=1e-9)
+
+
+def test_helix_keeps_the_mean_and_cuts_the_peak():
+    st, ex = immersion_angles(2.0, D_MM, "down")
+    n = 360
+    step = 2 * math.pi / n
+    angles = 0.1 + step * np.arange(n)
+    straight = np.array([step_tool_forces_N(K.as_array(), 2, 3.0, 0.1, st, ex, x, step, 0.0) for x in angles])
+    helical = np.array([step_tool_forces_N(K.as_array(), 2, 3.0, 0.1, st, ex, x, step, 0.6) for x in angles])
+    np.testing.assert_allclose(helical.mean(axis=0), mean_tool_forces_N(K, 2, 3.0, 0.1, st, ex), rtol=1e-9)
+    assert np.abs(helical).max(axis=0)[1] < 0.8 * np.abs(straight).max(axis=0)[1]
 
 
 def test_slot_mean_forces_match_closed_form_and_spectrum_peaks_at_tooth_frequency():

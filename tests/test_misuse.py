@@ -54,6 +54,21 @@ def test_each_crash_or_misuse_is_a_warning_on_its_line_with_its_value(lines, too
     assert total == len(found)
 
 
+@pytest.mark.parametrize(("shank_mm", "over_mm"), [(None, None), (4.0, None), (10.0, 2.0)])
+def test_a_shank_wider_than_the_cutter_rubs_on_the_walls_of_its_own_slot(shank_mm, over_mm):
+    """A 6 mm cutter with 2 mm flutes takes a slot down to 4 mm in two passes: its flutes
+    reach above the material it left (none rubs) unless its shank is wider than the slot: a
+    10 mm shank meets the walls standing 4 - 2 = 2 mm above the flutes on the second pass."""
+    tool = ToolSpec(diameter_mm=6.0, n_flutes=2, flute_length_mm=2.0, shank_diameter_mm=shank_mm)
+    found, _ = _warnings(["G1 Z-2 F300", "G1 X30 F600", "G1 Z-4 F300", "G1 X-10 F600"], tool)
+    rubs = {line: w["value"] for (line, kind), w in found.items() if kind == "deeper_than_flutes"}
+    if over_mm is None:
+        assert rubs == {}
+    else:
+        assert set(rubs) == {3, 4}  # the plunge at X30 already meets the wall of the slot's end
+        assert rubs[4] == pytest.approx(over_mm, abs=1e-6)
+
+
 def test_a_ramp_within_the_tools_angle_is_not_a_plunge():
     """A 5.7 deg ramp (2 mm down over 20 mm) with a tool that ramps at up to 10 deg."""
     found, _ = _warnings(

@@ -53,6 +53,13 @@ configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_ca
 
 #: Feed per tooth (m) below which the feed direction is held at its last value.
 MIN_FEED_M = 1e-9
+#: Helix angles at and above this (deg) are refused: end mills go to about 45 to 55 deg.
+MAX_HELIX_DEG = 60.0
+
+
+def helix_lag_rad_per_mm(helix_deg: float, diameter_mm: float) -> float:
+    """How far a helical flute's edge lags its tip per height (rad/mm): ``2 tan(helix)/D``."""
+    return 2.0 * math.tan(math.radians(helix_deg)) / diameter_mm
 
 
 def immersion_angles(radial_depth_mm: float, diameter_mm: float, mode: str) -> tuple[float, float]:
@@ -107,32 +114,101 @@ def mean_tool_forces_N(
 
 
 @njit(cache=True)
+def flute_force_double_integral(k, feed_per_tooth_mm, phi):  # pragma: no cover - compiled
+    """Primitive ``R(phi)`` of :func:`flute_force_integral` at unit axial depth (N rad^2/mm).
+
+    ``R_x = c/4 [K_tc sin(2phi)/2 - K_rc (phi^2 + cos(2phi)/2)] + K_te cos phi + K_re sin phi``,
+    ``R_y = c/4 [K_tc (phi^2 + cos(2phi)/2) + K_rc sin(2phi)/2] - K_te sin phi + K_re cos phi``,
+    ``R_z = -K_ac c sin phi + K_ae phi^2/2``.
+    """
+    c = feed_per_tooth_mm
+    s2, c2 = math.sin(2.0 * phi), math.cos(2.0 * phi)
+    s1, c1 = math.sin(phi), math.cos(phi)
+    rx = c / 4.0 * (k[0] * s2 / 2.0 - k[1] * (phi * phi + c2 / 2.0)) + k[3] * c1 + k[4] * s1
+    ry = c / 4.0 * (k[0] * (phi * phi + c2 / 2.0) + k[1] * s2 / 2.0) - k[3] * s1 + k[4] * c1
+    rz = -k[2] * c * s1 + k[5] * phi * phi / 2.0
+    return rx, ry, rz
+
+
+@njit(cache=True)
+def _clipped_double_integral(k, c, phi_st, phi_ex, u):  # pragma: no cover - compiled
+    """``G(u)``: the integral up to ``u`` of ``Q(clip(psi, phi_st, phi_ex))`` at unit depth,
+    zero at ``phi_st`` (N rad^2/mm): ``Q(phi_st) (u - phi_st)`` below the arc, ``R(u) - R(phi_st)``
+    on it, ``R(phi_ex) - R(phi_st) + Q(phi_ex) (u - phi_ex)`` above it."""
+    if u <= phi_st:
+        q = flute_force_integral(k, 1.0, c, phi_st)
+        d = u - phi_st
+        return q[0] * d, q[1] * d, q[2] * d
+    r0 = flute_force_double_integral(k, c, phi_st)
+    if u < phi_ex:
+        r = flute_force_double_integral(k, c, u)
+        return r[0] - r0[0], r[1] - r0[1], r[2] - r0[2]
+    r = flute_force_double_integral(k, c, phi_ex)
+    q = flute_force_integral(k, 1.0, c, phi_ex)
+    d = u - phi_ex
+    return r[0] - r0[0] + q[0] * d, r[1] - r0[1] + q[1] * d, r[2] - r0[2] + q[2] * d
+
+
+@njit(cache=True)
 def step_tool_forces_N(
-    k, n_flutes, axial_depth_mm, feed_per_tooth_mm, phi_st, phi_ex, spindle_angle_rad, step_angle_rad
+    k, n_flutes, axial_depth_mm, feed_per_tooth_mm, phi_st, phi_ex, spindle_angle_rad, step_angle_rad, lag_rad
 ):  # pragma: no cover - compiled
     """Force on the tool, feed frame (N), averaged over one physics step, summed over the flutes.
 
-    ``k`` is :meth:`CuttingCoefficients.as_array`.  Flute 0 turns from ``spindle_angle_rad``
-    through ``step_angle_rad`` (> 0) during the step; flute j trails it by ``2 pi j/N``.  The
-    average is exact (the integral of :func:`flute_force_integral` over the engaged part of the
-    step), so the force the twin applies carries the same impulse as the continuous model,
-    whatever the timestep.
+    ``k`` is :meth:`CuttingCoefficients.as_array`.  Flute 0's tip turns from
+    ``spindle_angle_rad`` through ``step_angle_rad`` (> 0) during the step; flute j trails it by
+    ``2 pi j/N``.  A helical flute's edge at height ``z`` above the bottom of the cut lags its
+    tip by ``lag_rad z/a`` (``lag_rad = 2 a tan(helix)/D``; 0: straight flutes).  The average is
+    exact, so the force the twin applies carries the same impulse as the continuous model,
+    whatever the timestep: straight flutes integrate :func:`flute_force_integral` over the
+    engaged part of the step; helical ones integrate the flute's force
+    ``a/lag [Q(clip(phi)) - Q(clip(phi - lag))]`` (at unit depth; the integral over the
+    discs ``dz`` turned into one over their angles) once more, over the step
+    (:func:`_clipped_double_integral`), the edge's whole turns (``lag`` over 2 pi) taken at once.
     """
     fx = fy = fz = 0.0
     two_pi = 2.0 * math.pi
     pitch = two_pi / n_flutes
+    if lag_rad * n_flutes < 1e-6:  # straight flutes (within 1 urad of lag per flute pitch)
+        for j in range(n_flutes):
+            start = (spindle_angle_rad - j * pitch) % two_pi
+            for shift in (0.0, -two_pi):  # the step may wrap past 2 pi into the next revolution
+                lo = max(start + shift, phi_st)
+                hi = min(start + shift + step_angle_rad, phi_ex)
+                if hi > lo:
+                    qh = flute_force_integral(k, axial_depth_mm, feed_per_tooth_mm, hi)
+                    ql = flute_force_integral(k, axial_depth_mm, feed_per_tooth_mm, lo)
+                    fx += qh[0] - ql[0]
+                    fy += qh[1] - ql[1]
+                    fz += qh[2] - ql[2]
+        return fx / step_angle_rad, fy / step_angle_rad, fz / step_angle_rad
+    per_rad = axial_depth_mm / lag_rad  # depth per radian of lag (mm/rad)
+    turns = math.floor(lag_rad / two_pi)
+    rest = lag_rad - turns * two_pi
+    if turns > 0:  # each whole turn of the edge sweeps every angle once: the arc's whole force
+        qh = flute_force_integral(k, 1.0, feed_per_tooth_mm, phi_ex)
+        ql = flute_force_integral(k, 1.0, feed_per_tooth_mm, phi_st)
+        whole = n_flutes * turns * per_rad
+        fx, fy, fz = whole * (qh[0] - ql[0]), whole * (qh[1] - ql[1]), whole * (qh[2] - ql[2])
+    if rest <= 0.0:
+        return fx, fy, fz
+    c = feed_per_tooth_mm
+    scale = per_rad / step_angle_rad
     for j in range(n_flutes):
         start = (spindle_angle_rad - j * pitch) % two_pi
-        for shift in (0.0, -two_pi):  # the step may wrap past 2 pi into the next revolution
-            lo = max(start + shift, phi_st)
-            hi = min(start + shift + step_angle_rad, phi_ex)
-            if hi > lo:
-                qh = flute_force_integral(k, axial_depth_mm, feed_per_tooth_mm, hi)
-                ql = flute_force_integral(k, axial_depth_mm, feed_per_tooth_mm, lo)
-                fx += qh[0] - ql[0]
-                fy += qh[1] - ql[1]
-                fz += qh[2] - ql[2]
-    return fx / step_angle_rad, fy / step_angle_rad, fz / step_angle_rad
+        # the arc's copies one revolution apart that the swept angles [start - rest, start + step] meet
+        for m in range(
+            math.floor((start - rest - phi_ex) / two_pi), math.floor((start + step_angle_rad - phi_st) / two_pi) + 1
+        ):
+            u = start - m * two_pi
+            g1 = _clipped_double_integral(k, c, phi_st, phi_ex, u + step_angle_rad)
+            g0 = _clipped_double_integral(k, c, phi_st, phi_ex, u)
+            h1 = _clipped_double_integral(k, c, phi_st, phi_ex, u + step_angle_rad - rest)
+            h0 = _clipped_double_integral(k, c, phi_st, phi_ex, u - rest)
+            fx += scale * (g1[0] - g0[0] - h1[0] + h0[0])
+            fy += scale * (g1[1] - g0[1] - h1[1] + h0[1])
+            fz += scale * (g1[2] - g0[2] - h1[2] + h0[2])
+    return fx, fy, fz
 
 
 def _window(start_s: float, stop_s: float | None, timestep_s: float = 0.0) -> tuple[float, float]:
@@ -193,6 +269,8 @@ class EndMilling:
     spindle_phase_rad : float or None
         Flute 0's immersion angle at t = 0; None draws it from ``seed``.
     seed : int
+    helix_deg : float
+        Helix angle of the flutes (deg); 0: straight flutes.
     """
 
     spindle_rpm: float
@@ -206,12 +284,15 @@ class EndMilling:
     stop_s: float | None = None
     spindle_phase_rad: float | None = None
     seed: int = 0
+    helix_deg: float = 0.0
 
     def __post_init__(self):
         _check_cutter(self.spindle_rpm, self.n_flutes)
         for name in ("diameter_mm", "axial_depth_mm"):
             if not getattr(self, name) > 0:
                 raise TwinInputError(name, getattr(self, name), "must be > 0")
+        if not 0.0 <= self.helix_deg < MAX_HELIX_DEG:
+            raise TwinInputError("helix_deg", self.helix_deg, f"must be in [0, {MAX_HELIX_DEG})")
         immersion_angles(self.radial_depth_mm, self.diameter_mm, self.mode)
         _window(self.start_s, self.stop_s)
 
@@ -242,6 +323,7 @@ class EndMilling:
                 **dict(zip(("K_tc", "K_rc", "K_ac", "K_te", "K_re", "K_ae"), self.coefficients.as_array())),
                 "n_flutes": int(self.n_flutes),
                 "axial_depth_mm": self.axial_depth_mm,
+                "lag_rad": self.axial_depth_mm * helix_lag_rad_per_mm(self.helix_deg, self.diameter_mm),
                 "phi_st": phi_st,
                 "phi_ex": phi_ex,
                 "omega": 2.0 * math.pi * self.spindle_rpm / 60.0,
@@ -334,6 +416,7 @@ END_MILLING_SLOTS = (
     "K_ae",
     "n_flutes",
     "axial_depth_mm",
+    "lag_rad",
     "phi_st",
     "phi_ex",
     "omega",
@@ -347,22 +430,27 @@ END_MILLING_SLOTS = (
 )
 AVERAGE_FORCE_SLOTS = ("k_il", "k_c", "harmonic_fraction", "omega", "phase", "lo", "hi")
 #: A part program's milling (:class:`twin.process.machining.ProgramMilling`): then the workpiece
-#: Jacobian (2 x nq), each tool's ``K_tc .. K_ae, n_flutes`` (7 values), and the engagement table
-#: of ``n_table`` rows of :data:`PM_COLUMNS`, one every ``table_period`` seconds.
+#: Jacobian (2 x nq), each tool's :data:`PM_TOOL_COLUMNS`, and the engagement table of
+#: ``n_table`` rows of :data:`PM_COLUMNS`, one every ``table_period`` seconds.
 PROGRAM_MILLING_SLOTS = ("n_tools", "table_period", "n_table", "dt", "n_hist", "n_jac")
+#: A tool's values: its coefficients, flutes and helix lag per depth (:func:`helix_lag_rad_per_mm`).
+PM_TOOL_COLUMNS = ("K_tc", "K_rc", "K_ac", "K_te", "K_re", "K_ae", "n_flutes", "lag_rad_per_mm")
 #: The table's columns: the two engaged arcs (rad) each with its mean axial depth (mm), spindle
 #: speed (rad/s), spindle angle at the row's start (rad), tool index.
 PM_COLUMNS = ("phi_st1", "phi_ex1", "depth1_mm", "phi_st2", "phi_ex2", "depth2_mm", "omega", "angle", "tool")
 _PM = {name: i for i, name in enumerate(PROGRAM_MILLING_SLOTS)}
 PM_N_TOOLS, PM_PERIOD, PM_N_TABLE, PM_DT = _PM["n_tools"], _PM["table_period"], _PM["n_table"], _PM["dt"]
 PM_N_HIST, PM_N_JAC, PM_JACOBIAN, PM_WIDTH = _PM["n_hist"], _PM["n_jac"], len(PROGRAM_MILLING_SLOTS), len(PM_COLUMNS)
+PM_TOOL_WIDTH, PM_TOOL_FLUTES = len(PM_TOOL_COLUMNS), PM_TOOL_COLUMNS.index("n_flutes")
+PM_TOOL_LAG = PM_TOOL_COLUMNS.index("lag_rad_per_mm")
 _EM = {name: i for i, name in enumerate(END_MILLING_SLOTS)}
 _AF = {name: i for i, name in enumerate(AVERAGE_FORCE_SLOTS)}
 # the kernels' slot indices (module constants: numba freezes them)
-EM_K, EM_N_FLUTES, EM_DEPTH, EM_PHI_ST, EM_PHI_EX = (
+EM_K, EM_N_FLUTES, EM_DEPTH, EM_LAG, EM_PHI_ST, EM_PHI_EX = (
     _EM["K_tc"],
     _EM["n_flutes"],
     _EM["axial_depth_mm"],
+    _EM["lag_rad"],
     _EM["phi_st"],
     _EM["phi_ex"],
 )
@@ -431,14 +519,14 @@ def _on_workpiece(fx, fy, fz, ux, uy, out):  # pragma: no cover - compiled
 def _end_milling(par, state, qpos, t, out):  # pragma: no cover - compiled
     """Add one step's mechanistic milling force on the workpiece (world frame, N) to ``out``."""
     k = par[EM_K : EM_K + 6]
-    n_flutes, a, phi_st, phi_ex = int(par[EM_N_FLUTES]), par[EM_DEPTH], par[EM_PHI_ST], par[EM_PHI_EX]
+    n_flutes, a, lag, phi_st, phi_ex = int(par[EM_N_FLUTES]), par[EM_DEPTH], par[EM_LAG], par[EM_PHI_ST], par[EM_PHI_EX]
     omega, phase0, dt = par[EM_OMEGA], par[EM_PHASE0], par[EM_DT]
     lag_lo, frac, lo, hi, n = int(par[EM_LAG_LO]), par[EM_LAG_FRAC], par[EM_LO], par[EM_HI], int(par[EM_N_HIST])
     i, hist = _record_position(par[EM_JACOBIAN:].reshape((2, -1)), qpos, state, n)
     if not (lo <= t < hi):
         return
     c_m, ux, uy = _chip(hist, i, n, lag_lo, frac, state)
-    fx, fy, fz = step_tool_forces_N(k, n_flutes, a, c_m * 1e3, phi_st, phi_ex, phase0 + omega * t, omega * dt)
+    fx, fy, fz = step_tool_forces_N(k, n_flutes, a, c_m * 1e3, phi_st, phi_ex, phase0 + omega * t, omega * dt, lag)
     _on_workpiece(fx, fy, fz, ux, uy, out)
 
 
@@ -450,16 +538,17 @@ def _program_milling(par, state, qpos, t, out):  # pragma: no cover - compiled
     n_tools, period, n_table = int(par[PM_N_TOOLS]), par[PM_PERIOD], int(par[PM_N_TABLE])
     dt, n, n_jac = par[PM_DT], int(par[PM_N_HIST]), int(par[PM_N_JAC])
     jac = par[PM_JACOBIAN : PM_JACOBIAN + n_jac].reshape((2, -1))
-    tools = par[PM_JACOBIAN + n_jac : PM_JACOBIAN + n_jac + 7 * n_tools].reshape((n_tools, 7))
-    table = par[PM_JACOBIAN + n_jac + 7 * n_tools :].reshape((n_table, PM_WIDTH))
+    tools_end = PM_JACOBIAN + n_jac + PM_TOOL_WIDTH * n_tools
+    tools = par[PM_JACOBIAN + n_jac : tools_end].reshape((n_tools, PM_TOOL_WIDTH))
+    table = par[tools_end:].reshape((n_table, PM_WIDTH))
     i, hist = _record_position(jac, qpos, state, n)
     row = min(max(int(t / period), 0), n_table - 1)
     omega = table[row, 6]
     if (table[row, 2] <= 0.0 and table[row, 5] <= 0.0) or omega <= 0.0:
         return
     tool = int(table[row, 8])
-    k = tools[tool, :6]
-    n_flutes = int(tools[tool, 6])
+    k = tools[tool, :PM_TOOL_FLUTES]
+    n_flutes, lag_per_mm = int(tools[tool, PM_TOOL_FLUTES]), tools[tool, PM_TOOL_LAG]
     lag_steps = 2.0 * math.pi / (omega * n_flutes) / dt
     lag_lo = int(lag_steps)
     c_m, ux, uy = _chip(hist, i, n, lag_lo, lag_steps - lag_lo, state)
@@ -468,7 +557,7 @@ def _program_milling(par, state, qpos, t, out):  # pragma: no cover - compiled
     for arc in range(2):
         st, ex, a = table[row, 3 * arc], table[row, 3 * arc + 1], table[row, 3 * arc + 2]
         if ex > st and a > 0.0:
-            gx, gy, gz = step_tool_forces_N(k, n_flutes, a, c_m * 1e3, st, ex, angle, omega * dt)
+            gx, gy, gz = step_tool_forces_N(k, n_flutes, a, c_m * 1e3, st, ex, angle, omega * dt, a * lag_per_mm)
             fx, fy, fz = fx + gx, fy + gy, fz + gz
     _on_workpiece(fx, fy, fz, ux, uy, out)
 
@@ -579,6 +668,7 @@ class EndMillingSpec(DisturbanceSpecBase):
     stop_s: PositiveFloat | None = Field(None, description="the cut stops, s (default: never)")
     spindle_phase_rad: float | None = Field(None, description="None: drawn from the seed")
     seed: int | None = Field(None, ge=0, description="default: the scenario's seed")
+    helix_deg: float = Field(0.0, ge=0.0, lt=MAX_HELIX_DEG, description="helix angle of the flutes, deg (0: straight)")
 
 
 class AverageForceSpec(DisturbanceSpecBase):
@@ -599,17 +689,18 @@ class AverageForceSpec(DisturbanceSpecBase):
 def _end_milling_from(spec: EndMillingSpec, axis_names: list[str], seed: int, field: str) -> EndMilling:
     coefficients = spec.coefficients.applied_to(spec.material)
     return EndMilling(
-        spec.spindle_rpm,
-        spec.n_flutes,
-        spec.diameter_mm,
-        spec.axial_depth_mm,
-        spec.radial_depth_mm,
-        spec.mode,
-        coefficients,
-        spec.start_s,
-        spec.stop_s,
-        spec.spindle_phase_rad,
-        seed,
+        spindle_rpm=spec.spindle_rpm,
+        n_flutes=spec.n_flutes,
+        diameter_mm=spec.diameter_mm,
+        axial_depth_mm=spec.axial_depth_mm,
+        radial_depth_mm=spec.radial_depth_mm,
+        mode=spec.mode,
+        coefficients=coefficients,
+        start_s=spec.start_s,
+        stop_s=spec.stop_s,
+        spindle_phase_rad=spec.spindle_phase_rad,
+        seed=seed,
+        helix_deg=spec.helix_deg,
     )
 
 

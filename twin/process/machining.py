@@ -33,7 +33,16 @@ from pydantic import Field, PositiveFloat, model_validator
 
 from twin.errors import TwinInputError
 from twin.numba_cache import configure as configure_numba_cache
-from twin.process.cutting import MAX_FLUTES, CoefficientsSpec
+from twin.process.cutting import (
+    MAX_FLUTES,
+    MAX_HELIX_DEG,
+    MIN_SPINDLE_RPM,
+    PM_COLUMNS,
+    PROGRAM_MILLING,
+    PROGRAM_MILLING_SLOTS,
+    CoefficientsSpec,
+    helix_lag_rad_per_mm,
+)
 from twin.process.materials import MATERIALS, CuttingCoefficients
 from twin.spec import StrictSpec
 
@@ -142,7 +151,9 @@ class ToolSpec(StrictSpec):
         None, description="length of the cutting edge from the tip (mm); material above it is not cut by the flutes"
     )
     shank_diameter_mm: PositiveFloat | None = Field(
-        None, description="diameter of the shank above the flutes (mm); not used yet: the shank is taken as the cutter"
+        None,
+        description="diameter of the shank above the flutes (mm; default the cutter's): material within it above "
+        "the flute length rubs",
     )
     max_ramp_deg: float = Field(
         90.0, ge=0.0, le=90.0, description="steepest descent into material (deg): 90 plunges (centre cutting), 0 none"
@@ -151,7 +162,7 @@ class ToolSpec(StrictSpec):
         None, description="the tool maker's feed per tooth range [min, max] (mm); outside it is a warning"
     )
     helix_deg: float = Field(
-        0.0, ge=0.0, lt=60.0, description="helix angle (deg); the straight-flute force kernel does not use it yet"
+        0.0, ge=0.0, lt=MAX_HELIX_DEG, description="helix angle of the flutes (deg); 0: straight flutes"
     )
     # the names of the materials table (pydantic evaluates the Literal at run time; mypy cannot)
     material: Literal[tuple(MATERIALS)] = Field(  # type: ignore[valid-type]
@@ -510,11 +521,31 @@ def cut_path(heights, x0, y0, res, pos, radius, corner):  # pragma: no cover - c
 
 
 @njit(cache=True)
-def _engage(pos, vel, radius, corner, flute, heights, x0, y0, res, top, bottom, step, out):  # pragma: no cover
+def _highest_in_disc(grid, cx, cy, r):  # pragma: no cover - compiled
+    """The highest material (m) of the cells of ``grid`` whose centres lie within ``r`` (m) of
+    (cx, cy); -inf if none."""
+    heights, x0, y0, res = grid[0], grid[1], grid[2], grid[3]
+    nx, ny = heights.shape
+    best = -np.inf
+    for j in range(max(int((cy - r - y0) / res), 0), min(int((cy + r - y0) / res) + 1, ny)):
+        dy = y0 + (j + 0.5) * res - cy
+        if abs(dy) > r:
+            continue
+        w = math.sqrt(r * r - dy * dy)
+        for i in range(
+            max(math.ceil((cx - w - x0) / res - 0.5), 0), min(math.floor((cx + w - x0) / res - 0.5), nx - 1) + 1
+        ):
+            best = max(best, heights[i, j])
+    return best
+
+
+@njit(cache=True)
+def _engage(pos, vel, radius, corner, flute, shank, heights, x0, y0, res, top, bottom, step, out):  # pragma: no cover
     """The engagement table ``out`` (n, :data:`COLUMNS`, angles in rad, lengths in mm) along
-    tool tips ``pos`` (n, 3, m) moving at ``vel`` (n, 3), tool radius, corner radius and flute
-    length ``radius``, ``corner``, ``flute`` (n, m), the spindle turning or not; cuts
-    ``heights`` (m) as it goes: each sample is read before the tool's surface there is cut."""
+    tool tips ``pos`` (n, 3, m) moving at ``vel`` (n, 3), tool radius, corner radius, flute
+    length and shank radius ``radius``, ``corner``, ``flute``, ``shank`` (n, m; a shank of 0:
+    the cutter's), the spindle turning or not; cuts ``heights`` (m) as it goes: each sample is
+    read before the tool's surface there is cut."""
     n = pos.shape[0]
     n_steps = round(math.pi / step) + 1
     extent = np.zeros(n_steps)
@@ -541,11 +572,13 @@ def _engage(pos, vel, radius, corner, flute, heights, x0, y0, res, top, bottom, 
         # though it removes the material under the tool)
         if math.hypot(vel[k, 0], vel[k, 1]) > MOVING_M_PER_S:
             _side_engagement((path, k, cz), (r, rc, flute[k]), grid, n_steps, step, extent, out[k])
+        if shank[k] > 0.0 and cz + flute[k] < top:  # a shank of its own: the material within it
+            out[k, 8] = max(out[k, 8], (_highest_in_disc(grid, cx, cy, shank[k]) - cz - flute[k]) * 1e3)
         _cut_sample(heights, x0, y0, res, CUT_MARGIN_CELLS, pos, radius, corner, k)
 
 
 def engagement_table(
-    position_m, velocity_m_per_s, radius_m, height_map: HeightMap, corner_m=None, flute_m=None
+    position_m, velocity_m_per_s, radius_m, height_map: HeightMap, corner_m=None, flute_m=None, shank_m=None
 ) -> np.ndarray:
     """The engagement along a planned path (see the module docstring), shape (n, 10):
     :data:`COLUMNS`, angles in rad, lengths in mm.  Cuts ``height_map`` as it goes, whether the
@@ -561,11 +594,15 @@ def engagement_table(
     corner_m, flute_m : ndarray (n,) or None
         The tool's corner radius (m; 0 a flat end mill, the radius a ball) and flute length
         (m); None: flat, and flutes longer than any depth.
+    shank_m : ndarray (n,) or None
+        The radius of the tool's shank above the flutes (m; 0 or None: the cutter's radius).
+        Material within it above the flute length is ``over_flutes_mm``.
     """
     n = len(position_m)
     radius = np.ascontiguousarray(radius_m, float)
     corner = np.zeros(n) if corner_m is None else np.ascontiguousarray(corner_m, float)
     flute = np.full(n, np.inf) if flute_m is None else np.ascontiguousarray(flute_m, float)
+    shank = np.zeros(n) if shank_m is None else np.ascontiguousarray(shank_m, float)
     out = np.zeros((n, len(COLUMNS)))
     _engage(
         np.ascontiguousarray(position_m, float),
@@ -573,6 +610,7 @@ def engagement_table(
         radius,
         corner,
         flute,
+        shank,
         height_map.heights,
         height_map.x0_m,
         height_map.y0_m,
@@ -616,7 +654,6 @@ class ProgramMilling:
 
     def kernel_arrays(self, machine) -> tuple[int, np.ndarray, np.ndarray]:
         """``(PROGRAM_MILLING, params, state)`` for :func:`twin.process.cutting.workpiece_forces`."""
-        from twin.process.cutting import MIN_SPINDLE_RPM, PM_COLUMNS, PROGRAM_MILLING, PROGRAM_MILLING_SLOTS
 
         dt = machine.model.opt.timestep
         omega = 2.0 * math.pi * self.spindle_rpm / 60.0
@@ -627,7 +664,12 @@ class ProgramMilling:
         n_hist = int(lag) + 2
         rows = np.column_stack([self.table[:, :6], omega, angle, self.tool_index]).astype(float)
         assert rows.shape[1] == len(PM_COLUMNS)
-        tools = [np.concatenate([t.cutting_coefficients().as_array(), [t.n_flutes]]) for t in self.tools]
+        tools = [
+            np.concatenate(
+                [t.cutting_coefficients().as_array(), [t.n_flutes, helix_lag_rad_per_mm(t.helix_deg, t.diameter_mm)]]
+            )
+            for t in self.tools
+        ]
         jacobian = np.asarray(machine.workpiece_jacobian(), float).ravel()
         head = dict(zip(PROGRAM_MILLING_SLOTS, (len(self.tools), self.period_s, len(rows), dt, n_hist, jacobian.size)))
         params = np.concatenate([[float(head[name]) for name in PROGRAM_MILLING_SLOTS], jacobian, *tools, rows.ravel()])
@@ -713,9 +755,10 @@ def program_milling(plan, stock: StockSpec, tool: ToolSpec | None, tools: list[T
     radius = np.array([t.diameter_mm for t in chosen])[index] * 0.5e-3
     corner = np.array([t.corner_radius_mm for t in chosen])[index] * 1e-3
     flute = np.array([math.inf if t.flute_length_mm is None else t.flute_length_mm for t in chosen])[index] * 1e-3
+    shank = np.array([t.shank_diameter_mm or 0.0 for t in chosen])[index] * 0.5e-3
     rpm = plan.per_sample(plan.spindle_rpm, 0.0)
     height_map = HeightMap(stock, max(t.diameter_mm for t in chosen) + 1.0)
-    table = engagement_table(plan.position, plan.velocity, radius, height_map, corner, flute)
+    table = engagement_table(plan.position, plan.velocity, radius, height_map, corner, flute, shank)
     model = ProgramMilling(table, rpm, index, chosen, plan.period_s, _spindle_phase(None, seed))
     warnings, total = machining_warnings(plan, table, chosen, index, rpm, stock)
     return ProgramCut(model, table, height_map, warnings, total, radius, corner)
