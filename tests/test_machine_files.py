@@ -14,6 +14,7 @@ import pytest
 from twin.commissioning.calibration import calibrate, replay
 from twin.commissioning.frf import FrfSettings, excitation_signal, measure, peaks
 from twin.commissioning.tuning import tune
+from twin.errors import TwinInputError
 from twin.fidelity import time_response_nrmse
 from twin.machines import build, get_machine
 
@@ -22,7 +23,10 @@ MID = str(EXAMPLES / "mid_size_xy.toml")
 LINEAR = str(EXAMPLES / "linear_motor_xy.toml")
 TWIN = [sys.executable, "-m", "twin.cli"]
 RIGID = {"x_k_axial_N_per_m": math.inf, "y_k_axial_N_per_m": math.inf}
-RIGID |= {"x_k_torsion_N_m_per_rad": math.inf, "y_k_torsion_N_m_per_rad": math.inf}
+TORSION_RIGID = {
+    f"{a}_{key}": math.inf for a in "xy" for key in ("k_torsion_N_m_per_rad", "k_screw_torsion_N_m_per_rad")
+}
+RIGID |= TORSION_RIGID
 NO_COULOMB = {"x_friction_coulomb_N": 0.0, "y_friction_coulomb_N": 0.0}
 
 
@@ -69,13 +73,107 @@ def test_generated_model_masses_and_rigid_transfer_function():
     assert bm.model.ntendon == 0 and bm.model.neq == 4  # rigid: today's gear equalities only
 
 
+@pytest.mark.parametrize(
+    "overrides",
+    [
+        {},
+        RIGID,
+        {"x_k_axial_N_per_m": math.inf, "y_k_torsion_N_m_per_rad": math.inf},
+        {"x_k_torsion_N_m_per_rad": math.inf},
+    ],
+    ids=["compliant", "rigid", "mixed", "screw torsion alone"],
+)
+def test_mujoco_mass_matrix_equals_the_transfer_functions_masses(overrides):
+    """One mass budget: MuJoCo's own joint-space inertia (mj_fullM at the start) in table travel,
+    motor n^2/p^2, screw 1/p^2, table 1 (the table's slide carries all that rides on it), is the
+    chain's masses for every axis, with the rigid links merged as the chain merges them."""
+    import mujoco
+
+    machine = get_machine(MID)
+    bm = build(MID, overrides, timestep_s=2e-5)  # a rigid coupling leaves the screw's 1 kHz mode
+    p = machine.resolve(overrides)
+    data = mujoco.MjData(bm.model)
+    mujoco.mj_forward(bm.model, data)
+    full = np.zeros((bm.model.nv, bm.model.nv))
+    mujoco.mj_fullM(bm.model, data, full)
+    for a in ("x", "y"):
+        lead = p[f"{a}_screw_lead_m"] / (2 * math.pi)
+        n = p[f"{a}_gear_ratio"]
+
+        def diagonal(joint):
+            dof = bm.model.joint(joint).dofadr[0]
+            return full[dof, dof]
+
+        masses = [diagonal(f"{a}_motor") * n**2 / lead**2, diagonal(f"{a}_screw") / lead**2, diagonal(f"{a}_table")]
+        if math.isinf(p[f"{a}_k_axial_N_per_m"]):
+            masses[1:] = [masses[1] + masses[2]]
+        if math.isinf(p[f"{a}_k_torsion_N_m_per_rad"]) and math.isinf(p[f"{a}_k_screw_torsion_N_m_per_rad"]):
+            masses[:2] = [masses[0] + masses[1]]
+        np.testing.assert_allclose(machine.chain(p, a).masses_kg, masses, rtol=1e-12)
+
+
+def test_the_screws_torsion_is_in_series_with_the_coupling():
+    """k = 1 / (1/k_coupling + 1/k_screw) in the chain (in table travel, / p^2) and on the MJCF's
+    tendon; the screw's alone where the coupling is rigid; rigid only where both are."""
+    machine = get_machine(MID)
+    for overrides, expected in (
+        ({}, 1 / (1 / 5000.0 + 1 / 8.3e3)),
+        ({"x_k_torsion_N_m_per_rad": math.inf}, 8.3e3),
+        ({"x_k_screw_torsion_N_m_per_rad": math.inf}, 5000.0),
+    ):
+        p = machine.resolve(overrides)
+        lead = p["x_screw_lead_m"] / (2 * math.pi)
+        assert machine.chain(p, "x").springs_N_per_m[0] == pytest.approx(expected / lead**2, rel=1e-12)
+        model = build(MID, overrides, timestep_s=2e-5).model
+        assert model.tendon_stiffness[model.tendon("x_gear_spring").id] == pytest.approx(expected, rel=1e-12)
+    assert len(machine.chain(machine.resolve(TORSION_RIGID), "x").masses_kg) == 2
+
+
+def test_a_physics_step_too_coarse_for_the_fastest_mode_is_refused_with_the_step_that_would_do():
+    """The fastest mode is the largest |pole| of the chains (719 Hz, Y's torsion); 2 pi f h at
+    most 0.3 gives a step of at most 6.6e-5 s: 5e-5 builds, 1e-4 is refused naming the step."""
+    machine = get_machine(MID)
+    p = machine.resolve({})
+    poles = [np.abs(np.roots(machine.chain(p, a).transfer_function().den)).max() for a in "xy"]
+    fastest = max(poles) / (2 * math.pi)
+    assert machine.fastest_mode_hz(p) == pytest.approx(fastest, rel=1e-12)
+    assert 2 * math.pi * fastest * 5e-5 < 0.3 < 2 * math.pi * fastest * 1e-4
+    build(MID, timestep_s=5e-5)
+    with pytest.raises(TwinInputError) as refused:
+        build(MID, timestep_s=1e-4)
+    assert refused.value.field == "timestep_s" and f"{0.3 / (2 * math.pi * fastest):.2g} s" in str(refused.value)
+
+
+@pytest.mark.parametrize("machine", ["googol_xy", MID])
+def test_twin_mjcf_writes_the_model_the_twin_simulates(machine, tmp_path):
+    """`twin mjcf` writes the MJCF with the values in (here a heavier workpiece): MuJoCo reads it
+    back with the twin's bodies, masses and stiffnesses (to the 6 digits MuJoCo writes XML with),
+    joints, tendons and step."""
+    import mujoco
+    from typer.testing import CliRunner
+
+    from twin.cli import app
+
+    symbol = "workpiece_mass_kg" if machine == MID else "m_workpiece"
+    out = tmp_path / "model.xml"
+    result = CliRunner().invoke(app, ["mjcf", machine, "--out", str(out), "--set", f"{symbol}=31.5"])
+    assert result.exit_code == 0, result.output
+    ours = build(machine, {symbol: 31.5}).model
+    theirs = mujoco.MjModel.from_xml_path(str(out))
+    assert theirs.body("workpiece").mass[0] == pytest.approx(31.5)
+    np.testing.assert_allclose(theirs.body_subtreemass, ours.body_subtreemass, rtol=5e-6)
+    assert (theirs.njnt, theirs.ntendon, theirs.neq, theirs.nu) == (ours.njnt, ours.ntendon, ours.neq, ours.nu)
+    np.testing.assert_allclose(theirs.tendon_stiffness, ours.tendon_stiffness, rtol=5e-6)
+    assert theirs.opt.timestep == ours.opt.timestep
+
+
 def test_compliant_modes_at_the_closed_forms():
     """Axial compliance alone: a two-mass system, resonance sqrt(k (1/m + 1/M)), anti-resonance
     (motor side) sqrt(k/m): the model's poles and zeros there, the twin's time response equal to
     the 4th-order model's, and the measured peaks where the model's FRF has them, within 2 % of
     the (undamped) closed forms (the 4 % damping moves the motor-side peaks up by 1-2 %; the
     measured peak sits 0.9 % above the model FRF's, the 0.6 Hz resolution and the sampled loop)."""
-    overrides = {"x_k_torsion_N_m_per_rad": math.inf, "y_k_torsion_N_m_per_rad": math.inf, **NO_COULOMB}
+    overrides = {**TORSION_RIGID, **NO_COULOMB}
     machine = get_machine(MID)
     p = machine.resolve(overrides)
     chain = machine.chain(p, "x")

@@ -1,4 +1,5 @@
-"""Command line: ``twin run | demo | gcode | fidelity | frf | calibrate | tune | reproduce | sweep | list | bench``.
+"""Command line: ``twin run | demo | gcode | fidelity | frf | calibrate | tune | mjcf | reproduce | sweep``,
+``twin list | bench``.
 
 Bad input (unknown machine, controller or field, invalid values, malformed TOML) prints one
 line ``error: <field> = <value>: <reason>`` on stderr and exits with code 2; a diverging
@@ -624,6 +625,25 @@ def tune(
     if out is not None:
         out.write_text(tuning.scenario_text(result, where), encoding="utf-8")
         typer.echo(f"scenario written to {out} (run it: twin run {out})", err=as_json)
+
+
+@app.command()
+@_guard
+def mjcf(
+    machine: str = typer.Argument(..., help="A machine (twin list) or a machine file (FILE.toml)"),
+    out: Path = typer.Option(..., "--out", help="The MJCF to write (.xml)"),
+    sets: list[str] = typer.Option(None, "--set", help="Parameter override SYMBOL=VALUE"),
+    timestep: float = typer.Option(None, "--timestep", help="Physics step, s (default the machine's)"),
+):
+    """Write the MuJoCo model (MJCF) the twin simulates for a machine, its values written in,
+    for use in one's own MuJoCo code."""
+    from twin.machines import get_machine
+
+    _check_output("--out", out, ".xml")
+    if timestep is not None and not (1e-7 <= timestep <= 1e-2):
+        raise TwinInputError("--timestep", timestep, "must be in [1e-7, 0.01] s")
+    out.write_text(get_machine(machine).mjcf(_parse_sets(sets or []), timestep))
+    typer.echo(f"wrote {out}")
 
 
 @app.command("list")

@@ -357,6 +357,13 @@ class Machine:
             spec.joint(axis.table_joint).frictionloss = params.get(f"F_coul_{axis.name}", 0.0)
         return spec
 
+    def mjcf(self, overrides: dict[str, float] | None = None, timestep_s: float | None = None) -> str:
+        """The MJCF the twin simulates, with the parameter values written in, as XML text (for
+        the user's own MuJoCo code: ``mujoco.MjModel.from_xml_string``)."""
+        spec = self.make_spec(self.resolve(overrides), timestep_s)
+        spec.compile()  # MjSpec writes XML of a compiled spec
+        return spec.to_xml()
+
     def build(self, overrides: dict[str, float] | None = None, timestep_s: float | None = None) -> BuiltMachine:
         """Apply parameters with MjSpec, compile, and derive the reference model."""
         params = self.resolve(overrides)

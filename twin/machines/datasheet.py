@@ -56,6 +56,9 @@ from twin.spec import StrictSpec, read_toml
 
 #: Density of screw steel (kg/m^3), for a screw inertia the file does not give.
 STEEL_DENSITY_KG_PER_M3 = 7850.0
+#: The largest 2 pi f h (fastest mode f, physics step h) a machine file may be simulated at:
+#: MuJoCo integrates its springs explicitly (semi-implicit Euler: 17 deg of phase a step at 0.3).
+MAX_MODE_STEP_RAD = 0.3
 
 
 def _geom(body, kind: str, size, rgba, **placement) -> None:
@@ -142,8 +145,11 @@ class BallScrewSpec(AxisSpec):
     gear_ratio: PositiveFloat = Field(1.0, description="motor revolutions per screw revolution")
     gear_inertia_kg_m2: NonNegativeFloat = Field(0.0, description="gearbox or pulleys, at the motor shaft")
     coupling_inertia_kg_m2: NonNegativeFloat = 0.0
-    k_torsion_N_m_per_rad: Stiffness = math.inf
+    k_torsion_N_m_per_rad: Stiffness = Field(math.inf, description="the coupling's torsional stiffness")
     c_torsion_N_m_s_per_rad: NonNegativeFloat = 0.0
+    k_screw_torsion_N_m_per_rad: Stiffness = Field(
+        math.inf, description="the screw's own torsion up to the nut, G J / L (in series with the coupling's)"
+    )
     screw_lead_m: PositiveFloat = Field(description="table travel per screw revolution")
     screw_diameter_m: PositiveFloat
     screw_length_m: PositiveFloat
@@ -342,7 +348,7 @@ class DatasheetMachine(Machine):
                     f"{a.upper()} axis ({ax.type}): {key}" + (f", {field.description}" if field.description else ""),
                     positive=positive,
                     nonnegative=not positive,
-                    infinite=key.startswith(("k_axial", "k_torsion")),
+                    infinite=key.startswith(("k_axial", "k_torsion", "k_screw_torsion")),
                 )
         return out
 
@@ -374,7 +380,7 @@ class DatasheetMachine(Machine):
         lead = params[f"{a}_screw_lead_m"] / (2.0 * math.pi)  # m/rad
         n = params[f"{a}_gear_ratio"]
         coupling = params[f"{a}_coupling_inertia_kg_m2"]
-        k_t, k_a = params[f"{a}_k_torsion_N_m_per_rad"], params[f"{a}_k_axial_N_per_m"]
+        k_t, k_a = self.torsion_N_m_per_rad(params, a), params[f"{a}_k_axial_N_per_m"]
         motor = (
             (params[f"{a}_motor_inertia_kg_m2"] + params[f"{a}_gear_inertia_kg_m2"]) * n**2 + coupling / 2
         ) / lead**2
@@ -421,7 +427,7 @@ class DatasheetMachine(Machine):
             if self.spec.axes[a].type != "ball_screw":
                 continue
             lead = params[f"{a}_screw_lead_m"] / (2.0 * math.pi)
-            if math.isinf(params[f"{a}_k_torsion_N_m_per_rad"]):
+            if math.isinf(self.torsion_N_m_per_rad(params, a)):
                 pairs.append((f"{a}_motor", f"{a}_screw", params[f"{a}_gear_ratio"]))
             if math.isinf(params[f"{a}_k_axial_N_per_m"]):
                 pairs.append((f"{a}_screw", f"{a}_table", 1.0 / lead))
@@ -430,12 +436,45 @@ class DatasheetMachine(Machine):
 
     # -- the MJCF ---------------------------------------------------------------------------
 
+    @staticmethod
+    def torsion_N_m_per_rad(params, a: str) -> float:
+        """The drive train's torsional stiffness of axis ``a`` (N m/rad): the coupling's and the
+        screw's own in series; infinite where both are rigid."""
+        compliance = sum(1.0 / params[f"{a}_{key}"] for key in ("k_torsion_N_m_per_rad", "k_screw_torsion_N_m_per_rad"))
+        return math.inf if compliance == 0.0 else 1.0 / compliance
+
+    def fastest_mode_hz(self, params) -> float:
+        """The highest natural frequency (Hz) of the axes' chains (0 where every link is rigid)."""
+        fastest = 0.0
+        for a in self.spec.machine.stacking:
+            den = self.chain(params, a).transfer_function().den
+            if len(den) > 3:
+                fastest = max(fastest, float(np.abs(np.roots(den)).max()) / (2.0 * math.pi))
+        return fastest
+
     def make_spec(self, params, timestep_s: float | None = None) -> mujoco.MjSpec:
-        """The machine's MJCF, generated (see the module docstring)."""
+        """The machine's MJCF, generated (see the module docstring).
+
+        Raises
+        ------
+        TwinInputError
+            Where the physics step is too coarse for the fastest mode (``2 pi f h`` over
+            :data:`MAX_MODE_STEP_RAD`), with the step that would do.
+        """
+        step = timestep_s if timestep_s is not None else self.spec.machine.timestep_s
+        fastest = self.fastest_mode_hz(params)
+        if 2.0 * math.pi * fastest * step > MAX_MODE_STEP_RAD:
+            longest = MAX_MODE_STEP_RAD / (2.0 * math.pi * fastest)
+            raise TwinInputError(
+                "timestep_s",
+                step,
+                f"too coarse for the drive train's {fastest:.0f} Hz mode ({self.path.name}): "
+                f"2 pi f h must be at most {MAX_MODE_STEP_RAD}, a step of at most {longest:.2g} s",
+            )
         spec = mujoco.MjSpec()
         spec.modelname = self.name
         spec.compiler.autolimits = True
-        spec.option.timestep = timestep_s if timestep_s is not None else self.spec.machine.timestep_s
+        spec.option.timestep = step
         spec.option.integrator = mujoco.mjtIntegrator.mjINT_EULER
         spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_GRAVITY | mujoco.mjtDisableBit.mjDSBL_CONTACT
         parent = spec.worldbody
@@ -500,7 +539,7 @@ class DatasheetMachine(Machine):
         lead = params[f"{a}_screw_lead_m"] / (2.0 * math.pi)
         coupling = params[f"{a}_coupling_inertia_kg_m2"]
         nut = params[f"{a}_nut_mass_kg"]
-        k_torsion, k_axial = params[f"{a}_k_torsion_N_m_per_rad"], params[f"{a}_k_axial_N_per_m"]
+        k_torsion, k_axial = self.torsion_N_m_per_rad(params, a), params[f"{a}_k_axial_N_per_m"]
         # half the coupling on each side of a compliant coupling; the nut on the screw's side of a
         # compliant nut (as inertia nut p^2), on the table where the nut is rigid
         motor_inertia = params[f"{a}_motor_inertia_kg_m2"] + params[f"{a}_gear_inertia_kg_m2"]
@@ -523,7 +562,9 @@ class DatasheetMachine(Machine):
         _geom(rotor, "cylinder", [0.03], (0.2, 0.2, 0.25), fromto=list(np.r_[-0.06 * e, 0.06 * e]))
         marker = 0.061 * e + [0, 0, 0.018]
         _geom(rotor, "box", [0.004, 0.004, 0.0105], (1, 0.45, 0.1), name=f"{a}_motor_rotor_marker", pos=list(marker))
-        mass = screw_mass_kg(2 * radius, length)
+        # a compliant nut turns with the screw (its inertia above) and travels with the axes below
+        # with it: its mass on the screw's body, so that each slide carries what the chain's table does
+        mass = screw_mass_kg(2 * radius, length) + (nut if math.isfinite(k_axial) else 0.0)
         screw = self._body(parent, f"{a}_screw", (0, 0, z - 0.05), mass, about_axis(screw_inertia, mass))
         screw.add_joint(name=f"{a}_screw", type=mujoco.mjtJoint.mjJNT_HINGE, axis=list(e))
         _geom(screw, "cylinder", [radius], (0.7, 0.7, 0.7), fromto=list(np.r_[-length / 2 * e, length / 2 * e]))
