@@ -484,6 +484,7 @@ def frf(
     axis: str = typer.Option("x", "--axis", help="The axis to excite"),
     loop: str = typer.Option("velocity", "--loop", help="open | velocity | position"),
     sensor: str = typer.Option("table", "--sensor", help="motor | table: whose position is measured"),
+    feedback: str = typer.Option("motor", "--feedback", help="motor | table: the encoder the loop closes on"),
     excitation: str = typer.Option("prbs", "--excitation", help="prbs | chirp | multisine"),
     amplitude: float = typer.Option(1.0, "--amplitude", help="Excitation amplitude, V (peak)"),
     duration: float = typer.Option(16.0, "--duration", help="Recorded time, s"),
@@ -499,14 +500,24 @@ def frf(
 
     _check_output("--rrd", rrd, ".rrd")
     _check_folder(plots)
-    settings = FrfSettings(axis, loop, sensor, excitation, amplitude, duration, f_max)  # type: ignore[arg-type]
+    settings = FrfSettings(
+        axis=axis,
+        loop=loop,  # type: ignore[arg-type]
+        sensor=sensor,  # type: ignore[arg-type]
+        excitation=excitation,  # type: ignore[arg-type]
+        amplitude_V=amplitude,
+        duration_s=duration,
+        f_max_hz=f_max,
+        feedback=feedback,  # type: ignore[arg-type]
+    )
     result = measure(machine, settings, _parse_sets(sets or []))
     run = result.pop("run")
     if as_json:
         typer.echo(json.dumps(result, indent=1, allow_nan=False))
     else:
         typer.echo(
-            f"{machine}: axis {axis}, {loop} loop, {sensor} sensor, {excitation} {amplitude:g} V, "
+            f"{machine}: axis {axis}, {loop} loop on the {feedback} encoder, {sensor} sensor, "
+            f"{excitation} {amplitude:g} V, "
             f"{len(result['frequency_hz'])} lines {result['frequency_hz'][0]:.2f}-{result['frequency_hz'][-1]:.0f} Hz"
         )
         for label, key in (("resonances", "resonances_hz"), ("anti-resonances", "antiresonances_hz")):

@@ -77,6 +77,9 @@ class SensorSpec(StrictSpec):
     )
     noise_std_m: float | list[float] = 0.0
     velocity: Literal["backward_difference", "tachometer"] = "backward_difference"
+    feedback: Literal["table", "motor"] = Field(
+        "table", description="the encoder on the table (a linear scale) or on each axis's motor (a semi-closed loop)"
+    )
 
 
 #: The ``[[disturbances]]`` entries: one spec per registered kind (:mod:`twin.process`), the same way.
@@ -394,6 +397,7 @@ def prepare(scn: Scenario):
         np.array(machine.sensor_gains),
         scn.seed,
         scn.sensors.velocity,
+        scn.sensors.feedback,
     )
     disturbances = [_disturbance(d, i, names, scn.seed) for i, d in enumerate(scn.disturbances)]
     if scn.inspect and scn.stock is None:

@@ -2,7 +2,8 @@
 
 An excitation ``d`` (PRBS, logarithmic chirp or random-phase multisine, volts) is added to one
 axis's drive input, with the loop open or closed around the axis (a velocity loop: derivative
-feedback of the position; a position loop: PD), and the plant's FRF from drive input ``u`` (V)
+feedback of the position; a position loop: PD; on the motor's encoder by default, as a drive
+closes it, collocated with the drive), and the plant's FRF from drive input ``u`` (V)
 to the sensor's position (m; the table's, or the motor's in table travel) is estimated from the
 recorded signals with Welch's averaged cross spectra (``scipy.signal.csd``):
 
@@ -27,9 +28,10 @@ from scipy import signal
 
 from controllers.blocks import error_feedback, open_loop, sum_of
 from controllers.lti import SisoTf
-from twin.errors import TwinInputError
+from twin.errors import SimulationDiverged, TwinInputError
 from twin.machines import BuiltMachine, build
 from twin.references import Step
+from twin.sim.drive import FEEDBACK, Encoder
 from twin.sim.runner import simulate
 
 LOOPS = ("open", "velocity", "position")
@@ -64,6 +66,9 @@ class FrfSettings:
         Highest frequency reported (Hz), at most 0.4 / the sample period.
     seed : int
         Random seed of the PRBS and multisine.
+    feedback : {"motor", "table"}
+        The encoder the loop closes on: the motor's (in table travel, as a drive closes its
+        velocity loop; an axis without a motor has its table's only) or the table's.
     """
 
     axis: str = "x"
@@ -74,6 +79,7 @@ class FrfSettings:
     duration_s: float = 16.0
     f_max_hz: float = 1000.0
     seed: int = 1
+    feedback: Literal["motor", "table"] = "motor"
 
     def check(self) -> None:
         """Refuse a value out of range, naming its option."""
@@ -81,6 +87,7 @@ class FrfSettings:
             ("--loop", self.loop, LOOPS),
             ("--sensor", self.sensor, SENSORS),
             ("--excitation", self.excitation, EXCITATIONS),
+            ("--feedback", self.feedback, FEEDBACK),
         ):
             if value not in allowed:
                 raise TwinInputError(name, value, f"must be one of {', '.join(allowed)}")
@@ -188,10 +195,14 @@ def peaks(freqs: np.ndarray, mag_db: np.ndarray, coherence: np.ndarray) -> tuple
         for i in idx:
             if coherence[i] < MIN_COHERENCE or not inside[i] or not 3 <= i < len(freqs) - 3:
                 continue
-            i = i - 1 + int(np.argmax(sign * mag_db[i - 1 : i + 2]))  # the raw magnitude's extreme
-            a, b, c = sign * mag_db[i - 1 : i + 2]
-            shift = 0.5 * (a - c) / (a - 2 * b + c) if a - 2 * b + c < 0 else 0.0  # parabola's vertex
-            at.append(float(freqs[i] + shift * (freqs[1] - freqs[0])))
+            # the unsmoothed extreme, above the rigid body's slope as found (the raw magnitude
+            # falls 2 dB a line at 5 Hz: its extreme is not the mode's)
+            i = i - 1 + int(np.argmax(sign * trend[i - 1 : i + 2]))
+            a, b, c = sign * trend[i - 1 : i + 2]
+            # the vertex of the parabola through the line and its neighbours, where the line is
+            # their extreme (then within half a line of it; else the line itself)
+            shift = 0.5 * (a - c) / (a - 2 * b + c) if b >= max(a, c) and a - 2 * b + c < 0 else 0.0
+            at.append(float(freqs[i] + min(max(shift, -0.5), 0.5) * (freqs[1] - freqs[0])))
         found.append(at)
     return found[0], found[1]
 
@@ -240,7 +251,20 @@ def measure(machine: str, settings: FrfSettings, overrides: dict[str, float] | N
         settings.excitation, n - settle, dt, settings.amplitude_V, settings.f_max_hz, settings.seed
     )
     controller = sum_of([*_loop_controller(bm, settings, dt, k), open_loop(d, dt, names, name="excitation")])
-    run = simulate(bm, controller, Step(0.0, n_axes=len(names)), n * dt, dt, progress=False, record_every=1)
+    encoder = Encoder(np.zeros(len(names)), np.zeros(len(names)), np.array(bm.sensor_gains), feedback=settings.feedback)
+    try:
+        run = simulate(
+            bm, controller, Step(0.0, n_axes=len(names)), n * dt, dt, encoder=encoder, progress=False, record_every=1
+        )
+    except SimulationDiverged as exc:
+        advice = "--loop open" if settings.feedback == "motor" or bm.axes[k].motor_joint is None else "--feedback motor"
+        diverged = SimulationDiverged(
+            exc.sim_time_s,
+            f"{exc.reason} (the measurement's {settings.loop} loop on the {settings.feedback} "
+            f"encoder is unstable on this axis: try {advice})",
+        )
+        diverged.result = exc.result
+        raise diverged from None
     u = run.u_applied_V[settle:, k]
     motor = bm.axes[k].motor_joint
     if settings.sensor == "motor" and motor is not None:
@@ -263,6 +287,11 @@ def measure(machine: str, settings: FrfSettings, overrides: dict[str, float] | N
     mag_db, model_db = 20 * np.log10(np.abs(g)), 20 * np.log10(np.abs(model))
     resonances, antiresonances = peaks(freqs, mag_db, coherence)
     model_res, model_anti = model_modes(bm, k, settings.sensor)
+    # a dip of a sensor away from the drive (the table of a ball screw) is no anti-resonance:
+    # a non-collocated transfer function has no zeros there
+    collocated = settings.sensor == "motor" or bm.axes[k].motor_joint is None
+    if not collocated:
+        antiresonances = []
     good = coherence >= MIN_COHERENCE
     return {
         "machine": machine,
@@ -278,6 +307,10 @@ def measure(machine: str, settings: FrfSettings, overrides: dict[str, float] | N
         "antiresonances_hz": antiresonances,
         "model_resonances_hz": model_res,
         "model_antiresonances_hz": model_anti,
+        "antiresonances_note": None
+        if collocated
+        else "the table's sensor is not collocated with the drive: "
+        "its dips are not anti-resonances (measure --sensor motor)",
         "coherent_share": float(good.mean()),
         "max_model_error_db": float(np.abs(mag_db - model_db)[good].max()) if good.any() else None,
         "run": run,

@@ -79,6 +79,10 @@ class Drive:
         return np.zeros((self.delay_ticks + 2, self.n_axes))
 
 
+#: Where an encoder may sit: the table (a linear scale) or the motor (a semi-closed loop).
+FEEDBACK = ("table", "motor")
+
+
 @dataclass
 class Encoder:
     """Quantized, noisy position measurement.
@@ -95,7 +99,10 @@ class Encoder:
         Seed of the noise generator.
     velocity : {"backward_difference", "tachometer"}
         Velocity measurement: backward difference of the encoder (the papers' drives) or an
-        ideal tachometer on the table.
+        ideal tachometer where the encoder is.
+    feedback : {"table", "motor"}
+        Where the encoder is: on the table (a linear scale) or on the motor of each axis that
+        has one (in table travel: motor angle x lead / gear ratio; a semi-closed loop).
     """
 
     resolution_m: np.ndarray
@@ -103,6 +110,7 @@ class Encoder:
     gains: np.ndarray
     seed: int = 0
     velocity: str = "backward_difference"
+    feedback: str = "table"
 
     def __post_init__(self):
         for name in ("resolution_m", "noise_std_m"):
@@ -113,6 +121,8 @@ class Encoder:
         self.gains = np.asarray(self.gains, float)
         if self.velocity not in ("backward_difference", "tachometer"):
             raise TwinInputError("sensors.velocity", self.velocity, "must be 'backward_difference' or 'tachometer'")
+        if self.feedback not in FEEDBACK:
+            raise TwinInputError("sensors.feedback", self.feedback, f"must be one of {', '.join(FEEDBACK)}")
 
     def noise_source(self):
         """``draw(n_ticks)`` -> the next ``n_ticks`` rows of the run's measurement noise (m),

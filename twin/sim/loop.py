@@ -55,11 +55,14 @@ class MjViews(NamedTuple):
 
 
 class Sensor(NamedTuple):
-    """The encoders: table qpos and dof indices per axis, gains, resolution (m), tachometer or
-    backward difference, the control period (s), the runaway limit (m), the last reading per
-    axis (updated in place) and the preview ticks on the bus."""
+    """The encoders: the tables' qpos indices per axis (runaway check, recorded error), the qpos
+    and dof indices each axis's encoder reads (its table, or its motor: a semi-closed loop),
+    their gains (to table travel), resolution (m), tachometer or backward difference, the
+    control period (s), the runaway limit (m), the last reading per axis (updated in place) and
+    the preview ticks on the bus."""
 
     q_idx: np.ndarray
+    encoder_q_idx: np.ndarray
     v_idx: np.ndarray
     gains: np.ndarray
     resolution: np.ndarray
@@ -195,6 +198,7 @@ def compiled_ticks(
     out of a tuple)."""
     qpos, qvel, qacc, ctrl, act, xfrc = mj.qpos, mj.qvel, mj.qacc, mj.ctrl, mj.actuator_force, mj.xfrc_applied
     q_idx, v_idx, gains, resolution = sensor.q_idx, sensor.v_idx, sensor.gains, sensor.resolution
+    encoder_q_idx = sensor.encoder_q_idx
     tachometer, period_s, runaway_m = sensor.tachometer, sensor.period_s, sensor.runaway_m
     meas_prev, preview = sensor.meas_prev, sensor.preview
     u_idx, act_idx, limit, substeps = drive.u_idx, drive.act_idx, drive.limit, drive.substeps
@@ -218,7 +222,7 @@ def compiled_ticks(
             row,
             qpos,
             qvel,
-            q_idx,
+            encoder_q_idx,
             v_idx,
             gains,
             resolution,
@@ -252,6 +256,7 @@ def python_ticks(k0, k1, model, data, program, mj, sensor, drive, force, chunk, 
     ``mujoco.mj_step``; the simulation time is ``data.time``."""
     qpos, qvel, qacc, ctrl, act, xfrc = mj.qpos, mj.qvel, mj.qacc, mj.ctrl, mj.actuator_force, mj.xfrc_applied
     q_idx, v_idx, gains, resolution = sensor.q_idx, sensor.v_idx, sensor.gains, sensor.resolution
+    encoder_q_idx = sensor.encoder_q_idx
     tachometer, period_s, runaway_m = sensor.tachometer, sensor.period_s, sensor.runaway_m
     meas_prev, preview = sensor.meas_prev, sensor.preview
     u_idx, act_idx, limit, substeps = drive.u_idx, drive.act_idx, drive.limit, drive.substeps
@@ -273,7 +278,7 @@ def python_ticks(k0, k1, model, data, program, mj, sensor, drive, force, chunk, 
             row,
             qpos,
             qvel,
-            q_idx,
+            encoder_q_idx,
             v_idx,
             gains,
             resolution,
