@@ -253,6 +253,49 @@ def test_calibration_names_a_combination_it_cannot_identify(tmp_path):
         "x_table_mass_kg": "the data determine only its combination with y_table_mass_kg",
         "y_table_mass_kg": "the data determine only its combination with x_table_mass_kg",
     }
+    assert r["fitted"] == {} and r["parameters"]["x_table_mass_kg"] == 90.0  # both held at nominal
+
+
+def test_calibration_holds_a_combination_together_and_fits_the_rest_again(tmp_path):
+    """X's table 23 % heavy, and the fit asked for X's and Y's table masses and X's viscous
+    friction on an X trace: both masses are held at nominal together (not one of them left at
+    the value fitted with the other) and the friction is fitted again without them, so the fit
+    index rises from the nominal's."""
+    dt, n = 1e-4, 3000
+    u = excitation_signal("prbs", n, dt, 2.0, 50.0, 3)
+    y = replay(build(MID, {"x_table_mass_kg": 110.7}), dt, np.c_[u, np.zeros(n)], np.zeros(2))[:, 0]
+    y = y + np.random.default_rng(1).normal(0.0, 2e-7, n)
+    path = tmp_path / "trace.parquet"
+    pq.write_table(pa.table({"time_s": np.arange(n) * dt, "u_x_V": u, "pos_x_m": y}), path)
+    r = calibrate(MID, path, ["x_table_mass_kg", "y_table_mass_kg", "x_friction_viscous_N_s_per_m"])
+    assert set(r["unidentifiable"]) == {"x_table_mass_kg", "y_table_mass_kg"}
+    assert list(r["fitted"]) == ["x_friction_viscous_N_s_per_m"]
+    assert r["parameters"]["x_table_mass_kg"] == 90.0 and r["parameters"]["y_table_mass_kg"] == 45.0
+    assert r["solver"]["converged"]
+    assert r["fit_index_pct"]["after"] > r["fit_index_pct"]["before"]
+
+
+def test_calibration_recovers_a_compliant_hidden_variant(tmp_path):
+    """The issue's hidden variant: table +23 %, axial stiffness -31 %, viscous friction 210 N s/m
+    (Coulomb 15 N as the file), 0.2 um noise, a 500 Hz PRBS. From the nominal alone the solve
+    converged at +62 % stiffness with a 0.2 % standard error (a local minimum: the response is
+    not convex in a stiffness); with the stiffness's starts it recovers all three within 0.5 %
+    and the fit index of the truth itself."""
+    hidden = {"x_table_mass_kg": 110.7, "x_k_axial_N_per_m": 1.0005e8, "x_friction_viscous_N_s_per_m": 210.0}
+    dt, n = 1e-4, 6000
+    u = np.zeros((n, 2))
+    u[:, 0] = excitation_signal("prbs", n, dt, 2.0, 500.0, 3)
+    y = replay(build(MID, hidden), dt, u, np.zeros(2))[:, 0] + np.random.default_rng(0).normal(0.0, 2e-7, n)
+    path = tmp_path / "trace.parquet"
+    pq.write_table(pa.table({"time_s": np.arange(n) * dt, "u_x_V": u[:, 0], "pos_x_m": y}), path)
+    r = calibrate(MID, path, list(hidden))
+    assert r["solver"]["converged"] and r["unidentifiable"] == {}
+    for name, value in hidden.items():
+        assert r["fitted"][name] == pytest.approx(value, rel=0.005)
+    truth = replay(build(MID, hidden), dt, u, np.zeros(2))[:, :1]
+    from twin.metrics import fit_index
+
+    assert r["fit_index_pct"]["after"] == pytest.approx(float(fit_index(y[:, None], truth)[0]), abs=0.01)
 
 
 @pytest.mark.parametrize(
@@ -435,6 +478,33 @@ def test_calibration_from_a_measured_frf(tmp_path):
     for name, value in hidden.items():
         assert r["fitted"][name] == pytest.approx(value, rel=0.01)
     assert r["fit_index_pct"]["after"] > r["fit_index_pct"]["before"]
+
+
+def test_a_motor_sensor_frf_is_fitted_through_the_motors_transfer_function(tmp_path):
+    """A motor-side FRF of mid_size_xy with X's table 23 % heavy and its nut 31 % soft (the
+    model's with the drive's delay, 1 % noise): --sensor motor fits it through the motor's transfer function and
+    recovers both within 1 %; through the table's (the old behaviour) the fit drifts to a 125 kg
+    table on a near-rigid nut, its fit index 94.5 % against 98.6 %."""
+    from twin.commissioning.frf import sensor_plant
+
+    hidden = {"x_table_mass_kg": 110.7, "x_k_axial_N_per_m": 1.0005e8}
+    g = sensor_plant(build(MID, hidden), 0, "motor")
+    f = np.geomspace(2.0, 1000.0, 400)
+    s = 2j * np.pi * f
+    h = np.exp(-s * 2e-4) * np.polyval(g.num, s) / np.polyval(g.den, s)  # the file's 0.2 ms drive delay
+    h = h * (1 + 0.01 * np.random.default_rng(3).standard_normal(len(f)))
+    path = tmp_path / "frf.parquet"
+    pq.write_table(
+        pa.table({"frequency_hz": f, "magnitude_db": 20 * np.log10(np.abs(h)), "phase_deg": np.degrees(np.angle(h))}),
+        path,
+    )
+    motor = calibrate(MID, path, list(hidden), sensor="motor")
+    for name, value in hidden.items():
+        assert motor["fitted"][name] == pytest.approx(value, rel=0.01)
+    table = calibrate(MID, path, list(hidden), sensor="table")
+    assert table["fitted"]["x_table_mass_kg"] > 1.1 * hidden["x_table_mass_kg"]  # 125 kg
+    assert table["fitted"]["x_k_axial_N_per_m"] > 10 * hidden["x_k_axial_N_per_m"]  # no mode where it looks
+    assert table["fit_index_pct"]["after"] < motor["fit_index_pct"]["after"] - 3
 
 
 @pytest.mark.parametrize(

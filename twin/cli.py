@@ -547,6 +547,7 @@ def calibrate(
     trace: Path = typer.Option(..., "--trace", help="Measured time trace or FRF, .csv or .parquet"),
     fit: str = typer.Option(..., "--fit", help="Parameters to fit, SYM,SYM"),
     axis: str = typer.Option("x", "--axis", help="The axis an FRF was measured on"),
+    sensor: str = typer.Option("table", "--sensor", help="motor | table: where an FRF was measured"),
     sets: list[str] = typer.Option(None, "--set", help="Parameter override SYMBOL=VALUE before the fit"),
     as_json: bool = typer.Option(False, "--json", help="Print the result as JSON"),
     out: Path = typer.Option(None, "--out", help="Write the calibrated machine file (.toml; machine files only)"),
@@ -561,17 +562,25 @@ def calibrate(
     if out is not None and not is_machine_file(machine):
         raise TwinInputError("--out", str(out), "writes a machine file: calibrate a machine file (FILE.toml)")
     symbols = [s.strip() for s in fit.split(",") if s.strip()]
-    result = fit_machine(machine, trace, symbols, _parse_sets(sets or []), axis, progress=sys.stderr.isatty())
+    result = fit_machine(
+        machine, trace, symbols, _parse_sets(sets or []), axis, progress=sys.stderr.isatty(), sensor=sensor
+    )
     if as_json:
         typer.echo(json.dumps(result, indent=2, allow_nan=False))
     else:
         what = "twin runs" if result["kind"] == "time" else "model evaluations"
         typer.echo(f"{machine}: {result['kind']} trace {trace}, {result['evaluations']} {what}")
+        solver = result["solver"]
+        typer.echo(
+            f"  {'converged' if solver['converged'] else 'NOT converged'}: {solver['termination']} "
+            f"(optimality {solver['optimality']:.2g}"
+            + (f", {solver['rejected_diverged']} diverging trials rejected)" if solver["rejected_diverged"] else ")")
+        )
         for s, v in result["fitted"].items():
             unit = get_machine(machine).parameters[s].unit
-            typer.echo(
-                f"  {s} = {v:.6g} {unit} +- {result['standard_errors'][s]:.2g} (nominal {result['nominal'][s]:.6g})"
-            )
+            error = result["standard_errors"].get(s)
+            spread = f" +- {error:.2g}" if error is not None else " (no standard error: the fit did not converge)"
+            typer.echo(f"  {s} = {v:.6g} {unit}{spread} (nominal {result['nominal'][s]:.6g})")
         for s, why in result["unidentifiable"].items():
             typer.echo(f"  {s}: not identifiable, kept at {result['nominal'][s]:.6g}: {why}")
         fi = result["fit_index_pct"]

@@ -8,13 +8,19 @@ replays the measured input open loop on the MuJoCo model built with the trial va
 nonlinear terms (Coulomb friction) are fitted as well as the linear ones.
 
 A measured FRF (``frequency_hz``, ``magnitude_db``, ``phase_deg``, one axis: ``--axis``) is fitted
-through the machine's transfer function (with its delay), the residual the complex logarithm
-of model over measurement (log-magnitude and phase in radians).
+through the machine's transfer function to the sensor it was measured at (``--sensor``: the
+table's or the motor's), with its delay, the residual the complex logarithm of model over
+measurement (log-magnitude and phase in radians).
 
 Standard errors come from the Jacobian at the solution: cov = s^2 (J^T J)^-1 with s^2 the
 residual variance; a parameter the data cannot identify (a Jacobian column near zero or
 nearly dependent on the others: relative standard error above 50 %) is named, and the fit
-keeps its nominal value. The fit index is seed 001's NRMSE fit, 100 (1 - ||y - y_model|| /
+keeps its nominal value: every such parameter (a combination's partners together) is held at
+nominal and the others are fitted again without them.  ``solver`` reports whether the solve
+converged (scipy's termination, the evaluations out of :data:`MAX_EVALUATIONS`, the final
+first-order optimality); standard errors are given only for a converged fit.  A trial the
+twin diverges on is a rejected step (a huge residual), counted in ``rejected_diverged``.
+The fit index is seed 001's NRMSE fit, 100 (1 - ||y - y_model|| /
 ||y - mean(y)||), before (nominal values) and after.
 """
 
@@ -28,7 +34,8 @@ from scipy import optimize
 from tqdm import tqdm
 
 from controllers.blocks import open_loop
-from twin.errors import TwinInputError
+from twin.commissioning.frf import SENSORS, sensor_plant
+from twin.errors import SimulationDiverged, TwinInputError
 from twin.machines import BuiltMachine, build, get_machine
 from twin.metrics import fit_index
 from twin.references import Step
@@ -41,6 +48,14 @@ MIN_DURATION_S = 0.05
 MAX_SAMPLES = 2_000_000
 #: Relative standard error above which a parameter counts as not identifiable.
 MAX_RELATIVE_ERROR = 0.5
+#: Correlation of two estimates over which a parameter not determined is named with the other.
+MAX_CORRELATION = 0.95
+#: Most model evaluations of one least-squares solve (finite differences included).
+MAX_EVALUATIONS = 200
+#: Multiples of a fitted stiffness's nominal value the solve also starts from.
+STIFFNESS_STARTS = (0.5, 0.7, 1.0, 1.4, 2.0)
+#: The residual of a trial the twin diverges on (each entry; measured ones are about 1).
+DIVERGED_RESIDUAL = 1e6
 
 
 def read_table(path: str | Path) -> dict[str, np.ndarray]:
@@ -169,6 +184,7 @@ def calibrate(
     overrides: dict[str, float] | None = None,
     axis: str = "x",
     progress: bool = False,
+    sensor: str = "table",
 ) -> dict:
     """Fit ``fit`` (parameter symbols) to a measured trace or FRF (see the module docstring).
 
@@ -186,6 +202,8 @@ def calibrate(
     TwinInputError
         A bad machine, parameter, file or column (one line).
     """
+    if sensor not in SENSORS:
+        raise TwinInputError("--sensor", sensor, f"must be one of {', '.join(SENSORS)}")
     spec = get_machine(machine)
     fit = _fit_parameters(spec, fit)
     base = spec.resolve(overrides)
@@ -204,7 +222,7 @@ def calibrate(
 
     if "frequency_hz" in columns:
         kind = "frf"
-        residual, measured_vector, model_vector = _frf_problem(machine, columns, names, axis, values)
+        residual, measured_vector, model_vector = _frf_problem(machine, columns, names, axis, values, sensor)
     else:
         kind = "time"
         dt, u, y, measured = time_trace(columns, names)
@@ -228,43 +246,58 @@ def calibrate(
     x0 = np.maximum(nominal / scale, lower + 0.01)  # a value on its bound starts just inside
     runs = tqdm(desc=f"calibrating {', '.join(fit)}", unit="run", disable=not progress, leave=False)
     evaluations = []
+    rejected = []
+    size: list[int] = []  # the residual's length, from the first (nominal) evaluation
 
     def counted(x):
-        """The residual; each evaluation (a twin run for a time trace) counted, and on the bar."""
+        """The residual; each evaluation (a twin run for a time trace) counted, and on the bar.
+        A trial that makes the twin diverge, or needs a shorter physics step than the
+        machine's, is a step the solver rejects (a residual far larger than any it has
+        seen), not the end of the fit."""
         evaluations.append(1)
         runs.update(1)
-        return residual(x)
+        if not size:
+            r = residual(x)
+            size.append(len(r))
+            return r
+        try:
+            return residual(x)
+        except SimulationDiverged:
+            rejected.append(1)
+        except TwinInputError as exc:
+            if exc.field != "timestep_s":  # a trial stiffness too high for the physics step: rejected too
+                raise
+            rejected.append(1)
+        return np.full(size[0], DIVERGED_RESIDUAL)
 
     try:
         before = model_vector(x0)
-        sol = optimize.least_squares(counted, x0, bounds=(lower, np.inf), diff_step=1e-4, x_scale="jac", max_nfev=60)
+        stiff = np.array([spec.parameters[s].infinite for s in fit])
+        sol = min(
+            (_solve(counted, start, lower, np.ones(len(fit), bool)) for start in _starts(x0, stiff)),
+            key=lambda solution: solution.cost,
+        )
+        unidentifiable = _unidentifiable(sol.jac, sol.x, scale, fit, sol.cost)
+        fitted_x, free = sol.x.copy(), np.array([s not in unidentifiable for s in fit])
+        fitted_x[~free] = (nominal / scale)[~free]  # held at nominal, all together
+        if unidentifiable and free.any():  # the others fitted again with them held
+            sol = _solve(counted, fitted_x, lower, free)
+            fitted_x = sol.x
     except TwinInputError as exc:
         raise TwinInputError(exc.field, exc.value, f"{exc.reason} (during the fit)") from None
     finally:
         runs.close()
-    J = sol.jac
-    dof = max(1, J.shape[0] - len(fit))
-    s2 = 2 * sol.cost / dof
-    _, sv, vt = np.linalg.svd(J, full_matrices=False)
-    # finite differences of a simulation resolve about 1e-5 of the largest direction
-    tiny = sv < 1e-5 * sv.max() if sv.max() > 0 else np.ones_like(sv, bool)
-    inv_sv2 = np.where(tiny, 0.0, 1.0 / np.where(tiny, 1.0, sv) ** 2)
-    cov = (vt.T * inv_sv2) @ vt * s2
-    std = np.sqrt(np.maximum(np.diag(cov), 0.0)) * scale
-    fitted_x = sol.x.copy()
-    unidentifiable = {}
-    null_space = vt[tiny]  # directions the data do not see
-    for i, s in enumerate(fit):
-        rel = std[i] / abs(fitted_x[i] * scale[i]) if fitted_x[i] else np.inf
-        if not np.abs(J[:, i]).max() > 0:
-            unidentifiable[s] = "the data do not depend on it"
-        elif null_space.size and np.abs(null_space[:, i]).max() > 0.1:
-            partners = [fit[j] for j in range(len(fit)) if j != i and np.abs(null_space[:, j]).max() > 0.1]
-            unidentifiable[s] = "the data determine only its combination with " + (", ".join(partners) or "itself")
-        elif rel > MAX_RELATIVE_ERROR:
-            unidentifiable[s] = f"the data do not determine it (relative standard error {100 * rel:.0f} %)"
-    for s in unidentifiable:
-        fitted_x[fit.index(s)] = nominal[fit.index(s)] / scale[fit.index(s)]
+    solver = {
+        "converged": bool(sol.status > 0),
+        "termination": sol.message,
+        "evaluations": int(sol.nfev),
+        "max_evaluations": MAX_EVALUATIONS,
+        "optimality": float(sol.optimality),  # the final gradient's largest component, scaled
+        "rejected_diverged": len(rejected),
+    }
+    std = np.full(len(fit), np.nan)
+    if free.any():
+        std[free] = _standard_errors(sol.jac, sol.cost) * scale[free]
     after = model_vector(fitted_x)
     target = measured_vector()
     fitted = {s: float(fitted_x[i] * scale[i]) for i, s in enumerate(fit) if s not in unidentifiable}
@@ -281,12 +314,104 @@ def calibrate(
         "kind": kind,
         "fitted": fitted,
         "nominal": {s: float(base[s]) for s in fit},
-        "standard_errors": {s: float(std[i]) for i, s in enumerate(fit) if s not in unidentifiable},
+        "standard_errors": (
+            {s: float(std[i]) for i, s in enumerate(fit) if s not in unidentifiable} if solver["converged"] else {}
+        ),
         "unidentifiable": unidentifiable,
+        "solver": solver,
         "fit_index_pct": fit_index_pct,
         "evaluations": len(evaluations),
         "parameters": {k: float(v) for k, v in values(fitted_x).items()},
     }
+
+
+def _starts(x0: np.ndarray, stiff: np.ndarray) -> list[np.ndarray]:
+    """Where the solve starts: ``x0``, and each fitted stiffness, one at a time, at
+    :data:`STIFFNESS_STARTS` times its nominal value (the solution of least cost is kept).  A
+    drive train's response is not convex in its stiffness (a mode moved past the excitation's
+    lines rings out of phase): from the nominal alone, a stiffness 31 % low came back 62 % high."""
+    starts = [x0]
+    for i in np.flatnonzero(stiff):
+        for factor in STIFFNESS_STARTS:
+            if factor != 1.0:
+                x = x0.copy()
+                x[i] *= factor
+                starts.append(x)
+    return starts
+
+
+def _solve(residual, x0: np.ndarray, lower: np.ndarray, free: np.ndarray):
+    """Least squares over the ``free`` entries of ``x`` (in units of their scale), the others held
+    at ``x0``: trust-region reflective, a finite-difference Jacobian, at most
+    :data:`MAX_EVALUATIONS` evaluations.  The solution's ``x`` is the whole vector."""
+
+    def partial(z):
+        x = x0.copy()
+        x[free] = z
+        return residual(x)
+
+    sol = optimize.least_squares(
+        partial, x0[free], bounds=(lower[free], np.inf), diff_step=1e-4, x_scale="jac", max_nfev=MAX_EVALUATIONS
+    )
+    x = x0.copy()
+    x[free] = sol.x
+    sol.x = x
+    return sol
+
+
+def _covariance(jac: np.ndarray, cost: float) -> np.ndarray:
+    """The parameters' covariance (in units of their scale) from the Jacobian at the solution:
+    s^2 (J^T J)^-1, s^2 the residual variance, through the SVD with the directions finite
+    differences cannot resolve (singular values under 1e-5 of the largest) left out."""
+    s2 = 2 * cost / max(1, jac.shape[0] - jac.shape[1])
+    _, sv, vt = np.linalg.svd(jac, full_matrices=False)
+    tiny = sv < 1e-5 * sv.max() if sv.max() > 0 else np.ones_like(sv, bool)
+    inv_sv2 = np.where(tiny, 0.0, 1.0 / np.where(tiny, 1.0, sv) ** 2)
+    return (vt.T * inv_sv2) @ vt * s2
+
+
+def _standard_errors(jac: np.ndarray, cost: float) -> np.ndarray:
+    """Standard errors (in units of the scale): the square roots of :func:`_covariance`'s diagonal."""
+    return np.sqrt(np.maximum(np.diag(_covariance(jac, cost)), 0.0))
+
+
+def _unidentifiable(jac: np.ndarray, x: np.ndarray, scale: np.ndarray, fit: list[str], cost: float) -> dict:
+    """The parameters the data do not determine, with the reason (see the module docstring): a
+    Jacobian column of zeros, a direction of the Jacobian's null space it takes part in, or a
+    relative standard error over :data:`MAX_RELATIVE_ERROR`, a combination where its estimate
+    correlates over :data:`MAX_CORRELATION` with others'; a combination's partners are flagged
+    with it."""
+    _, sv, vt = np.linalg.svd(jac, full_matrices=False)
+    tiny = sv < 1e-5 * sv.max() if sv.max() > 0 else np.ones_like(sv, bool)
+    null_space = vt[tiny]  # directions the data do not see
+    cov = _covariance(jac, cost)
+    std = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = np.nan_to_num(cov / np.outer(std, std))
+    combination = "the data determine only its combination with "
+    out = {}
+    for i, s in enumerate(fit):
+        rel = std[i] / abs(x[i]) if x[i] else np.inf
+        partners = []
+        if not np.abs(jac[:, i]).max() > 0:
+            out[s] = "the data do not depend on it"
+            continue
+        if null_space.size and np.abs(null_space[:, i]).max() > 0.1:
+            partners = [fit[j] for j in range(len(fit)) if j != i and np.abs(null_space[:, j]).max() > 0.1]
+        elif rel > MAX_RELATIVE_ERROR:
+            partners = [fit[j] for j in range(len(fit)) if j != i and abs(corr[i, j]) > MAX_CORRELATION]
+            if not partners:
+                out[s] = f"the data do not determine it (relative standard error {100 * rel:.0f} %)"
+                continue
+        else:
+            continue
+        out[s] = combination + (", ".join(partners) or "itself")
+    for s, why in list(out.items()):  # a combination's partners are held with it
+        if why.startswith(combination):
+            for partner in why.removeprefix(combination).split(", "):
+                if partner in fit and partner not in out:
+                    out[partner] = combination + s
+    return out
 
 
 def _real(values: np.ndarray) -> np.ndarray:
@@ -297,8 +422,9 @@ def _real(values: np.ndarray) -> np.ndarray:
     return values
 
 
-def _frf_problem(machine, columns, names, axis, values):
-    """Residual and vectors of an FRF fit (see the module docstring)."""
+def _frf_problem(machine, columns, names, axis, values, sensor):
+    """Residual and vectors of an FRF fit (see the module docstring), through the transfer
+    function to the ``sensor`` it was measured at (the table's or the motor's)."""
     import control
 
     needed = ("frequency_hz", "magnitude_db", "phase_deg")
@@ -325,7 +451,7 @@ def _frf_problem(machine, columns, names, axis, values):
 
     def model_vector(x):
         bm = build(machine, values(x))
-        g = bm.plant[k][k]
+        g = sensor_plant(bm, k, sensor)
         s = 2j * math.pi * f
         return control.tf(list(g.num), list(g.den))(s) * np.exp(-s * bm.delay_s)
 
