@@ -34,6 +34,16 @@ def test_a_peak_is_refined_within_half_a_line_of_the_modes_maximum(f0_hz, zeta):
     assert antiresonances == []
 
 
+def test_a_slow_bend_is_no_resonance_and_a_mode_beside_it_is():
+    """A broad 6 dB hump over a decade around 15 Hz (what Coulomb friction leaves at low
+    frequency: the twin's mid_size_xy X read a resonance at 15.3 Hz there) is not prominent
+    within a factor 1.5 of its frequency; the 175 Hz mode beside it is found."""
+    f = LINE_HZ * np.arange(2, 1600)
+    hump = 6.0 * np.exp(-(np.log10(f / 15.0) ** 2) / (2 * 0.4**2))
+    resonances, _ = peaks(f, _resonance_on_a_rigid_body(f, 175.0, 0.02) + hump, np.ones_like(f))
+    assert resonances == [pytest.approx(175.0, abs=LINE_HZ)]
+
+
 def test_the_heavy_axis_is_measured_with_the_loop_on_the_motor_encoder():
     """A 200 kg table with a 1.99e-3 kg m^2 motor (the issue's case): the default velocity loop
     on the table's scale is unstable (non-collocated) and the error says what to try; on the

@@ -45,6 +45,8 @@ MAX_DURATION_S = 120.0
 SEGMENT = 16384
 #: Peaks of the magnitude this prominent (dB) and this coherent count as (anti-)resonances.
 PEAK_PROMINENCE_DB = 3.0
+#: ... within this factor of its frequency on either side.
+PEAK_SPAN = 1.5
 MIN_COHERENCE = 0.9
 
 
@@ -184,7 +186,8 @@ def sensor_plant(bm: BuiltMachine, axis: int, sensor: str) -> SisoTf:
 
 def peaks(freqs: np.ndarray, mag_db: np.ndarray, coherence: np.ndarray) -> tuple[list[float], list[float]]:
     """Resonances and anti-resonances (Hz): coherent local maxima and minima of the magnitude
-    above the rigid body's -40 dB/decade slope (prominence >= PEAK_PROMINENCE_DB)."""
+    above the rigid body's -40 dB/decade slope, prominent by PEAK_PROMINENCE_DB within a
+    factor PEAK_SPAN of their frequency."""
     trend = mag_db + 40.0 * np.log10(freqs)  # a rigid body is flat here
     smooth = np.convolve(np.pad(trend, 1, mode="edge"), np.ones(3) / 3, mode="valid")
     inside = (freqs > 1.02 * freqs[0]) & (freqs < 0.98 * freqs[-1])  # a peak needs both flanks
@@ -194,6 +197,16 @@ def peaks(freqs: np.ndarray, mag_db: np.ndarray, coherence: np.ndarray) -> tuple
         at = []
         for i in idx:
             if coherence[i] < MIN_COHERENCE or not inside[i] or not 3 <= i < len(freqs) - 3:
+                continue
+            # a mode stands out within its own neighbourhood: the prominence over
+            # f / PEAK_SPAN .. f x PEAK_SPAN (a slow bend of the response, as Coulomb friction
+            # leaves at low frequency, is prominent only over a decade)
+            left = (freqs >= freqs[i] / PEAK_SPAN) & (freqs < freqs[i])
+            right = (freqs > freqs[i]) & (freqs <= freqs[i] * PEAK_SPAN)
+            if not left.any() or not right.any():
+                continue
+            base = max((sign * smooth[left]).min(), (sign * smooth[right]).min())
+            if sign * smooth[i] - base < PEAK_PROMINENCE_DB:
                 continue
             # the unsmoothed extreme, above the rigid body's slope as found (the raw magnitude
             # falls 2 dB a line at 5 Hz: its extreme is not the mode's)
@@ -343,7 +356,8 @@ def write_bode(result: dict, path) -> None:
     ax_c.set_xlabel("frequency (Hz)")
     s = result["settings"]
     fig.suptitle(
-        f"{Path(result['machine']).name}: axis {s['axis']}, {s['loop']} loop, {s['sensor']} sensor, {s['excitation']}"
+        f"{Path(result['machine']).name}: axis {s['axis']}, {s['loop']} loop on the {s['feedback']} encoder, "
+        f"{s['sensor']} sensor, {s['excitation']}"
         f" (red: resonances, green: anti-resonances)",
         fontsize=10,
     )
