@@ -1,4 +1,4 @@
-"""FRF measurement details: peak refinement, collocation, the loop's encoder."""
+"""The motor's encoder in the loop (FRF measurement, semi-closed loops and their tuning) and the FRF's peaks."""
 
 import math
 from pathlib import Path
@@ -86,3 +86,22 @@ def test_a_semi_closed_loop_reads_the_motor_encoder_in_table_travel():
     np.testing.assert_allclose(run.meas_m[:, 0], motor, rtol=0, atol=1e-15)
     lag = np.abs(run.meas_m[:, 0] - run.table_position_m()[:, 0]).max()
     assert 1e-6 < lag < 1e-4
+
+
+def test_a_semi_closed_loop_is_tuned_on_the_motor_and_holds_the_table(tmp_path):
+    """`twin tune --feedback motor` on the heavy axis designs both loops on the motor's transfer
+    function (collocated: a velocity loop of 173 Hz against 30 Hz on the scale) with the
+    margins met, and bounds the table's response peak to 3 dB: on the twin the table
+    overshoots a 1 mm step by under 10 % (45 % without the bound); the scenario it writes
+    closes the loops on the motors."""
+    from twin.commissioning.tuning import GAIN_MARGIN_DB, PHASE_MARGIN_DEG, scenario_text, tune, verify
+
+    machine = str(Path(__file__).resolve().parent.parent / "examples" / "machines" / "mid_size_xy.toml")
+    heavy = {"x_table_mass_kg": 200.0, "x_motor_inertia_kg_m2": 1.99e-3}
+    motor, table = tune(machine, heavy, feedback="motor"), tune(machine, heavy)
+    x = motor["axes"]["x"]
+    assert x["phase_margin_deg"] >= PHASE_MARGIN_DEG and x["gain_margin_db"] >= GAIN_MARGIN_DB
+    assert x["velocity_loop"]["crossover_hz"] > 3 * table["axes"]["x"]["velocity_loop"]["crossover_hz"]
+    assert '[sensors]\nfeedback = "motor"' in scenario_text(motor, machine)
+    checked = verify(motor, machine, tmp_path)
+    assert checked["x"]["step_overshoot_pct"] < 10.0

@@ -601,6 +601,7 @@ def tune(
     machine: str = typer.Argument(..., help="A machine (twin list) or a machine file (FILE.toml)"),
     sets: list[str] = typer.Option(None, "--set", help="Parameter override SYMBOL=VALUE"),
     control_period: float = typer.Option(None, "--control-period", help="Control period, s (default about 0.1 ms)"),
+    feedback: str = typer.Option("table", "--feedback", help="table | motor: the encoder the loops close on"),
     as_json: bool = typer.Option(False, "--json", help="Print the design as JSON"),
     out: Path = typer.Option(None, "--out", help="Write the tuned cascade as a scenario (.toml, a 10 mm circle)"),
     check: bool = typer.Option(True, "--verify/--no-verify", help="Run a step and a circle on the twin"),
@@ -616,7 +617,7 @@ def tune(
     _check_output("--out", out, ".toml")
     if control_period is not None and not (1e-6 <= control_period <= 0.1):
         raise TwinInputError("--control-period", control_period, "must be in [1e-6, 0.1] s")
-    result = tuning.tune(machine, _parse_sets(sets or []), control_period)
+    result = tuning.tune(machine, _parse_sets(sets or []), control_period, feedback)
     where = str(Path(machine).resolve()) if is_machine_file(machine) else machine
     if check:
         with tempfile.TemporaryDirectory() as folder:
