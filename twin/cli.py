@@ -659,10 +659,11 @@ def mjcf(
     """Write the MuJoCo model (MJCF) the twin simulates for a machine, its values written in,
     for use in one's own MuJoCo code."""
     from twin.machines import get_machine
+    from twin.scenario import MAX_TIMESTEP_S, MIN_TIMESTEP_S
 
     _check_output("--out", out, ".xml")
-    if timestep is not None and not (1e-7 <= timestep <= 1e-2):
-        raise TwinInputError("--timestep", timestep, "must be in [1e-7, 0.01] s")
+    if timestep is not None and not (MIN_TIMESTEP_S <= timestep <= MAX_TIMESTEP_S):
+        raise TwinInputError("--timestep", timestep, f"must be in [{MIN_TIMESTEP_S:g}, {MAX_TIMESTEP_S:g}] s")
     out.write_text(get_machine(machine).mjcf(_parse_sets(sets or []), timestep))
     typer.echo(f"wrote {out}")
 

@@ -359,13 +359,20 @@ def _solve(residual, x0: np.ndarray, lower: np.ndarray, free: np.ndarray):
     return sol
 
 
+def _resolved_svd(jac: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The Jacobian's singular values and right singular vectors, and which singular values
+    finite differences of a simulation cannot resolve (under 1e-5 of the largest)."""
+    _, sv, vt = np.linalg.svd(jac, full_matrices=False)
+    tiny = sv < 1e-5 * sv.max() if sv.max() > 0 else np.ones_like(sv, bool)
+    return sv, vt, tiny
+
+
 def _covariance(jac: np.ndarray, cost: float) -> np.ndarray:
     """The parameters' covariance (in units of their scale) from the Jacobian at the solution:
     s^2 (J^T J)^-1, s^2 the residual variance, through the SVD with the directions finite
-    differences cannot resolve (singular values under 1e-5 of the largest) left out."""
+    differences cannot resolve left out (:func:`_resolved_svd`)."""
     s2 = 2 * cost / max(1, jac.shape[0] - jac.shape[1])
-    _, sv, vt = np.linalg.svd(jac, full_matrices=False)
-    tiny = sv < 1e-5 * sv.max() if sv.max() > 0 else np.ones_like(sv, bool)
+    sv, vt, tiny = _resolved_svd(jac)
     inv_sv2 = np.where(tiny, 0.0, 1.0 / np.where(tiny, 1.0, sv) ** 2)
     return (vt.T * inv_sv2) @ vt * s2
 
@@ -381,8 +388,7 @@ def _unidentifiable(jac: np.ndarray, x: np.ndarray, scale: np.ndarray, fit: list
     relative standard error over :data:`MAX_RELATIVE_ERROR`, a combination where its estimate
     correlates over :data:`MAX_CORRELATION` with others'; a combination's partners are flagged
     with it."""
-    _, sv, vt = np.linalg.svd(jac, full_matrices=False)
-    tiny = sv < 1e-5 * sv.max() if sv.max() > 0 else np.ones_like(sv, bool)
+    _, vt, tiny = _resolved_svd(jac)
     null_space = vt[tiny]  # directions the data do not see
     cov = _covariance(jac, cost)
     std = np.sqrt(np.maximum(np.diag(cov), 0.0))

@@ -165,7 +165,7 @@ def tune(
         raise TwinInputError("--control-period", dt, f"must be a whole multiple of the timestep {step:g} s")
     axes = {}
     for i, a in enumerate(bm.axes):
-        sensor = "motor" if feedback == "motor" and a.motor_joint else "table"
+        sensor = "motor" if a.encoder_joint(feedback) == a.motor_joint else "table"
         axes[a.name] = tune_axis(bm, i, dt, model_modes(bm, i, sensor)[0], sensor)
     return {
         "machine": machine,

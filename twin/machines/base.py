@@ -80,6 +80,11 @@ class Axis:
     motor_joint: str | None = None
     screw_joint: str | None = None
 
+    def encoder_joint(self, feedback: str) -> str:
+        """The joint this axis's encoder reads: its motor's with ``feedback = "motor"`` where it
+        has one (a semi-closed loop), else its table's."""
+        return self.motor_joint if feedback == "motor" and self.motor_joint else self.table_joint
+
 
 @dataclass(frozen=True)
 class MotionLimits:

@@ -304,7 +304,7 @@ def simulate(
     acc = loop.Accumulators(np.zeros((n_axes, 2)), np.zeros(n_axes))
     mj = loop.MjViews(data.qpos, data.qvel, data.qacc, data.ctrl, data.actuator_force, data.xfrc_applied)
     # each axis's encoder: on its table, or on its motor (in table travel) for a semi-closed loop
-    read = [a.motor_joint if encoder.feedback == "motor" and a.motor_joint else a.table_joint for a in machine.axes]
+    read = [a.encoder_joint(encoder.feedback) for a in machine.axes]
     travel = [machine.motor_travel_m_per_rad[a.name] if j == a.motor_joint else 1.0 for a, j in zip(machine.axes, read)]
     sensor = loop.Sensor(
         machine.table_qpos_indices(),
