@@ -461,6 +461,23 @@ def _side_engagement(pose, tool, grid, n_steps, step, extent, row):  # pragma: n
 
 
 @njit(cache=True)
+def _disc_rows(y0, res, ny, cy, reach):  # pragma: no cover - compiled
+    """The rows ``range(lo, hi)`` of a map (origin ``y0``, cells of ``res``, ``ny`` rows, m) a
+    disc of radius ``reach`` about ``cy`` may hold cell centres of."""
+    return max(int((cy - reach - y0) / res), 0), min(int((cy + reach - y0) / res) + 1, ny)
+
+
+@njit(cache=True)
+def _disc_columns(x0, res, nx, cx, dy, reach):  # pragma: no cover - compiled
+    """The columns ``a..b`` (inclusive; ``a > b``: none) of the cells on a row ``dy`` (m) from
+    a disc's centre ``cx`` whose centres lie within ``reach`` of it."""
+    if abs(dy) > reach:
+        return 1, 0
+    w = math.sqrt(reach * reach - dy * dy)
+    return max(math.ceil((cx - w - x0) / res - 0.5), 0), min(math.floor((cx + w - x0) / res - 0.5), nx - 1)
+
+
+@njit(cache=True)
 def _cut(heights, x0, y0, res, margin, cx, cy, cz, r, rc, crescent, px, py, pr):  # pragma: no cover - compiled
     """Lower the height map to the tool's surface at (cx, cy) with tip cz (m): every cell whose
     centre lies within the tool's radius and ``margin`` cells (the engagement's
@@ -470,24 +487,14 @@ def _cut(heights, x0, y0, res, margin, cx, cy, cz, r, rc, crescent, px, py, pr):
     (px, py) with radius pr) only the cells the disc newly covers on each row are visited."""
     nx, ny = heights.shape
     reach = r + margin * res
-    j_lo = max(int((cy - reach - y0) / res), 0)
-    j_hi = min(int((cy + reach - y0) / res) + 1, ny)
+    j_lo, j_hi = _disc_rows(y0, res, ny, cy, reach)
     for j in range(j_lo, j_hi):
         yc = y0 + (j + 0.5) * res
         dy = yc - cy
-        if abs(dy) > reach:
-            continue
-        w = math.sqrt(reach * reach - dy * dy)
-        a = max(math.ceil((cx - w - x0) / res - 0.5), 0)
-        b = min(math.floor((cx + w - x0) / res - 0.5), nx - 1)
+        a, b = _disc_columns(x0, res, nx, cx, dy, reach)
         old_a, old_b = 1, 0  # empty
         if crescent:
-            reach_old = pr + margin * res
-            dyo = yc - py
-            if abs(dyo) <= reach_old:
-                wo = math.sqrt(reach_old * reach_old - dyo * dyo)
-                old_a = math.ceil((px - wo - x0) / res - 0.5)
-                old_b = math.floor((px + wo - x0) / res - 0.5)
+            old_a, old_b = _disc_columns(x0, res, nx, px, yc - py, pr + margin * res)
         for i in range(a, b + 1):
             if old_a <= i <= old_b:
                 continue
@@ -527,14 +534,10 @@ def _highest_in_disc(grid, cx, cy, r):  # pragma: no cover - compiled
     heights, x0, y0, res = grid[0], grid[1], grid[2], grid[3]
     nx, ny = heights.shape
     best = -np.inf
-    for j in range(max(int((cy - r - y0) / res), 0), min(int((cy + r - y0) / res) + 1, ny)):
-        dy = y0 + (j + 0.5) * res - cy
-        if abs(dy) > r:
-            continue
-        w = math.sqrt(r * r - dy * dy)
-        for i in range(
-            max(math.ceil((cx - w - x0) / res - 0.5), 0), min(math.floor((cx + w - x0) / res - 0.5), nx - 1) + 1
-        ):
+    j_lo, j_hi = _disc_rows(y0, res, ny, cy, r)
+    for j in range(j_lo, j_hi):
+        a, b = _disc_columns(x0, res, nx, cx, y0 + (j + 0.5) * res - cy, r)
+        for i in range(a, b + 1):
             best = max(best, heights[i, j])
     return best
 
