@@ -107,6 +107,16 @@ def test_bore_diameter_is_the_envelope_of_the_actual_motion(bore):
     assert row["pass"] is (abs(row["deviation_um"]) <= 10)
 
 
+def test_a_run_stopped_halfway_is_compared_with_what_the_program_had_cut_by_then(bore):
+    """The bore's run stopped at 1.5 s of its 2.9 s: the part is the nominal part as far as the
+    run went, its surface error within the whole run's (66 um); against the whole program's
+    part it read the half of the bore never reached as material left (3 mm)."""
+    half = api.run("gcode_seed004_circle_stock", duration_s=1.5).summary["part"]["surface_error_um"]
+    whole = bore.part.summary()["surface_error_um"]
+    assert half["max"] <= whole["max"] + 1.0
+    assert half["min"] >= whole["min"] - 1.0
+
+
 def test_bore_cut_by_the_perfect_loop_measures_its_size(bore):
     # an exact circle of radius 28 mm with the 5 mm tool: a 66 mm bore
     turn = np.linspace(0.0, 2 * np.pi, 20_001)

@@ -449,9 +449,16 @@ def _inspect(feature, part: MachinedPart) -> dict:
 
 def _machined_part(result: RunResult, reference, stock: StockSpec) -> MachinedPart:
     """The part the run's actual motion cut: the table's measured path at the recorded ticks,
-    the planned Z and the tool of the planned sample at each tick."""
-    nominal = reference.nominal_sweep
-    k = np.clip(np.rint(result.t_s / reference.plan.period_s).astype(int), 0, len(nominal.line) - 1)
+    the planned Z and the tool of the planned sample at each tick; against the nominal part of
+    the program as far as the run went (a run stopped before the program's end, by its
+    duration or a divergence, is compared with what the program had cut by then, not with
+    material it never reached)."""
+    k = np.clip(np.rint(result.t_s / reference.plan.period_s).astype(int), 0, len(reference.nominal_sweep.line) - 1)
+    reached = slice(0, int(k[-1]) + 1 if k.size else 0)
+    full = reference.nominal_sweep
+    nominal = Sweep(
+        full.xy_mm[reached], full.tip_mm[reached], full.radius_mm[reached], full.corner_mm[reached], full.line[reached]
+    )
     actual = Sweep(
         result.table_position_m()[:, :2] * 1e3,
         nominal.tip_mm[k],
