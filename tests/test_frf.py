@@ -60,32 +60,42 @@ def test_the_heavy_axis_is_measured_with_the_loop_on_the_motor_encoder():
 
 
 def test_a_semi_closed_loop_reads_the_motor_encoder_in_table_travel():
-    """`sensors.feedback = "motor"`: the encoder the loop reads is motor angle x lead / 2 pi
-    (ideal encoder: exactly), not the table, which lags it through the nut's and the screw's
-    compliance while the axis accelerates (29 um on a 1 mm step, the drive at its 4.6 kN)."""
+    """`sensors.feedback = "motor"`: the encoder the position loop reads is motor angle x lead /
+    2 pi (ideal encoders: exactly), not the table, which lags it through the nut's and the
+    screw's compliance while the axis accelerates (29 um on a 1 mm step, the drive at its
+    4.6 kN); with the default, dual feedback, the position loop reads the table's scale; with
+    the machine's 20-bit motor encoder, the motor's reading is on its grid of lead / 2^20."""
+    from twin.machines import build
     from twin.scenario import run_scenario, scenario_from_dict
 
     machine = str(Path(__file__).resolve().parent.parent / "examples" / "machines" / "mid_size_xy.toml")
-    gains = {"kp_pos": 60.0, "kp_vel": 300.0, "ti_vel_s": 0.01}
-    run = run_scenario(
-        scenario_from_dict(
-            {
-                "machine": machine,
-                "duration_s": 0.1,
-                "control_period_s": 1e-4,
-                "controllers": {a: {"type": "servo_cascade", "params": gains} for a in "xy"},
-                "reference": {"type": "step", "amplitude_m": 1e-3},
-                "sensors": {"feedback": "motor", "encoder_resolution_m": 0.0},
-            }
-        )
-    )
-    from twin.machines import build
-
     bm = build(machine)
+    gains = {"kp_pos": 60.0, "kp_vel": 300.0, "ti_vel_s": 0.01}
+
+    def step(sensors):
+        return run_scenario(
+            scenario_from_dict(
+                {
+                    "machine": machine,
+                    "duration_s": 0.1,
+                    "control_period_s": 1e-4,
+                    "controllers": {a: {"type": "servo_cascade", "params": gains} for a in "xy"},
+                    "reference": {"type": "step", "amplitude_m": 1e-3},
+                    "sensors": sensors,
+                }
+            )
+        )
+
+    ideal = {"encoder_resolution_m": 0.0, "motor_encoder_resolution_m": 0.0}
+    run = step({"feedback": "motor", **ideal})
     motor = run.qpos[:, bm.joint_qpos_index("x_motor")] * bm.motor_travel_m_per_rad["x"]
     np.testing.assert_allclose(run.meas_m[:, 0], motor, rtol=0, atol=1e-15)
     lag = np.abs(run.meas_m[:, 0] - run.table_position_m()[:, 0]).max()
     assert 1e-6 < lag < 1e-4
+    dual = step(ideal)
+    np.testing.assert_allclose(dual.meas_m, dual.table_position_m(), rtol=0, atol=1e-15)
+    counts = step({"feedback": "motor"}).meas_m[:, 0] / (0.010 / 2**20)
+    np.testing.assert_allclose(counts, np.rint(counts), rtol=0, atol=1e-6)
 
 
 def test_a_semi_closed_loop_is_tuned_on_the_motor_and_holds_the_table(tmp_path):
@@ -93,15 +103,26 @@ def test_a_semi_closed_loop_is_tuned_on_the_motor_and_holds_the_table(tmp_path):
     function (collocated: a velocity loop of 173 Hz against 30 Hz on the scale) with the
     margins met, and bounds the table's response peak to 3 dB: on the twin the table
     overshoots a 1 mm step by under 10 % (45 % without the bound); the scenario it writes
-    closes the loops on the motors."""
+    closes the loops on the motors.  The machine's default, dual feedback, keeps the motor's
+    velocity loop and closes position on the scale: the table settles faster than with both
+    loops on the scale, without overshoot."""
     from twin.commissioning.tuning import GAIN_MARGIN_DB, PHASE_MARGIN_DEG, scenario_text, tune, verify
 
     machine = str(Path(__file__).resolve().parent.parent / "examples" / "machines" / "mid_size_xy.toml")
     heavy = {"x_table_mass_kg": 200.0, "x_motor_inertia_kg_m2": 1.99e-3}
-    motor, table = tune(machine, heavy, feedback="motor"), tune(machine, heavy)
+    motor, table, dual = (
+        tune(machine, heavy, feedback="motor"),
+        tune(machine, heavy, feedback="table"),
+        tune(machine, heavy),
+    )
+    assert dual["feedback"] == "dual"
     x = motor["axes"]["x"]
     assert x["phase_margin_deg"] >= PHASE_MARGIN_DEG and x["gain_margin_db"] >= GAIN_MARGIN_DB
     assert x["velocity_loop"]["crossover_hz"] > 3 * table["axes"]["x"]["velocity_loop"]["crossover_hz"]
+    assert dual["axes"]["x"]["velocity_loop"]["crossover_hz"] == x["velocity_loop"]["crossover_hz"]
     assert '[sensors]\nfeedback = "motor"' in scenario_text(motor, machine)
     checked = verify(motor, machine, tmp_path)
     assert checked["x"]["step_overshoot_pct"] < 10.0
+    on_scale, both = verify(table, machine, tmp_path), verify(dual, machine, tmp_path)
+    assert both["x"]["step_overshoot_pct"] < 1.0
+    assert both["x"]["step_settling_s"] < 0.8 * on_scale["x"]["step_settling_s"]

@@ -431,9 +431,15 @@ def calibrate(
     return fit_machine(machine, trace, list(fit), overrides, axis)
 
 
-def tune(machine: str, overrides: dict[str, float] | None = None, control_period_s: float | None = None) -> dict:
+def tune(
+    machine: str,
+    overrides: dict[str, float] | None = None,
+    control_period_s: float | None = None,
+    feedback: str | None = None,
+) -> dict:
     """Each axis's tuned cascade with its margins and bandwidth, as ``twin tune --json
-    --no-verify``; :func:`twin.commissioning.tuning.verify` runs it on the twin."""
+    --no-verify`` (``feedback``: :data:`twin.sim.drive.FEEDBACK`, default the machine's);
+    :func:`twin.commissioning.tuning.verify` runs it on the twin."""
     from twin.commissioning.tuning import tune as design
 
-    return design(machine, overrides, control_period_s)
+    return design(machine, overrides, control_period_s, feedback)

@@ -601,7 +601,12 @@ def tune(
     machine: str = typer.Argument(..., help="A machine (twin list) or a machine file (FILE.toml)"),
     sets: list[str] = typer.Option(None, "--set", help="Parameter override SYMBOL=VALUE"),
     control_period: float = typer.Option(None, "--control-period", help="Control period, s (default about 0.1 ms)"),
-    feedback: str = typer.Option("table", "--feedback", help="table | motor: the encoder the loops close on"),
+    feedback: str = typer.Option(
+        None,
+        "--feedback",
+        help="dual | table | motor: velocity on the motor and position on the table's scale, both on the "
+        "scale, or both on the motor (default: the machine's, dual for a machine file)",
+    ),
     as_json: bool = typer.Option(False, "--json", help="Print the design as JSON"),
     out: Path = typer.Option(None, "--out", help="Write the tuned cascade as a scenario (.toml, a 10 mm circle)"),
     check: bool = typer.Option(True, "--verify/--no-verify", help="Run a step and a circle on the twin"),
@@ -625,7 +630,7 @@ def tune(
     if as_json:
         typer.echo(json.dumps(result, indent=2, allow_nan=False))
     else:
-        typer.echo(f"{machine}: control period {1e3 * result['control_period_s']:g} ms")
+        typer.echo(f"{machine}: control period {1e3 * result['control_period_s']:g} ms, {result['feedback']} feedback")
         for a, r in result["axes"].items():
             g = r["gains"]
             filt = (

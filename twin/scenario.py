@@ -73,12 +73,18 @@ class DriveSpec(StrictSpec):
 
 class SensorSpec(StrictSpec):
     encoder_resolution_m: float | list[float] | None = Field(
-        None, description="m; 0 for ideal; default: the machine's (0 for the papers' machines)"
+        None, description="the table's scale, m; 0 for ideal; default: the machine's (0 for the papers' machines)"
+    )
+    motor_encoder_resolution_m: float | list[float] | None = Field(
+        None, description="the motor's encoder in table travel, m; 0 for ideal; default: the machine's"
     )
     noise_std_m: float | list[float] = 0.0
     velocity: Literal["backward_difference", "tachometer"] = "backward_difference"
-    feedback: Literal["table", "motor"] = Field(
-        "table", description="the encoder on the table (a linear scale) or on each axis's motor (a semi-closed loop)"
+    feedback: Literal["dual", "table", "motor"] | None = Field(
+        None,
+        description="position on the table's scale and velocity on the motor's encoder (dual), both on the "
+        "scale (table) or both on the motor (motor, a semi-closed loop); default: the machine's (dual for a "
+        "machine file, table for the papers' machines)",
     )
 
 
@@ -397,7 +403,14 @@ def prepare(scn: Scenario):
         np.array(machine.sensor_gains),
         scn.seed,
         scn.sensors.velocity,
-        scn.sensors.feedback,
+        scn.sensors.feedback or machine.feedback,
+        _per_axis(
+            list(machine.motor_encoder_resolution_m)
+            if scn.sensors.motor_encoder_resolution_m is None
+            else scn.sensors.motor_encoder_resolution_m,
+            len(names),
+            "sensors.motor_encoder_resolution_m",
+        ),
     )
     disturbances = [_disturbance(d, i, names, scn.seed) for i, d in enumerate(scn.disturbances)]
     if scn.inspect and scn.stock is None:

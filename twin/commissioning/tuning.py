@@ -1,10 +1,11 @@
 """Auto-tuning: the cascade a drive's commissioning tool sets, designed on the sampled loop.
 
-Per axis, from the machine's transfer function G (drive input V to table position m, or to the
-motor's in table travel for a semi-closed loop, ``feedback = "motor"``) with its delay, at the
-control period T:
+Per axis, from the machine's transfer functions with their delay, drive input V to the
+position (m) of the encoder each loop reads (:data:`twin.sim.drive.FEEDBACK`): G_v the
+velocity loop's (the motor's in table travel, except ``feedback = "table"``), G_p the position
+loop's (the table's, except ``feedback = "motor"``, a semi-closed loop), at the control period T:
 
-1. Velocity loop (velocity from the position by backward difference, as the twin's sensor):
+1. Velocity loop (velocity from G_v's position by backward difference, as the twin's sensor):
    a PI, kv (1 + 1/(Ti s)), with Ti = 4 / w_c, in series with a filter; for each crossover
    w_c from high to low and each filter (none, a notch at each model resonance above w_c, a
    second-order low-pass at 4 w_c), kv puts |L_v| = 1 at w_c; the first design with a phase
@@ -14,11 +15,11 @@ control period T:
    :func:`controllers.design.loop_analysis.crossing_margins`), so a resonance that crosses
    again above the crossover counts.
 2. Position loop: a P gain kp, from w_c / 4 down, the first with the same margins on
-   L_p = kp C_v G / (1 + C_v D G); in a semi-closed loop also with the table's response to the
+   L_p = kp C_v G_p / (1 + C_v D G_v); in a semi-closed loop also with the table's response to the
    reference, L_p / (1 + L_p) G_table / G_motor, peaking at most 3 dB (the drive train's mode
    is outside the loop: closed on the motor alone, a 200 kg table overshot a step by 45 %).
 3. Feedforward: the whole reference velocity into the velocity loop, and the drive input the
-   rigid body needs, acceleration_ff = 1 / (s^2 coefficient of G's gain) (V s^2/m) and
+   rigid body needs, acceleration_ff = 1 / (s^2 coefficient of G_p's gain) (V s^2/m) and
    friction_ff its viscous term (V s/m).
 
 Every loop is evaluated exactly as the twin runs it: G by zero-order hold with the delay in
@@ -71,24 +72,36 @@ def _stable(loop) -> bool:
     return bool(np.all((np.abs(poles) < 1.0 - 1e-9) | (np.abs(poles - 1.0) < 1e-6)))
 
 
-def tune_axis(bm: BuiltMachine, i: int, dt: float, resonances_hz: list[float], sensor: str = "table") -> dict:
-    """One axis's design (see the module docstring), on the transfer function to the encoder
-    the loops close on (``sensor``: the table's, or the motor's in a semi-closed loop)."""
-    g = sensor_plant(bm, i, sensor)
+def tune_axis(
+    bm: BuiltMachine,
+    i: int,
+    dt: float,
+    resonances_hz: list[float],
+    velocity_sensor: str = "table",
+    position_sensor: str = "table",
+) -> dict:
+    """One axis's design (see the module docstring), on the transfer functions to the encoders
+    the loops close on (each ``"table"`` or ``"motor"``: :func:`twin.commissioning.frf.sensor_plant`)."""
     delay = round(bm.delay_s / dt)
     z = control.tf([1.0, 0.0], [1.0], dt)
-    gd = discretized(g, dt, "zoh")
-    if delay:
-        gd = control.ss(control.tf([1.0], [1.0] + [0.0] * delay, dt)) * gd
+
+    def sampled(g):
+        gd = discretized(g, dt, "zoh")
+        return control.ss(control.tf([1.0], [1.0] + [0.0] * delay, dt)) * gd if delay else gd
+
+    g, g_pos = sensor_plant(bm, i, velocity_sensor), sensor_plant(bm, i, position_sensor)
+    gd, gd_pos = sampled(g), sampled(g_pos)
     diff = control.ss((z - 1) / (dt * z))
     nyquist = 0.5 / dt
     freqs = np.geomspace(0.1, nyquist, 3000)  # to Nyquist: a sampled loop often crosses there
     zs = np.exp(2j * math.pi * freqs * dt)
     zs[-1] = -1.0
     g_resp = zoh_response(g, dt, bm.delay_s, freqs)
+    pos_resp = zoh_response(g_pos, dt, bm.delay_s, freqs)
     # a semi-closed loop moves the table through the drive train: its response to the reference
     # is the loop's times table / motor, whose peak the design bounds
-    to_table = zoh_response(bm.plant[i][i], dt, bm.delay_s, freqs) / g_resp if sensor == "motor" else None
+    table_resp = zoh_response(bm.plant[i][i], dt, bm.delay_s, freqs)
+    to_table = table_resp / pos_resp if position_sensor == "motor" else None
     d_resp = (zs - 1) / (dt * zs)
     s_tustin = 2.0 / dt * (zs[:-1] - 1) / (zs[:-1] + 1)  # Nyquist is s = infinity
     for f_c in np.geomspace(0.4 * nyquist, 2.0, 80):
@@ -108,11 +121,11 @@ def tune_axis(bm: BuiltMachine, i: int, dt: float, resonances_hz: list[float], s
             if not _meets(velocity) or not _stable(kv * unit * gd * diff):
                 continue
             for kp in w / 4.0 * np.geomspace(1.0, 0.02, 40):
-                lp = kp * kv * c_resp * g_resp / (1 + lv)
+                lp = kp * kv * c_resp * pos_resp / (1 + lv)
                 position = crossing_margins(freqs, lp)
                 cv = kv * unit
                 table_ok = to_table is None or np.abs(lp / (1 + lp) * to_table).max() <= MAX_TABLE_PEAK
-                if table_ok and _meets(position) and _stable(kp * cv * gd / (1 + cv * diff * gd)):
+                if table_ok and _meets(position) and _stable(kp * cv * gd_pos / (1 + cv * diff * gd)):
                     closed = np.abs(lp / (1 + lp))
                     below = np.flatnonzero(closed < 10 ** (-3 / 20))
                     worst = CrossingMargins(
@@ -128,8 +141,8 @@ def tune_axis(bm: BuiltMachine, i: int, dt: float, resonances_hz: list[float], s
                             "kp_vel": float(kv),
                             "ti_vel_s": float(ti),
                             "velocity_ff": 1.0,
-                            "acceleration_ff": float(rigid_body(g)[0]),
-                            "friction_ff": float(rigid_body(g)[1]),
+                            "acceleration_ff": float(rigid_body(g_pos)[0]),
+                            "friction_ff": float(rigid_body(g_pos)[1]),
                             "notch_hz": float(notch),
                             "lowpass_hz": float(lowpass),
                         },
@@ -141,10 +154,11 @@ def tune(
     machine: str,
     overrides: dict[str, float] | None = None,
     control_period_s: float | None = None,
-    feedback: str = "table",
+    feedback: str | None = None,
 ) -> dict:
-    """Design every axis's cascade (see the module docstring), its loops closed on the table's
-    encoder or (``feedback = "motor"``, a semi-closed loop) on each ball-screw axis's motor's.
+    """Design every axis's cascade (see the module docstring), its loops closed as ``feedback``
+    says (:data:`twin.sim.drive.FEEDBACK`; default: the machine's, dual for a machine file:
+    velocity on the motor's encoder, position on the table's scale).
 
     Returns
     -------
@@ -154,10 +168,11 @@ def tune(
         None with a ``..._note`` where infinite),
         ``bandwidth_hz`` (the closed position loop's -3 dB), the two loops' figures and ``gains``.
     """
-    if feedback not in FEEDBACK:
+    if feedback is not None and feedback not in FEEDBACK:
         raise TwinInputError("--feedback", feedback, f"must be one of {', '.join(FEEDBACK)}")
     spec = get_machine(machine)
     bm = build(machine, overrides)
+    feedback = feedback or bm.feedback
     step = float(bm.model.opt.timestep)
     dt = control_period_s if control_period_s is not None else max(1, round(CONTROL_PERIOD_S / step)) * step
     ratio = dt / step
@@ -165,8 +180,11 @@ def tune(
         raise TwinInputError("--control-period", dt, f"must be a whole multiple of the timestep {step:g} s")
     axes = {}
     for i, a in enumerate(bm.axes):
-        sensor = "motor" if a.encoder_joint(feedback) == a.motor_joint else "table"
-        axes[a.name] = tune_axis(bm, i, dt, model_modes(bm, i, sensor)[0], sensor)
+        velocity, position = (
+            "motor" if joint == a.motor_joint else "table"
+            for joint in (a.velocity_joint(feedback), a.encoder_joint(feedback))
+        )
+        axes[a.name] = tune_axis(bm, i, dt, model_modes(bm, i, velocity)[0], velocity, position)
     return {
         "machine": machine,
         "machine_name": spec.name,
@@ -199,8 +217,7 @@ def scenario_text(result: dict, machine_path: str, reference: str = "circle") ->
         ]
     else:
         lines += ["duration_s = 0.3", "", "[reference]", 'type = "step"', "amplitude_m = 0.001", "t0_s = 0.01"]
-    if result["feedback"] != "table":
-        lines += ["", "[sensors]", f'feedback = "{result["feedback"]}"']
+    lines += ["", "[sensors]", f'feedback = "{result["feedback"]}"']
     for a, r in result["axes"].items():
         lines += ["", f"[controllers.{a}]", 'type = "servo_cascade"', f"[controllers.{a}.params]"]
         lines += [f"{k} = {v!r}" for k, v in r["gains"].items()]

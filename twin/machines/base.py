@@ -81,9 +81,14 @@ class Axis:
     screw_joint: str | None = None
 
     def encoder_joint(self, feedback: str) -> str:
-        """The joint this axis's encoder reads: its motor's with ``feedback = "motor"`` where it
-        has one (a semi-closed loop), else its table's."""
+        """The joint the position loop reads (:data:`twin.sim.drive.FEEDBACK`): the motor's with
+        ``feedback = "motor"`` where the axis has one (a semi-closed loop), else the table's."""
         return self.motor_joint if feedback == "motor" and self.motor_joint else self.table_joint
+
+    def velocity_joint(self, feedback: str) -> str:
+        """The joint the velocity loop reads: the motor's with ``feedback = "motor"`` or
+        ``"dual"`` where the axis has one, else the table's."""
+        return self.motor_joint if feedback in ("motor", "dual") and self.motor_joint else self.table_joint
 
 
 @dataclass(frozen=True)
@@ -135,7 +140,13 @@ class BuiltMachine:
     motion_limits : dict of str to MotionLimits
         Each axis's kinematic limits for the G-code interpolator, z included.
     encoder_resolution_m : tuple of float
-        Each axis's encoder resolution (m of table travel; 0: ideal), a scenario's default.
+        Each axis's table encoder (linear scale) resolution (m; 0: ideal), a scenario's default.
+    motor_encoder_resolution_m : tuple of float
+        Each axis's motor encoder resolution in table travel (m; 0: ideal or no motor).
+    feedback : str
+        What a scenario's loops close on unless it says (:data:`twin.sim.drive.FEEDBACK`):
+        ``"dual"`` for a machine file's drives, ``"table"`` for the papers' machines (their
+        measurements are of one encoder).
     motor_plant : tuple of SisoTf
         Per axis, drive input (V) to the motor's angle in table travel (m), where it differs from
         the table's (a compliant drive train); empty otherwise.
@@ -154,6 +165,8 @@ class BuiltMachine:
     sensor_gains: tuple[float, ...] = ()
     motion_limits: dict[str, MotionLimits] = field(default_factory=dict)
     encoder_resolution_m: tuple[float, ...] = ()
+    motor_encoder_resolution_m: tuple[float, ...] = ()
+    feedback: str = "table"
     motor_plant: tuple[SisoTf, ...] = ()
     motor_travel_m_per_rad: dict[str, float] = field(default_factory=dict)
 
@@ -261,6 +274,8 @@ class Machine:
     axes: tuple[Axis, ...] = ()
     #: Each axis's limits for the G-code interpolator (Z: :data:`SPINDLE_HEAD_Z` unless given).
     motion_limits: dict[str, MotionLimits] = {}
+    #: What a scenario's loops close on unless it says (:attr:`BuiltMachine.feedback`).
+    feedback: str = "table"
 
     def resolve(self, overrides: dict[str, float] | None = None) -> dict[str, float]:
         """Merge overrides into the nominal values, validating names and values.
@@ -347,6 +362,10 @@ class Machine:
         """Encoder resolution (m) per axis (0: ideal, the papers' machines)."""
         return (0.0,) * len(self.axes)
 
+    def motor_encoder_resolution(self, params: dict[str, float]) -> tuple[float, ...]:
+        """Motor encoder resolution in table travel (m) per axis (0: ideal, the papers' machines)."""
+        return (0.0,) * len(self.axes)
+
     def coulomb_symbols(self) -> tuple[str, ...]:
         """The symbols of the guideways' Coulomb friction (what ``twin fidelity`` forces off)."""
         return tuple(s for s in (f"F_coul_{a.name}" for a in self.axes) if s in self.parameters)
@@ -388,6 +407,8 @@ class Machine:
             self.sensor_gains(params),
             motion_limits={**self.motion_limits, "z": self.motion_limits.get("z", SPINDLE_HEAD_Z)},
             encoder_resolution_m=self.encoder_resolution(params),
+            motor_encoder_resolution_m=self.motor_encoder_resolution(params),
+            feedback=self.feedback,
             motor_plant=self.motor_plant(params, model),
             motor_travel_m_per_rad=self.motor_travel(params),
         )

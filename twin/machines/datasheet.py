@@ -155,6 +155,9 @@ class BallScrewSpec(AxisSpec):
     screw_length_m: PositiveFloat
     screw_inertia_kg_m2: PositiveFloat | None = Field(None, description="default: a steel cylinder")
     nut_mass_kg: NonNegativeFloat = 0.0
+    motor_encoder_counts_per_rev: NonNegativeFloat = Field(
+        0.0, description="the motor encoder's counts per motor revolution (0: ideal)"
+    )
     k_axial_N_per_m: Stiffness = math.inf
     c_axial_N_s_per_m: NonNegativeFloat = 0.0
 
@@ -213,6 +216,7 @@ _UNITS = {
     "N": "N",
     "m": "m",
     "s": "s",
+    "counts_per_rev": "1/rev",
 }
 
 
@@ -303,6 +307,7 @@ class DatasheetMachine(Machine):
         self.name = m.name
         self.summary = m.summary or f"machine file {path.name}"
         self.xml = ""
+        self.feedback = "dual"
         self.axes = tuple(
             Axis(
                 a,
@@ -420,6 +425,13 @@ class DatasheetMachine(Machine):
 
     def encoder_resolution(self, params) -> tuple[float, ...]:
         return tuple(params[f"{a}_encoder_resolution_m"] for a in self.spec.machine.stacking)
+
+    def motor_encoder_resolution(self, params) -> tuple[float, ...]:
+        travel = self.motor_travel(params)
+        counts = {a: params.get(f"{a}_motor_encoder_counts_per_rev", 0.0) for a in travel}
+        return tuple(
+            2.0 * math.pi * travel[a] / counts[a] if counts.get(a) else 0.0 for a in self.spec.machine.stacking
+        )
 
     def couplings(self, params):
         pairs, leads = [], {}

@@ -79,8 +79,11 @@ class Drive:
         return np.zeros((self.delay_ticks + 2, self.n_axes))
 
 
-#: Where an encoder may sit: the table (a linear scale) or the motor (a semi-closed loop).
-FEEDBACK = ("table", "motor")
+#: What the loops close on: position on the table's linear scale and velocity on the motor's
+#: encoder (``"dual"``, a drive's usual set-up), both on the scale (``"table"``, a fully closed
+#: loop) or both on the motor's encoder (``"motor"``, a semi-closed loop).  An axis without a
+#: motor joint (a linear motor) reads its scale in all three.
+FEEDBACK = ("dual", "table", "motor")
 
 
 @dataclass
@@ -90,9 +93,9 @@ class Encoder:
     Parameters
     ----------
     resolution_m : ndarray, shape (n_axes,)
-        Encoder resolution (m); 0 for ideal.
+        Resolution of the table's encoder, a linear scale (m); 0 for ideal.
     noise_std_m : ndarray, shape (n_axes,)
-        Standard deviation of additive Gaussian noise (m).
+        Standard deviation of additive Gaussian noise on the position loop's reading (m).
     gains : ndarray, shape (n_axes,)
         Sensor gain (the machine's H1).
     seed : int
@@ -100,9 +103,12 @@ class Encoder:
     velocity : {"backward_difference", "tachometer"}
         Velocity measurement: backward difference of the encoder (the papers' drives) or an
         ideal tachometer where the encoder is.
-    feedback : {"table", "motor"}
-        Where the encoder is: on the table (a linear scale) or on the motor of each axis that
-        has one (in table travel: motor angle x lead / gear ratio; a semi-closed loop).
+    feedback : {"dual", "table", "motor"}
+        What the loops close on (:data:`FEEDBACK`); the motor's encoder reads in table travel
+        (motor angle x lead / gear ratio).
+    motor_resolution_m : ndarray, shape (n_axes,), optional
+        Resolution of the motor's encoder in table travel (m; 0 for ideal), wherever a loop
+        reads the motor; default ideal.
     """
 
     resolution_m: np.ndarray
@@ -111,9 +117,12 @@ class Encoder:
     seed: int = 0
     velocity: str = "backward_difference"
     feedback: str = "table"
+    motor_resolution_m: np.ndarray | None = None
 
     def __post_init__(self):
-        for name in ("resolution_m", "noise_std_m"):
+        if self.motor_resolution_m is None:
+            self.motor_resolution_m = np.zeros(len(self.gains))
+        for name in ("resolution_m", "noise_std_m", "motor_resolution_m"):
             arr = np.asarray(getattr(self, name), float)
             if (arr < 0).any() or not np.isfinite(arr).all():
                 raise TwinInputError(f"sensors.{name}", arr.tolist(), "must be finite and >= 0")
@@ -176,15 +185,28 @@ def table_in_bounds(qpos, q_idx, runaway_m):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
+def _reading(qpos, q_idx, gain, resolution):  # pragma: no cover - compiled
+    """An encoder's reading: ``gain * qpos[q_idx]`` quantized to ``resolution`` (0: ideal)."""
+    y = gain * qpos[q_idx]
+    if resolution > 0:
+        y = np.rint(y / resolution) * resolution
+    return y
+
+
+@njit(cache=True, inline="always")
 def sense(
     k,
     row,
     qpos,
     qvel,
     q_idx,
-    v_idx,
+    vel_q_idx,
+    vel_v_idx,
     gains,
+    vel_gains,
     resolution,
+    vel_resolution,
+    vel_noise,
     noise,
     ref,
     tachometer,
@@ -197,30 +219,31 @@ def sense(
     """Write tick ``k``'s loop signals onto the bus (layout of ``standard_signals``).
 
     ``row`` is tick k's row in the chunk arrays ``noise`` (n, n_axes) and ``ref``
-    (n + preview, n_axes, 3).  The encoder reads ``gains * table position`` quantized to
-    ``resolution`` (m; 0 for ideal) plus noise.  The velocity is ``(y[k] - y[k-1]) / period_s``
-    (0 at k = 0) or, with ``tachometer``, ``gains * table velocity``.  ``meas_prev`` (the last
-    encoder reading) is updated in place.
+    (n + preview, n_axes, 3).  The position encoder reads ``gains * qpos[q_idx]`` quantized to
+    ``resolution`` (m; 0 for ideal) plus noise.  The velocity encoder reads
+    ``vel_gains * qpos[vel_q_idx]`` quantized to ``vel_resolution``, plus ``vel_noise`` times
+    the same noise (1 where both are one encoder, 0 for a second one); the velocity is its
+    ``(y[k] - y[k-1]) / period_s`` (0 at k = 0) or, with ``tachometer``,
+    ``vel_gains * qvel[vel_v_idx]``.  ``meas_prev`` (the velocity encoder's last reading) is
+    updated in place.
     """
     n_axes = q_idx.shape[0]
     bus[TICK_INDEX] = k
     for a in range(n_axes):
-        y = gains[a] * qpos[q_idx[a]]
-        if resolution[a] > 0:
-            y = np.rint(y / resolution[a]) * resolution[a]
-        y = y + noise[row, a]
+        y = _reading(qpos, q_idx[a], gains[a], resolution[a]) + noise[row, a]
+        y_vel = _reading(qpos, vel_q_idx[a], vel_gains[a], vel_resolution[a]) + vel_noise[a] * noise[row, a]
         base = FIRST_AXIS_INDEX + STRIDE * a
         bus[base + REF] = ref[row, a, 0]
         bus[base + REF_VEL] = ref[row, a, 1]
         bus[base + REF_ACC] = ref[row, a, 2]
         bus[base + POS] = y
         if tachometer:
-            bus[base + VEL] = gains[a] * qvel[v_idx[a]]
+            bus[base + VEL] = vel_gains[a] * qvel[vel_v_idx[a]]
         else:
-            bus[base + VEL] = (y - meas_prev[a]) / period_s if k > 0 else 0.0
+            bus[base + VEL] = (y_vel - meas_prev[a]) / period_s if k > 0 else 0.0
         bus[base + ERROR] = ref[row, a, 0] - y
         bus[base + U_PREV] = u_prev[a]
-        meas_prev[a] = y
+        meas_prev[a] = y_vel
         for i in range(preview):
             bus[FIRST_AXIS_INDEX + STRIDE * n_axes + a * preview + i] = ref[row + 1 + i, a, 0]
 

@@ -55,17 +55,22 @@ class MjViews(NamedTuple):
 
 
 class Sensor(NamedTuple):
-    """The encoders: the tables' qpos indices per axis (runaway check, recorded error), the qpos
-    and dof indices each axis's encoder reads (its table, or its motor: a semi-closed loop),
-    their gains (to table travel), resolution (m), tachometer or backward difference, the
-    control period (s), the runaway limit (m), the last reading per axis (updated in place) and
-    the preview ticks on the bus."""
+    """The encoders (:func:`twin.sim.drive.sense`): the tables' qpos indices per axis (runaway
+    check, recorded error); per axis the position encoder's qpos index, gain (to table travel)
+    and resolution (m); the velocity encoder's qpos and dof indices, gain, resolution and noise
+    share (1: the position encoder itself, 0: the motor's own); tachometer or backward
+    difference, the control period (s), the runaway limit (m), the velocity encoder's last
+    reading per axis (updated in place) and the preview ticks on the bus."""
 
     q_idx: np.ndarray
     encoder_q_idx: np.ndarray
-    v_idx: np.ndarray
     gains: np.ndarray
     resolution: np.ndarray
+    vel_q_idx: np.ndarray
+    vel_v_idx: np.ndarray
+    vel_gains: np.ndarray
+    vel_resolution: np.ndarray
+    vel_noise: np.ndarray
     tachometer: bool
     period_s: float
     runaway_m: float
@@ -197,8 +202,9 @@ def compiled_ticks(
     The groups are unpacked once, before the loop (numba reference-counts every array taken
     out of a tuple)."""
     qpos, qvel, qacc, ctrl, act, xfrc = mj.qpos, mj.qvel, mj.qacc, mj.ctrl, mj.actuator_force, mj.xfrc_applied
-    q_idx, v_idx, gains, resolution = sensor.q_idx, sensor.v_idx, sensor.gains, sensor.resolution
-    encoder_q_idx = sensor.encoder_q_idx
+    q_idx, encoder_q_idx, gains, resolution = sensor.q_idx, sensor.encoder_q_idx, sensor.gains, sensor.resolution
+    vel_q_idx, vel_v_idx, vel_gains = sensor.vel_q_idx, sensor.vel_v_idx, sensor.vel_gains
+    vel_resolution, vel_noise = sensor.vel_resolution, sensor.vel_noise
     tachometer, period_s, runaway_m = sensor.tachometer, sensor.period_s, sensor.runaway_m
     meas_prev, preview = sensor.meas_prev, sensor.preview
     u_idx, act_idx, limit, substeps = drive.u_idx, drive.act_idx, drive.limit, drive.substeps
@@ -223,9 +229,13 @@ def compiled_ticks(
             qpos,
             qvel,
             encoder_q_idx,
-            v_idx,
+            vel_q_idx,
+            vel_v_idx,
             gains,
+            vel_gains,
             resolution,
+            vel_resolution,
+            vel_noise,
             noise,
             ref,
             tachometer,
@@ -255,8 +265,9 @@ def python_ticks(k0, k1, model, data, program, mj, sensor, drive, force, chunk, 
     """Ticks ``k0 <= k < k1`` in Python: ``program.run()`` (Python blocks too) and
     ``mujoco.mj_step``; the simulation time is ``data.time``."""
     qpos, qvel, qacc, ctrl, act, xfrc = mj.qpos, mj.qvel, mj.qacc, mj.ctrl, mj.actuator_force, mj.xfrc_applied
-    q_idx, v_idx, gains, resolution = sensor.q_idx, sensor.v_idx, sensor.gains, sensor.resolution
-    encoder_q_idx = sensor.encoder_q_idx
+    q_idx, encoder_q_idx, gains, resolution = sensor.q_idx, sensor.encoder_q_idx, sensor.gains, sensor.resolution
+    vel_q_idx, vel_v_idx, vel_gains = sensor.vel_q_idx, sensor.vel_v_idx, sensor.vel_gains
+    vel_resolution, vel_noise = sensor.vel_resolution, sensor.vel_noise
     tachometer, period_s, runaway_m = sensor.tachometer, sensor.period_s, sensor.runaway_m
     meas_prev, preview = sensor.meas_prev, sensor.preview
     u_idx, act_idx, limit, substeps = drive.u_idx, drive.act_idx, drive.limit, drive.substeps
@@ -279,9 +290,13 @@ def python_ticks(k0, k1, model, data, program, mj, sensor, drive, force, chunk, 
             qpos,
             qvel,
             encoder_q_idx,
-            v_idx,
+            vel_q_idx,
+            vel_v_idx,
             gains,
+            vel_gains,
             resolution,
+            vel_resolution,
+            vel_noise,
             noise,
             ref,
             tachometer,

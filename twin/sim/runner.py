@@ -270,12 +270,14 @@ def simulate(
         )
     use_compiled = can_compile if compiled is None else compiled
     drive = drive or Drive(n_axes, substeps, dt, machine.delay_s)
-    encoder = encoder or Encoder(np.zeros(n_axes), np.zeros(n_axes), np.array(machine.sensor_gains))
+    encoder = encoder or Encoder(
+        np.zeros(n_axes), np.zeros(n_axes), np.array(machine.sensor_gains), feedback=machine.feedback
+    )
     if drive.n_axes != n_axes or drive.substeps != substeps:
         raise TwinInputError(
             "drive", (drive.n_axes, drive.substeps), f"needs {n_axes} axes and {substeps} physics steps per tick"
         )
-    for name in ("gains", "resolution_m", "noise_std_m"):
+    for name in ("gains", "resolution_m", "noise_std_m", "motor_resolution_m"):
         if getattr(encoder, name).shape != (n_axes,):
             raise TwinInputError(
                 f"encoder.{name}", getattr(encoder, name).tolist(), f"needs one value per axis ({n_axes})"
@@ -303,20 +305,34 @@ def simulate(
     )
     acc = loop.Accumulators(np.zeros((n_axes, 2)), np.zeros(n_axes))
     mj = loop.MjViews(data.qpos, data.qvel, data.qacc, data.ctrl, data.actuator_force, data.xfrc_applied)
-    # each axis's encoder: on its table, or on its motor (in table travel) for a semi-closed loop
-    read = [a.encoder_joint(encoder.feedback) for a in machine.axes]
-    travel = [machine.motor_travel_m_per_rad[a.name] if j == a.motor_joint else 1.0 for a, j in zip(machine.axes, read)]
+
+    # each axis's encoders (twin.sim.drive.FEEDBACK): the position loop's and the velocity
+    # loop's, on its table or on its motor (in table travel)
+    def travel(a, joint):
+        return machine.motor_travel_m_per_rad[a.name] if joint == a.motor_joint else 1.0
+
+    def resolution(joints):
+        on_motor = np.array([j == a.motor_joint for a, j in zip(machine.axes, joints)])
+        return np.where(on_motor, encoder.motor_resolution_m, encoder.resolution_m)
+
+    position = [a.encoder_joint(encoder.feedback) for a in machine.axes]
+    velocity = [a.velocity_joint(encoder.feedback) for a in machine.axes]
+    second = np.array([p != v for p, v in zip(position, velocity)])
     sensor = loop.Sensor(
-        machine.table_qpos_indices(),
-        np.array([machine.joint_qpos_index(j) for j in read]),
-        np.array([machine.joint_dof_index(j) for j in read]),
-        encoder.gains * np.array(travel),
-        encoder.resolution_m,
-        encoder.velocity == "tachometer",
-        float(control_period_s),
-        RUNAWAY_M,
-        np.zeros(n_axes),
-        preview,
+        q_idx=machine.table_qpos_indices(),
+        encoder_q_idx=np.array([machine.joint_qpos_index(j) for j in position]),
+        gains=encoder.gains * np.array([travel(a, j) for a, j in zip(machine.axes, position)]),
+        resolution=resolution(position),
+        vel_q_idx=np.array([machine.joint_qpos_index(j) for j in velocity]),
+        vel_v_idx=np.array([machine.joint_dof_index(j) for j in velocity]),
+        vel_gains=encoder.gains * np.array([travel(a, j) for a, j in zip(machine.axes, velocity)]),
+        vel_resolution=resolution(velocity),
+        vel_noise=np.where(second, 0.0, 1.0),
+        tachometer=encoder.velocity == "tachometer",
+        period_s=float(control_period_s),
+        runaway_m=RUNAWAY_M,
+        meas_prev=np.zeros(n_axes),
+        preview=preview,
     )
     u_applied = np.zeros(n_axes)  # the drive input of the last tick (V), reported on divergence
     drive_args = loop.DriveState(

@@ -54,7 +54,28 @@ def _ticks(
             for i in range(x.shape[0]):
                 y[a] += Cd[a, i] * x[i]
             pos[k, a] = y[a]
-        sense(k, k, y, y, axis, axis, ones, zeros, no_noise, ref, False, dt, y_prev, u_prev, preview, bus)
+        sense(
+            k,
+            k,
+            y,
+            y,
+            axis,
+            axis,
+            axis,
+            ones,
+            ones,
+            zeros,
+            zeros,
+            ones,
+            no_noise,
+            ref,
+            False,
+            dt,
+            y_prev,
+            u_prev,
+            preview,
+            bus,
+        )
         run_blocks(0, ops.shape[0], ops, io, par, state, scratch, bus)
         drive_command(k, k, bus, u_idx, u_dist, limit, command, drive_input, u_prev, delay_line)
         actuator_input(k, 0, 1, delay, delay_line, axis, applied)
