@@ -489,6 +489,9 @@ def frf(
     amplitude: float = typer.Option(1.0, "--amplitude", help="Excitation amplitude, V (peak)"),
     duration: float = typer.Option(16.0, "--duration", help="Recorded time, s"),
     f_max: float = typer.Option(1000.0, "--f-max", help="Highest frequency, Hz"),
+    position: float = typer.Option(
+        None, "--position", help="The nut's distance from the drive end, m (a machine file with screw_root_diameter_m)"
+    ),
     sets: list[str] = typer.Option(None, "--set", help="Parameter override SYMBOL=VALUE"),
     as_json: bool = typer.Option(False, "--json", help="Print the FRF as JSON"),
     plots: Path = typer.Option(None, "--plots", help="Write the Bode plot (PNG) to this folder"),
@@ -497,9 +500,21 @@ def frf(
     """Measure an axis's frequency response on the twin as a commissioning tool does (excite,
     H1 with coherence, resonances and anti-resonances) beside the model's."""
     from twin.commissioning.frf import FrfSettings, measure, write_bode
+    from twin.machines import get_machine
 
     _check_output("--rrd", rrd, ".rrd")
     _check_folder(plots)
+    overrides = _parse_sets(sets or [])
+    if position is not None:
+        spec = get_machine(machine)
+        if f"{axis}_nut_position_m" not in spec.parameters:
+            raise TwinInputError(
+                "--position",
+                position,
+                f"needs screw_root_diameter_m on axis {axis} of a machine file (the stiffness it computes from the "
+                "nut's position)",
+            )
+        overrides[f"{axis}_nut_position_m"] = position
     settings = FrfSettings(
         axis=axis,
         loop=loop,  # type: ignore[arg-type]
@@ -510,7 +525,7 @@ def frf(
         f_max_hz=f_max,
         feedback=feedback,  # type: ignore[arg-type]
     )
-    result = measure(machine, settings, _parse_sets(sets or []))
+    result = measure(machine, settings, overrides)
     run = result.pop("run")
     if as_json:
         typer.echo(json.dumps(result, indent=1, allow_nan=False))
@@ -520,6 +535,12 @@ def frf(
             f"{excitation} {amplitude:g} V, "
             f"{len(result['frequency_hz'])} lines {result['frequency_hz'][0]:.2f}-{result['frequency_hz'][-1]:.0f} Hz"
         )
+        if position is not None:
+            params = spec.resolve(overrides)
+            typer.echo(
+                f"  nut at {position:g} m: axial stiffness {spec.axial_N_per_m(params, axis) / 1e6:.4g} N/um, "  # type: ignore[attr-defined]
+                f"torsion {spec.torsion_N_m_per_rad(params, axis):.4g} N m/rad"  # type: ignore[attr-defined]
+            )
         for label, key in (("resonances", "resonances_hz"), ("anti-resonances", "antiresonances_hz")):
             measured, model = (", ".join(f"{f:.1f}" for f in result[k]) or "none" for k in (key, f"model_{key}"))
             typer.echo(f"  {label} (Hz): {measured}   model: {model}")

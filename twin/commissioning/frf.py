@@ -309,7 +309,12 @@ def measure(machine: str, settings: FrfSettings, overrides: dict[str, float] | N
     return {
         "machine": machine,
         "settings": {**settings.__dict__, "sample_period_s": dt, "segment_samples": SEGMENT},
-        "parameters": dict(bm.params),
+        "parameters": {k: v if math.isfinite(v) else None for k, v in bm.params.items()},
+        **(
+            {"parameters_note": "null: infinite, a rigid link"}
+            if not all(map(math.isfinite, bm.params.values()))
+            else {}
+        ),
         "frequency_hz": freqs.tolist(),
         "magnitude_db": mag_db.tolist(),
         "phase_deg": np.degrees(np.angle(g)).tolist(),

@@ -56,6 +56,10 @@ from twin.spec import StrictSpec, read_toml
 
 #: Density of screw steel (kg/m^3), for a screw inertia the file does not give.
 STEEL_DENSITY_KG_PER_M3 = 7850.0
+#: Young's modulus of screw steel (Pa), as THK's ball screw catalogue takes it (2.06e5 N/mm^2),
+#: and its shear modulus (Pa): the shaft's stiffness from its root diameter.
+STEEL_YOUNG_MODULUS_PA = 2.06e11
+STEEL_SHEAR_MODULUS_PA = 7.93e10
 #: The largest 2 pi f h (fastest mode f, physics step h) a machine file may be simulated at:
 #: MuJoCo integrates its springs explicitly (semi-implicit Euler: 17 deg of phase a step at 0.3).
 MAX_MODE_STEP_RAD = 0.3
@@ -155,6 +159,23 @@ class BallScrewSpec(AxisSpec):
     screw_length_m: PositiveFloat
     screw_inertia_kg_m2: PositiveFloat | None = Field(None, description="default: a steel cylinder")
     nut_mass_kg: NonNegativeFloat = 0.0
+    screw_root_diameter_m: PositiveFloat | None = Field(
+        None,
+        description="the shaft's root diameter: with it the twin computes the axial stiffness (nut, bearings and "
+        "the shaft up to the nut in series) and the screw's torsion from the nut's position",
+    )
+    screw_support: Literal["fixed_fixed", "fixed_free"] = Field(
+        "fixed_fixed", description="the shaft's bearings: both ends fixed, or the drive end only"
+    )
+    nut_position_m: PositiveFloat | None = Field(
+        None, description="the nut's distance from the drive end's bearing; default: half the screw's length"
+    )
+    k_nut_N_per_m: Stiffness = Field(
+        math.inf, description="the preloaded nut's axial stiffness (with the root diameter)"
+    )
+    k_bearing_N_per_m: Stiffness = Field(
+        math.inf, description="the fixed bearings' axial stiffness (with the root diameter)"
+    )
     motor_encoder_counts_per_rev: NonNegativeFloat = Field(
         0.0, description="the motor encoder's counts per motor revolution (0: ideal)"
     )
@@ -162,6 +183,22 @@ class BallScrewSpec(AxisSpec):
     c_axial_N_s_per_m: NonNegativeFloat = 0.0
 
     drive_keys: ClassVar = ("drive_gain_N_m_per_V", "torque_constant_N_m_per_A", "amplifier_gain_A_per_V")
+
+    @model_validator(mode="after")
+    def _one_stiffness_source(self):
+        if self.screw_root_diameter_m is None:
+            stray = [k for k in ("nut_position_m", "k_nut_N_per_m", "k_bearing_N_per_m") if k in self.model_fields_set]
+            if stray:
+                raise ValueError(f"{stray[0]} needs screw_root_diameter_m (the shaft the stiffness is computed from)")
+            return self
+        given = [k for k in ("k_axial_N_per_m", "k_screw_torsion_N_m_per_rad") if k in self.model_fields_set]
+        if given:
+            raise ValueError(f"give {given[0]} or screw_root_diameter_m (which computes it), not both")
+        if self.screw_root_diameter_m >= self.screw_diameter_m:
+            raise ValueError(f"screw_root_diameter_m = {self.screw_root_diameter_m} must be below screw_diameter_m")
+        if self.nut_position_m is not None and self.nut_position_m >= self.screw_length_m:
+            raise ValueError(f"nut_position_m = {self.nut_position_m} must be within screw_length_m")
+        return self
 
 
 class LinearMotorSpec(AxisSpec):
@@ -339,9 +376,15 @@ class DatasheetMachine(Machine):
         }
         for a in m.stacking:
             ax = self.spec.axes[a]
-            values = ax.model_dump(exclude={"type", "limits"})
+            values = ax.model_dump(exclude={"type", "limits", "screw_support"})
             if isinstance(ax, BallScrewSpec) and ax.screw_inertia_kg_m2 is None:
                 values["screw_inertia_kg_m2"] = screw_inertia_kg_m2(ax.screw_diameter_m, ax.screw_length_m)
+            if isinstance(ax, BallScrewSpec) and ax.screw_root_diameter_m is not None and ax.nut_position_m is None:
+                values["nut_position_m"] = ax.screw_length_m / 2.0
+            if isinstance(ax, BallScrewSpec) and ax.screw_root_diameter_m is not None:
+                del values["k_axial_N_per_m"], values["k_screw_torsion_N_m_per_rad"]  # computed
+            elif isinstance(ax, BallScrewSpec):
+                del values["k_nut_N_per_m"], values["k_bearing_N_per_m"]  # the shaft's, not given
             for key, value in values.items():
                 if value is None:
                     continue
@@ -353,7 +396,7 @@ class DatasheetMachine(Machine):
                     f"{a.upper()} axis ({ax.type}): {key}" + (f", {field.description}" if field.description else ""),
                     positive=positive,
                     nonnegative=not positive,
-                    infinite=key.startswith(("k_axial", "k_torsion", "k_screw_torsion")),
+                    infinite=key.startswith(("k_axial", "k_torsion", "k_screw_torsion", "k_nut", "k_bearing")),
                 )
         return out
 
@@ -385,7 +428,7 @@ class DatasheetMachine(Machine):
         lead = params[f"{a}_screw_lead_m"] / (2.0 * math.pi)  # m/rad
         n = params[f"{a}_gear_ratio"]
         coupling = params[f"{a}_coupling_inertia_kg_m2"]
-        k_t, k_a = self.torsion_N_m_per_rad(params, a), params[f"{a}_k_axial_N_per_m"]
+        k_t, k_a = self.torsion_N_m_per_rad(params, a), self.axial_N_per_m(params, a)
         motor = (
             (params[f"{a}_motor_inertia_kg_m2"] + params[f"{a}_gear_inertia_kg_m2"]) * n**2 + coupling / 2
         ) / lead**2
@@ -441,18 +484,50 @@ class DatasheetMachine(Machine):
             lead = params[f"{a}_screw_lead_m"] / (2.0 * math.pi)
             if math.isinf(self.torsion_N_m_per_rad(params, a)):
                 pairs.append((f"{a}_motor", f"{a}_screw", params[f"{a}_gear_ratio"]))
-            if math.isinf(params[f"{a}_k_axial_N_per_m"]):
+            if math.isinf(self.axial_N_per_m(params, a)):
                 pairs.append((f"{a}_screw", f"{a}_table", 1.0 / lead))
             leads[a] = lead
         return pairs, leads
 
     # -- the MJCF ---------------------------------------------------------------------------
 
-    @staticmethod
-    def torsion_N_m_per_rad(params, a: str) -> float:
+    def _screw_to_nut(self, params, a: str) -> tuple[float, float, float]:
+        """The shaft's cross-section (m^2) and polar moment (m^4) from its root diameter, and
+        the nut's distance from the drive end (m), where the file gives the root diameter."""
+        d, position = params[f"{a}_screw_root_diameter_m"], params[f"{a}_nut_position_m"]
+        if not position < params[f"{a}_screw_length_m"]:
+            raise TwinInputError(
+                f"{a}_nut_position_m", position, f"must be within the screw's {params[f'{a}_screw_length_m']} m"
+            )
+        return math.pi * d**2 / 4.0, math.pi * d**4 / 32.0, position
+
+    def axial_N_per_m(self, params, a: str) -> float:
+        """Axis ``a``'s axial stiffness (N/m): the file's ``k_axial_N_per_m``, or, with the
+        shaft's root diameter, the nut, the bearings and the shaft up to the nut in series. The
+        shaft at the nut's distance a from the drive end: E A / a held at the drive end only
+        (fixed_free), E A L / (a (L - a)) held at both (fixed_fixed, the two lengths in parallel;
+        THK's ball screw catalogue, "Axial rigidity of the feed screw system")."""
+        if f"{a}_screw_root_diameter_m" not in params:
+            return params[f"{a}_k_axial_N_per_m"]
+        area, _, position = self._screw_to_nut(params, a)
+        length = params[f"{a}_screw_length_m"]
+        shaft = STEEL_YOUNG_MODULUS_PA * area / position
+        axis = self.spec.axes[a]
+        if isinstance(axis, BallScrewSpec) and axis.screw_support == "fixed_fixed":
+            shaft *= length / (length - position)
+        compliance = 1.0 / shaft + 1.0 / params[f"{a}_k_nut_N_per_m"] + 1.0 / params[f"{a}_k_bearing_N_per_m"]
+        return 1.0 / compliance
+
+    def torsion_N_m_per_rad(self, params, a: str) -> float:
         """The drive train's torsional stiffness of axis ``a`` (N m/rad): the coupling's and the
-        screw's own in series; infinite where both are rigid."""
-        compliance = sum(1.0 / params[f"{a}_{key}"] for key in ("k_torsion_N_m_per_rad", "k_screw_torsion_N_m_per_rad"))
+        screw's own in series (the file's ``k_screw_torsion_N_m_per_rad``, or with the root
+        diameter G J / a up to the nut); infinite where both are rigid."""
+        if f"{a}_screw_root_diameter_m" in params:
+            _, polar, position = self._screw_to_nut(params, a)
+            screw = STEEL_SHEAR_MODULUS_PA * polar / position
+        else:
+            screw = params[f"{a}_k_screw_torsion_N_m_per_rad"]
+        compliance = 1.0 / params[f"{a}_k_torsion_N_m_per_rad"] + 1.0 / screw
         return math.inf if compliance == 0.0 else 1.0 / compliance
 
     def fastest_mode_hz(self, params) -> float:
@@ -551,7 +626,7 @@ class DatasheetMachine(Machine):
         lead = params[f"{a}_screw_lead_m"] / (2.0 * math.pi)
         coupling = params[f"{a}_coupling_inertia_kg_m2"]
         nut = params[f"{a}_nut_mass_kg"]
-        k_torsion, k_axial = self.torsion_N_m_per_rad(params, a), params[f"{a}_k_axial_N_per_m"]
+        k_torsion, k_axial = self.torsion_N_m_per_rad(params, a), self.axial_N_per_m(params, a)
         # half the coupling on each side of a compliant coupling; the nut on the screw's side of a
         # compliant nut (as inertia nut p^2), on the table where the nut is rigid
         motor_inertia = params[f"{a}_motor_inertia_kg_m2"] + params[f"{a}_gear_inertia_kg_m2"]
@@ -655,7 +730,7 @@ def machine_file_text(machine: DatasheetMachine, params: dict[str, float], note:
         lines.append(f"{key} = {_toml_value(value)}")
     for a, ax in spec.axes.items():
         lines += ["", f"[axes.{a}]"]
-        for key, value in ax.model_dump(exclude={"limits"}, exclude_none=True).items():
+        for key, value in ax.model_dump(exclude={"limits"}, exclude_none=True, exclude_unset=True).items():
             lines.append(f"{key} = {_toml_value(value)}")
         lines += ["", f"[axes.{a}.limits]"]
         for key, value in ax.limits.model_dump().items():
