@@ -31,7 +31,7 @@ from controllers.lti import SisoTf
 from twin.errors import SimulationDiverged, TwinInputError
 from twin.machines import BuiltMachine, build
 from twin.references import Step
-from twin.sim.drive import FEEDBACK, Encoder
+from twin.sim.drive import Encoder
 from twin.sim.runner import simulate
 
 LOOPS = ("open", "velocity", "position")
@@ -89,7 +89,7 @@ class FrfSettings:
             ("--loop", self.loop, LOOPS),
             ("--sensor", self.sensor, SENSORS),
             ("--excitation", self.excitation, EXCITATIONS),
-            ("--feedback", self.feedback, FEEDBACK),
+            ("--feedback", self.feedback, ("motor", "table")),
         ):
             if value not in allowed:
                 raise TwinInputError(name, value, f"must be one of {', '.join(allowed)}")
