@@ -79,7 +79,8 @@ def main(machines: list[str]) -> list[dict]:
             print(Path(machine).name)
             for axis, (measured, model) in row["modes"].items():
                 print(
-                    f"  modes {axis}: measured {np.round(measured, 1).tolist()} Hz, model {np.round(model, 1).tolist()} Hz"
+                    f"  modes {axis}: measured {np.round(measured, 1).tolist()} Hz, "
+                    f"model {np.round(model, 1).tolist()} Hz"
                 )
             c = row["calibration"]
             print("  calibration of the hidden variant, fit index", f"{c['fit_index_pct']['after']:.3f} %:")
@@ -95,9 +96,10 @@ def main(machines: list[str]) -> list[dict]:
             for axis, design in row["tune"]["axes"].items():
                 g, v, p = design["gains"], design["velocity_loop"], design["position_loop"]
                 print(
-                    f"  tune {axis} ({row['tune']['feedback']}): kp {g['kp_pos']:.4g} 1/s, kv {g['kp_vel']:.4g} V s/m, "
-                    f"Ti {1e3 * g['ti_vel_s']:.3g} ms, notch {g['notch_hz']:.1f} Hz; velocity loop {v['crossover_hz']:.1f} Hz "
-                    f"PM {v['phase_margin_deg']:.1f} deg GM {v['gain_margin_db']:.2f} dB at {v['gain_margin_hz']:.0f} Hz; "
+                    f"  tune {axis} ({row['tune']['feedback']}): kp {g['kp_pos']:.4g} 1/s, "
+                    f"kv {g['kp_vel']:.4g} V s/m, Ti {1e3 * g['ti_vel_s']:.3g} ms, notch {g['notch_hz']:.1f} Hz; "
+                    f"velocity loop {v['crossover_hz']:.1f} Hz PM {v['phase_margin_deg']:.1f} deg "
+                    f"GM {v['gain_margin_db']:.2f} dB at {v['gain_margin_hz']:.0f} Hz; "
                     f"position loop PM {p['phase_margin_deg']:.1f} deg GM {p['gain_margin_db']:.2f} dB at "
                     f"{p['gain_margin_hz']:.0f} Hz; bandwidth {design['bandwidth_hz']:.1f} Hz"
                 )

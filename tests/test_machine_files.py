@@ -364,8 +364,8 @@ def test_the_part_scenario_holds_the_tuned_gains(name, tuned):
 
     scenario = tomllib.loads((EXAMPLES / f"{name}_part.toml").read_text())
     assert scenario["machine"] == f"{name}_xy.toml"
-    design = tuned if name == "mid_size" else tune(str(EXAMPLES / f"{name}_xy.toml"))
-    for axis, design in design["axes"].items():
+    result = tuned if name == "mid_size" else tune(str(EXAMPLES / f"{name}_xy.toml"))
+    for axis, design in result["axes"].items():
         written = scenario["controllers"][axis]["params"]
         for key, value in design["gains"].items():
             assert written.get(key, 0.0) == pytest.approx(value, rel=5e-4), (axis, key)
