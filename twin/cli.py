@@ -501,13 +501,15 @@ def frf(
     H1 with coherence, resonances and anti-resonances) beside the model's."""
     from twin.commissioning.frf import FrfSettings, measure, write_bode
     from twin.machines import get_machine
+    from twin.machines.datasheet import DatasheetMachine
 
     _check_output("--rrd", rrd, ".rrd")
     _check_folder(plots)
     overrides = _parse_sets(sets or [])
+    at_position = ""  # the stiffness where the nut is, for the summary
     if position is not None:
         spec = get_machine(machine)
-        if f"{axis}_nut_position_m" not in spec.parameters:
+        if not isinstance(spec, DatasheetMachine) or f"{axis}_nut_position_m" not in spec.parameters:
             raise TwinInputError(
                 "--position",
                 position,
@@ -515,6 +517,11 @@ def frf(
                 "nut's position)",
             )
         overrides[f"{axis}_nut_position_m"] = position
+        params = spec.resolve(overrides)
+        at_position = (
+            f"  nut at {position:g} m: axial stiffness {spec.axial_N_per_m(params, axis) / 1e6:.4g} N/um, "
+            f"torsion {spec.torsion_N_m_per_rad(params, axis):.4g} N m/rad"
+        )
     settings = FrfSettings(
         axis=axis,
         loop=loop,  # type: ignore[arg-type]
@@ -535,12 +542,8 @@ def frf(
             f"{excitation} {amplitude:g} V, "
             f"{len(result['frequency_hz'])} lines {result['frequency_hz'][0]:.2f}-{result['frequency_hz'][-1]:.0f} Hz"
         )
-        if position is not None:
-            params = spec.resolve(overrides)
-            typer.echo(
-                f"  nut at {position:g} m: axial stiffness {spec.axial_N_per_m(params, axis) / 1e6:.4g} N/um, "  # type: ignore[attr-defined]
-                f"torsion {spec.torsion_N_m_per_rad(params, axis):.4g} N m/rad"  # type: ignore[attr-defined]
-            )
+        if at_position:
+            typer.echo(at_position)
         for label, key in (("resonances", "resonances_hz"), ("anti-resonances", "antiresonances_hz")):
             measured, model = (", ".join(f"{f:.1f}" for f in result[k]) or "none" for k in (key, f"model_{key}"))
             typer.echo(f"  {label} (Hz): {measured}   model: {model}")

@@ -106,12 +106,14 @@ def time_response_nrmse(bm, reference, duration_s: float = 1.0, disturbances=())
     for k in range(n_axes):
         u = np.zeros((n, n_axes))
         u[:, k] = test
+        u_delayed = np.vstack([np.zeros((delay, n_axes)), u[: n - delay]]) if delay else u
+        y_ref = np.atleast_2d(control.forced_response(g, T=t, U=u_delayed.T).outputs).T
         # a light, strong axis would run the 1 V doublet into its travel's end (the model has
-        # none): scaled to move at most a fifth of the half travel, as the model predicts it
-        unit = np.atleast_2d(control.forced_response(g, T=t, U=u.T).outputs).T
+        # none): scaled to move at most a fifth of the half travel, as the (linear) model predicts it
         table = bm.model.joint(bm.axes[k].table_joint)
         half_travel = 0.5 * float(table.range[1] - table.range[0]) if table.limited[0] else math.inf
-        u *= min(1.0, 0.2 * half_travel / float(np.abs(unit).max()))
+        scale = min(1.0, 0.2 * half_travel / float(np.abs(y_ref).max()))
+        u, y_ref = scale * u, scale * y_ref
         res = simulate(
             bm,
             open_loop(u, dt, [a.name for a in bm.axes]),
@@ -122,8 +124,6 @@ def time_response_nrmse(bm, reference, duration_s: float = 1.0, disturbances=())
             progress=False,
             record_every=1,
         )
-        u_delayed = np.vstack([np.zeros((delay, n_axes)), u[: n - delay]]) if delay else u
-        y_ref = np.atleast_2d(control.forced_response(g, T=t, U=u_delayed.T).outputs).T
         err = res.table_position_m() - y_ref
         worst = max(worst, float(np.sqrt(np.mean(err**2)) / np.sqrt(np.mean(y_ref**2))))
     return worst

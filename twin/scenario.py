@@ -391,26 +391,20 @@ def prepare(scn: Scenario):
     if duration_s is None:
         raise TwinInputError("duration_s", None, f"give it: a {scn.reference.type} reference has no end of its own")
     drive = Drive(len(names), substeps, timestep_s, delay, scn.drive.saturation_V)
+
+    def resolution(key: str) -> np.ndarray:
+        """``sensors.<key>``, or the machine's own where the scenario gives none."""
+        given = getattr(scn.sensors, key)
+        return _per_axis(list(getattr(machine, key)) if given is None else given, len(names), f"sensors.{key}")
+
     encoder = Encoder(
-        _per_axis(
-            list(machine.encoder_resolution_m)
-            if scn.sensors.encoder_resolution_m is None
-            else scn.sensors.encoder_resolution_m,
-            len(names),
-            "sensors.encoder_resolution_m",
-        ),
+        resolution("encoder_resolution_m"),
         _per_axis(scn.sensors.noise_std_m, len(names), "sensors.noise_std_m"),
         np.array(machine.sensor_gains),
         scn.seed,
         scn.sensors.velocity,
         scn.sensors.feedback or machine.feedback,
-        _per_axis(
-            list(machine.motor_encoder_resolution_m)
-            if scn.sensors.motor_encoder_resolution_m is None
-            else scn.sensors.motor_encoder_resolution_m,
-            len(names),
-            "sensors.motor_encoder_resolution_m",
-        ),
+        resolution("motor_encoder_resolution_m"),
     )
     disturbances = [_disturbance(d, i, names, scn.seed) for i, d in enumerate(scn.disturbances)]
     if scn.inspect and scn.stock is None:

@@ -100,8 +100,7 @@ def tune_axis(
     pos_resp = zoh_response(g_pos, dt, bm.delay_s, freqs)
     # a semi-closed loop moves the table through the drive train: its response to the reference
     # is the loop's times table / motor, whose peak the design bounds
-    table_resp = zoh_response(bm.plant[i][i], dt, bm.delay_s, freqs)
-    to_table = table_resp / pos_resp if position_sensor == "motor" else None
+    to_table = zoh_response(bm.plant[i][i], dt, bm.delay_s, freqs) / pos_resp if position_sensor == "motor" else None
     d_resp = (zs - 1) / (dt * zs)
     s_tustin = 2.0 / dt * (zs[:-1] - 1) / (zs[:-1] + 1)  # Nyquist is s = infinity
     for f_c in np.geomspace(0.4 * nyquist, 2.0, 80):

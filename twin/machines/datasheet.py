@@ -377,14 +377,15 @@ class DatasheetMachine(Machine):
         for a in m.stacking:
             ax = self.spec.axes[a]
             values = ax.model_dump(exclude={"type", "limits", "screw_support"})
-            if isinstance(ax, BallScrewSpec) and ax.screw_inertia_kg_m2 is None:
-                values["screw_inertia_kg_m2"] = screw_inertia_kg_m2(ax.screw_diameter_m, ax.screw_length_m)
-            if isinstance(ax, BallScrewSpec) and ax.screw_root_diameter_m is not None and ax.nut_position_m is None:
-                values["nut_position_m"] = ax.screw_length_m / 2.0
-            if isinstance(ax, BallScrewSpec) and ax.screw_root_diameter_m is not None:
-                del values["k_axial_N_per_m"], values["k_screw_torsion_N_m_per_rad"]  # computed
-            elif isinstance(ax, BallScrewSpec):
-                del values["k_nut_N_per_m"], values["k_bearing_N_per_m"]  # the shaft's, not given
+            if isinstance(ax, BallScrewSpec):
+                if ax.screw_inertia_kg_m2 is None:
+                    values["screw_inertia_kg_m2"] = screw_inertia_kg_m2(ax.screw_diameter_m, ax.screw_length_m)
+                if ax.screw_root_diameter_m is None:
+                    del values["k_nut_N_per_m"], values["k_bearing_N_per_m"]  # the shaft's, not given
+                else:
+                    del values["k_axial_N_per_m"], values["k_screw_torsion_N_m_per_rad"]  # computed
+                    if ax.nut_position_m is None:
+                        values["nut_position_m"] = ax.screw_length_m / 2.0
             for key, value in values.items():
                 if value is None:
                     continue
@@ -470,8 +471,8 @@ class DatasheetMachine(Machine):
         return tuple(params[f"{a}_encoder_resolution_m"] for a in self.spec.machine.stacking)
 
     def motor_encoder_resolution(self, params) -> tuple[float, ...]:
-        travel = self.motor_travel(params)
-        counts = {a: params.get(f"{a}_motor_encoder_counts_per_rev", 0.0) for a in travel}
+        travel = self.motor_travel(params)  # the ball-screw axes'
+        counts = {a: params[f"{a}_motor_encoder_counts_per_rev"] for a in travel}
         return tuple(
             2.0 * math.pi * travel[a] / counts[a] if counts.get(a) else 0.0 for a in self.spec.machine.stacking
         )
