@@ -48,6 +48,15 @@ PEAK_PROMINENCE_DB = 3.0
 #: ... within this factor of its frequency on either side.
 PEAK_SPAN = 1.5
 MIN_COHERENCE = 0.9
+#: ... and by this many standard deviations of the magnitude (median over this many lines on
+#: either side), where the estimate gives them (a multisine's BLA).
+PEAK_UNCERTAINTIES = 3.0
+PEAK_LINES = 4
+#: A multisine's period (samples: 0.82 s at 0.1 ms, 1.22 Hz lines), the periods each
+#: realization is measured over after one period of settling, and the fewest realizations.
+MULTISINE_PERIOD = 8192
+MULTISINE_PERIODS = 2
+MIN_REALIZATIONS = 4
 
 
 @dataclass(frozen=True)
@@ -101,6 +110,14 @@ class FrfSettings:
             )
         if not (10 <= self.f_max_hz <= 0.4 / SAMPLE_PERIOD_S):
             raise TwinInputError("--f-max", self.f_max_hz, f"must be in [10, {0.4 / SAMPLE_PERIOD_S:g}] Hz")
+        shortest = MIN_REALIZATIONS * (1 + MULTISINE_PERIODS) * MULTISINE_PERIOD * SAMPLE_PERIOD_S
+        if self.excitation == "multisine" and self.duration_s < shortest:
+            raise TwinInputError(
+                "--duration",
+                self.duration_s,
+                f"a multisine needs {MIN_REALIZATIONS} realizations of {1 + MULTISINE_PERIODS} periods: "
+                f"at least {math.ceil(10 * shortest) / 10:g} s",
+            )
 
 
 def excitation_signal(kind: str, n: int, dt: float, amplitude: float, f_max_hz: float, seed: int) -> np.ndarray:
@@ -108,8 +125,10 @@ def excitation_signal(kind: str, n: int, dt: float, amplitude: float, f_max_hz: 
 
     prbs: a maximum-length sequence (``scipy.signal.max_len_seq``) of +-amplitude, each bit held
     for ``round(0.4 / (f_max dt))`` samples (flat spectrum to about f_max); chirp: logarithmic
-    sweep from 1 Hz to f_max over the record (``scipy.signal.chirp``); multisine: every DFT bin of
-    a 2^k-sample period up to f_max with random phases, scaled to the amplitude's peak.
+    sweep from 1 Hz to f_max over the record (``scipy.signal.chirp``); multisine: realizations
+    (:func:`multisine_realizations`), each every DFT line of a :data:`MULTISINE_PERIOD`-sample
+    period up to f_max with its own random phases, scaled to the amplitude's peak and repeated
+    for 1 + :data:`MULTISINE_PERIODS` periods.
     """
     rng = np.random.default_rng(seed)
     if kind == "prbs":
@@ -120,12 +139,99 @@ def excitation_signal(kind: str, n: int, dt: float, amplitude: float, f_max_hz: 
     t = np.arange(n) * dt
     if kind == "chirp":
         return amplitude * signal.chirp(t, 1.0, t[-1], f_max_hz, method="logarithmic", phi=-90)
-    period = SEGMENT
-    bins = np.arange(1, int(f_max_hz * period * dt) + 1)
-    spectrum = np.zeros(period // 2 + 1, complex)
-    spectrum[bins] = np.exp(2j * math.pi * rng.random(len(bins)))
-    one = np.fft.irfft(spectrum, period)
-    return amplitude * np.resize(one / np.abs(one).max(), n)
+    lines = np.arange(1, int(f_max_hz * MULTISINE_PERIOD * dt) + 1)
+    blocks = []
+    for _ in range(max(1, multisine_realizations(n))):
+        spectrum = np.zeros(MULTISINE_PERIOD // 2 + 1, complex)
+        spectrum[lines] = np.exp(2j * math.pi * rng.random(len(lines)))
+        one = np.fft.irfft(spectrum, MULTISINE_PERIOD)
+        blocks.append(np.tile(one / np.abs(one).max(), 1 + MULTISINE_PERIODS))
+    return amplitude * np.resize(np.concatenate(blocks), n)
+
+
+def multisine_realizations(n: int) -> int:
+    """How many whole realizations (1 + :data:`MULTISINE_PERIODS` periods each) a record of
+    ``n`` samples holds."""
+    return n // ((1 + MULTISINE_PERIODS) * MULTISINE_PERIOD)
+
+
+def welch_frf(d: np.ndarray, u: np.ndarray, y: np.ndarray, dt: float, f_max_hz: float) -> dict:
+    """The FRF G = S_dy / S_du and its coherence (see the module docstring) from Welch's averaged
+    cross spectra of the excitation ``d``, the drive input ``u`` (V) and the position ``y`` (m),
+    sampled at ``dt``, on the lines from the second to ``f_max_hz``."""
+    kw = dict(fs=1.0 / dt, nperseg=SEGMENT, window="hann", detrend="linear")
+    freqs, s_du = signal.csd(d, u, **kw)
+    _, s_dy = signal.csd(d, y, **kw)
+    _, s_dd = signal.welch(d, **kw)
+    _, s_uu = signal.welch(u, **kw)
+    _, s_yy = signal.welch(y, **kw)
+    band = (freqs >= 2.0 / (SEGMENT * dt)) & (freqs <= f_max_hz)
+    return {
+        "frequency_hz": freqs[band],
+        "frf": s_dy[band] / s_du[band],
+        "coherence": _coherence(s_du[band], s_dy[band], s_dd[band], s_uu[band], s_yy[band]),
+    }
+
+
+def _coherence(s_du, s_dy, s_dd, s_uu, s_yy) -> np.ndarray:
+    """The product of the excitation's coherence with the input and with the output."""
+    return np.clip(np.abs(s_du) ** 2 / (s_dd * s_uu) * np.abs(s_dy) ** 2 / (s_dd * s_yy), 0.0, 1.0)
+
+
+def multisine_frf(d: np.ndarray, u: np.ndarray, y: np.ndarray, dt: float, f_max_hz: float) -> dict:
+    """The best linear approximation (BLA) from a multisine's realizations, with the noise and the
+    nonlinear distortion on it per line (Pintelon and Schoukens, System Identification, ch. 3-4).
+
+    Each realization's periods after the first (settling) are taken whole (no window: the
+    excitation is periodic) and averaged; the position through its sample differences, so an
+    open loop's drift falls on the DC line only.  Over the realizations, G = S_dy / S_du (the
+    ratio through the excitation, as for Welch) and the coherence as for Welch: a nonlinearity
+    such as Coulomb friction adds to each realization's output what does not repeat from one
+    set of random phases to the next, so it lowers the coherence here (within one periodic
+    excitation it repeats exactly and looked coherent).  The noise's variance on G comes from
+    the spread over the periods, the total from the spread over the realizations, and the
+    stochastic nonlinear distortion is their difference.
+
+    Returns
+    -------
+    dict
+        ``frequency_hz`` (the excited lines up to ``f_max_hz``), ``frf`` (m/V), ``coherence``,
+        ``noise_db`` and ``distortion_db`` (the standard deviations on G, dB re 1 m/V; -inf
+        where none), ``realizations``.
+    """
+    realizations = multisine_realizations(len(d))
+    n, p = MULTISINE_PERIOD, MULTISINE_PERIODS
+
+    def measured_periods(x: np.ndarray) -> np.ndarray:
+        """(realization, period, sample) of the periods after each realization's first."""
+        return x[: realizations * (1 + p) * n].reshape(realizations, 1 + p, n)[:, 1:, :]
+
+    lines = np.arange(1, int(f_max_hz * n * dt) + 1)
+    spectra = {name: np.fft.rfft(measured_periods(x), axis=2)[:, :, lines] for name, x in (("d", d), ("u", u))}
+    steps = np.diff(y, prepend=y[0])  # y[i] - y[i - 1]: a period's own samples and the one before it
+    rotation = 1.0 - np.exp(-2j * math.pi * lines / n)  # a periodic signal's difference: (1 - 1/z) Y
+    spectra["y"] = np.fft.rfft(measured_periods(steps), axis=2)[:, :, lines] / rotation
+    ratio = spectra["y"] / spectra["u"]  # each period's G
+    mean = {name: value.mean(axis=1) for name, value in spectra.items()}  # each realization's
+    g_each = mean["y"] / mean["u"]
+
+    def cross(a: str, b: str) -> np.ndarray:
+        return (np.conj(mean[a]) * mean[b]).mean(axis=0)
+
+    s_du, s_dy = cross("d", "u"), cross("d", "y")
+    noise_var = ratio.var(axis=1, ddof=1).mean(axis=0) / (p * realizations)
+    total_var = g_each.var(axis=0, ddof=1) / realizations
+    with np.errstate(divide="ignore"):
+        noise_db = 10 * np.log10(noise_var)
+        distortion_db = 10 * np.log10(np.maximum(total_var - noise_var, 0.0))
+    return {
+        "frequency_hz": lines / (n * dt),
+        "frf": s_dy / s_du,
+        "coherence": _coherence(s_du, s_dy, cross("d", "d").real, cross("u", "u").real, cross("y", "y").real),
+        "noise_db": noise_db,
+        "distortion_db": distortion_db,
+        "realizations": realizations,
+    }
 
 
 def _loop_controller(bm: BuiltMachine, settings: FrfSettings, dt: float, k: int):
@@ -184,10 +290,14 @@ def sensor_plant(bm: BuiltMachine, axis: int, sensor: str) -> SisoTf:
     return bm.plant[axis][axis]
 
 
-def peaks(freqs: np.ndarray, mag_db: np.ndarray, coherence: np.ndarray) -> tuple[list[float], list[float]]:
+def peaks(
+    freqs: np.ndarray, mag_db: np.ndarray, coherence: np.ndarray, uncertainty_db: np.ndarray | None = None
+) -> tuple[list[float], list[float]]:
     """Resonances and anti-resonances (Hz): coherent local maxima and minima of the magnitude
     above the rigid body's -40 dB/decade slope, prominent by PEAK_PROMINENCE_DB within a
-    factor PEAK_SPAN of their frequency."""
+    factor PEAK_SPAN of their frequency and, where the magnitude's standard deviation per line
+    ``uncertainty_db`` is known, by PEAK_UNCERTAINTIES times its median over the peak's
+    PEAK_LINES lines on either side (a BLA's scatter from friction is no mode)."""
     trend = mag_db + 40.0 * np.log10(freqs)  # a rigid body is flat here
     smooth = np.convolve(np.pad(trend, 1, mode="edge"), np.ones(3) / 3, mode="valid")
     inside = (freqs > 1.02 * freqs[0]) & (freqs < 0.98 * freqs[-1])  # a peak needs both flanks
@@ -206,7 +316,11 @@ def peaks(freqs: np.ndarray, mag_db: np.ndarray, coherence: np.ndarray) -> tuple
             if not left.any() or not right.any():
                 continue
             base = max((sign * smooth[left]).min(), (sign * smooth[right]).min())
-            if sign * smooth[i] - base < PEAK_PROMINENCE_DB:
+            needed = PEAK_PROMINENCE_DB
+            if uncertainty_db is not None:
+                near = uncertainty_db[max(0, i - PEAK_LINES) : i + PEAK_LINES + 1]
+                needed = max(needed, PEAK_UNCERTAINTIES * float(np.median(near)))
+            if sign * smooth[i] - base < needed:
                 continue
             # the unsmoothed extreme, above the rigid body's slope as found (the raw magnitude
             # falls 2 dB a line at 5 Hz: its extreme is not the mode's)
@@ -284,21 +398,17 @@ def measure(machine: str, settings: FrfSettings, overrides: dict[str, float] | N
         y = run.qpos[settle:][:, bm.joint_qpos_index(motor)] * bm.motor_travel_m_per_rad[bm.axes[k].name]
     else:
         y = run.table_position_m()[settle:, k]
-    e = d[settle:, k]
-    fs = 1.0 / dt
-    kw = dict(fs=fs, nperseg=SEGMENT, window="hann", detrend="linear")
-    freqs, s_du = signal.csd(e, u, **kw)
-    _, s_dy = signal.csd(e, y, **kw)
-    _, s_dd = signal.welch(e, **kw)
-    _, s_uu = signal.welch(u, **kw)
-    _, s_yy = signal.welch(y, **kw)
-    band = (freqs >= 2.0 / (SEGMENT * dt)) & (freqs <= settings.f_max_hz)
-    freqs, s_du, s_dy, s_dd, s_uu, s_yy = (a[band] for a in (freqs, s_du, s_dy, s_dd, s_uu, s_yy))
-    g = s_dy / s_du
-    coherence = np.clip(np.abs(s_du) ** 2 / (s_dd * s_uu) * np.abs(s_dy) ** 2 / (s_dd * s_yy), 0.0, 1.0)
+    estimate = (multisine_frf if settings.excitation == "multisine" else welch_frf)(
+        d[settle:, k], u, y, dt, settings.f_max_hz
+    )
+    freqs, g, coherence = estimate["frequency_hz"], estimate["frf"], estimate["coherence"]
     model = model_frf(bm, k, settings.sensor, freqs, dt)
     mag_db, model_db = 20 * np.log10(np.abs(g)), 20 * np.log10(np.abs(model))
-    resonances, antiresonances = peaks(freqs, mag_db, coherence)
+    uncertainty_db = None
+    if "distortion_db" in estimate:  # the BLA's standard deviation, in dB of its magnitude
+        spread = np.sqrt(10 ** (estimate["noise_db"] / 10) + 10 ** (estimate["distortion_db"] / 10))
+        uncertainty_db = 20 * np.log10(1 + spread / np.abs(g))
+    resonances, antiresonances = peaks(freqs, mag_db, coherence, uncertainty_db)
     model_res, model_anti = model_modes(bm, k, settings.sensor)
     # a dip of a sensor away from the drive (the table of a ball screw) is no anti-resonance:
     # a non-collocated transfer function has no zeros there
@@ -329,10 +439,25 @@ def measure(machine: str, settings: FrfSettings, overrides: dict[str, float] | N
         if collocated
         else "the table's sensor is not collocated with the drive: "
         "its dips are not anti-resonances (measure --sensor motor)",
+        **(
+            {
+                "realizations": estimate["realizations"],
+                "noise_db": _finite_or_none(estimate["noise_db"]),
+                "distortion_db": _finite_or_none(estimate["distortion_db"]),
+                "levels_note": "standard deviations on the BLA (dB re 1 m/V); null: none measurable",
+            }
+            if "distortion_db" in estimate
+            else {}
+        ),
         "coherent_share": float(good.mean()),
         "max_model_error_db": float(np.abs(mag_db - model_db)[good].max()) if good.any() else None,
         "run": run,
     }
+
+
+def _finite_or_none(values: np.ndarray) -> list[float | None]:
+    """A JSON list: each finite value as it is, the others as null."""
+    return [float(v) if math.isfinite(v) else None for v in values]
 
 
 def write_bode(result: dict, path) -> None:
@@ -350,6 +475,11 @@ def write_bode(result: dict, path) -> None:
         ax_m.axvline(fr, color="tab:red", lw=0.8, alpha=0.6)
     for fa in result["antiresonances_hz"]:
         ax_m.axvline(fa, color="tab:green", lw=0.8, alpha=0.6)
+    if "distortion_db" in result:  # a multisine's BLA: the levels on it
+        levels = {"noise_db": "noise", "distortion_db": "nonlinear distortion"}
+        for key, label in levels.items():
+            level = np.array([np.nan if v is None else v for v in result[key]], float)
+            ax_m.semilogx(f, level, ".", ms=2, label=f"{label} (std on the BLA)")
     ax_m.set_ylabel("magnitude (dB re 1 m/V)")
     ax_m.legend()
     ax_p.semilogx(f, np.degrees(np.unwrap(np.radians(result["phase_deg"]))))
