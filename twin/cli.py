@@ -609,6 +609,13 @@ def calibrate(
             typer.echo(f"  {s}: not identifiable, kept at {result['nominal'][s]:.6g}: {why}")
         fi = result["fit_index_pct"]
         typer.echo("  fit index: " + ", ".join(f"{k} {v:.2f} %" for k, v in fi.items()))
+        if "residual_rms_m" in solver:
+            typer.echo(
+                f"  residual {solver['residual_rms_m']:.3g} m RMS, the trace's noise {solver['noise_floor_m']:.3g} m"
+                + (f": {solver['note']}" if "note" in solver else "")
+            )
+        for s, why in result["not_excited"].items():
+            typer.echo(f"  {s}: not excited: {why}")
     if out is not None:
         note = f"calibrated by twin calibrate against {trace}: " + ", ".join(
             f"{s} = {v:.6g}" for s, v in result["fitted"].items()
@@ -617,6 +624,37 @@ def calibrate(
         assert isinstance(calibrated, DatasheetMachine)  # --out was refused above for a bundled machine
         out.write_text(machine_file_text(calibrated, result["fitted"], note), encoding="utf-8")
         typer.echo(f"calibrated machine file written to {out}", err=as_json)
+
+
+@app.command()
+@_guard
+def excite(
+    machine: str = typer.Argument(..., help="A machine (twin list) or a machine file (FILE.toml)"),
+    out: Path = typer.Option(..., "--out", help="The trace to write, .csv or .parquet"),
+    axis: str = typer.Option("x", "--axis", help="The axis to excite"),
+    f_max: float = typer.Option(500.0, "--f-max", help="Highest frequency excited, Hz (1.5 x the highest mode)"),
+    amplitude: float = typer.Option(2.0, "--amplitude", help="PRBS amplitude, V"),
+    duration: float = typer.Option(0.6, "--duration", help="Length, s (an open loop drifts: keep it short)"),
+    seed: int = typer.Option(1, "--seed", help="Random seed of the PRBS"),
+    simulate: bool = typer.Option(False, "--simulate", help="Add the twin's open-loop response (pos_<axis>_m)"),
+    sets: list[str] = typer.Option(None, "--set", help="Parameter override SYMBOL=VALUE (with --simulate)"),
+):
+    """Write an open-loop PRBS for calibration (time_s, u_<axis>_V at 0.1 ms): play it on the
+    machine, add the measured pos_<axis>_m and give it to twin calibrate --trace; --simulate adds
+    the twin's own response instead."""
+    from twin.commissioning.calibration import excitation_trace, write_table
+
+    if out.suffix not in (".csv", ".parquet"):
+        raise TwinInputError("--out", str(out), "must be a .csv or .parquet file")
+    _check_output("--out", out)
+    columns = excitation_trace(
+        machine, axis, f_max, amplitude, duration, seed, _parse_sets(sets or []), simulate_twin=simulate
+    )
+    write_table(columns, out)
+    typer.echo(
+        f"{out}: {len(columns['time_s'])} samples, PRBS of {amplitude:g} V on {axis} to about {f_max:g} Hz"
+        + (", with the twin's response" if simulate else f": record pos_{axis}_m beside it")
+    )
 
 
 @app.command()
