@@ -5,8 +5,8 @@
 For each machine file (default: the three example ball-screw tables): the modes of X and Y
 measured by `twin frf` (velocity loop on the motor's encoder, PRBS to 1 kHz) beside the
 model's; the calibration of a hidden variant (X's table +20 %, its nut's stiffness -30 %, its
-viscous friction +20 %) from a 0.6 s open-loop PRBS on X, simulated by MuJoCo (not by the
-transfer function the fit uses), with each fitted value's error; and `twin tune`'s gains with
+viscous friction +20 %) from a 0.6 s open-loop PRBS on X, simulated by MuJoCo, read on a 10 nm
+scale with 0.1 um of white noise, with each fitted value's error and standard error; and `twin tune`'s gains with
 their margins over every crossing. `twin fidelity --machine FILE` and `twin run
 examples/machines/<name>_part.toml` give the rest of the docs' table.
 """
@@ -23,6 +23,9 @@ import twin
 from twin.machines import get_machine
 
 EXAMPLES = Path(__file__).resolve().parent / "machines"
+#: The measured trace's scale resolution and its white noise (m): a 10 nm scale, 0.1 um noise.
+SCALE_M = 1e-8
+NOISE_M = 1e-7
 MACHINES = [EXAMPLES / "mid_size_xy.toml", EXAMPLES / "compact_xy.toml", EXAMPLES / "heavy_xy.toml"]
 
 
@@ -47,10 +50,12 @@ def calibration(machine: str, folder: Path) -> dict:
     trace = folder / f"{Path(machine).stem}_trace.parquet"
     start = measured.t_s[np.flatnonzero(measured.u_applied_V[:, 0])[0]]  # after the FRF's settling
     first = measured.t_s < start + 0.6  # at rest until then; the open loop drifts: 0.6 s of it
+    position = measured.table_position_m()[first, 0]
+    noise = np.random.default_rng(0).normal(0.0, NOISE_M, len(position))
     columns = {
         "time_s": measured.t_s[first],
         "u_x_V": measured.u_applied_V[first, 0],
-        "pos_x_m": measured.table_position_m()[first, 0],
+        "pos_x_m": np.round(position / SCALE_M) * SCALE_M + noise,  # as a scale reads it
     }
     pq.write_table(pa.table(columns), trace)
     result = twin.calibrate(machine, trace, list(hidden))
@@ -62,6 +67,7 @@ def calibration(machine: str, folder: Path) -> dict:
         "standard_errors": result["standard_errors"],
         "fit_index_pct": result["fit_index_pct"],
         "unidentifiable": result["unidentifiable"],
+        "solver": result["solver"],
     }
 
 
@@ -83,7 +89,11 @@ def main(machines: list[str]) -> list[dict]:
                     f"model {np.round(model, 1).tolist()} Hz"
                 )
             c = row["calibration"]
-            print("  calibration of the hidden variant, fit index", f"{c['fit_index_pct']['after']:.3f} %:")
+            print(
+                "  calibration of the hidden variant, fit index",
+                f"{c['fit_index_pct']['after']:.3f} %, residual {c['solver']['residual_rms_m']:.3g} m RMS",
+                f"(the trace's noise {c['solver']['noise_floor_m']:.3g} m):",
+            )
             for k, v in c["hidden"].items():
                 if k in c["fitted"]:
                     se = 100 * c["standard_errors"].get(k, float("nan")) / c["fitted"][k]

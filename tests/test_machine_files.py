@@ -341,7 +341,7 @@ def test_a_fit_above_the_traces_noise_says_so(tmp_path):
     pq.write_table(pa.table({"time_s": np.arange(n) * dt, "u_x_V": u[:, 0], "pos_x_m": y}), path)
     r = calibrate(MID, path, ["x_table_mass_kg"])
     assert r["solver"]["noise_floor_m"] == pytest.approx(2e-7, rel=0.1)
-    assert r["solver"]["residual_rms_m"] > 3 * r["solver"]["noise_floor_m"]
+    assert r["solver"]["residual_rms_m"] > 1.2 * r["solver"]["noise_floor_m"]
     assert not r["solver"]["at_noise_floor"] and "a parameter not fitted" in r["solver"]["note"]
 
 

@@ -62,8 +62,10 @@ MAX_CORRELATION = 0.95
 MAX_EVALUATIONS = 200
 #: Multiples of a fitted stiffness's nominal value the solve also starts from.
 STIFFNESS_STARTS = (0.5, 0.7, 1.4, 2.0)
-#: Multiples of the trace's noise (:func:`noise_floor`) a converged fit's residual may reach.
-NOISE_FLOOR_FACTOR = 3.0
+#: Multiples of the trace's noise (:func:`noise_floor`) a fit's residual may reach: a white
+#: residual's RMS over a few thousand samples is known within about 1 %, the noise's estimate
+#: within a few; a fit 10 % above it has not reached its minimum (or the model misses something).
+NOISE_FLOOR_FACTOR = 1.2
 #: Input lines within this many dB of the input's strongest count as excited.
 EXCITED_WITHIN_DB = 20.0
 #: A stiffness is seen through its mode: the input must reach this multiple of the mode.
@@ -391,7 +393,7 @@ def _against_noise(residual_rms_m: float, positions: np.ndarray, resolution_m: n
     if residual_rms_m > NOISE_FLOOR_FACTOR * floor:
         out["at_noise_floor"] = False
         out["note"] = (
-            f"the fit leaves {residual_rms_m:.3g} m RMS, {residual_rms_m / floor:.0f} x the trace's noise "
+            f"the fit leaves {residual_rms_m:.3g} m RMS, {residual_rms_m / floor:.2g} x the trace's noise "
             f"({floor:.3g} m): a local minimum, a parameter not fitted, or a model that cannot explain the data"
         )
     return out
