@@ -380,6 +380,7 @@ def test_a_stiffness_beyond_the_inputs_band_is_named_with_the_excitation_that_wo
         (["--out", "t.csv", "--f-max", "5"], "--f-max = 5.0: must be in [10, 4000] Hz"),
         (["--out", "t.csv", "--duration", "1e9"], "--duration = 1000000000.0: must be in [0.05, 60] s"),
         (["--out", "t.csv", "--axis", "z"], "--axis = 'z': machine axes are ['x', 'y']"),
+        (["--out", "t.csv", "--seed", "-5"], "--seed = -5: must be in [0, 2**32)"),
     ],
 )
 def test_twin_excite_refuses_bad_options_in_one_line(tmp_path, monkeypatch, args, message):

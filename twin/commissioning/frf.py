@@ -102,6 +102,8 @@ class FrfSettings:
         ):
             if value not in allowed:
                 raise TwinInputError(name, value, f"must be one of {', '.join(allowed)}")
+        if not (0 <= self.seed < 2**32):
+            raise TwinInputError("--seed", self.seed, "must be in [0, 2**32)")
         if not (0 < self.amplitude_V <= 10):
             raise TwinInputError("--amplitude", self.amplitude_V, "must be in (0, 10] V")
         if not (2 * SEGMENT * SAMPLE_PERIOD_S <= self.duration_s <= MAX_DURATION_S):
