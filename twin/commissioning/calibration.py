@@ -211,7 +211,9 @@ def calibrate(
         ``nominal``, ``standard_errors``, ``unidentifiable`` (symbol: reason),
         ``fit_index_pct`` (``before``, ``after``, and ``twin``: a twin run with the fitted
         values), ``evaluations`` (of the model, finite differences included), ``parameters``
-        (all values in effect after the fit). ``progress`` shows a bar of the evaluations.
+        (all values in effect after the fit), ``solver`` (convergence; for a time trace the
+        residual beside the trace's noise, m), ``excited_band_hz`` and ``not_excited``
+        (symbol: the excitation that would). ``progress`` shows a bar of the evaluations.
 
     Raises
     ------
