@@ -16,10 +16,9 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-import pyarrow as pa
-import pyarrow.parquet as pq
 
 import twin
+from twin.commissioning.calibration import write_table
 from twin.machines import get_machine
 
 EXAMPLES = Path(__file__).resolve().parent / "machines"
@@ -57,7 +56,7 @@ def calibration(machine: str, folder: Path) -> dict:
         "u_x_V": measured.u_applied_V[first, 0],
         "pos_x_m": np.round(position / SCALE_M) * SCALE_M + noise,  # as a scale reads it
     }
-    pq.write_table(pa.table(columns), trace)
+    write_table(columns, trace)
     result = twin.calibrate(machine, trace, list(hidden))
     errors = {k: result["fitted"][k] / v - 1 for k, v in hidden.items() if k in result["fitted"]}
     return {

@@ -6,7 +6,7 @@ import tomllib
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Union
+from typing import Annotated, Union, overload
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -35,6 +35,14 @@ class StrictSpec(BaseModel):
     """Unknown fields and non-finite numbers (nan, inf) are errors."""
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+@overload
+def axes_indices(names: list[str], axis_names: list[str], field: str) -> tuple[int, ...]: ...
+
+
+@overload
+def axes_indices(names: None, axis_names: list[str], field: str) -> None: ...
 
 
 def axes_indices(names: list[str] | None, axis_names: list[str], field: str) -> tuple[int, ...] | None:

@@ -42,12 +42,20 @@ from scipy import optimize, signal
 from tqdm import tqdm
 
 from controllers.blocks import open_loop
-from twin.commissioning.frf import SAMPLE_PERIOD_S, SENSORS, excitation_signal, model_modes, sensor_plant
+from twin.commissioning.frf import (
+    SENSORS,
+    FrfSettings,
+    excitation_signal,
+    model_modes,
+    sample_period,
+    sensor_plant,
+)
 from twin.errors import SimulationDiverged, TwinInputError
 from twin.machines import BuiltMachine, build, get_machine
 from twin.metrics import fit_index
 from twin.references import Step
 from twin.sim.runner import simulate
+from twin.spec import axes_indices
 
 #: Fewest samples and seconds a time trace must hold.
 MIN_SAMPLES = 200
@@ -272,7 +280,8 @@ def calibrate(
             velocity = np.diff(model_vector(x), axis=0) / dt
             return (velocity - measured_velocity).ravel() / np.std(measured_velocity)
 
-        velocity_floor = math.sqrt(2.0) * noise_floor(y[:, measured], np.array(bm0.encoder_resolution_m)[measured]) / dt
+        position_floor = noise_floor(y[:, measured], np.array(bm0.encoder_resolution_m)[measured])
+        velocity_floor = math.sqrt(2.0) * position_floor / dt
 
         def at_noise_floor(solution) -> bool:  # the velocity's residual within a few times its noise
             rms = float(np.sqrt(np.mean(solution.fun**2))) * np.std(measured_velocity)
@@ -350,8 +359,7 @@ def calibrate(
     if kind == "time":  # confirmed by a twin run with the fitted values, in full
         confirm = replay(build(machine, values(fitted_x)), dt, u, y[0])[:, measured]
         fit_index_pct["twin"] = float(np.mean(fit_index(target, confirm)))
-        resolution = np.array(bm0.encoder_resolution_m)[measured]
-        solver.update(_against_noise(float(np.sqrt(np.mean((confirm - target) ** 2))), target, resolution))
+        solver.update(_against_noise(float(np.sqrt(np.mean((confirm - target) ** 2))), position_floor))
     band_hz = float(columns["frequency_hz"].max()) if kind == "frf" else excited_band_hz(u, dt)
     not_excited = _not_excited(
         machine, values(fitted_x), [s for s, stiffness in zip(fit, stiff) if stiffness], names, band_hz
@@ -386,11 +394,11 @@ def noise_floor(positions: np.ndarray, resolution_m: np.ndarray) -> float:
     return float(np.sqrt(np.mean(noise**2)))
 
 
-def _against_noise(residual_rms_m: float, positions: np.ndarray, resolution_m: np.ndarray) -> dict:
-    """The fit's residual beside the trace's noise (:func:`noise_floor`), and a note where it is
-    over :data:`NOISE_FLOOR_FACTOR` times it: a solve that stopped away from the minimum, a
-    parameter that should be fitted too, or a model that cannot explain the data."""
-    floor = noise_floor(positions, resolution_m)
+def _against_noise(residual_rms_m: float, floor: float) -> dict:
+    """The fit's residual (m RMS) beside the trace's noise ``floor`` (:func:`noise_floor`, m),
+    and a note where it is over :data:`NOISE_FLOOR_FACTOR` times it: a solve that stopped away
+    from the minimum, a parameter that should be fitted too, or a model that cannot explain the
+    data."""
     out: dict = {"residual_rms_m": residual_rms_m, "noise_floor_m": floor, "at_noise_floor": True}
     if residual_rms_m > NOISE_FLOOR_FACTOR * floor:
         out["at_noise_floor"] = False
@@ -450,23 +458,19 @@ def excitation_trace(
     drive input, flat to about ``f_max_hz``, at the FRF's sample period, as trace columns
     (``time_s``, ``u_<axis>_V``) to play on a machine and record its ``pos_<axis>_m``; with
     ``simulate_twin``, the twin's own open-loop response (the machine with ``overrides``)."""
-    from twin.commissioning.frf import FrfSettings
-
-    settings = FrfSettings(axis=axis, amplitude_V=amplitude_V, f_max_hz=f_max_hz, seed=seed)
     bm = build(machine, overrides)
     names = [a.name for a in bm.axes]
-    if axis not in names:
-        raise TwinInputError("--axis", axis, f"machine axes are {names}")
+    (k,) = axes_indices([axis], names, "--axis")
     if not (MIN_DURATION_S <= duration_s <= 60.0):
         raise TwinInputError("--duration", duration_s, f"must be in [{MIN_DURATION_S:g}, 60] s")
-    settings.check()
-    dt = max(1, round(SAMPLE_PERIOD_S / bm.model.opt.timestep)) * bm.model.opt.timestep
+    FrfSettings(axis=axis, amplitude_V=amplitude_V, f_max_hz=f_max_hz, seed=seed).check()
+    dt = sample_period(bm)
     n = max(MIN_SAMPLES, round(duration_s / dt))
     u = np.zeros((n, len(names)))
-    u[:, names.index(axis)] = excitation_signal("prbs", n, dt, amplitude_V, f_max_hz, seed)
-    columns = {"time_s": np.arange(n) * dt, f"u_{axis}_V": u[:, names.index(axis)]}
+    u[:, k] = excitation_signal("prbs", n, dt, amplitude_V, f_max_hz, seed)
+    columns = {"time_s": np.arange(n) * dt, f"u_{axis}_V": u[:, k]}
     if simulate_twin:
-        columns[f"pos_{axis}_m"] = replay(bm, dt, u, np.zeros(len(names)))[:, names.index(axis)]
+        columns[f"pos_{axis}_m"] = replay(bm, dt, u, np.zeros(len(names)))[:, k]
     return columns
 
 
@@ -602,8 +606,7 @@ def _frf_problem(machine, columns, names, axis, values, sensor):
         raise TwinInputError(
             "--trace column", unknown[0], f"unknown in an FRF (columns: {', '.join(needed)}, coherence)"
         )
-    if axis not in names:
-        raise TwinInputError("--axis", axis, f"machine axes are {names}")
+    (k,) = axes_indices([axis], names, "--axis")
     f = columns["frequency_hz"]
     if len(f) < 10:
         raise TwinInputError("--trace", f"{len(f)} lines", "too short: an FRF needs 10 frequency lines")
@@ -611,7 +614,6 @@ def _frf_problem(machine, columns, names, axis, values, sensor):
     if (f <= 0).any() or (np.diff(f) <= 0).any():
         raise TwinInputError("--trace column frequency_hz", f"{f.min():g} Hz", "frequencies must be > 0 and increase")
     g_meas = 10 ** (columns["magnitude_db"] / 20) * np.exp(1j * np.radians(columns["phase_deg"]))
-    k = names.index(axis)
 
     def model_vector(x):
         bm = build(machine, values(x))

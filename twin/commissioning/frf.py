@@ -33,6 +33,7 @@ from twin.machines import BuiltMachine, build
 from twin.references import Step
 from twin.sim.drive import Encoder
 from twin.sim.runner import simulate
+from twin.spec import axes_indices
 
 LOOPS = ("open", "velocity", "position")
 SENSORS = ("motor", "table")
@@ -122,6 +123,12 @@ class FrfSettings:
             )
 
 
+def sample_period(bm: BuiltMachine) -> float:
+    """The measurement's sample period (s): the whole number of physics steps nearest
+    :data:`SAMPLE_PERIOD_S`, at least one."""
+    return max(1, round(SAMPLE_PERIOD_S / bm.model.opt.timestep)) * bm.model.opt.timestep
+
+
 def excitation_signal(kind: str, n: int, dt: float, amplitude: float, f_max_hz: float, seed: int) -> np.ndarray:
     """The excitation (V), ``n`` samples at ``dt``.
 
@@ -199,7 +206,8 @@ def multisine_frf(d: np.ndarray, u: np.ndarray, y: np.ndarray, dt: float, f_max_
     dict
         ``frequency_hz`` (the excited lines up to ``f_max_hz``), ``frf`` (m/V), ``coherence``,
         ``noise_db`` and ``distortion_db`` (the standard deviations on G, dB re 1 m/V; -inf
-        where none), ``realizations``.
+        where none), ``spread`` (G's standard deviation, noise and distortion together, m/V),
+        ``realizations``.
     """
     realizations = multisine_realizations(len(d))
     n, p = MULTISINE_PERIOD, MULTISINE_PERIODS
@@ -232,6 +240,7 @@ def multisine_frf(d: np.ndarray, u: np.ndarray, y: np.ndarray, dt: float, f_max_
         "coherence": _coherence(s_du, s_dy, cross("d", "d").real, cross("u", "u").real, cross("y", "y").real),
         "noise_db": noise_db,
         "distortion_db": distortion_db,
+        "spread": np.sqrt(np.maximum(total_var, noise_var)),
         "realizations": realizations,
     }
 
@@ -369,10 +378,8 @@ def measure(machine: str, settings: FrfSettings, overrides: dict[str, float] | N
     settings.check()
     bm = build(machine, overrides)
     names = [a.name for a in bm.axes]
-    if settings.axis not in names:
-        raise TwinInputError("--axis", settings.axis, f"machine axes are {names}")
-    k = names.index(settings.axis)
-    dt = max(1, round(SAMPLE_PERIOD_S / bm.model.opt.timestep)) * bm.model.opt.timestep
+    (k,) = axes_indices([settings.axis], names, "--axis")
+    dt = sample_period(bm)
     settle = round(0.5 / dt)
     n = settle + round(settings.duration_s / dt)
     d = np.zeros((n, len(names)))
@@ -407,9 +414,8 @@ def measure(machine: str, settings: FrfSettings, overrides: dict[str, float] | N
     model = model_frf(bm, k, settings.sensor, freqs, dt)
     mag_db, model_db = 20 * np.log10(np.abs(g)), 20 * np.log10(np.abs(model))
     uncertainty_db = None
-    if "distortion_db" in estimate:  # the BLA's standard deviation, in dB of its magnitude
-        spread = np.sqrt(10 ** (estimate["noise_db"] / 10) + 10 ** (estimate["distortion_db"] / 10))
-        uncertainty_db = 20 * np.log10(1 + spread / np.abs(g))
+    if "spread" in estimate:  # the BLA's standard deviation, in dB of its magnitude
+        uncertainty_db = 20 * np.log10(1 + estimate["spread"] / np.abs(g))
     resonances, antiresonances = peaks(freqs, mag_db, coherence, uncertainty_db)
     model_res, model_anti = model_modes(bm, k, settings.sensor)
     # a dip of a sensor away from the drive (the table of a ball screw) is no anti-resonance:
