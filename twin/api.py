@@ -387,6 +387,7 @@ def program(file: str | Path, machine: str | None = None, **settings: Any) -> di
     TwinInputError
         The program's first bad line (``file:line``, its text and the reason), or a bad setting.
     """
+    from twin.errors import input_file
     from twin.gcode.planner import PlanningError, plan
     from twin.gcode.reader import read_program
     from twin.gcode.report import planned_summary
@@ -394,8 +395,7 @@ def program(file: str | Path, machine: str | None = None, **settings: Any) -> di
     from twin.references.gcode import program_settings
 
     reference, planner = program_settings(str(file), _paths(settings))
-    if not Path(file).is_file():
-        raise TwinInputError("file", str(file), "is a folder" if Path(file).is_dir() else "no such file")
+    input_file(file, "file")
     moves = list(read_program(file, reference.reader_settings()))  # a bad line: GcodeError, a TwinInputError
     out: dict[str, Any] = {"file": str(file), "moves": [m.as_dict() for m in moves]}
     if machine is not None:

@@ -8,7 +8,7 @@ simulation prints the simulated time and exits with code 3.
 
 from __future__ import annotations
 
-import json
+import os
 import signal
 import sys
 from functools import wraps
@@ -16,6 +16,7 @@ from pathlib import Path
 
 import typer
 
+from twin import exits
 from twin.errors import RunInterrupted, SimulationDiverged, TwinInputError
 from twin.reproductions import DEFAULT_SAMPLES, DEFAULT_SEED, DEFAULT_TWIN_SAMPLES
 
@@ -28,23 +29,52 @@ app = typer.Typer(
 
 
 def _guard(func):
-    """Turn the twin's own errors into one stderr line and an exit code."""
+    """Run a command under the contract of :mod:`twin.exits`: the twin's own errors become one
+    stderr line and their exit code, warnings become errors, and anything unexpected one
+    ``internal error`` line with exit code 70 (never a traceback, never exit code 1)."""
 
     @wraps(func)
     def wrapper(*args, **kwargs):
         try:
-            return func(*args, **kwargs)
+            with exits.warnings_as_errors():
+                return func(*args, **kwargs)
+        except typer.Exit:
+            raise
         except TwinInputError as exc:
             typer.echo(f"error: {exc}", err=True)
-            raise typer.Exit(2) from None
+            raise typer.Exit(exits.BAD_INPUT) from None
         except SimulationDiverged as exc:
             typer.echo(f"error: {exc}", err=True)
-            raise typer.Exit(3) from None
+            raise typer.Exit(exits.DIVERGED) from None
         except RunInterrupted as exc:
             typer.echo(f"error: {exc}", err=True)
-            raise typer.Exit(130) from None
+            raise typer.Exit(exits.INTERRUPTED) from None
+        except KeyboardInterrupt:
+            typer.echo("error: interrupted", err=True)
+            raise typer.Exit(exits.INTERRUPTED) from None
+        except BrokenPipeError:
+            raise
+        except OSError as exc:  # a file the system will not read or write: full disk, no permission
+            if exc.filename is None:
+                typer.echo(exits.internal_error_line(exc), err=True)
+                raise typer.Exit(exits.INTERNAL_ERROR) from None
+            typer.echo(f"error: {TwinInputError('file', str(exc.filename), exc.strerror or str(exc))}", err=True)
+            raise typer.Exit(exits.BAD_INPUT) from None
+        except Exception as exc:
+            typer.echo(exits.internal_error_line(exc), err=True)
+            raise typer.Exit(exits.INTERNAL_ERROR) from None
 
     return wrapper
+
+
+def _echo_json(value, indent: int = 1) -> None:
+    """Print ``value`` as one strict JSON document (:func:`twin.exits.strict_json`)."""
+    typer.echo(exits.strict_json(value, indent, default=float))
+
+
+def _progress(as_json: bool) -> bool:
+    """Progress bars: on a terminal only, and never under --json."""
+    return not as_json and sys.stderr.isatty()
 
 
 def _check_output(option: str, path: Path | None, suffix: str | None = None) -> None:
@@ -53,16 +83,19 @@ def _check_output(option: str, path: Path | None, suffix: str | None = None) -> 
         return
     if suffix and path.suffix != suffix:
         raise TwinInputError(option, str(path), f"the file must end in {suffix}")
-    if not path.parent.is_dir():
+    if not os.path.isdir(path.parent):
         raise TwinInputError(option, str(path), f"folder {str(path.parent)!r} does not exist")
-    if path.is_dir():
+    if os.path.isdir(path):
         raise TwinInputError(option, str(path), "is a folder")
+    limit = os.pathconf(path.parent, "PC_NAME_MAX")
+    if len(os.fsencode(path.name)) > limit:
+        raise TwinInputError(option, str(path), f"the file's name is over the system's {limit} bytes")
 
 
 def _check_folder(plots: Path | None, option: str = "--plots") -> None:
     """Refuse a ``--plots`` (or ``option``) path that exists and is not a folder (a missing one
     is created)."""
-    if plots is not None and plots.exists() and not plots.is_dir():
+    if plots is not None and os.path.exists(plots) and not os.path.isdir(plots):
         raise TwinInputError(option, str(plots), "exists and is not a folder")
 
 
@@ -174,7 +207,7 @@ def _run(
     if rrd is not None and scn.record_every_ticks == 0:
         raise TwinInputError("record_every_ticks", 0, "the run keeps metrics only: nothing to write to --rrd")
     try:
-        done = api.run(scn, progress=None, max_physics_steps=max_steps)
+        done = api.run(scn, progress=None if _progress(as_json) else False, max_physics_steps=max_steps)
     except (SimulationDiverged, RunInterrupted) as exc:
         status = "diverged" if isinstance(exc, SimulationDiverged) else "interrupted"
         if exc.result is not None:
@@ -189,7 +222,7 @@ def _run(
             f"error: {total} machining warning(s) under --strict; the first: line {first['line']}: {first['message']}",
             err=True,
         )
-        raise typer.Exit(4)
+        raise typer.Exit(exits.CHECK_FAILED)
 
 
 #: Lines of a program the text summary names, worst first.
@@ -203,7 +236,7 @@ def _report(
     program, its per-line table and (with a stock) its virtual part's files."""
     summary = done.summary
     if as_json:
-        typer.echo(json.dumps(summary, indent=2, allow_nan=False))
+        _echo_json(summary, 2)
     else:
         _print_summary(
             f"{done.scenario.name}: {done.scenario.description}",
@@ -317,11 +350,13 @@ def fidelity(
                 f"{'PASS' if r['pass'] else 'FAIL'}"
             )
     if as_json:
-        typer.echo(json.dumps(results, indent=2))
+        _echo_json(results, 2)
     else:
         typer.echo("targets: " + ", ".join(f"{k} <= {v}" for k, v in TARGETS.items()))
-    if not all(r["pass"] for r in results):
-        raise typer.Exit(1)
+    failed = [r["case"] for r in results if not r["pass"]]
+    if failed:
+        typer.echo(f"error: {len(failed)} case(s) miss their fidelity targets: {', '.join(failed)}", err=True)
+        raise typer.Exit(exits.CHECK_FAILED)
 
 
 @app.command()
@@ -339,16 +374,21 @@ def reproduce(
 ):
     """Reproduce a paper's design procedures and tables (paper | transfer function | twin).
 
-    Exits 1 if a twin number departs from its transfer-function number by more than 2 %.
+    Exits with code 4 if a twin number departs from its transfer-function number by more than 2 %.
     """
     from twin import api
     from twin.reproductions import reproduction
 
     _check_output("--rrd", rrd, ".rrd")
     _check_folder(plots)
-    res = api.reproduce(source, samples=samples, twin_samples=twin_samples, random_seed=seed, progress=not as_json)
+    res = api.reproduce(
+        source, samples=samples, twin_samples=twin_samples, random_seed=seed, progress=_progress(as_json)
+    )
     paper = reproduction(source)
-    typer.echo(json.dumps(res, indent=1, default=float) if as_json else paper.format_report(res))
+    if as_json:
+        _echo_json(res, 1)
+    else:
+        typer.echo(paper.format_report(res))
     if plots is not None:
         for path in paper.write_plots(plots, res):
             typer.echo(f"plot written to {path}", err=as_json)
@@ -356,7 +396,8 @@ def reproduce(
         paper.record(rrd)
         typer.echo(f"recording written to {rrd} (view with: rerun {rrd})", err=as_json)
     if paper.failed(res):
-        raise typer.Exit(1)
+        typer.echo(f"error: {source}: a twin number departs from its transfer function's by over 2 %", err=True)
+        raise typer.Exit(exits.CHECK_FAILED)
 
 
 @app.command()
@@ -398,12 +439,12 @@ def sweep(
         scheduler=scheduler,
         batch=batch,
         resume=resume,
-        progress=not as_json,
+        progress=_progress(as_json),
         **parse_settings(list(sets or [])),
     )
     summary = done.summary
     if as_json:
-        typer.echo(json.dumps(summary, indent=1))
+        _echo_json(summary, 1)
     else:
         typer.echo(format_summary(summary, summary["certificates"], done.axes))
         typer.echo(
@@ -418,7 +459,7 @@ def sweep(
             f"twin sweep ... --out {done.out} --resume completes it",
             err=True,
         )
-        raise typer.Exit(130)
+        raise typer.Exit(exits.INTERRUPTED)
 
 
 @app.command()
@@ -535,7 +576,7 @@ def frf(
     result = measure(machine, settings, overrides)
     run = result.pop("run")
     if as_json:
-        typer.echo(json.dumps(result, indent=1, allow_nan=False))
+        _echo_json(result, 1)
     else:
         typer.echo(
             f"{machine}: axis {axis}, {loop} loop on the {feedback} encoder, {sensor} sensor, "
@@ -587,10 +628,10 @@ def calibrate(
         raise TwinInputError("--out", str(out), "writes a machine file: calibrate a machine file (FILE.toml)")
     symbols = [s.strip() for s in fit.split(",") if s.strip()]
     result = fit_machine(
-        machine, trace, symbols, _parse_sets(sets or []), axis, progress=sys.stderr.isatty(), sensor=sensor
+        machine, trace, symbols, _parse_sets(sets or []), axis, progress=_progress(as_json), sensor=sensor
     )
     if as_json:
-        typer.echo(json.dumps(result, indent=2, allow_nan=False))
+        _echo_json(result, 2)
     else:
         what = "twin runs" if result["kind"] == "time" else "model evaluations"
         typer.echo(f"{machine}: {result['kind']} trace {trace}, {result['evaluations']} {what}")
@@ -690,7 +731,7 @@ def tune(
         with tempfile.TemporaryDirectory() as folder:
             result["verification"] = tuning.verify(result, where, Path(folder))
     if as_json:
-        typer.echo(json.dumps(result, indent=2, allow_nan=False))
+        _echo_json(result, 2)
     else:
         typer.echo(f"{machine}: control period {1e3 * result['control_period_s']:g} ms, {result['feedback']} feedback")
         for a, r in result["axes"].items():
@@ -816,7 +857,7 @@ def bench(
         return
     figures = run_bench(seconds, repeats, gcode_lines, gcode_moves)
     if as_json:
-        typer.echo(json.dumps(figures, indent=2))
+        _echo_json(figures, 2)
         return
     typer.echo(f"medians of {repeats} alternating repeats, {seconds:g} s simulated each")
     typer.echo(f"{'case':<30} {'bare steps/s':>14} {'closed steps/s':>15} {'ratio':>6} {'x realtime':>11}  loop")
@@ -849,9 +890,9 @@ def _bench_sweep(as_json: bool, samples: int, memory_samples: int, repeats: int)
     for option, value in (("--samples", samples), ("--memory-samples", memory_samples)):
         if not 1 <= value <= 100_000:
             raise TwinInputError(option, value, "must be in 1..100000")
-    f = run_sweep_bench(samples, repeats, memory_samples, progress=not as_json)
+    f = run_sweep_bench(samples, repeats, memory_samples, progress=_progress(as_json))
     if as_json:
-        typer.echo(json.dumps({"sweep": f}, indent=2))
+        _echo_json({"sweep": f}, 2)
         return
     typer.echo(
         f"twin sweep {f['scenario']} ({', '.join(f['settings'])}) --vary {' --vary '.join(f['vary'])}, "
@@ -877,10 +918,37 @@ def _terminate(signum, frame):
     raise KeyboardInterrupt
 
 
+def run_cli(argv: list[str]) -> int:
+    """Run the command line ``argv`` (without the program's name) and return its exit code
+    (:mod:`twin.exits`); a usage error (an unknown option, a value of the wrong type, a missing
+    argument) is one ``error:`` line with exit code 2, as any other bad input."""
+    try:
+        code = app(args=argv, prog_name="twin", standalone_mode=False)
+    except typer.Abort:
+        typer.echo("error: interrupted", err=True)
+        return exits.INTERRUPTED
+    except Exception as exc:
+        if not hasattr(exc, "format_message"):  # click's usage errors (typer carries its own click)
+            typer.echo(exits.internal_error_line(exc), err=True)
+            return exits.INTERNAL_ERROR
+        context = getattr(exc, "ctx", None)
+        command = context.command_path if context is not None else "twin"
+        message = " ".join(exc.format_message().split())
+        typer.echo(f"error: {command}: {message} (see {command} --help)", err=True)
+        return exits.BAD_INPUT
+    return code if isinstance(code, int) else exits.DONE
+
+
 def main() -> None:
     """The command line (:mod:`twin.launcher` runs it for every command but a plain listing)."""
     signal.signal(signal.SIGTERM, _terminate)
-    app(prog_name="twin")
+    try:
+        code = run_cli(sys.argv[1:])
+        sys.stdout.flush()
+    except BrokenPipeError:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # Python's flush at exit goes nowhere
+        code = exits.PIPE_CLOSED
+    sys.exit(code)
 
 
 if __name__ == "__main__":

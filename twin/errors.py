@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import errno
+import stat
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
@@ -25,6 +28,30 @@ def _short(text: str, limit: int) -> str:
     """One line: control characters escaped, at most ``limit`` characters."""
     text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in str(text)).strip()
     return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def input_file(path: str | Path, field: str, missing: str = "no such file") -> Path:
+    """``path`` if it names a regular file; else the twin's error under ``field``.
+
+    Raises
+    ------
+    TwinInputError
+        ``missing`` where nothing is there; a folder, a device or a pipe; a name the system
+        cannot look up (too long, a loop of links, no permission), with its reason.
+    """
+    path = Path(path)
+    try:
+        mode = path.stat().st_mode
+    except OSError as exc:
+        reason = missing if exc.errno in (errno.ENOENT, errno.ENOTDIR) else (exc.strerror or str(exc))
+        raise TwinInputError(field, str(path), reason) from None
+    except ValueError as exc:  # a NUL character in the name
+        raise TwinInputError(field, str(path), str(exc)) from None
+    if stat.S_ISDIR(mode):
+        raise TwinInputError(field, str(path), "is a folder")
+    if not stat.S_ISREG(mode):
+        raise TwinInputError(field, str(path), "is not a regular file (a device or a pipe)")
+    return path
 
 
 class SimulationDiverged(RuntimeError):

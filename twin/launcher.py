@@ -24,31 +24,38 @@ def plain_listing(argv: list[str]) -> tuple[Path, bool] | None:
 
 
 def main() -> None:
-    """Console-script entry point. Errors are the command line's: one ``error: ...`` line on
-    stderr, exit code 2 (bad input) or 130 (interrupted); a reader that closes the pipe early
-    (``twin gcode FILE | head``) ends the listing quietly with exit code 1, as click does."""
+    """Console-script entry point. Errors are the command line's (:mod:`twin.exits`): one
+    ``error: ...`` line on stderr, exit code 2 (bad input), 70 (a bug) or 130 (interrupted); a
+    reader that closes the pipe early (``twin gcode FILE | head``) ends the listing quietly with
+    exit code 141."""
     listing = plain_listing(sys.argv[1:])
     if listing is None:
         from twin.cli import main as cli_main
 
         cli_main()
         return
+    from twin import exits
     from twin.errors import TwinInputError
     from twin.gcode.listing import list_program
     from twin.gcode.reader import Settings
 
     file, as_json = listing
     try:
-        list_program(file, Settings(), as_json)
+        with exits.warnings_as_errors():
+            list_program(file, Settings(), as_json)
+            sys.stdout.flush()
     except TwinInputError as exc:
         print(f"error: {exc}", file=sys.stderr)
-        sys.exit(2)
+        sys.exit(exits.BAD_INPUT)
     except KeyboardInterrupt:
         print(f"error: interrupted while reading {file}; nothing was printed", file=sys.stderr)
-        sys.exit(130)
+        sys.exit(exits.INTERRUPTED)
     except BrokenPipeError:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # Python's flush at exit goes nowhere
-        sys.exit(1)
+        sys.exit(exits.PIPE_CLOSED)
+    except Exception as exc:
+        print(exits.internal_error_line(exc), file=sys.stderr)
+        sys.exit(exits.INTERNAL_ERROR)
 
 
 if __name__ == "__main__":

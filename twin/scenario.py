@@ -22,7 +22,7 @@ from pydantic import Field, PositiveFloat, ValidationError
 from controllers import CONTROLLERS, OBSERVERS, make_controller
 from controllers.blocks import with_correction
 from controllers.registry import Context, ParameterError, make_observers
-from twin.errors import TwinInputError
+from twin.errors import TwinInputError, input_file
 from twin.gcode.planner import PlannerSettings
 from twin.machines import build, is_machine_file
 from twin.process import DISTURBANCES, DisturbanceSpecBase
@@ -33,7 +33,7 @@ from twin.process.part_map import part_map
 from twin.references import REFERENCES, ReferenceContext, ReferenceSpecBase
 from twin.sim.drive import Drive, Encoder, substeps_per_tick
 from twin.sim.runner import MAX_PHYSICS_STEPS, RunResult, simulate
-from twin.spec import StrictSpec, read_toml, tagged_union
+from twin.spec import StrictSpec, read_toml, tagged_union, validation_error
 
 
 class ObserverSpec(StrictSpec):
@@ -141,12 +141,6 @@ class Scenario(StrictSpec):
     )
 
 
-def _first_error(err: ValidationError) -> TwinInputError:
-    e = err.errors()[0]
-    field = ".".join(str(p) for p in e["loc"]) or "scenario"
-    return TwinInputError(field, e.get("input"), e["msg"])
-
-
 def bundled_scenarios() -> dict[str, Path]:
     """Bundled scenario files by name (file stem)."""
     folder = resources.files("twin") / "scenarios"
@@ -226,16 +220,9 @@ def read_scenario_data(source: str | Path) -> dict:
     TwinInputError
         Missing file, malformed TOML, or a file that is not UTF-8 text.
     """
-    path = Path(source)
-    if not path.exists():
-        bundled = bundled_scenarios()
-        if str(source) not in bundled:
-            raise TwinInputError(
-                "scenario", str(source), f"no such file or bundled scenario (bundled: {', '.join(sorted(bundled))})"
-            )
-        path = bundled[str(source)]
-    if not path.is_file():
-        raise TwinInputError("scenario", str(source), "not a file")
+    bundled = bundled_scenarios()
+    missing = f"no such file or bundled scenario (bundled: {', '.join(sorted(bundled))})"
+    path = bundled[str(source)] if str(source) in bundled else input_file(source, "scenario", missing)
     return _relative_to(read_toml(path, "scenario file"), path.parent)
 
 
@@ -272,7 +259,7 @@ def scenario_from_dict(data: dict) -> Scenario:
     try:
         return Scenario.model_validate(data)
     except ValidationError as exc:
-        raise _first_error(exc) from None
+        raise validation_error(exc) from None
 
 
 def _per_axis(value, n_axes: int, field: str) -> np.ndarray:

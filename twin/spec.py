@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
+import math
 import tomllib
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Union, overload
+from typing import TYPE_CHECKING, Annotated, Union, overload
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+
+if TYPE_CHECKING:
+    from twin.errors import TwinInputError
 
 
 def read_toml(path: Path, what: str) -> dict:
@@ -31,10 +35,63 @@ def read_toml(path: Path, what: str) -> dict:
         raise TwinInputError(what, str(path), f"cannot be read ({exc.strerror})") from None
 
 
+#: The largest magnitude of any number in a scenario, machine, stock or tool table.  No
+#: physical value of the twin comes near it (the stiffest spring of the catalogue machines is
+#: 1.6e8 N/m); with every input under it, no product or power of a few inputs overflows (a
+#: gear ratio of 1e308 did, squared).
+MAX_MAGNITUDE = 1e12
+
+
+#: Coordinates and sizes at most (mm) of a stock, a tool, a work offset or an inspected
+#: feature: a metre-sized machine's travel, ten times.
+MAX_MM = 1e4
+#: A coordinate or size (mm) within +-MAX_MM.
+Millimetres = Annotated[float, Field(ge=-MAX_MM, le=MAX_MM)]
+
+
+def _beyond(value, limit: float) -> float | None:
+    """The first finite number in ``value`` (a number, or lists, tuples and dicts of them)
+    whose magnitude is over ``limit``; None if there is none."""
+    if isinstance(value, bool):
+        return None
+    if isinstance(value, int | float):
+        return value if math.isfinite(value) and abs(value) > limit else None
+    items = value.values() if isinstance(value, dict) else value if isinstance(value, list | tuple) else ()
+    for item in items:
+        found = _beyond(item, limit)
+        if found is not None:
+            return found
+    return None
+
+
 class StrictSpec(BaseModel):
-    """Unknown fields and non-finite numbers (nan, inf) are errors."""
+    """Unknown fields and non-finite numbers (nan, inf) are errors, and so is a number of
+    magnitude over :data:`MAX_MAGNITUDE` (fields may bound themselves more tightly)."""
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+    @field_validator("*", mode="after")
+    @classmethod
+    def _bounded(cls, value):
+        found = _beyond(value, MAX_MAGNITUDE)
+        if found is not None:
+            raise ValueError(f"{found:g} is beyond +-{MAX_MAGNITUDE:g}, out of any physical range")
+        return value
+
+
+def validation_error(
+    err: ValidationError, prefix: str = "", skip: tuple[str, ...] = (), whole: str = "scenario"
+) -> TwinInputError:
+    """The first error of pydantic's ``err`` as the twin's error line: its field path (after
+    ``prefix``; the union tags starting with one of ``skip`` left out; ``whole`` for an error
+    of the whole table), the value and the reason (without pydantic's "Value error, ")."""
+    from twin.errors import TwinInputError
+
+    e = err.errors()[0]
+    field = ".".join(str(p) for p in e["loc"] if not str(p).startswith(skip) or not skip)
+    value = e.get("input")
+    reason = e["msg"].removeprefix("Value error, ")
+    return TwinInputError(prefix + (field or whole), "{...}" if isinstance(value, dict) else value, reason)
 
 
 @overload

@@ -50,7 +50,7 @@ from twin.commissioning.frf import (
     sample_period,
     sensor_plant,
 )
-from twin.errors import SimulationDiverged, TwinInputError
+from twin.errors import SimulationDiverged, TwinInputError, input_file
 from twin.machines import BuiltMachine, build, get_machine
 from twin.metrics import fit_index
 from twin.references import Step
@@ -93,9 +93,7 @@ def read_table(path: str | Path) -> dict[str, np.ndarray]:
     import pyarrow.csv as pacsv
     import pyarrow.parquet as pq
 
-    path = Path(path)
-    if not path.is_file():
-        raise TwinInputError("--trace", str(path), "no such file")
+    path = input_file(path, "--trace")
     try:
         if path.suffix == ".parquet":
             table = pq.read_table(path)

@@ -13,7 +13,7 @@ import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
-from twin.errors import TwinInputError
+from twin.errors import input_file
 from twin.gcode.reader import Move, Settings, read_program
 
 #: Bytes of the listing held in memory before it goes to a temporary file (64 MiB).
@@ -85,8 +85,7 @@ def list_program(
     TwinInputError
         No such file, or a folder; :class:`~twin.gcode.reader.GcodeError` for a refused block.
     """
-    if not file.is_file():
-        raise TwinInputError("file", str(file), "is a folder" if file.is_dir() else "no such file")
+    input_file(file, "file")
     row = MoveJson() if as_json else move_row
     with tempfile.SpooledTemporaryFile(max_size=IN_MEMORY_BYTES, mode="w+") as out:
         out.write(f'{{"file": {json.dumps(str(file))}, "moves": [\n' if as_json else HEADER + "\n")

@@ -10,9 +10,8 @@ from __future__ import annotations
 import importlib
 import pkgutil
 from functools import lru_cache
-from pathlib import Path
 
-from twin.errors import TwinInputError
+from twin.errors import TwinInputError, input_file
 from twin.machines.base import MACHINES, Axis, BuiltMachine, Machine, Parameter, mjcf_dir, register_machine
 from twin.machines.datasheet import load_machine_file
 
@@ -39,9 +38,7 @@ def get_machine(name: str) -> Machine:
         If no machine has that name, or the machine file is missing or invalid.
     """
     if is_machine_file(name):
-        path = Path(name).resolve()
-        if not path.is_file():
-            raise TwinInputError("machine", str(name), "no such machine file")
+        path = input_file(name, "machine", "no such machine file").resolve()
         return _machine_file(str(path), path.stat().st_mtime_ns)
     try:
         return MACHINES[name]

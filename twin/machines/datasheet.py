@@ -50,9 +50,9 @@ import numpy as np
 from pydantic import Field, NonNegativeFloat, PositiveFloat, ValidationError, model_validator
 
 from controllers.lti import SisoTf
-from twin.errors import TwinInputError
+from twin.errors import TwinInputError, input_file
 from twin.machines.base import Axis, Machine, MotionLimits, Parameter, diagonal_plant
-from twin.spec import StrictSpec, read_toml
+from twin.spec import StrictSpec, read_toml, validation_error
 
 #: Density of screw steel (kg/m^3), for a screw inertia the file does not give.
 STEEL_DENSITY_KG_PER_M3 = 7850.0
@@ -672,15 +672,6 @@ class DatasheetMachine(Machine):
         return table
 
 
-def _first_error(err: ValidationError, path: Path) -> TwinInputError:
-    e = err.errors()[0]
-    field = ".".join(str(p) for p in e["loc"] if not str(p).startswith(("ball_screw", "linear_motor")))
-    value = e.get("input")
-    return TwinInputError(
-        f"{path.name}: {field or 'machine file'}", "{...}" if isinstance(value, dict) else value, e["msg"]
-    )
-
-
 def read_machine_file(path: str | Path) -> MachineFile:
     """Read and validate a machine file.
 
@@ -690,14 +681,12 @@ def read_machine_file(path: str | Path) -> MachineFile:
         A missing or unreadable file, malformed TOML, or a value the schema refuses (named by
         its table and key: ``mill.toml: axes.x.table_mass_kg = -3: ...``).
     """
-    path = Path(path)
-    if not path.is_file():
-        raise TwinInputError("machine", str(path), "no such machine file")
+    path = input_file(path, "machine", "no such machine file")
     data = read_toml(path, "machine file")
     try:
         return MachineFile.model_validate(data)
     except ValidationError as exc:
-        raise _first_error(exc, path) from None
+        raise validation_error(exc, f"{path.name}: ", ("ball_screw", "linear_motor"), "machine file") from None
 
 
 def load_machine_file(path: str | Path) -> DatasheetMachine:

@@ -28,7 +28,7 @@ from pydantic import Field, PositiveFloat
 from scipy.optimize import least_squares
 
 from twin.process.part import points_along
-from twin.spec import StrictSpec
+from twin.spec import MAX_MM, Millimetres, StrictSpec
 
 #: Distance from a nominal feature (mm) within which the boundary counts as its points.
 BAND_MM = 0.5
@@ -36,11 +36,6 @@ BAND_MM = 0.5
 PROBE_STEP_MM = 0.02
 #: Points a feature needs to be measured.
 MIN_POINTS = 8
-#: Coordinates and sizes of a feature at most (mm): a metre-sized machine's travel, ten times.
-MAX_MM = 1e4
-
-#: A coordinate of a feature (mm).
-Millimetres = Annotated[float, Field(ge=-MAX_MM, le=MAX_MM)]
 #: A point [x, y] of a feature (mm).
 Point = tuple[Millimetres, Millimetres]
 

@@ -44,7 +44,7 @@ from twin.process.cutting import (
     helix_lag_rad_per_mm,
 )
 from twin.process.materials import MATERIALS, CuttingCoefficients
-from twin.spec import StrictSpec
+from twin.spec import MAX_MM, Millimetres, StrictSpec
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
 
@@ -91,17 +91,17 @@ BISECTIONS = 6
 class StockSpec(StrictSpec):
     """The ``[stock]`` table: a 2.5-D workpiece, machine coordinates (mm)."""
 
-    outline_mm: list[tuple[float, float]] | None = Field(
+    outline_mm: list[tuple[Millimetres, Millimetres]] | None = Field(
         None, min_length=3, max_length=MAX_POLYGON_POINTS, description="outline polygon [[x, y], ...]"
     )
-    corners_mm: tuple[tuple[float, float], tuple[float, float]] | None = Field(
+    corners_mm: tuple[tuple[Millimetres, Millimetres], tuple[Millimetres, Millimetres]] | None = Field(
         None, description="a rectangle [[x0, y0], [x1, y1]] instead of an outline"
     )
-    top_mm: float = Field(description="top of the stock (Z, mm)")
-    bottom_mm: float = Field(description="bottom of the stock (Z, mm)")
-    islands_mm: list[Annotated[list[tuple[float, float]], Field(min_length=3, max_length=MAX_POLYGON_POINTS)]] = Field(
-        default_factory=list, max_length=1000, description="openings through the stock, each a polygon"
-    )
+    top_mm: Millimetres = Field(description="top of the stock (Z, mm)")
+    bottom_mm: Millimetres = Field(description="bottom of the stock (Z, mm)")
+    islands_mm: list[
+        Annotated[list[tuple[Millimetres, Millimetres]], Field(min_length=3, max_length=MAX_POLYGON_POINTS)]
+    ] = Field(default_factory=list, max_length=1000, description="openings through the stock, each a polygon")
     resolution_mm: float = Field(0.05, ge=0.005, le=1.0, description="height-map cell (mm)")
 
     @model_validator(mode="after")
@@ -135,6 +135,8 @@ class StockSpec(StrictSpec):
                 raise TwinInputError(field, shapely.get_coordinates(shape).tolist(), "encloses no area")
         for island in self.islands_mm:
             outline = outline.difference(shapely.Polygon(island))
+        if outline.is_empty or outline.area <= 0:
+            raise TwinInputError("stock.islands_mm", f"{len(self.islands_mm)} island(s)", "leave no material")
         return outline
 
 
@@ -142,16 +144,19 @@ class ToolSpec(StrictSpec):
     """A cutter: the ``[tool]`` table, or an entry of ``[[tools]]`` with its ``number``."""
 
     number: int | None = Field(None, ge=0, description="T number ([[tools]] only)")
-    diameter_mm: PositiveFloat = Field(description="cutter diameter (mm)")
+    diameter_mm: PositiveFloat = Field(le=MAX_MM, description="cutter diameter (mm)")
     n_flutes: int = Field(ge=1, le=MAX_FLUTES, description="teeth")
     corner_radius_mm: float = Field(
-        0.0, ge=0.0, description="corner radius (mm): 0 a flat end mill, half the diameter a ball end mill"
+        0.0, ge=0.0, le=MAX_MM, description="corner radius (mm): 0 a flat end mill, half the diameter a ball end mill"
     )
     flute_length_mm: PositiveFloat | None = Field(
-        None, description="length of the cutting edge from the tip (mm); material above it is not cut by the flutes"
+        None,
+        le=MAX_MM,
+        description="length of the cutting edge from the tip (mm); material above it is not cut by the flutes",
     )
     shank_diameter_mm: PositiveFloat | None = Field(
         None,
+        le=MAX_MM,
         description="diameter of the shank above the flutes (mm; default the cutter's): material within it above "
         "the flute length rubs",
     )

@@ -9,7 +9,6 @@ the machine having no Z axis.
 from __future__ import annotations
 
 from functools import cached_property
-from pathlib import Path
 from typing import ClassVar, Literal
 
 import numpy as np
@@ -27,6 +26,7 @@ from twin.gcode.planner import (
 )
 from twin.gcode.reader import Reader, Settings
 from twin.references.kinds import ReferenceContext, ReferenceSpecBase, register, two_axes
+from twin.spec import Millimetres, validation_error
 
 #: The work coordinate systems a program may select.
 WORK_SYSTEMS = ("G54", "G55", "G56", "G57", "G58", "G59")
@@ -252,11 +252,15 @@ class GcodeRef(ReferenceSpecBase):
 
     type: Literal["gcode"]
     file: str = Field(description="the program; a relative path is relative to the scenario file")
-    work_offsets_mm: dict[Literal["G54", "G55", "G56", "G57", "G58", "G59"], tuple[float, float, float]] = Field(
-        default_factory=dict, description="work offsets [x, y, z] in machine coordinates, mm (default 0)"
+    work_offsets_mm: dict[
+        Literal["G54", "G55", "G56", "G57", "G58", "G59"], tuple[Millimetres, Millimetres, Millimetres]
+    ] = Field(default_factory=dict, description="work offsets [x, y, z] in machine coordinates, mm (default 0)")
+    tool_lengths_mm: dict[int, Millimetres] = Field(
+        default_factory=dict, description="tool length (G43) by tool number, mm"
     )
-    tool_lengths_mm: dict[int, float] = Field(default_factory=dict, description="tool length (G43) by tool number, mm")
-    g28_home_mm: tuple[float, float, float] = Field((0.0, 0.0, 0.0), description="G28's home, machine mm")
+    g28_home_mm: tuple[Millimetres, Millimetres, Millimetres] = Field(
+        (0.0, 0.0, 0.0), description="G28's home, machine mm"
+    )
 
     #: Fields that hold a path relative to the scenario file.
     relative_paths: ClassVar[tuple[str, ...]] = ("file",)
@@ -280,7 +284,7 @@ def build(spec: GcodeRef, ctx: ReferenceContext) -> GcodeReference | StreamedGco
     TwinInputError
         ``reference.file`` naming the program's line and the reason; or the planner's settings.
     """
-    from twin.errors import TwinInputError
+    from twin.errors import TwinInputError, input_file
 
     two_axes(spec.type, ctx.axis_names)
     if ctx.machine is None:
@@ -289,9 +293,7 @@ def build(spec: GcodeRef, ctx: ReferenceContext) -> GcodeReference | StreamedGco
     if unknown:
         raise TwinInputError("reference.type", spec.type, f"the machine's axes {ctx.axis_names} are not x, y, z")
     settings = ctx.planner if isinstance(ctx.planner, PlannerSettings) else PlannerSettings.model_validate(ctx.planner)
-    path = Path(spec.file)
-    if not path.is_file():
-        raise TwinInputError("reference.file", spec.file, "is a folder" if path.is_dir() else "no such file")
+    path = input_file(spec.file, "reference.file")
     reader_settings = spec.reader_settings(ctx.tools)
     limits = settings.limits(ctx.machine.motion_limits)
     axes = tuple("xyz".index(a) for a in ctx.axis_names)
@@ -354,9 +356,7 @@ def program_settings(file: str, settings: dict):
         try:
             parsed = model.model_validate(data[key])
         except ValidationError as exc:
-            error = exc.errors()[0]
-            where = ".".join([key, *(str(p) for p in error["loc"])])
-            raise TwinInputError(where, error.get("input"), error["msg"]) from None
+            raise validation_error(exc, f"{key}.") from None
         if key == "reference":
             reference = parsed
         else:

@@ -3,13 +3,14 @@
 
 from __future__ import annotations
 
+import os
 import tomllib
 from dataclasses import dataclass
-from pathlib import Path
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from twin.errors import TwinInputError
+from twin.errors import input_file
+from twin.spec import validation_error
 from twin.sweeps.plan import Plan, parse_variation
 
 
@@ -37,9 +38,9 @@ def sweep_spec(target: str) -> SweepFile:
     TwinInputError
         A sweep file with an invalid field (named).
     """
-    path = Path(target)
-    if path.suffix != ".toml" or not path.is_file():
+    if not target.endswith(".toml"):
         return SweepFile(scenario=target, vary={})
+    path = input_file(target, "scenario")
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError):
@@ -49,10 +50,9 @@ def sweep_spec(target: str) -> SweepFile:
     try:
         spec = SweepFile(**data)
     except ValidationError as exc:
-        err = exc.errors()[0]
-        raise TwinInputError(".".join(str(p) for p in err["loc"]), err.get("input"), err["msg"]) from None
+        raise validation_error(exc) from None
     candidate = path.parent / spec.scenario
-    if candidate.suffix == ".toml" and candidate.is_file():
+    if candidate.suffix == ".toml" and os.path.isfile(candidate):
         spec.scenario = str(candidate)
     return spec
 
