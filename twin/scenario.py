@@ -14,7 +14,7 @@ from contextlib import contextmanager
 from dataclasses import replace
 from importlib import resources
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 import numpy as np
 from pydantic import Field, PositiveFloat, ValidationError
@@ -71,14 +71,20 @@ class DriveSpec(StrictSpec):
     delay_s: float | None = Field(None, ge=0, le=10.0, description="default: the machine's delay; at most 10 s")
 
 
+#: A sensor's resolution or noise at most (m): coarser than any scale or encoder of a machine tool.
+MAX_SENSOR_M = 1e-3
+#: A resolution or a noise's standard deviation (m), in [0, MAX_SENSOR_M].
+SensorMetres = Annotated[float, Field(ge=0, le=MAX_SENSOR_M)]
+
+
 class SensorSpec(StrictSpec):
-    encoder_resolution_m: float | list[float] | None = Field(
+    encoder_resolution_m: SensorMetres | list[SensorMetres] | None = Field(
         None, description="the table's scale, m; 0 for ideal; default: the machine's (0 for the papers' machines)"
     )
-    motor_encoder_resolution_m: float | list[float] | None = Field(
+    motor_encoder_resolution_m: SensorMetres | list[SensorMetres] | None = Field(
         None, description="the motor's encoder in table travel, m; 0 for ideal; default: the machine's"
     )
-    noise_std_m: float | list[float] = 0.0
+    noise_std_m: SensorMetres | list[SensorMetres] = 0.0
     velocity: Literal["backward_difference", "tachometer"] = "backward_difference"
     feedback: Literal["dual", "table", "motor"] | None = Field(
         None,

@@ -114,12 +114,26 @@ def read_table(path: str | Path) -> dict[str, np.ndarray]:
     return out
 
 
+#: The largest magnitude a trace's column may hold, by the column's unit (the name's end): a
+#: drive's input (V), a position within any machine's travel (m), a record's time (s), a
+#: frequency (Hz), a gain (dB), a phase (deg) and a coherence.
+TRACE_RANGES = {"_V": 1e3, "_m": 10.0, "_s": 1e6, "_hz": 1e6, "_db": 400.0, "_deg": 1e6, "coherence": 1.0}
+
+
 def _all_finite(columns: dict[str, np.ndarray], names: list[str]) -> None:
-    """Refuse the first NaN or inf of the columns ``names``, naming its column and row."""
+    """Refuse the first NaN or inf of the columns ``names``, or a value beyond the column's
+    range (:data:`TRACE_RANGES`), naming its column, row and value."""
     for name in names:
         bad = np.flatnonzero(~np.isfinite(columns[name]))
         if bad.size:
             raise TwinInputError(f"--trace column {name}", f"row {bad[0]}", "is not a finite number (NaN or inf)")
+        limit = next((v for end, v in TRACE_RANGES.items() if name.endswith(end)), None)
+        beyond = np.flatnonzero(np.abs(columns[name]) > limit) if limit is not None else []
+        if len(beyond):
+            row = int(beyond[0])
+            raise TwinInputError(
+                f"--trace column {name}", f"{columns[name][row]:g} at row {row}", f"beyond +-{limit:g}, out of range"
+            )
 
 
 def time_trace(columns: dict[str, np.ndarray], axes: list[str]) -> tuple[float, np.ndarray, np.ndarray, list[int]]:
@@ -156,6 +170,10 @@ def time_trace(columns: dict[str, np.ndarray], axes: list[str]) -> tuple[float, 
     if np.abs(steps - dt).max() > 1e-3 * dt:
         raise TwinInputError(
             "--trace column time_s", f"step {np.abs(steps - dt).max() + dt:g} s", "sampling must be uniform"
+        )
+    if not any(np.ptp(columns[f"u_{a}_V"]) > 0 for a in axes if f"u_{a}_V" in columns):
+        raise TwinInputError(
+            "--trace", [f"u_{a}_V" for a in axes], "the input never changes: nothing excites the axes to fit"
         )
     measured = [i for i, a in enumerate(axes) if f"pos_{a}_m" in columns]
     if not measured:

@@ -66,8 +66,10 @@ def cycle_calls(
     memory: CycleMemory,
 ) -> Iterator[tuple[str, tuple[float, float, float] | float | str]]:
     """The canonical calls of one cycle block: ``("rapid", xyz)``, ``("feed", xyz)``,
-    ``("dwell", seconds)``, ``("spindle", "off" | "cw" | "ccw")``; ``position`` (work
-    coordinates, program units) is updated as the block ends.
+    ``("dwell", seconds)``, ``("spindle", "off" | "cw" | "ccw")`` and ``("exact_path", "G61")``
+    where the cycle's own moves begin (as LinuxCNC, after the rapid up to the R plane from
+    below it, which runs in the path mode in force); ``position`` (work coordinates, program
+    units) is updated as the block ends.
 
     Raises
     ------
@@ -140,6 +142,7 @@ def cycle_calls(
         yield ("rapid", point(position[a_i], position[b_i], r))
         old_cc = r
         current_cc = old_cc
+    yield ("exact_path", "G61")
     clear_cc = r if retract_to_r else old_cc
     delta = PECK_CLEARANCE_INCH if inch else PECK_CLEARANCE_INCH * 25.4
     for repeat in range(repeats, 0, -1):

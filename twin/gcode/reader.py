@@ -1041,7 +1041,6 @@ class Reader:
             self.cycle,
         )
         mode, tolerance = s.path_mode, s.tolerance
-        s.path_mode, s.tolerance = "G61", None
         position = list(s.position)  # cycle_calls moves s.position to where the block ends
         end_of_block = s.position
         s.position = position
@@ -1053,6 +1052,8 @@ class Reader:
                 elif kind == "spindle":
                     assert isinstance(value, str)
                     s.spindle = value
+                elif kind == "exact_path":
+                    s.path_mode, s.tolerance = "G61", None
                 else:
                     assert isinstance(value, tuple)
                     self._linear(kind, list(value))
