@@ -49,16 +49,17 @@ MAX_MM = 1e4
 Millimetres = Annotated[float, Field(ge=-MAX_MM, le=MAX_MM)]
 
 
-def _beyond(value, limit: float) -> float | None:
-    """The first finite number in ``value`` (a number, or lists, tuples and dicts of them)
-    whose magnitude is over ``limit``; None if there is none."""
+def _beyond(value, limit: float, path: str = "") -> tuple[str, float] | None:
+    """The path (``key.0``; empty for ``value`` itself) and value of the first finite number
+    in ``value`` (a number, or lists, tuples and dicts of them) whose magnitude is over
+    ``limit``; None if there is none."""
     if isinstance(value, bool):
         return None
     if isinstance(value, int | float):
-        return value if math.isfinite(value) and abs(value) > limit else None
-    items = value.values() if isinstance(value, dict) else value if isinstance(value, list | tuple) else ()
-    for item in items:
-        found = _beyond(item, limit)
+        return (path, value) if math.isfinite(value) and abs(value) > limit else None
+    items = value.items() if isinstance(value, dict) else enumerate(value) if isinstance(value, list | tuple) else ()
+    for key, item in items:
+        found = _beyond(item, limit, f"{path}.{key}" if path else str(key))
         if found is not None:
             return found
     return None
@@ -75,7 +76,10 @@ class StrictSpec(BaseModel):
     def _bounded(cls, value):
         found = _beyond(value, MAX_MAGNITUDE)
         if found is not None:
-            raise ValueError(f"{found:g} is beyond +-{MAX_MAGNITUDE:g}, out of any physical range")
+            path, number = found
+            raise ValueError(
+                f"{path + ' = ' if path else ''}{number:g} is beyond +-{MAX_MAGNITUDE:g}, out of any physical range"
+            )
         return value
 
 

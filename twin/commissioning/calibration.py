@@ -127,9 +127,9 @@ def _all_finite(columns: dict[str, np.ndarray], names: list[str]) -> None:
         bad = np.flatnonzero(~np.isfinite(columns[name]))
         if bad.size:
             raise TwinInputError(f"--trace column {name}", f"row {bad[0]}", "is not a finite number (NaN or inf)")
-        limit = next((v for end, v in TRACE_RANGES.items() if name.endswith(end)), None)
-        beyond = np.flatnonzero(np.abs(columns[name]) > limit) if limit is not None else []
-        if len(beyond):
+        limit = next((v for end, v in TRACE_RANGES.items() if name.endswith(end)), math.inf)
+        beyond = np.flatnonzero(np.abs(columns[name]) > limit)
+        if beyond.size:
             row = int(beyond[0])
             raise TwinInputError(
                 f"--trace column {name}", f"{columns[name][row]:g} at row {row}", f"beyond +-{limit:g}, out of range"
@@ -171,10 +171,6 @@ def time_trace(columns: dict[str, np.ndarray], axes: list[str]) -> tuple[float, 
         raise TwinInputError(
             "--trace column time_s", f"step {np.abs(steps - dt).max() + dt:g} s", "sampling must be uniform"
         )
-    if not any(np.ptp(columns[f"u_{a}_V"]) > 0 for a in axes if f"u_{a}_V" in columns):
-        raise TwinInputError(
-            "--trace", [f"u_{a}_V" for a in axes], "the input never changes: nothing excites the axes to fit"
-        )
     measured = [i for i, a in enumerate(axes) if f"pos_{a}_m" in columns]
     if not measured:
         raise TwinInputError("--trace", sorted(columns), f"needs a pos_<axis>_m column for one of the axes {axes}")
@@ -189,6 +185,9 @@ def time_trace(columns: dict[str, np.ndarray], axes: list[str]) -> tuple[float, 
                 raise TwinInputError(
                     f"--trace column pos_{a}_m", f"range {np.ptp(y[:, i]):g} m", "the axis never moves"
                 )
+    inputs = [f"u_{a}_V" for a in axes if f"u_{a}_V" in columns]
+    if not any(np.ptp(columns[name]) > 0 for name in inputs):
+        raise TwinInputError("--trace", inputs, "the input never changes (or is missing): nothing excites the axes")
     return dt, u, y, measured
 
 
