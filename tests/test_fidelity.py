@@ -26,14 +26,34 @@ def test_fidelity_nominal(name):
 
 def test_fidelity_of_a_compliant_machine_file():
     """The example machine file, with its axial and torsional modes, against the multi-mass
-    transfer function derived from its values (`twin fidelity --machine FILE.toml`); ten times
-    its guideways' viscous friction shortens the frequency check's settling (its P loop rings
-    for 100 s otherwise)."""
-    more_damping = {"x_friction_viscous_N_s_per_m": 1500.0, "y_friction_viscous_N_s_per_m": 800.0}
-    r = fidelity(str(EXAMPLES / "mid_size_xy.toml"), more_damping, frf_period_s=2.0, frf_tones=15)
+    transfer function derived from its values (`twin fidelity --machine FILE.toml`), as it is:
+    its proportional check loop would ring for 130 s (decay b / 2m, 0.1/s); the lead the check
+    puts in its place settles within a period."""
+    r = fidelity(str(EXAMPLES / "mid_size_xy.toml"), frf_period_s=2.0, frf_tones=15)
     assert r["friction_forced_off"] == ["x_friction_coulomb_N", "y_friction_coulomb_N"]
     assert len(r["tf"]["x"]["den"]) == 7  # three masses: six poles
     _check(r)
+
+
+def test_the_check_loop_damps_a_ringing_table():
+    """The frequency check's controller on mid_size_xy's X channel: a gain alone decays at
+    0.12/s (python-control's poles of the closed loop); the lead decays faster than 12 / 5 s
+    and keeps loop gain 1 at the 2 Hz crossover."""
+    import math
+
+    import control
+
+    from twin.fidelity import position_controller
+    from twin.machines import build
+
+    bm = build(str(EXAMPLES / "mid_size_xy.toml"), {"x_friction_coulomb_N": 0.0, "y_friction_coulomb_N": 0.0})
+    channel = control.minreal(bm.plant_lti()[0, 0], verbose=False)
+    lead, decay = position_controller(channel, 2.0, 5.0)
+    kp = 1.0 / abs(channel(4j * math.pi))
+    assert -control.poles(control.feedback(kp * channel)).real.max() < 0.2
+    assert decay > 12.0 / 5.0 and len(lead.num) == 2
+    c = control.tf(list(lead.num), list(lead.den))
+    assert abs(abs(channel(4j * math.pi) * c(4j * math.pi)) - 1.0) < 1e-9
 
 
 @pytest.mark.parametrize(

@@ -100,6 +100,8 @@ def _assert_contract(result, as_json: bool, what) -> None:
 
 # --- part programs -------------------------------------------------------------------------
 
+#: Programs planned at most this long (bytes): LinuxCNC's 14 kB tort.ngc takes 18 s to plan.
+PLANNED_BYTES = 4000
 WORD = re.compile(r"([A-Za-z])\s*([-+]?[0-9]*\.?[0-9]+)")
 
 
@@ -142,10 +144,11 @@ def mutated_programs(draw) -> bytes:
 def test_any_program_gives_moves_or_one_error_line(tmp_path, program, planned):
     path = tmp_path / "fuzz.ngc"
     path.write_bytes(program)
-    args = ["gcode", str(path), "--json"] + (["--machine", "cncmt_xy"] if planned == 0 else [])
+    planned = planned == 0 and len(program) < PLANNED_BYTES
+    args = ["gcode", str(path), "--json"] + (["--machine", "cncmt_xy"] if planned else [])
     result = _invoke(args)
     _assert_contract(result, True, program[:300])
-    if result.exit_code == 0 and planned == 0:
+    if result.exit_code == 0 and planned:
         summary = _strict_json(result.stdout)["planned"]
         if not summary["violations"]:  # what it does not report, it keeps
             for axis, top in summary["max"].items():
