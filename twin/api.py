@@ -178,7 +178,7 @@ def run(
     progress : bool or None
         Show a progress bar (None: on long runs only).
     max_physics_steps : int or None
-        Refuse runs longer than this many physics steps (default 100 000 000).
+        Refuse runs longer than this many physics steps (default 20 000 000).
     keep_partial : bool
         On divergence or Ctrl-C, return the partial :class:`Run` (``status`` says which)
         instead of raising.

@@ -43,8 +43,10 @@ PROGRESS_STEPS = 1_000_000
 CHUNK_TICKS = 8192
 #: Physics steps per chunk at most: the loop returns to Python (progress, Ctrl-C) about every second.
 CHUNK_STEPS = 200_000
-#: Physics steps one run may take unless the caller allows more (about 5 minutes of wall time).
-MAX_PHYSICS_STEPS = 100_000_000
+#: Physics steps one run may take unless the caller allows more: 3-7 minutes of a plain run on
+#: a 2-core machine (1e8 steps ran 14-35 minutes there); a run cutting a stock takes longer
+#: per step.
+MAX_PHYSICS_STEPS = 20_000_000
 #: Recorded ticks at most when ``record_every`` is left to the runner: longer runs are decimated,
 #: so memory stays bounded whatever the duration (about 25 MB for a two-axis machine).
 MAX_RECORDED_TICKS = 100_000
