@@ -273,7 +273,10 @@ def run(
         None, "--set", help="Change a field: PATH=VALUE, e.g. disturbances.0.spindle_rpm=2500"
     ),
     max_steps: int = typer.Option(
-        None, "--max-steps", min=1, help="Physics steps a run may take (default 20 000 000: 3-7 minutes of a plain run on 2 cores)"
+        None,
+        "--max-steps",
+        min=1,
+        help="Physics steps a run may take (default 20 000 000: 3-7 minutes of a plain run on 2 cores)",
     ),
     plots: Path = typer.Option(
         None, "--plots", help="Write PNG plots (errors, inputs, forces, contour) to this folder"

@@ -40,6 +40,9 @@ def read_toml(path: Path, what: str) -> dict:
 #: 1.6e8 N/m); with every input under it, no product or power of a few inputs overflows (a
 #: gear ratio of 1e308 did, squared).
 MAX_MAGNITUDE = 1e12
+#: The smallest magnitude of a number that is not zero: its inverse and square inverse stay
+#: finite (a screw lead of 5e-324 divided by zero).
+MIN_MAGNITUDE = 1e-15
 
 
 #: Coordinates and sizes at most (mm) of a stock, a tool, a work offset or an inspected
@@ -49,17 +52,18 @@ MAX_MM = 1e4
 Millimetres = Annotated[float, Field(ge=-MAX_MM, le=MAX_MM)]
 
 
-def _beyond(value, limit: float, path: str = "") -> tuple[str, float] | None:
+def _out_of_range(value, path: str = "") -> tuple[str, float] | None:
     """The path (``key.0``; empty for ``value`` itself) and value of the first finite number
     in ``value`` (a number, or lists, tuples and dicts of them) whose magnitude is over
-    ``limit``; None if there is none."""
+    :data:`MAX_MAGNITUDE` or, not zero, under :data:`MIN_MAGNITUDE`; None if there is none."""
     if isinstance(value, bool):
         return None
     if isinstance(value, int | float):
-        return (path, value) if math.isfinite(value) and abs(value) > limit else None
+        size = abs(value)
+        return (path, value) if math.isfinite(value) and (size > MAX_MAGNITUDE or 0 < size < MIN_MAGNITUDE) else None
     items = value.items() if isinstance(value, dict) else enumerate(value) if isinstance(value, list | tuple) else ()
     for key, item in items:
-        found = _beyond(item, limit, f"{path}.{key}" if path else str(key))
+        found = _out_of_range(item, f"{path}.{key}" if path else str(key))
         if found is not None:
             return found
     return None
@@ -67,19 +71,20 @@ def _beyond(value, limit: float, path: str = "") -> tuple[str, float] | None:
 
 class StrictSpec(BaseModel):
     """Unknown fields and non-finite numbers (nan, inf) are errors, and so is a number of
-    magnitude over :data:`MAX_MAGNITUDE` (fields may bound themselves more tightly)."""
+    magnitude over :data:`MAX_MAGNITUDE` or, not zero, under :data:`MIN_MAGNITUDE` (fields may
+    bound themselves more tightly)."""
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
     @field_validator("*", mode="after")
     @classmethod
     def _bounded(cls, value):
-        found = _beyond(value, MAX_MAGNITUDE)
+        found = _out_of_range(value)
         if found is not None:
             path, number = found
-            raise ValueError(
-                f"{path + ' = ' if path else ''}{number:g} is beyond +-{MAX_MAGNITUDE:g}, out of any physical range"
-            )
+            big = abs(number) > MAX_MAGNITUDE
+            bound = f"beyond +-{MAX_MAGNITUDE:g}" if big else f"not zero and under +-{MIN_MAGNITUDE:g}"
+            raise ValueError(f"{path + ' = ' if path else ''}{number:g} is {bound}, out of any physical range")
         return value
 
 
