@@ -73,8 +73,9 @@ def _echo_json(value, indent: int = 1) -> None:
 
 
 def _progress(as_json: bool) -> bool:
-    """Progress bars: on a terminal only, and never under --json."""
-    return not as_json and sys.stderr.isatty()
+    """Progress bars on stderr, never under --json (stdout is then one JSON document and
+    stderr its error line at most)."""
+    return not as_json
 
 
 def _check_output(option: str, path: Path | None, suffix: str | None = None) -> None:
@@ -207,7 +208,7 @@ def _run(
     if rrd is not None and scn.record_every_ticks == 0:
         raise TwinInputError("record_every_ticks", 0, "the run keeps metrics only: nothing to write to --rrd")
     try:
-        done = api.run(scn, progress=None if _progress(as_json) else False, max_physics_steps=max_steps)
+        done = api.run(scn, progress=None if not as_json else False, max_physics_steps=max_steps)
     except (SimulationDiverged, RunInterrupted) as exc:
         status = "diverged" if isinstance(exc, SimulationDiverged) else "interrupted"
         if exc.result is not None:

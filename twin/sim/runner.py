@@ -18,7 +18,6 @@ force, recorded as the mean of the forces applied over that interval.
 from __future__ import annotations
 
 import math
-import sys
 from collections.abc import Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -224,7 +223,7 @@ def simulate(
         Record every Nth tick; 0 records no series (metrics only); None: every tick, or every
         Nth for runs over ``MAX_RECORDED_TICKS`` ticks so that at most that many are kept.
     progress : bool or None
-        Progress bar; None shows one on a terminal (stderr) for runs over ``PROGRESS_STEPS`` physics steps.
+        Progress bar; None shows one for runs over ``PROGRESS_STEPS`` physics steps.
     compiled : bool or None
         Run the compiled loop (every block compiled) or the Python loop.  None picks the
         compiled loop whenever it can run.
@@ -430,7 +429,7 @@ def simulate(
     outlines = reference.outlines if hasattr(reference, "outlines") else {}
     warnings = getattr(reference, "warnings", [])
     warnings_total = getattr(reference, "warnings_total", 0)
-    show = progress if progress is not None else (n * substeps > PROGRESS_STEPS and sys.stderr.isatty())
+    show = progress if progress is not None else n * substeps > PROGRESS_STEPS
     size = max(1, min(CHUNK_TICKS, CHUNK_STEPS // substeps, n))
     warnings0 = [data.warning[w].number for w in FATAL_WARNINGS]
     messages: list[str] = []
