@@ -38,31 +38,10 @@ def _guard(func):
         try:
             with exits.warnings_as_errors():
                 return func(*args, **kwargs)
-        except typer.Exit:
+        except (typer.Exit, BrokenPipeError):
             raise
-        except TwinInputError as exc:
-            typer.echo(f"error: {exc}", err=True)
-            raise typer.Exit(exits.BAD_INPUT) from None
-        except SimulationDiverged as exc:
-            typer.echo(f"error: {exc}", err=True)
-            raise typer.Exit(exits.DIVERGED) from None
-        except RunInterrupted as exc:
-            typer.echo(f"error: {exc}", err=True)
-            raise typer.Exit(exits.INTERRUPTED) from None
-        except KeyboardInterrupt:
-            typer.echo("error: interrupted", err=True)
-            raise typer.Exit(exits.INTERRUPTED) from None
-        except BrokenPipeError:
-            raise
-        except OSError as exc:  # a file the system will not read or write: full disk, no permission
-            if exc.filename is None:
-                typer.echo(exits.internal_error_line(exc), err=True)
-                raise typer.Exit(exits.INTERNAL_ERROR) from None
-            typer.echo(f"error: {TwinInputError('file', str(exc.filename), exc.strerror or str(exc))}", err=True)
-            raise typer.Exit(exits.BAD_INPUT) from None
-        except Exception as exc:
-            typer.echo(exits.internal_error_line(exc), err=True)
-            raise typer.Exit(exits.INTERNAL_ERROR) from None
+        except (Exception, KeyboardInterrupt) as exc:
+            raise typer.Exit(exits.report(exc)) from None
 
     return wrapper
 
@@ -70,12 +49,6 @@ def _guard(func):
 def _echo_json(value, indent: int = 1) -> None:
     """Print ``value`` as one strict JSON document (:func:`twin.exits.strict_json`)."""
     typer.echo(exits.strict_json(value, indent, default=float))
-
-
-def _progress(as_json: bool) -> bool:
-    """Progress bars on stderr, never under --json (stdout is then one JSON document and
-    stderr its error line at most)."""
-    return not as_json
 
 
 def _check_output(option: str, path: Path | None, suffix: str | None = None) -> None:
@@ -208,7 +181,7 @@ def _run(
     if rrd is not None and scn.record_every_ticks == 0:
         raise TwinInputError("record_every_ticks", 0, "the run keeps metrics only: nothing to write to --rrd")
     try:
-        done = api.run(scn, progress=None if not as_json else False, max_physics_steps=max_steps)
+        done = api.run(scn, progress=False if as_json else None, max_physics_steps=max_steps)
     except (SimulationDiverged, RunInterrupted) as exc:
         status = "diverged" if isinstance(exc, SimulationDiverged) else "interrupted"
         if exc.result is not None:
@@ -385,9 +358,7 @@ def reproduce(
 
     _check_output("--rrd", rrd, ".rrd")
     _check_folder(plots)
-    res = api.reproduce(
-        source, samples=samples, twin_samples=twin_samples, random_seed=seed, progress=_progress(as_json)
-    )
+    res = api.reproduce(source, samples=samples, twin_samples=twin_samples, random_seed=seed, progress=not as_json)
     paper = reproduction(source)
     if as_json:
         _echo_json(res, 1)
@@ -443,7 +414,7 @@ def sweep(
         scheduler=scheduler,
         batch=batch,
         resume=resume,
-        progress=_progress(as_json),
+        progress=not as_json,
         **parse_settings(list(sets or [])),
     )
     summary = done.summary
@@ -631,9 +602,7 @@ def calibrate(
     if out is not None and not is_machine_file(machine):
         raise TwinInputError("--out", str(out), "writes a machine file: calibrate a machine file (FILE.toml)")
     symbols = [s.strip() for s in fit.split(",") if s.strip()]
-    result = fit_machine(
-        machine, trace, symbols, _parse_sets(sets or []), axis, progress=_progress(as_json), sensor=sensor
-    )
+    result = fit_machine(machine, trace, symbols, _parse_sets(sets or []), axis, progress=not as_json, sensor=sensor)
     if as_json:
         _echo_json(result, 2)
     else:
@@ -894,7 +863,7 @@ def _bench_sweep(as_json: bool, samples: int, memory_samples: int, repeats: int)
     for option, value in (("--samples", samples), ("--memory-samples", memory_samples)):
         if not 1 <= value <= 100_000:
             raise TwinInputError(option, value, "must be in 1..100000")
-    f = run_sweep_bench(samples, repeats, memory_samples, progress=_progress(as_json))
+    f = run_sweep_bench(samples, repeats, memory_samples, progress=not as_json)
     if as_json:
         _echo_json({"sweep": f}, 2)
         return

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 import traceback
 import warnings
 from collections.abc import Callable, Iterator
@@ -51,6 +52,29 @@ def warnings_as_errors() -> Iterator[None]:
         for category in (DeprecationWarning, PendingDeprecationWarning, FutureWarning):
             warnings.simplefilter("ignore", category)
         yield
+
+
+def report(exc: BaseException) -> int:
+    """The exit code of the exception ``exc`` that ended a command, with its one ``error:``
+    line written on stderr: the twin's own errors (bad input, a divergence, an interruption),
+    Ctrl-C, a file the system would not read or write (bad input: a full disk, no permission),
+    and anything else as a bug."""
+    from twin.errors import RunInterrupted, SimulationDiverged, TwinInputError
+
+    if isinstance(exc, TwinInputError):
+        code, line = BAD_INPUT, f"error: {exc}"
+    elif isinstance(exc, SimulationDiverged):
+        code, line = DIVERGED, f"error: {exc}"
+    elif isinstance(exc, RunInterrupted):
+        code, line = INTERRUPTED, f"error: {exc}"
+    elif isinstance(exc, KeyboardInterrupt):
+        code, line = INTERRUPTED, "error: interrupted"
+    elif isinstance(exc, OSError) and exc.filename is not None:
+        code, line = BAD_INPUT, f"error: {TwinInputError('file', str(exc.filename), exc.strerror or str(exc))}"
+    else:
+        code, line = INTERNAL_ERROR, internal_error_line(exc)
+    print(line, file=sys.stderr)
+    return code
 
 
 def internal_error_line(exc: BaseException) -> str:

@@ -35,7 +35,6 @@ def main() -> None:
         cli_main()
         return
     from twin import exits
-    from twin.errors import TwinInputError
     from twin.gcode.listing import list_program
     from twin.gcode.reader import Settings
 
@@ -44,9 +43,6 @@ def main() -> None:
         with exits.warnings_as_errors():
             list_program(file, Settings(), as_json)
             sys.stdout.flush()
-    except TwinInputError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        sys.exit(exits.BAD_INPUT)
     except KeyboardInterrupt:
         print(f"error: interrupted while reading {file}; nothing was printed", file=sys.stderr)
         sys.exit(exits.INTERRUPTED)
@@ -54,8 +50,7 @@ def main() -> None:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # Python's flush at exit goes nowhere
         sys.exit(exits.PIPE_CLOSED)
     except Exception as exc:
-        print(exits.internal_error_line(exc), file=sys.stderr)
-        sys.exit(exits.INTERNAL_ERROR)
+        sys.exit(exits.report(exc))
 
 
 if __name__ == "__main__":

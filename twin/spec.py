@@ -97,7 +97,7 @@ def validation_error(
     from twin.errors import TwinInputError
 
     e = err.errors()[0]
-    field = ".".join(str(p) for p in e["loc"] if not str(p).startswith(skip) or not skip)
+    field = ".".join(str(p) for p in e["loc"] if not str(p).startswith(skip))
     value = e.get("input")
     reason = e["msg"].removeprefix("Value error, ")
     return TwinInputError(prefix + (field or whole), "{...}" if isinstance(value, dict) else value, reason)
