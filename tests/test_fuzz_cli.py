@@ -12,10 +12,10 @@ takes well under a second.  Profiles (``--hypothesis-profile``): ``default`` 150
 
 import json
 import math
-import re
 import tomllib
 import warnings
 
+from fuzz_toml import mutate, paths, toml_document
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 from typer.testing import CliRunner
@@ -39,48 +39,6 @@ values = st.recursive(
 )
 
 
-def _paths(data, prefix=()):
-    """Every path to a value in nested dicts and lists."""
-    items = data.items() if isinstance(data, dict) else enumerate(data) if isinstance(data, list) else ()
-    for key, value in items:
-        yield (*prefix, key)
-        yield from _paths(value, (*prefix, key))
-
-
-def _toml_key(key) -> str:
-    key = str(key)
-    return key if re.fullmatch(r"[A-Za-z0-9_-]+", key) else json.dumps(key)
-
-
-def _toml_value(value) -> str:
-    """A TOML value (inline tables and arrays); TOML has no null, so None becomes a string."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, int):
-        return str(value) if -(2**63) <= value < 2**63 else repr(float(value))
-    if isinstance(value, float):
-        return "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf") if math.isinf(value) else repr(value)
-    if isinstance(value, dict):
-        return "{ " + ", ".join(f"{_toml_key(k)} = {_toml_value(v)}" for k, v in value.items()) + " }"
-    if isinstance(value, list):
-        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
-    return json.dumps(str(value))
-
-
-def _toml(data: dict) -> str:
-    return "\n".join(f"{_toml_key(k)} = {_toml_value(v)}" for k, v in data.items()) + "\n"
-
-
-def _mutate(data, path, value, delete: bool):
-    node = data
-    for key in path[:-1]:
-        node = node[key]
-    if delete:
-        del node[path[-1]]
-    else:
-        node[path[-1]] = value
-
-
 @st.composite
 def scenario_files(draw) -> bytes:
     if draw(st.integers(0, 19)) == 0:  # now and then: any bytes at all
@@ -88,11 +46,11 @@ def scenario_files(draw) -> bytes:
     data = json.loads(json.dumps(BUNDLED[draw(st.sampled_from(sorted(BUNDLED)))]))
     data["duration_s"] = 0.02
     for _ in range(draw(st.integers(1, 3))):
-        paths = list(_paths(data))
-        if not paths:
+        where = list(paths(data))
+        if not where:
             break
-        _mutate(data, draw(st.sampled_from(paths)), draw(values), draw(st.booleans()) and draw(st.booleans()))
-    return _toml(data).encode("utf-8", "surrogatepass")
+        mutate(data, draw(st.sampled_from(where)), draw(values), draw(st.booleans()) and draw(st.booleans()))
+    return toml_document(data).encode("utf-8", "surrogatepass")
 
 
 def _finite(value) -> bool:

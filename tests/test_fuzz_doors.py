@@ -25,6 +25,7 @@ import warnings
 from pathlib import Path
 
 import pytest
+from fuzz_toml import mutate, paths, toml_document, toml_value
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 from typer.testing import CliRunner
@@ -161,37 +162,16 @@ def test_any_program_gives_moves_or_one_error_line(tmp_path, program, planned):
 # --- stock and tools -----------------------------------------------------------------------
 
 
-def _toml(value) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, float):
-        return (
-            "nan" if value != value else ("inf" if value > 0 else "-inf") if abs(value) == float("inf") else repr(value)
-        )
-    if isinstance(value, int):
-        return str(value) if -(2**63) <= value < 2**63 else repr(float(value))
-    if isinstance(value, dict):
-        return "{ " + ", ".join(f"{k} = {_toml(v)}" for k, v in value.items()) + " }"
-    if isinstance(value, list | tuple):
-        return "[" + ", ".join(_toml(v) for v in value) + "]"
-    return json.dumps(str(value))
-
-
-def _numbers_in(value, path=()):
-    """Paths to every number in nested dicts and lists."""
-    if isinstance(value, bool):
-        return
-    if isinstance(value, int | float):
-        yield path
-    items = value.items() if isinstance(value, dict) else enumerate(value) if isinstance(value, list) else ()
-    for key, item in items:
-        yield from _numbers_in(item, (*path, key))
-
-
-def _set(data, path, value):
-    for key in path[:-1]:
-        data = data[key]
-    data[path[-1]] = value
+def _number_paths(data) -> list[tuple]:
+    """Paths to every number (not a boolean) in nested dicts and lists."""
+    found = []
+    for path in paths(data):
+        node = data
+        for key in path:
+            node = node[key]
+        if isinstance(node, int | float) and not isinstance(node, bool):
+            found.append(path)
+    return found
 
 
 @st.composite
@@ -200,12 +180,15 @@ def stock_and_tools(draw) -> dict:
     island over the whole stock now and then)."""
     data = json.loads(json.dumps(STOCK_SCENARIO))
     data["duration_s"] = 0.02
+    data["reference"]["file"] = str(ROOT / "twin" / "scenarios" / data["reference"]["file"])
     data["stock"]["islands_mm"] = data["stock"]["islands_mm"] if draw(st.booleans()) else []
     if draw(st.integers(0, 9)) == 0:
         data["stock"]["islands_mm"] = [[[-500.0, -500.0], [500.0, -500.0], [500.0, 500.0], [-500.0, 500.0]]]
-    paths = [("stock", *p) for p in _numbers_in(data["stock"])][:40] + [("tool", *p) for p in _numbers_in(data["tool"])]
+    where = [("stock", *p) for p in _number_paths(data["stock"])][:40] + [
+        ("tool", *p) for p in _number_paths(data["tool"])
+    ]
     for _ in range(draw(st.integers(1, 3))):
-        _set(data, draw(st.sampled_from(paths)), draw(numbers))
+        mutate(data, draw(st.sampled_from(where)), draw(numbers))
     if draw(st.booleans()):
         data["tool"]["corner_radius_mm"] = draw(numbers)
     return data
@@ -215,15 +198,8 @@ def stock_and_tools(draw) -> dict:
 @given(scenario=stock_and_tools())
 def test_any_stock_and_tool_give_a_result_or_one_error_line(tmp_path, scenario):
     path = tmp_path / "fuzz.toml"
-    text = "\n".join(f"{k} = {_toml(v)}" for k, v in scenario.items() if not isinstance(v, dict))
-    text += "".join(
-        f"\n[{k}]\n" + "\n".join(f"{a} = {_toml(b)}" for a, b in v.items())
-        for k, v in scenario.items()
-        if isinstance(v, dict)
-    )
-    path.write_text(
-        text.replace("programs/seed004_circle.ngc", str(ROOT / "twin/scenarios/programs/seed004_circle.ngc"))
-    )
+    text = toml_document(scenario)
+    path.write_text(text)
     result = _invoke(["run", str(path), "--json", "--max-steps", "20000"])
     _assert_contract(result, True, text[:300])
 
@@ -243,7 +219,7 @@ def machine_files(draw) -> str:
         if draw(st.integers(0, 7)) == 0:
             text = text[: m.start()] + text[m.end() :]
         else:
-            text = text[: m.start(2)] + _toml(draw(numbers)) + text[m.end(2) :]
+            text = text[: m.start(2)] + toml_value(draw(numbers)) + text[m.end(2) :]
     return text
 
 
@@ -310,4 +286,4 @@ def test_the_mutations_reach_each_door():
     """The strategies' seeds are there: a fuzz test over nothing would pass vacuously."""
     assert len(PROGRAM_LINES) >= 10 and all(PROGRAM_LINES.values())
     assert len(MACHINE_FILES) >= 3 and all(len(VALUE.findall(t)) > 10 for t in MACHINE_FILES.values())
-    assert len(list(_numbers_in(STOCK_SCENARIO["stock"]))) > 100
+    assert len(_number_paths(STOCK_SCENARIO["stock"])) > 100
