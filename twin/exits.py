@@ -94,17 +94,16 @@ def internal_error_line(exc: BaseException) -> str:
     )
 
 
-def strict_json_ready(value, path: str = "", non_finite: dict | None = None):
+def _finite_or_null(value, path: str, non_finite: dict[str, str]):
     """``value`` with every nan or infinite float replaced by None (JSON's null), recorded in
     ``non_finite`` as ``{path: "inf" | "-inf" | "nan"}``."""
     if isinstance(value, float) and not math.isfinite(value):
-        if non_finite is not None:
-            non_finite[path or "."] = "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
+        non_finite[path or "."] = "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
         return None
     if isinstance(value, dict):
-        return {k: strict_json_ready(v, f"{path}.{k}" if path else str(k), non_finite) for k, v in value.items()}
+        return {k: _finite_or_null(v, f"{path}.{k}" if path else str(k), non_finite) for k, v in value.items()}
     if isinstance(value, list | tuple):
-        return [strict_json_ready(v, f"{path}.{i}" if path else str(i), non_finite) for i, v in enumerate(value)]
+        return [_finite_or_null(v, f"{path}.{i}" if path else str(i), non_finite) for i, v in enumerate(value)]
     return value
 
 
@@ -112,7 +111,7 @@ def strict_json(value, indent: int = 1, default: Callable | None = None) -> str:
     """One strict JSON document (``allow_nan=False``): a non-finite float is written as null,
     and a dict gets a ``non_finite`` table naming each such value and what it was."""
     non_finite: dict[str, str] = {}
-    ready = strict_json_ready(value, "", non_finite)
+    ready = _finite_or_null(value, "", non_finite)
     if non_finite and isinstance(ready, dict):
         ready["non_finite"] = non_finite
     return json.dumps(ready, indent=indent, allow_nan=False, default=default)
