@@ -22,7 +22,7 @@ outputs to it.  Block kinds:
     Elementwise static nonlinearity ``y_i = f(v_i)`` (``par``: code, then its parameters):
     :data:`NL_SATURATION` (limit L: ``clip(v, -L, L)``), :data:`NL_DEAD_ZONE` (width w:
     ``0`` for ``|v| <= w``, else ``v - w sign(v)``), :data:`NL_COSH_GAIN` (k, e_max:
-    ``cosh(k clip(v, -e_max, e_max)) v``, seed 002's eqs. 7-8), :data:`NL_RELAY` (amplitude d:
+    ``cosh(k clip(v, -e_max, e_max)) v``, Anang 2017's eqs. 7-8), :data:`NL_RELAY` (amplitude d:
     ``d`` for ``v >= 0``, else ``-d``; with ``u_prev`` fed back into ``v`` it is a relay with
     hysteresis, see :func:`controllers.blocks.compose.relay_feedback`).
 :data:`SEQUENCE`

@@ -1,4 +1,4 @@
-"""Compare two controllers on the same cut: seed 004's MIMO H-infinity controller and our PID.
+"""Compare two controllers on the same cut: Choi 1999's MIMO H-infinity controller and our PID.
 
     uv run python examples/compare_controllers.py [--duration 2.2]
 
@@ -13,15 +13,15 @@ import twin
 
 def main(duration_s: float) -> dict:
     controllers = {
-        "MIMO H-infinity (seed 004)": {"type": "seed004_mimo"},
-        "PID (ours, the MIMO loop's margins)": {"type": "seed004_pid"},
+        "MIMO H-infinity (Choi 1999)": {"type": "choi1999_mimo"},
+        "PID (ours, the MIMO loop's margins)": {"type": "choi1999_pid"},
         "PD with the MIMO's static gain": {
-            "type": "seed004_pid",
+            "type": "choi1999_pid",
             "params": {"tuning": "mimo_diagonal", "ki_scale": 0.0},
         },
     }
     return {
-        name: twin.run("seed004_mimo_cutting", duration_s=duration_s, controller=controller).summary
+        name: twin.run("choi1999_mimo_cutting", duration_s=duration_s, controller=controller).summary
         for name, controller in controllers.items()
     }
 

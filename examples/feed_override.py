@@ -5,7 +5,7 @@ over the machine's parameter box: a sweep of the G-code test piece on Dask.
         [--workers 2] [--out example_out]
 
 ``gcode_test_piece`` (the 2.5-D part cut from its stock on ``linear_motor_xy``) at each feed
-override, at every vertex of the carriages' mass box (seed 004 Table 1's m_x and m_y, the
+override, at every vertex of the carriages' mass box (Choi 1999 Table 1's m_x and m_y, the
 ``corners`` spec): for each override the worst vertex's max and RMS contour error on the feed
 moves (the rapids, which the override does not slow, left out), and the largest override whose
 worst case stays under the limit, for either metric.

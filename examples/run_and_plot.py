@@ -2,7 +2,7 @@
 
     uv run python examples/run_and_plot.py [--duration 2.2] [--out example_out]
 
-Seed 004's cutting circle under the MIMO H-infinity controller; prints the summary (the same as
+Choi 1999's cutting circle under the MIMO H-infinity controller; prints the summary (the same as
 ``twin run --json``) and writes ``run_and_plot.png``.
 """
 
@@ -18,7 +18,7 @@ import twin
 
 
 def main(duration_s: float, out: Path) -> dict:
-    run = twin.run("seed004_mimo_cutting", duration_s=duration_s)
+    run = twin.run("choi1999_mimo_cutting", duration_s=duration_s)
     frame = run.to_pandas()  # indexed by time (s); columns "<series> (<unit>)"
     fig, ax = plt.subplots(figsize=(8, 4))
     frame[["error/x (µm)", "error/y (µm)"]].plot(ax=ax, linewidth=0.8)

@@ -2,7 +2,7 @@
 
     uv run python examples/sweep_box.py [--samples 20] [--workers 2] [--out example_out]
 
-The square on seed 001's table (bundled ``square_sabau_pid``) with the identified gains K_x,
+The square on Sabau 2022's table (bundled ``square_sabau_pid``) with the identified gains K_x,
 K_y drawn in their +-10 % box: the summary's worst case, and each sample's row as a DataFrame.
 """
 

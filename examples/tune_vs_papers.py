@@ -15,10 +15,10 @@ import twin
 
 #: (scenario, what the paper's controller is)
 CASES = [
-    ("seed004_mimo_cutting", "seed 004 MIMO H-infinity + ZPETC"),
-    ("seed004_pid_cutting", "seed 004 PID + feedforward"),
-    ("seed003_cascade", "seed 003 cascade P/PI"),
-    ("demo_circle_cncmt_xy", "seed 000 robust PI"),
+    ("choi1999_mimo_cutting", "Choi 1999 MIMO H-infinity + ZPETC"),
+    ("choi1999_pid_cutting", "Choi 1999 PID + feedforward"),
+    ("maharof2021_cascade", "Maharof 2021 cascade P/PI"),
+    ("demo_circle_cncmt_xy", "Yadav 2020 robust PI"),
 ]
 
 

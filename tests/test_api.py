@@ -43,7 +43,7 @@ def test_run_summary_equals_the_cli_json_and_settings_take_both_spellings():
 
 
 def test_to_pandas_is_time_indexed_with_units_in_the_names():
-    run = twin.run("seed004_mimo_air_cut", duration_s=0.1)
+    run = twin.run("choi1999_mimo_air_cut", duration_s=0.1)
     frame = run.to_pandas()
     result = run.result
     assert isinstance(frame, pd.DataFrame) and frame.index.name == "time (s)"
@@ -62,8 +62,8 @@ def test_bad_settings_and_divergence_are_the_twins_errors():
         twin.run("slot_linear_motor", nope=1)
     with pytest.raises(TwinInputError, match=r"disturbances\.9\.spindle_rpm"):
         twin.load("slot_linear_motor", **{"disturbances.9.spindle_rpm": 1.0})
-    with pytest.raises(TwinInputError, match="source = 'seed999'"):
-        twin.reproduce("seed999")
+    with pytest.raises(TwinInputError, match="source = 'smith2000'"):
+        twin.reproduce("smith2000")
     with pytest.raises(SimulationDiverged) as err:
         twin.run("step_cncmt_hinf", controller={"type": "pid", "params": {"kp": 1e9}}, duration_s=0.5)
     partial = twin.run(

@@ -17,7 +17,7 @@ machine = "cncmt"
 duration_s = 0.5
 control_period_s = 1e-3
 [controller]
-type = "seed000_imc"
+type = "yadav2020_imc"
 [reference]
 type = "step"
 amplitude_m = 0.01
@@ -32,7 +32,7 @@ def _twin(*args, cwd=None):
     "text, field",
     [
         (GOOD.replace('"cncmt"', '"lathe"'), "machine = 'lathe'"),
-        (GOOD.replace('"seed000_imc"', '"lqg"'), "controller.type = 'lqg'"),
+        (GOOD.replace('"yadav2020_imc"', '"lqg"'), "controller.type = 'lqg'"),
         (GOOD + "\nspindle_rpm = 3000\n", "spindle_rpm"),
         (GOOD.replace('machine = "cncmt"', 'machine = "cncmt"\noverrides = { m = -50.0 }'), "overrides.m = -50.0"),
         (GOOD.replace("control_period_s = 1e-3", "control_period_s = 1.5e-4"), "control_period_s = 0.00015"),
@@ -63,7 +63,7 @@ def test_run_json_and_recording(tmp_path):
 def test_divergence_exit_code(tmp_path):
     path = tmp_path / "div.toml"
     path.write_text(
-        GOOD.replace('type = "seed000_imc"', 'type = "pid"\nparams = { kp = -500.0 }').replace(
+        GOOD.replace('type = "yadav2020_imc"', 'type = "pid"\nparams = { kp = -500.0 }').replace(
             "duration_s = 0.5", "duration_s = 60.0"
         )
     )
@@ -75,8 +75,8 @@ def test_demo_writes_recording(tmp_path):
     r = _twin("demo", "--json", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     out = json.loads(r.stdout)
-    assert out["machine"] == "linear_motor_xy" and out["scenario"] == "seed004_mimo_cutting"
-    # seed 004's MIMO controller while cutting: tens of um per axis (paper: about 36 and 41 um)
+    assert out["machine"] == "linear_motor_xy" and out["scenario"] == "choi1999_mimo_cutting"
+    # Choi 1999's MIMO controller while cutting: tens of um per axis (paper: about 36 and 41 um)
     assert 10.0 < max(out["max_tracking_error_um"].values()) < 100.0
     entities = read_back(tmp_path / "demo.rrd")
     assert entities["/contour/actual"] == 1
@@ -84,13 +84,13 @@ def test_demo_writes_recording(tmp_path):
 
 
 def test_run_writes_report_plots(tmp_path):
-    r = _twin("run", "seed004_air_cut_circle", "--set", "duration_s=0.2", "--plots", str(tmp_path / "plots"))
+    r = _twin("run", "choi1999_air_cut_circle", "--set", "duration_s=0.2", "--plots", str(tmp_path / "plots"))
     assert r.returncode == 0, r.stderr
     pngs = sorted(p.name for p in (tmp_path / "plots").glob("*.png"))
-    assert pngs == [f"seed004_air_cut_circle_{k}.png" for k in ("contour", "control", "forces", "tracking_error")]
+    assert pngs == [f"choi1999_air_cut_circle_{k}.png" for k in ("contour", "control", "forces", "tracking_error")]
     assert all((tmp_path / "plots" / p).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" for p in pngs)
     (tmp_path / "file").write_text("")
-    r = _twin("run", "seed004_air_cut_circle", "--plots", str(tmp_path / "file"))
+    r = _twin("run", "choi1999_air_cut_circle", "--plots", str(tmp_path / "file"))
     assert r.returncode == 2 and r.stderr.strip().splitlines() == [
         f"error: --plots = {str(tmp_path / 'file')!r}: exists and is not a folder"
     ]
@@ -120,7 +120,7 @@ def test_fidelity_bad_set():
 
 def test_list_and_bench():
     r = _twin("list")
-    assert r.returncode == 0 and "linear_motor_xy" in r.stdout and "seed000_hinf" in r.stdout
+    assert r.returncode == 0 and "linear_motor_xy" in r.stdout and "yadav2020_hinf" in r.stdout
     assert "cascade" in r.stdout and "inverse_model" in r.stdout and "reproductions" in r.stdout
     r = _twin("bench", "--json", "--seconds", "0.05", "--repeats", "3", "--gcode-lines", "3000", "--gcode-moves", "500")
     figures = json.loads(r.stdout)
@@ -149,11 +149,11 @@ def test_list_and_bench():
         assert 0.3 < figures["ratio"] / (figures["closed_loop_steps_per_s"] / figures["raw_steps_per_s"]) < 3
 
 
-def test_reproduce_seed000_small_counts(tmp_path):
+def test_reproduce_yadav2020_small_counts(tmp_path):
     rrd = tmp_path / "s0.rrd"
     r = _twin(
         "reproduce",
-        "seed000",
+        "yadav2020",
         "--json",
         "--samples",
         "5",
@@ -172,28 +172,28 @@ def test_reproduce_seed000_small_counts(tmp_path):
     assert len(list((tmp_path / "plots").glob("*.png"))) == 4
     counts = read_back(rrd)
     assert counts["/hinf/actual/x"] == 20_000 + 1  # 12 s at 10 kHz, decimated; + the legend entry
-    # the text report (what `twin reproduce seed000` prints without --json) of the same results
+    # the text report (what `twin reproduce yadav2020` prints without --json) of the same results
     from twin.reproductions import reproduction
 
-    report = reproduction("seed000").format_report(res)
+    report = reproduction("yadav2020").format_report(res)
     assert "Table 2" in report and "38.33" in report  # the paper's Kp beside ours
 
 
 def test_reproduce_unknown_source_exits_2():
-    r = _twin("reproduce", "seed999")
+    r = _twin("reproduce", "smith2000")
     assert r.returncode == 2 and r.stderr.strip().splitlines() == [
-        "error: source = 'seed999': no reproduction of that paper yet "
-        "(known: seed000, seed001, seed002, seed003, seed004)"
+        "error: source = 'smith2000': no reproduction of that paper yet "
+        "(known: yadav2020, sabau2022, anang2017, maharof2021, choi1999)"
     ]
 
 
-def test_reproduce_seed002_transfer_functions_only(tmp_path):
-    r = _twin("reproduce", "seed002", "--json", "--twin-samples", "0", "--plots", str(tmp_path / "p"))
+def test_reproduce_anang2017_transfer_functions_only(tmp_path):
+    r = _twin("reproduce", "anang2017", "--json", "--twin-samples", "0", "--plots", str(tmp_path / "p"))
     assert r.returncode == 0, r.stderr
     res = json.loads(r.stdout)
-    assert len(res["tables"]) == 16 and "twin" not in res["tables"][0]["seed002_pid"]
-    assert res["tables"][0]["seed002_pid"]["tf_loop"]["max_mm"] == pytest.approx(0.0639, rel=0.01)  # paper's PID
-    assert len(list((tmp_path / "p").glob("seed002_*.png"))) == 3
+    assert len(res["tables"]) == 16 and "twin" not in res["tables"][0]["anang2017_pid"]
+    assert res["tables"][0]["anang2017_pid"]["tf_loop"]["max_mm"] == pytest.approx(0.0639, rel=0.01)  # paper's PID
+    assert len(list((tmp_path / "p").glob("anang2017_*.png"))) == 3
     cut = [row for row in res["tables"] if row["rpm"] is not None]
     assert len(cut) == 12
     for row in cut:
@@ -202,21 +202,21 @@ def test_reproduce_seed002_transfer_functions_only(tmp_path):
         key = f"{row['f_hz']} {row['a_mm']} {row['rpm']:.0f}"
         paper_pid, paper_npid = res["paper"]["table2"][key]
         assert row["paper_max_reduction_pct"] == pytest.approx((paper_pid - paper_npid) / paper_pid * 100, abs=0.01)
-        pid, npid = row["seed002_pid"]["tf_loop"], row["seed002_npid"]["tf_loop"]
+        pid, npid = row["anang2017_pid"]["tf_loop"], row["anang2017_npid"]["tf_loop"]
         assert row["max_reduction_pct_tf_loop"] == pytest.approx((pid["max_mm"] - npid["max_mm"]) / pid["max_mm"] * 100)
         assert row["rmse_reduction_pct_tf_loop"] == pytest.approx(
             (pid["rmse_mm"] - npid["rmse_mm"]) / pid["rmse_mm"] * 100
         )
     _same_as_committed(
-        "seed002",
+        "anang2017",
         res,
         lambda out: [  # without the twin, the TF loop has no cutting force
             v
             for row in out["tables"]
             if row["rpm"] is None
             for v in (
-                *row["seed002_pid"]["tf_loop"].values(),
-                *row["seed002_npid"]["tf_loop"].values(),
+                *row["anang2017_pid"]["tf_loop"].values(),
+                *row["anang2017_npid"]["tf_loop"].values(),
                 row["max_reduction_pct_tf_loop"],
             )
         ],
@@ -235,15 +235,15 @@ def _same_as_committed(seed: str, res: dict, part) -> None:
     )
 
 
-def test_reproduce_seed003_transfer_functions_only():
-    r = _twin("reproduce", "seed003", "--json", "--twin-samples", "0")
+def test_reproduce_maharof2021_transfer_functions_only():
+    r = _twin("reproduce", "maharof2021", "--json", "--twin-samples", "0")
     assert r.returncode == 0, r.stderr
     res = json.loads(r.stdout)
     assert res["design"]["velocity"]["gm_db"] == pytest.approx(9.37, abs=0.01)  # the thesis's margins, met
     assert res["design"]["velocity"]["pm_deg"] == pytest.approx(56.4, abs=0.01)
     assert res["design"]["q_cutoff_hz"] == 100.0 and len(res["cases"]) == 6
     _same_as_committed(
-        "seed003",
+        "maharof2021",
         res,
         lambda out: (
             [
@@ -257,15 +257,17 @@ def test_reproduce_seed003_transfer_functions_only():
     )
 
 
-def test_reproduce_seed001_transfer_functions_only(tmp_path):
-    r = _twin("reproduce", "seed001", "--json", "--twin-samples", "0", "--samples", "2", "--plots", str(tmp_path / "p"))
+def test_reproduce_sabau2022_transfer_functions_only(tmp_path):
+    r = _twin(
+        "reproduce", "sabau2022", "--json", "--twin-samples", "0", "--samples", "2", "--plots", str(tmp_path / "p")
+    )
     assert r.returncode == 0, r.stderr
     res = json.loads(r.stdout)
     assert res["relay"]["used"] == "tf" and "twin" not in res["table1"]["p"]
     # ZN P from the 10 ms relay test: Table 1's 20 % / 8 % overshoot within a few points
     assert [m["overshoot_pct"] for m in res["table1"]["p"]["tf"]] == pytest.approx([20.0, 8.0], abs=2.0)
     assert all(res["lmi"][d]["in_region"] == [True, True] for d in ("lmi", "pi_p_lmi"))
-    assert len(list((tmp_path / "p").glob("seed001_*.png"))) == 7  # the trajectories need the twin
+    assert len(list((tmp_path / "p").glob("sabau2022_*.png"))) == 7  # the trajectories need the twin
 
 
 def test_run_cutting_scenario_with_settings_and_recording(tmp_path):
@@ -343,7 +345,7 @@ def test_divergence_keeps_the_partial_run(tmp_path):
     """Exit 3 after printing how far the run got and writing its recording up to there."""
     path = tmp_path / "div.toml"
     path.write_text(
-        GOOD.replace('type = "seed000_imc"', 'type = "pid"\nparams = { kp = -500.0 }').replace(
+        GOOD.replace('type = "yadav2020_imc"', 'type = "pid"\nparams = { kp = -500.0 }').replace(
             "duration_s = 0.5", "duration_s = 60.0"
         )
     )
@@ -395,7 +397,7 @@ def test_interrupt_keeps_the_partial_run(tmp_path):
     assert read_back(tmp_path / "cut.rrd")["/reference/x"] > 0
 
 
-@pytest.mark.parametrize("scenario", ["cascade_observer_googol", "step_cncmt_hinf", "seed004_cutting_circle"])
+@pytest.mark.parametrize("scenario", ["cascade_observer_googol", "step_cncmt_hinf", "choi1999_cutting_circle"])
 def test_run_imports_only_what_it_needs(scenario):
     """twin run of a bundled scenario (observer, 4th-order H-infinity, milling) loads neither
     python-control nor scipy.signal, matplotlib or rerun (without --rrd): together about 2 s of

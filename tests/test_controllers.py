@@ -20,7 +20,7 @@ from controllers.blocks import (
 )
 from controllers.design.pid import pid_tf
 from controllers.lti import SisoTf
-from controllers.papers import seed000
+from controllers.papers import yadav2020
 from controllers.registry import Context, make_observers
 
 
@@ -46,11 +46,11 @@ def test_linear_block_matches_python_control(method):
     """Eq. (28) discretized by our realization and formulas, against python-control's own
     realization (slycot) and ``c2d`` (scipy): equal up to rounding."""
     dt, n = 1e-3, 2000
-    ctrl = error_feedback(seed000.HINF, dt, method=method)
+    ctrl = error_feedback(yadav2020.HINF, dt, method=method)
     e = np.sin(np.arange(n) * dt * 7.0)
     u = _drive(Program([ctrl], standard_signals("x")), {"error.x": e}, n, ["u.x"])[:, 0]
     ref = control.forced_response(
-        control.c2d(control.ss(seed000.HINF.to_control()), dt, method), T=np.arange(n) * dt, U=e
+        control.c2d(control.ss(yadav2020.HINF.to_control()), dt, method), T=np.arange(n) * dt, U=e
     ).outputs
     assert np.abs(u - ref).max() <= 1e-12 * np.abs(ref).max()
 
@@ -88,16 +88,16 @@ def test_static_nonlinearities():
 
 
 def test_npid_is_the_pid_of_the_shaped_error():
-    """Seed 002 eqs. (6)-(8): u = PID(cosh(KO e) e), e clipped at e_max inside cosh (mm read)."""
+    """Anang 2017 eqs. (6)-(8): u = PID(cosh(KO e) e), e clipped at e_max inside cosh (mm read)."""
     dt, n = 1e-4, 3000
     e = 0.5e-3 * np.sin(np.arange(n) * dt * 40.0)  # +-0.5 mm: the clip at 0.3 mm is active
-    npid = make_controller("seed002_npid", dt)
+    npid = make_controller("anang2017_npid", dt)
     u = _drive(Program([npid], standard_signals("x")), {"error.x": e}, n, ["u.x"])[:, 0]
     shaped = np.cosh(6e3 * np.clip(e, -0.3e-3, 0.3e-3)) * e
-    from controllers.papers import seed002
+    from controllers.papers import anang2017
 
     ref = control.forced_response(
-        control.c2d(control.ss(seed002.pid(1e-4).to_control()), dt, "tustin"), T=np.arange(n) * dt, U=shaped
+        control.c2d(control.ss(anang2017.pid(1e-4).to_control()), dt, "tustin"), T=np.arange(n) * dt, U=shaped
     ).outputs
     assert np.abs(u - ref).max() <= 1e-9 * np.abs(ref).max()
     # the gain at the clip is the paper's Ke = 3.1075 at KO = 6, e_max = 0.3
@@ -118,7 +118,7 @@ def test_cascade_is_the_two_loop_law():
 
 
 def test_inverse_model_observer_recovers_an_input_disturbance():
-    """Plant P_n = 78.02/(s^2 + 163 s + 193.3) m/V (seed 002 eq. 1) under u + d: d_hat -> d."""
+    """Plant P_n = 78.02/(s^2 + 163 s + 193.3) m/V (Anang 2017 eq. 1) under u + d: d_hat -> d."""
     dt, n = 1e-4, 20000
     plant = SisoTf([78.02], [1.0, 163.0, 193.3])
     obs = inverse_model_observer(plant, 50.0, 2, dt)
@@ -186,10 +186,10 @@ def test_pid_tf(kp, ki, kd, order):
         pid_tf(1.0, 0.0, 1.0, 0.0)
 
 
-def test_published_seed000_controllers():
-    assert seed000.ROBUST_PI(1j) == pytest.approx(38.33 + 45.65 / 1j)
-    assert seed000.HINF_REDUCED(0) == pytest.approx(20.97 / 5.5)
-    assert make_controller("seed000_hinf", 1e-4).blocks[0].n_state == 4
+def test_published_yadav2020_controllers():
+    assert yadav2020.ROBUST_PI(1j) == pytest.approx(38.33 + 45.65 / 1j)
+    assert yadav2020.HINF_REDUCED(0) == pytest.approx(20.97 / 5.5)
+    assert make_controller("yadav2020_hinf", 1e-4).blocks[0].n_state == 4
 
 
 def test_registry_rejects_unknown_parameters_and_builds_every_kind():
@@ -204,8 +204,8 @@ def test_registry_rejects_unknown_parameters_and_builds_every_kind():
     }
     for name in CONTROLLERS:
         parts = [make_controller("pid", 1e-3, {"kp": 1.0}, axes=("x", "y"))] if name == "sum" else ()
-        googol = SisoTf([78.02], [1.0, 163.0, 193.3])  # seed 002 eq. (1) in m/V, for model-based kinds
-        dt = 5e-4 if name.startswith("seed004") else 1e-3  # seed 004's are designed for 2 kHz
+        googol = SisoTf([78.02], [1.0, 163.0, 193.3])  # Anang 2017 eq. (1) in m/V, for model-based kinds
+        dt = 5e-4 if name.startswith("choi1999") else 1e-3  # Choi 1999's are designed for 2 kHz
         ctrl = make_controller(
             name,
             dt,

@@ -1,4 +1,4 @@
-"""Milling forces (mechanistic and seed 004's average model) on the workpiece, in real MuJoCo runs."""
+"""Milling forces (mechanistic and Choi 1999's average model) on the workpiece, in real MuJoCo runs."""
 
 import math
 
@@ -196,7 +196,7 @@ def test_cutting_force_is_off_outside_its_window():
     assert force[(res.t_s > 0.15) & (res.t_s < 0.25)].min() > 10.0
 
 
-def test_average_force_model_is_seed_004_eq_4_5():
+def test_average_force_model_is_choi1999_eq_4_5():
     """F_x = k_il v_x - k_c v_y, F_y = k_il v_y + k_c v_x, checked against the run's velocities."""
     bm = build("linear_motor_xy")
     forces = ForceModels([AverageForce(-2500.0, 2500.0)], bm)

@@ -13,14 +13,14 @@ CUT = dict(
     type="end_milling", spindle_rpm=1500.0, n_flutes=2, diameter_mm=10.0, axial_depth_mm=1.0, radial_depth_mm=10.0
 )
 OPTIONS = {
-    "end_milling (seed 002's spindle speeds)": dict(disturbances=[CUT]),
-    "average_force with tooth harmonic (seed 004)": dict(
+    "end_milling (Anang 2017's spindle speeds)": dict(disturbances=[CUT]),
+    "average_force with tooth harmonic (Choi 1999)": dict(
         disturbances=[dict(type="average_force", harmonic_fraction=0.2, spindle_rpm=3500.0, n_flutes=2)]
     ),
-    "harmonic_input 0.2/0.5/0.8 Hz (seed 003)": dict(
+    "harmonic_input 0.2/0.5/0.8 Hz (Maharof 2021)": dict(
         disturbances=[dict(type="harmonic_input", amplitudes_V=[0.01, 0.01, 0.01], frequencies_hz=[0.2, 0.5, 0.8])]
     ),
-    "voltage_step + sensor noise (seed 000)": dict(
+    "voltage_step + sensor noise (Yadav 2020)": dict(
         disturbances=[dict(type="voltage_step", amplitude_V=0.005, start_s=0.05)], sensors=dict(noise_std_m=2e-6)
     ),
 }
@@ -34,7 +34,7 @@ def _scenario(seed, **extra):
             timestep_s=1e-4,
             control_period_s=1e-4,
             seed=seed,
-            controller=dict(type="seed002_pid"),
+            controller=dict(type="anang2017_pid"),
             reference=dict(type="sines", amplitudes_m=[0.01], frequencies_hz=[0.4], axes=["x"]),
             **extra,
         )

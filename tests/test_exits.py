@@ -78,25 +78,25 @@ def test_an_output_the_system_cannot_write_is_one_line(capsys, tmp_path):
     ("argv", "words"),
     [
         (
-            ["run", "gcode_seed004_circle_stock", "--set", "stock.corners_mm=[[-1e308,-1e308],[1e308,1e308]]"],
+            ["run", "gcode_choi1999_circle_stock", "--set", "stock.corners_mm=[[-1e308,-1e308],[1e308,1e308]]"],
             "stock.corners_mm.0.0 = -1e+308: Input should be greater than or equal to -10000",
         ),
         (
             [
                 "run",
-                "gcode_seed004_circle_stock",
+                "gcode_choi1999_circle_stock",
                 "--set",
                 "stock.islands_mm=[[[-100.0,-100.0],[100.0,-100.0],[100.0,100.0],[-100.0,100.0]]]",
             ],
             "stock.islands_mm = '1 island(s)': leave no material",
         ),
         (
-            ["run", "gcode_seed004_circle", "--set", "reference.work_offsets_mm={G54=[1e300,0.0,0.0]}"],
+            ["run", "gcode_choi1999_circle", "--set", "reference.work_offsets_mm={G54=[1e300,0.0,0.0]}"],
             "work_offsets_mm.G54.0 = 1e+300: Input should be less than or equal to 10000",
         ),
         (["run", "step_cncmt_hinf", "--set", "reference.amplitude_m=1e308"], "1e+308 is beyond +-1e+12"),
         (["gcode", "a" * 300 + ".ngc"], "File name too long"),
-        (["run", "gcode_seed004_circle", "--set", f'reference.file="{"a" * 300}.ngc"'], "File name too long"),
+        (["run", "gcode_choi1999_circle", "--set", f'reference.file="{"a" * 300}.ngc"'], "File name too long"),
         (["run", "demo_circle_cncmt_xy", "--set", "sensors.noise_std_m=1e308"], "less than or equal to 0.001"),
         (["gcode", "/dev/zero"], "is not a regular file"),
     ],

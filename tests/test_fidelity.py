@@ -17,7 +17,7 @@ def _check(r):
 
 @pytest.mark.parametrize("name", list(CASES))
 def test_fidelity_nominal(name):
-    """Every machine, and linear_motor_xy with seed 004's average cutting force against eq. (11)."""
+    """Every machine, and linear_motor_xy with Choi 1999's average cutting force against eq. (11)."""
     # a 2 s multisine period (0.5-50 Hz) keeps the test short; `twin fidelity` uses 10 s (0.1-50 Hz)
     r = fidelity(name, frf_period_s=2.0, frf_tones=15)
     assert r["frf_band_hz"] == [0.5, 50.0]

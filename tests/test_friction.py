@@ -21,7 +21,7 @@ def _open_loop(bm, u_V, duration_s):
 
 
 def test_coulomb_friction_holds_below_and_subtracts_above_breakaway():
-    """m v' + b v + F_c sign(v) = k u (seed 004 eq. 1): below F_c the table creeps < 5 um/s;
+    """m v' + b v + F_c sign(v) = k u (Choi 1999 eq. 1): below F_c the table creeps < 5 um/s;
     above, the velocity follows the exact solution of the linear ODE with k u - F_c."""
     F_c, k, m, b = 20.0, 98.2, 52.3, 193.5
     bm = build("linear_motor_xy", {"F_coul_x": F_c, "F_coul_y": F_c})
@@ -77,7 +77,7 @@ def _circle_with_pid(friction_N):
 
 
 def test_quadrant_glitches_at_reversals_grow_with_friction():
-    """Circle R 20 mm at 2400 mm/min (seed 004's air cut) under plain PID: the error that friction
+    """Circle R 20 mm at 2400 mm/min (Choi 1999's air cut) under plain PID: the error that friction
     adds peaks right after each axis's velocity reversal, and grows with the friction level."""
     base = _circle_with_pid(0.0)
     sizes = []

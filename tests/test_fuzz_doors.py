@@ -44,7 +44,7 @@ PROGRAM_LINES = {p.name: p.read_text(encoding="utf-8", errors="replace").splitli
 MACHINE_FILES = {
     p.name: p.read_text(encoding="utf-8") for p in sorted((ROOT / "examples" / "machines").glob("*_xy.toml"))
 }
-STOCK_SCENARIO = tomllib.loads((ROOT / "twin" / "scenarios" / "gcode_seed004_circle_stock.toml").read_text())
+STOCK_SCENARIO = tomllib.loads((ROOT / "twin" / "scenarios" / "gcode_choi1999_circle_stock.toml").read_text())
 
 #: Numbers a hostile user types: extremes, zero, negatives, tiny, non-finite.
 HOSTILE = [0, -1, 1e308, -1e308, 5e-324, 1e300, 1e-300, 2**63, 1e30, 1e13, -0.0, 1e-12, 3.5]

@@ -77,7 +77,7 @@ def test_a_circle_runs_at_min_of_feed_centripetal_and_jerk_speeds(radius_mm, fee
 
 
 def _programs():
-    return [(PROGRAMS / f"{n}.ngc", Settings()) for n in ("seed004_circle", "test_piece")] + [
+    return [(PROGRAMS / f"{n}.ngc", Settings()) for n in ("choi1999_circle", "test_piece")] + [
         (FIXTURES / f"{n}.ngc", Settings(tool_lengths_mm={1: 5.08})) for n in ("basic", "planes", "offsets")
     ]
 
@@ -124,7 +124,7 @@ def test_a_program_too_long_to_hold_is_refused_with_its_time():
 
 
 def test_the_gcode_circle_gives_the_builtin_circles_results_when_the_limits_are_not_active():
-    """Seed 004's cutting circle as G-code, with limits far above what the circle needs (the
+    """Choi 1999's cutting circle as G-code, with limits far above what the circle needs (the
     filter a/j then one sample: none): over the same second of the circle, the same tracking
     errors and cutting forces as the built-in circle reference (which starts at full feed)."""
     fast = {
@@ -132,8 +132,8 @@ def test_the_gcode_circle_gives_the_builtin_circles_results_when_the_limits_are_
         "planner.jerk_m_per_s3": {"x": 1e6, "y": 1e6, "z": 1e6},
         "planner.velocity_m_per_s": {"x": 10.0, "y": 10.0, "z": 10.0},
     }
-    program = api.run("gcode_seed004_circle", **fast).result
-    builtin = api.run("seed004_cutting_circle").result
+    program = api.run("gcode_choi1999_circle", **fast).result
+    builtin = api.run("choi1999_cutting_circle").result
     start = program.t_s[np.argmax(np.abs(program.ref[:, :, 0]).sum(axis=1) > 0)]  # after the plunge
 
     def second_of_circle(res, t0):
@@ -154,8 +154,10 @@ def test_bundled_programs_run_to_their_end_with_z_recorded():
     frame = run.to_pandas()
     assert "reference/z (mm)" in frame.columns
     assert frame["reference/z (mm)"].max() == pytest.approx(2.0, abs=0.05)  # the rapid up to Z2
-    whole = api.run("gcode_seed004_circle")
-    planned = api.program(PROGRAMS / "seed004_circle.ngc", machine="linear_motor_xy", **{"planner.tolerance_mm": 0.005})
+    whole = api.run("gcode_choi1999_circle")
+    planned = api.program(
+        PROGRAMS / "choi1999_circle.ngc", machine="linear_motor_xy", **{"planner.tolerance_mm": 0.005}
+    )
     assert whole.summary["completed_ticks"] == pytest.approx(planned["planned"]["cycle_time_s"] / 5e-4, abs=2)
     import twin
 
@@ -217,13 +219,13 @@ def test_a_dwell_too_long_to_hold_is_refused():
 
 
 def test_zpetc_reads_the_programs_preview_and_the_progress_is_in_lines():
-    """Seed 004's MIMO controller with ZPETC (which reads the reference ahead) on the circle
+    """Choi 1999's MIMO controller with ZPETC (which reads the reference ahead) on the circle
     program; the progress bar of a program counts its lines."""
     from twin.scenario import prepare, read_scenario_data, scenario_from_dict
     from twin.sim.runner import _progress_bar
 
-    data = read_scenario_data("seed004_mimo_cutting")
-    data["reference"] = {"type": "gcode", "file": str(PROGRAMS / "seed004_circle.ngc")}
+    data = read_scenario_data("choi1999_mimo_cutting")
+    data["reference"] = {"type": "gcode", "file": str(PROGRAMS / "choi1999_circle.ngc")}
     data["duration_s"] = 1.0
     run = api.run(scenario_from_dict(data))
     assert run.summary["status"] == "ok" and run.summary["max_tracking_error_um"]["y"] < 500

@@ -1,4 +1,4 @@
-"""Seeds 002 and 003 on the Googol table: loop analysis against independent dense-grid
+"""Anang 2017 and Maharof 2021 on the Googol table: loop analysis against independent dense-grid
 computations, the NPID's bound, the transfer-function loop against frequency responses, the
 twin against the TF loop, and the cascade P/PI design against the thesis's margins."""
 
@@ -12,7 +12,7 @@ from controllers.blocks import harmonic_estimator, inverse_model_observer, with_
 from controllers.design.cascade import backward_difference, closed_loop, gain_for_phase_margin, pi_for_margins, pi_loop
 from controllers.design.dob import delay_and_gain_error, q_cutoff, q_response, worst_q_delta
 from controllers.design.loop_analysis import loop_margins, popov_crossing
-from twin.reproductions.seed002 import procedure as r
+from twin.reproductions.anang2017 import procedure as r
 from twin.sim.tf_loop import tf_loop
 
 
@@ -58,7 +58,9 @@ def test_tf_loop_error_follows_the_sampled_sensitivity():
     f, a = 0.7, 0.01
     n = int(6.0 / r.DT_S)
     ref = r.sine_reference(f, a * 1e3, n)
-    pos, _ = tf_loop(r.machine().plant[0][0], make_controller("seed002_pid", r.DT_S), ref, r.DT_S, r.machine().delay_s)
+    pos, _ = tf_loop(
+        r.machine().plant[0][0], make_controller("anang2017_pid", r.DT_S), ref, r.DT_S, r.machine().delay_s
+    )
     e = (ref[:, 0] - pos)[int(3.0 / r.DT_S) :]
     L = r.sampled_loop()(np.array([2 * math.pi * f]))[0]
     assert np.abs(e).max() == pytest.approx(abs(1 / (1 + L)) * a, rel=5e-3)
@@ -72,7 +74,7 @@ def test_critical_gain_in_time_matches_the_gain_margin():
 
 def test_twin_matches_the_tf_loop_under_cutting():
     """NPID at 0.7 Hz, 20 mm with slot milling at 3500 rpm, 4 s: max error and RMSE within 2 %."""
-    case = r.table_case(0.7, 20, 3500.0, "seed002_npid", twin=True, duration_s=4.0)
+    case = r.table_case(0.7, 20, 3500.0, "anang2017_npid", twin=True, duration_s=4.0)
     for key in ("max_mm", "rmse_mm"):
         assert case["twin"][key] == pytest.approx(case["tf_loop"][key], rel=r.TWIN_TOL_REL)
     assert case["tf_loop"]["max_mm"] > 0.1  # a real error, not a trivial match
@@ -84,7 +86,7 @@ def test_error_in_micrometres_destabilizes_the_sampled_npid():
     assert all(0 < row["mm"] < 30 for row in rows)
 
 
-#: Seed 003's loops (thesis Figs. 4.3 and 4.7): velocity GM 9.37 dB at 194 Hz, PM 56.4 deg at
+#: Maharof 2021's loops (thesis Figs. 4.3 and 4.7): velocity GM 9.37 dB at 194 Hz, PM 56.4 deg at
 #: 96.4 Hz; position GM 9.1 dB at 123 Hz, PM 67.1 deg at 31.4 Hz.
 THESIS_VELOCITY, THESIS_POSITION = (9.37, 56.4), (9.1, 67.1)
 
@@ -176,9 +178,9 @@ def test_harmonic_estimator_interpolates_and_is_stable():
 
 
 def test_dfo_cancels_the_harmonics_and_the_combination_counts_once():
-    """TF loop, seed 003's cascade under three harmonics: the DFO's and IMBDO+DFO's share of the
+    """TF loop, Maharof 2021's cascade under three harmonics: the DFO's and IMBDO+DFO's share of the
     error is below 0.1 % of the cascade's; IMBDO alone leaves its |1 - Q e^(-jwT)| (about 1-2 %)."""
-    from twin.reproductions.seed003 import procedure as s3
+    from twin.reproductions.maharof2021 import procedure as s3
 
     shares = {
         c: s3.run_case(0.5, 1.0, (0.2, 0.5, 0.8), c, twin=False, duration_s=6.0)["tf_loop"]["disturbance"]
@@ -189,8 +191,8 @@ def test_dfo_cancels_the_harmonics_and_the_combination_counts_once():
     assert shares["dfo"]["mte_um"] < 1e-3 * base and shares["imbdo_dfo"]["mte_um"] < 1e-3 * base
 
 
-def test_seed003_twin_matches_the_tf_loop_with_both_observers():
-    from twin.reproductions.seed003 import procedure as s3
+def test_maharof2021_twin_matches_the_tf_loop_with_both_observers():
+    from twin.reproductions.maharof2021 import procedure as s3
 
     case = s3.run_case(10.0, 0.5, (0.2, 0.5, 0.8), "imbdo_dfo", twin=True, duration_s=4.0)
     for key in ("mte_um", "rmse_um"):
@@ -202,7 +204,7 @@ def test_seed003_twin_matches_the_tf_loop_with_both_observers():
 def test_dfo_takes_down_the_tooth_line_of_the_milling_force():
     """Twin, 1500 rpm slot milling, 4 s: the DFO cuts the 50 Hz line of the error by over 95 %;
     the TF loop replaying the twin's force agrees on the MTE within 2 %."""
-    from twin.reproductions.seed003 import procedure as s3
+    from twin.reproductions.maharof2021 import procedure as s3
 
     base, dfo = (s3.milling_case(1500.0, c, duration_s=4.0) for c in ("cascade", "dfo"))
     assert dfo["twin"]["disturbance"]["fft_um"][0] < 0.05 * base["twin"]["disturbance"]["fft_um"][0]
@@ -215,7 +217,7 @@ def test_observers_leave_the_reference_loop_unchanged():
     """No disturbance: the four configurations track the sine alike (the estimates do not depend
     on the command), as the reference-loop plot states; only the start differs a little, where
     the observers' Tustin inverse model and the ZOH plant part (0.4 um on 180 um)."""
-    from twin.reproductions.seed003 import procedure as s3
+    from twin.reproductions.maharof2021 import procedure as s3
 
     n = int(3.0 / s3.DT_S)
     ref = s3.sine_reference(0.5, 10.0, n)
@@ -231,12 +233,12 @@ def test_observers_leave_the_reference_loop_unchanged():
 
 
 def test_feedforward_removes_the_following_error_and_the_amplitude_decides_the_reductions():
-    """Seed 003 with our velocity and acceleration feedforward (from eq. (1)'s a1/b0 and 1/b0):
+    """Maharof 2021 with our velocity and acceleration feedforward (from eq. (1)'s a1/b0 and 1/b0):
     the cascade's 181 um following error at 10 mm / 0.5 Hz drops below 1 um on the TF loop, and
     IMBDO + DFO's MTE reduction then grows with the assumed disturbance amplitude (the
     disturbance's share scales with it, the residual does not): small at 0.001 V, above 97 % at
     1 V, where the thesis's reductions lie."""
-    from twin.reproductions.seed003 import procedure as s3
+    from twin.reproductions.maharof2021 import procedure as s3
 
     ff = s3.model_feedforward()
     g = r.machine().plant[0][0]  # m/V: b0/(s^2 + a1 s + a0)

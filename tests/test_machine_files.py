@@ -41,9 +41,9 @@ def test_linear_motor_file_equals_the_bundled_machine():
     assert bundled.plant == from_file.plant
     np.testing.assert_array_equal(bundled.model.body_subtreemass, from_file.model.body_subtreemass)
     settings = {"duration_s": 0.3}
-    a = run("seed004_pid_cutting", **settings).summary
+    a = run("choi1999_pid_cutting", **settings).summary
     b = run(
-        "seed004_pid_cutting",
+        "choi1999_pid_cutting",
         machine=LINEAR,
         overrides={"x_friction_coulomb_N": 2.94, "y_friction_coulomb_N": 1.90},
         **settings,

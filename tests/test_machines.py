@@ -9,7 +9,7 @@ from twin.errors import TwinInputError
 from twin.machines import MACHINES, build
 
 
-def test_cncmt_tf_is_eq2_of_seed000():
+def test_cncmt_tf_is_eq2_of_yadav2020():
     """Eq. (1) with Table 1 nominals and p = 0.05 gives eq. (2): 4.85/(s(s + 9.7))."""
     g = build("cncmt").plant[0][0]
     num, den = g.num, g.den
@@ -89,7 +89,7 @@ def test_googol_realizes_identified_g_with_any_masses():
         m, d = bm.model, mujoco.MjData(bm.model)
         d.ctrl[:] = [1.0, 1.0]
         mujoco.mj_forward(m, d)
-        # initial table acceleration = b0 (m/s^2 per V): 78.02 from seed 002 eq. (1); the soft
+        # initial table acceleration = b0 (m/s^2 per V): 78.02 from Anang 2017 eq. (1); the soft
         # gear constraints (impedance 0.9999) take about 1e-4 of it
         assert d.qacc[bm.joint_dof_index("x_table")] == pytest.approx(78.02, rel=5e-4)
         assert d.qacc[bm.joint_dof_index("y_table")] == pytest.approx(78.02, rel=5e-4)

@@ -1,6 +1,6 @@
 """Virtual machining: the engagement along a program against closed forms (a slot is 180 deg, a
 side cut of radial depth a engages arccos(1 - 2a/D), an inside arc more than a straight line at
-the same depth, air moves nothing), the stock and tool tables' errors, and seed 004's circle
+the same depth, air moves nothing), the stock and tool tables' errors, and Choi 1999's circle
 cutting a stock against the built-in cutting circle."""
 
 import math
@@ -124,12 +124,12 @@ def test_bad_stock_and_tools_are_one_error_line_naming_the_field(change, field, 
     assert err.value.field.startswith(field) and words in str(err.value), str(err.value)
 
 
-def test_seed004_circle_cutting_a_stock_gives_the_builtin_cutting_circles_force_level():
+def test_choi1999_circle_cutting_a_stock_gives_the_builtin_cutting_circles_force_level():
     """3 mm radial depth left by a 30 mm bore (the built-in circle's depth): the engaged angle
     is the inside arc's 71.0 deg (the built-in's straight-line 66.4 deg), the mean cutting force
     within 20 % of the built-in's over the same second of the circle."""
-    stock_run = api.run("gcode_seed004_circle_stock").result
-    builtin = api.run("seed004_cutting_circle").result
+    stock_run = api.run("gcode_choi1999_circle_stock").result
+    builtin = api.run("choi1999_cutting_circle").result
     start = stock_run.t_s[np.argmax(np.abs(stock_run.ref[:, :, 0]).sum(axis=1) > 0)]
 
     def mean_force(res, t0):

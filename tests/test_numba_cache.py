@@ -14,7 +14,7 @@ SATURATION = "ua[a] = min(max(u[a] + u_dist[row, a], -limit), limit)"
 def _run(tree: Path, cache: Path) -> dict:
     env = {"PYTHONPATH": str(tree), "PATH": "/usr/bin:/bin", "NUMBA_CACHE_DIR": str(cache)}
     r = subprocess.run(
-        [sys.executable, "-m", "twin.cli", "run", "seed004_pid_air_cut", "--json", "--set", "duration_s=0.05"],
+        [sys.executable, "-m", "twin.cli", "run", "choi1999_pid_air_cut", "--json", "--set", "duration_s=0.05"],
         capture_output=True,
         text=True,
         env=env,

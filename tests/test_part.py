@@ -83,7 +83,7 @@ def test_ball_radius_by_height_and_levels():
 
 @pytest.fixture(scope="module")
 def bore():
-    scn = api.load("gcode_seed004_circle_stock")
+    scn = api.load("gcode_choi1999_circle_stock")
     features = [
         CircleFeature(type="circle", name="bore", center_mm=(-28, 0), diameter_mm=66.0, z_mm=-1.5, tolerance_um=10)
     ]
@@ -111,7 +111,7 @@ def test_a_run_stopped_halfway_is_compared_with_what_the_program_had_cut_by_then
     """The bore's run stopped at 1.5 s of its 2.9 s: the part is the nominal part as far as the
     run went, its surface error within the whole run's (66 um); against the whole program's
     part it read the half of the bore never reached as material left (3 mm)."""
-    half = api.run("gcode_seed004_circle_stock", duration_s=1.5).summary["part"]["surface_error_um"]
+    half = api.run("gcode_choi1999_circle_stock", duration_s=1.5).summary["part"]["surface_error_um"]
     whole = bore.part.summary()["surface_error_um"]
     assert half["max"] <= whole["max"] + 1.0
     assert half["min"] >= whole["min"] - 1.0
@@ -142,7 +142,7 @@ def test_bore_cut_by_the_perfect_loop_measures_its_size(bore):
 
 
 def test_per_line_wall_error_is_the_run_s(bore):
-    lines = {row["line"]: row for row in api.Run(api.load("gcode_seed004_circle_stock"), bore).summary["lines"]}
+    lines = {row["line"]: row for row in api.Run(api.load("gcode_choi1999_circle_stock"), bore).summary["lines"]}
     walls = bore.part.walls
     circle = walls[walls[:, 4] == 12, 3]  # the G3 line cuts the bore's wall
     assert lines[12]["max_wall_error_um"] == pytest.approx(circle[np.argmax(np.abs(circle))], abs=1e-3)
@@ -159,10 +159,10 @@ def test_inspection_needs_a_stock():
 def test_the_part_is_recorded_and_plotted(bore, tmp_path):
     from twin.recording import read_back
 
-    run = api.Run(api.load("gcode_seed004_circle_stock"), bore)
+    run = api.Run(api.load("gcode_choi1999_circle_stock"), bore)
     counts = read_back(run.record(tmp_path / "part.rrd"))
     assert counts.get("/contour/part_walls", 0) > 0 and counts.get("/contour/inspection", 0) > 0
-    assert "gcode_seed004_circle_stock_walls.png" in {p.name for p in run.plots(tmp_path / "plots")}
+    assert "gcode_choi1999_circle_stock_walls.png" in {p.name for p in run.plots(tmp_path / "plots")}
 
 
 def test_the_part_s_files_hold_the_cut(bore, tmp_path):
@@ -174,11 +174,11 @@ def test_the_part_s_files_hold_the_cut(bore, tmp_path):
     from twin.process.machining import HeightMap
     from twin.process.part_map import PartMap
 
-    run = api.Run(api.load("gcode_seed004_circle_stock"), bore)
+    run = api.Run(api.load("gcode_choi1999_circle_stock"), bore)
     stl, parquet = run.write_part(tmp_path / "part")
     assert [stl.name, parquet.name] == [
-        "gcode_seed004_circle_stock_part.stl",
-        "gcode_seed004_circle_stock_part_map.parquet",
+        "gcode_choi1999_circle_stock_part.stl",
+        "gcode_choi1999_circle_stock_part_map.parquet",
     ]
     part = trimesh.load(stl)
     stock = run.scenario.stock
@@ -198,7 +198,7 @@ def test_part_files_need_a_stock():
 
     from twin.cli import app
 
-    out = CliRunner().invoke(app, ["run", "seed004_pid_air_cut", "--part", "somewhere"])
+    out = CliRunner().invoke(app, ["run", "choi1999_pid_air_cut", "--part", "somewhere"])
     assert out.exit_code == 2 and out.output.strip().splitlines() == [
         "error: --part = 'somewhere': the virtual part is cut from a stock: the scenario has no [stock]"
     ]

@@ -43,7 +43,7 @@ def _views(path) -> dict:
 @pytest.fixture(scope="module")
 def circle_run():
     bm = build("cncmt_xy")
-    return simulate(bm, make_controller("seed000_robust_pi", 1e-3, axes=("x", "y")), Circle(5.0, 600.0), 0.5, 1e-3)
+    return simulate(bm, make_controller("yadav2020_robust_pi", 1e-3, axes=("x", "y")), Circle(5.0, 600.0), 0.5, 1e-3)
 
 
 def test_series_are_named_and_counted(circle_run, tmp_path):
@@ -136,7 +136,7 @@ def test_cutting_force_arrow_and_series(tmp_path):
 
 def test_recording_decimates_long_runs(tmp_path):
     bm = build("cncmt")
-    res = simulate(bm, make_controller("seed000_imc", 1e-4), Step(0.01), 1.0, 1e-4)
+    res = simulate(bm, make_controller("yadav2020_imc", 1e-4), Step(0.01), 1.0, 1e-4)
     path = record(res, tmp_path / "long.rrd", max_points=1000)
     counts = read_back(path)
     assert counts["/actual/x"] == 1000 + 1 and counts["/machine/x_table"] == 1000
@@ -147,10 +147,10 @@ def test_several_runs_get_a_prefix_each(tmp_path):
     bm = build("cncmt")
     runs = {
         name: simulate(bm, make_controller(name, 1e-3), Step(0.01), 0.2, 1e-3)
-        for name in ("seed000_imc", "seed000_robust_pi")
+        for name in ("yadav2020_imc", "yadav2020_robust_pi")
     }
     counts = read_back(record_runs(runs, tmp_path / "two.rrd"))
-    assert counts["/seed000_imc/actual/x"] == counts["/seed000_robust_pi/machine/x_table"] + 1 == 201
+    assert counts["/yadav2020_imc/actual/x"] == counts["/yadav2020_robust_pi/machine/x_table"] + 1 == 201
 
 
 def test_round_numbers():

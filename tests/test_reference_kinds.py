@@ -48,7 +48,7 @@ SCENARIO = """
 machine = "cncmt"
 duration_s = 0.5
 [controller]
-type = "seed000_imc"
+type = "yadav2020_imc"
 [reference]
 type = "hold"
 position_m = 0.001

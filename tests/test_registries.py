@@ -89,7 +89,7 @@ def test_parameter_errors_name_the_parameter():
     assert (err.value.field, err.value.value) == ("gain", 1.0)
     assert err.value.reason == "not a parameter of pid (its parameters: kp, ki, kd, tf_s)"
     with pytest.raises(ParameterError) as err:
-        make_controller("seed001", 1e-3, {"velocity_ff": "yes"}, axes=("x", "y"))
+        make_controller("sabau2022", 1e-3, {"velocity_ff": "yes"}, axes=("x", "y"))
     assert err.value.field == "velocity_ff" and "valid boolean" in err.value.reason
     with pytest.raises(ParameterError) as err:
         make_controller("linear", 1e-3, {"inputs": ["error", 3]})
@@ -108,10 +108,10 @@ def test_every_reproduction_offers_the_whole_interface(tmp_path: Path):
         for entry in ("run", "format_report", "markdown_tables", "write_plots", "twin_runs"):
             assert callable(getattr(report, entry)), (name, entry)
     # the shared verdict reads the twin-vs-TF mismatches every report computes
-    assert REPRODUCTIONS["seed002"].failed({"twin_vs_tf_mismatches": ["x"]})
-    assert not REPRODUCTIONS["seed002"].failed({"twin_vs_tf_mismatches": []})
-    # the certificates hook: seed 004's mu bound for its own controllers, nothing elsewhere
-    assert REPRODUCTIONS["seed002"].certificates("googol_xy", "seed002_pid", {"m"}, []) == []
+    assert REPRODUCTIONS["anang2017"].failed({"twin_vs_tf_mismatches": ["x"]})
+    assert not REPRODUCTIONS["anang2017"].failed({"twin_vs_tf_mismatches": []})
+    # the certificates hook: Choi 1999's mu bound for its own controllers, nothing elsewhere
+    assert REPRODUCTIONS["anang2017"].certificates("googol_xy", "anang2017_pid", {"m"}, []) == []
 
 
 def test_each_machine_readme_states_its_motion_limits():

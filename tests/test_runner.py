@@ -6,7 +6,7 @@ import pytest
 
 from controllers import error_feedback, make_controller, open_loop
 from controllers.blocks import Controller, Sum
-from controllers.papers import seed000
+from controllers.papers import yadav2020
 from twin.errors import SimulationDiverged, TwinInputError
 from twin.machines import build
 from twin.process.cutting import AverageForce
@@ -19,9 +19,9 @@ def test_closed_loop_step_matches_transfer_functions():
     """cncmt + robust PI at 1 kHz: twin step response equals the sampled-data TF loop."""
     dt = 1e-3
     bm = build("cncmt")
-    res = simulate(bm, make_controller("seed000_robust_pi", dt), Step(1.0), 6.0, dt)
+    res = simulate(bm, make_controller("yadav2020_robust_pi", dt), Step(1.0), 6.0, dt)
     g = control.c2d(bm.plant[0][0].to_control(), dt, "zoh")
-    c = control.c2d(seed000.ROBUST_PI.to_control(), dt, "tustin")
+    c = control.c2d(yadav2020.ROBUST_PI.to_control(), dt, "tustin")
     loop = control.feedback(g * c, 1)
     # the twin samples the state at the start of each tick: y[k] of the loop
     y_ref = control.step_response(loop, T=res.t_s).outputs
@@ -86,7 +86,7 @@ def test_compiled_and_python_loops_give_identical_series():
     dt, period = bm.model.opt.timestep, 5e-4
     runs = []
     for compiled in (True, False):
-        ctrl = make_controller("seed002_pid", period, velocity_ff=0.5, axes=("x", "y"))
+        ctrl = make_controller("anang2017_pid", period, velocity_ff=0.5, axes=("x", "y"))
         drive = Drive(2, round(period / dt), dt, bm.delay_s, saturation_V=0.1)
         enc = Encoder(np.full(2, 1e-6), np.full(2, 2e-7), np.array(bm.sensor_gains), seed=3)
         runs.append(
@@ -139,7 +139,7 @@ def test_record_every_keeps_metrics_of_every_tick():
     runs = [
         simulate(
             bm,
-            make_controller("seed000_robust_pi", 1e-3, axes=("x", "y")),
+            make_controller("yadav2020_robust_pi", 1e-3, axes=("x", "y")),
             Circle(5.0, 600.0),
             1.0,
             1e-3,
@@ -234,7 +234,7 @@ def test_unstable_physics_reported_at_its_step_without_a_log_file(tmp_path, monk
 def test_control_period_must_be_multiple_of_timestep():
     bm = build("cncmt")
     with pytest.raises(TwinInputError, match="control_period_s"):
-        simulate(bm, make_controller("seed000_imc", 2.5e-4), Step(1.0), 1.0, 2.5e-4 + 1e-5)
+        simulate(bm, make_controller("yadav2020_imc", 2.5e-4), Step(1.0), 1.0, 2.5e-4 + 1e-5)
 
 
 def test_controllers_must_drive_every_axis_once_and_read_existing_signals():
@@ -252,7 +252,7 @@ def test_long_runs_are_recorded_decimated_by_default(monkeypatch):
     import twin.sim.runner as runner
 
     bm = build("cncmt")
-    ctrl = make_controller("seed000_robust_pi", 1e-3)
+    ctrl = make_controller("yadav2020_robust_pi", 1e-3)
     full = simulate(bm, ctrl, Step(0.01), 1.0, 1e-3)
     monkeypatch.setattr(runner, "MAX_RECORDED_TICKS", 300)
     sparse = simulate(bm, ctrl, Step(0.01), 1.0, 1e-3)

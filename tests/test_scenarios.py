@@ -1,5 +1,5 @@
 """Every bundled scenario validates, runs compiled, and both loops agree on it; every block kind
-works from a scenario file; the seed-004 air cut keeps its accuracy."""
+works from a scenario file; the Choi 1999 air cut keeps its accuracy."""
 
 import math
 import warnings
@@ -32,10 +32,10 @@ def test_bundled_scenario_runs_compiled_and_equals_the_python_loop(name):
         assert max(summary["max_cutting_force_N"].values()) > 1.0
 
 
-def test_seed004_air_cut_contour_error_is_micrometres():
-    """Seed 004 reports max tracking errors of 6/7 um (its MIMO controller + ZPETC) on this
+def test_choi1999_air_cut_contour_error_is_micrometres():
+    """Choi 1999 reports max tracking errors of 6/7 um (its MIMO controller + ZPETC) on this
     circle; the twin's PID + model feedforward with catalogue friction stays under 10 um contour error."""
-    res = run_scenario(load_scenario("seed004_air_cut_circle"))
+    res = run_scenario(load_scenario("choi1999_air_cut_circle"))
     assert tracking_summary(res)["max_contour_error_um"] < 10.0
 
 
@@ -55,8 +55,8 @@ def _run(controller: dict, **extra):
 def test_every_block_kind_from_a_scenario_file_tracks():
     """Each kind on googol_xy, compiled: a 2 mm, 1 Hz sine tracked to within 10 % of its size."""
     kinds = {
-        "pid": {"type": "seed002_pid"},
-        "npid": {"type": "seed002_npid", "params": {"ko_per_mm": 6.0, "e_max_mm": 0.3}},
+        "pid": {"type": "anang2017_pid"},
+        "npid": {"type": "anang2017_npid", "params": {"ko_per_mm": 6.0, "e_max_mm": 0.3}},
         "lure": {"type": "lure", "params": {"num": [899.8], "den": [1.0], "nonlinearity": "saturation", "limit": 0.01}},
         "cascade": {"type": "cascade", "params": {"kp_pos": 200.0, "kp_vel": 7.0, "ki_vel": 400.0}},
         "cascade+observer": {
@@ -111,7 +111,7 @@ def test_tachometer_and_decimated_recording_from_a_scenario():
         ),
         ({"type": "pid", "params": {"kp": "30"}}, "controller.params.kp", "valid number"),
         ({"type": "tf", "params": {"num": [1.0]}}, "controller.params.den", "tf needs it"),
-        ({"type": "seed004_mimo", "params": {"zpetc": 1}}, "controller.params.zpetc", "valid boolean"),
+        ({"type": "choi1999_mimo", "params": {"zpetc": 1}}, "controller.params.zpetc", "valid boolean"),
         (
             {"type": "pid", "observer": {"type": "harmonic", "params": {"bandwidth_hz": -1.0}}},
             "controller.observer.params.bandwidth_hz",
@@ -180,25 +180,25 @@ def test_inverse_model_observer_removes_a_step_input_disturbance_on_the_twin():
 def test_counts_and_rates_the_loops_run_over_are_bounded(setting, field, words):
     """Each count a force model loops over, and the timestep, has a bound named in its error."""
     with pytest.raises(TwinInputError) as err:
-        load_scenario("seed004_cutting_circle", [setting])
+        load_scenario("choi1999_cutting_circle", [setting])
     assert err.value.field == field and words in err.value.reason
 
 
 def test_harmonic_and_sine_counts_are_bounded():
     many = "[" + ", ".join(["0.001"] * 101) + "]"
     with pytest.raises(TwinInputError) as err:
-        load_scenario("seed003_cascade", [f"disturbances.0.amplitudes_V={many}"])
+        load_scenario("maharof2021_cascade", [f"disturbances.0.amplitudes_V={many}"])
     assert err.value.field == "disturbances.0.harmonic_input.amplitudes_V" and "at most 100" in err.value.reason
     with pytest.raises(TwinInputError) as err:
-        load_scenario("seed003_cascade", [f"reference.amplitudes_m={many}"])
+        load_scenario("maharof2021_cascade", [f"reference.amplitudes_m={many}"])
     assert err.value.field == "reference.sines.amplitudes_m" and "at most 100" in err.value.reason
 
 
 def test_a_design_that_fails_numerically_is_one_error_and_no_warning():
-    """Seed 003's cascade designed for a physics step of 5e-324 s (beyond the schema's bound, so
+    """Maharof 2021's cascade designed for a physics step of 5e-324 s (beyond the schema's bound, so
     set past validation) overflows inside numpy; the build reports it as the controller's error
     instead of printing numpy's RuntimeWarnings first."""
-    scn = load_scenario("seed003_cascade")
+    scn = load_scenario("maharof2021_cascade")
     scn = scn.model_copy(update={"timestep_s": 5e-324, "control_period_s": 5e-324})
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

@@ -94,7 +94,7 @@ def _sweep(
     vary=("overrides.m_x=box", "disturbances.0.spindle_rpm=uniform(5000,12000)"),
     samples=12,
     batch=3,
-    scenario="seed004_cutting_circle",
+    scenario="choi1999_cutting_circle",
     settings=SHORT,
     client=None,
 ):
@@ -137,7 +137,7 @@ def test_a_killed_worker_loses_no_sample(tmp_path):
 
     try:
         sw = prepare_sweep(
-            "seed004_cutting_circle",
+            "choi1999_cutting_circle",
             SHORT,
             ["overrides.m_x=box", "disturbances.0.spindle_rpm=uniform(5000,12000)"],
             40,
@@ -204,11 +204,11 @@ def test_summary_bands_and_worst_case(tmp_path):
     assert s["status"] == {"ok": 12}
 
 
-def test_seed000_certificate_is_the_reproductions():
-    from twin.reproductions.seed000.procedure import interval_table
+def test_yadav2020_certificate_is_the_reproductions():
+    from twin.reproductions.yadav2020.procedure import interval_table
 
     plan = _plan("overrides.K1=box", "overrides.m=box", params=get_machine("cncmt").parameters)
-    (cert,) = certificates("cncmt", "seed000_robust_pi", plan)
+    (cert,) = certificates("cncmt", "yadav2020_robust_pi", plan)
     row = next(r for r in interval_table() if r["controller"] == "robust_pi")
     assert cert["stability_margin"] == pytest.approx(row["sm"]) and cert["kharitonov_robustly_stable"] is False
     assert certificates("cncmt", "pid", plan) == []
@@ -230,7 +230,7 @@ def test_cli_sweep_file_writes_parquet_summary_and_plots(tmp_path):
 
     import twin
 
-    example = Path(twin.__file__).parent / "sweeps" / "examples" / "seed004_cutting_circle.toml"
+    example = Path(twin.__file__).parent / "sweeps" / "examples" / "choi1999_cutting_circle.toml"
     out = tmp_path / "s.parquet"
     r = _cli(
         str(example),
@@ -266,7 +266,7 @@ def test_cli_interrupted_sweep_keeps_its_parts_and_resume_completes_it(tmp_path)
 
     out = tmp_path / "i.parquet"
     args = [
-        "seed004_cutting_circle",
+        "choi1999_cutting_circle",
         "--vary",
         "overrides.m_x=box",
         "--samples",

@@ -4,7 +4,7 @@ The public API (:mod:`twin.api`) is imported on first use, so that ``import twin
 command line start fast::
 
     import twin
-    run = twin.run("seed004_mimo_cutting", duration_s=0.5)
+    run = twin.run("choi1999_mimo_cutting", duration_s=0.5)
     run.summary, run.to_pandas()
 
 ``twin.load``, ``twin.run``, ``twin.sweep``, ``twin.fidelity``, ``twin.reproduce``,

@@ -1,7 +1,7 @@
 """The public Python API: what the command line does, from a script.
 
 >>> import twin
->>> run = twin.run("seed004_mimo_cutting", duration_s=0.5)
+>>> run = twin.run("choi1999_mimo_cutting", duration_s=0.5)
 >>> run.summary["max_contour_error_um"]          # the CLI's --json summary
 >>> frame = run.to_pandas()                        # time-indexed, units in the column names
 >>> frame["error/x (µm)"].abs().max()
@@ -346,15 +346,15 @@ def fidelity(machines: list[str] | tuple = (), **symbols: float) -> list[dict]:
 
 
 def reproduce(
-    seed: str,
+    paper: str,
     *,
     samples: int = DEFAULT_SAMPLES,
     twin_samples: int = DEFAULT_TWIN_SAMPLES,
     random_seed: int = DEFAULT_SEED,
     progress: bool = False,
 ) -> dict:
-    """A paper's reproduction, as ``twin reproduce SEED --json`` returns it (``seed000`` ...
-    ``seed004``); ``twin_samples = 0`` leaves the twin out.
+    """A paper's reproduction, as ``twin reproduce PAPER --json`` returns it (``yadav2020`` ...
+    ``choi1999``); ``twin_samples = 0`` leaves the twin out.
 
     Raises
     ------
@@ -363,15 +363,15 @@ def reproduce(
     """
     from twin.reproductions import REPRODUCTIONS, reproduction
 
-    if seed not in REPRODUCTIONS:
-        raise TwinInputError("source", seed, f"no reproduction of that paper yet (known: {', '.join(REPRODUCTIONS)})")
+    if paper not in REPRODUCTIONS:
+        raise TwinInputError("source", paper, f"no reproduction of that paper yet (known: {', '.join(REPRODUCTIONS)})")
     if samples < 1 or twin_samples < 0:
         raise TwinInputError(
             "samples" if samples < 1 else "twin_samples",
             samples if samples < 1 else twin_samples,
             "must be >= 1 (samples) / >= 0 (twin_samples)",
         )
-    return reproduction(seed).run(samples, twin_samples, random_seed, progress)
+    return reproduction(paper).run(samples, twin_samples, random_seed, progress)
 
 
 def program(file: str | Path, machine: str | None = None, **settings: Any) -> dict:

@@ -9,11 +9,11 @@ so a busy core shows up in both and not in the ratio).
 
 Cases:
 
-(a) ``hinf_cncmt``: seed 000's eq. (28) H-infinity (4th order) on ``cncmt`` at 10 kHz;
+(a) ``hinf_cncmt``: Yadav 2020's eq. (28) H-infinity (4th order) on ``cncmt`` at 10 kHz;
 (b) ``cascade_dob_googol``: position P around velocity PI with an inverse-model disturbance
     observer on ``googol_xy`` at 10 kHz (the velocity is the encoder's backward difference);
-(c) ``npid_googol``: seed 002's nonlinear PID (eqs. 6-8) on ``googol_xy`` at 10 kHz;
-(d) ``cutting_circle_linear_motor``: the bundled ``seed004_cutting_circle`` (mechanistic end
+(c) ``npid_googol``: Anang 2017's nonlinear PID (eqs. 6-8) on ``googol_xy`` at 10 kHz;
+(d) ``cutting_circle_linear_motor``: the bundled ``choi1999_cutting_circle`` (mechanistic end
     milling every physics step, PID + feedforward at 2 kHz, 0.1 ms physics);
 (e) ``gcode_test_piece_linear_motor``: the bundled ``gcode_test_piece`` (the part program planned
     once, before the timing; its reference sampled by Hermite interpolation every tick).
@@ -27,11 +27,11 @@ lines with tangent arc turnarounds (``plan_s``, median of the repeats, and ``pla
 (``engagement_s``), the peak memory (tracemalloc) of the planner streaming the raster once and
 four times over (``stream_peak_mb``, by reference length in s: what grows is each line's text,
 feed, spindle and tool, which the per-line results report), and of a whole run of the bundled
-``gcode_seed004_circle`` scenario on a twelfth of the raster and four times that
+``gcode_choi1999_circle`` scenario on a twelfth of the raster and four times that
 (``run_peak_mb``, by cycle time in s: both under the 600 s of motion a run holds whole, so it
 grows with them; a longer program is streamed, and the recording keeps at most 100 000 ticks).
 
-Start-up (``startup``): wall time of ``twin run seed004_cutting_circle --json`` (2.2 s simulated)
+Start-up (``startup``): wall time of ``twin run choi1999_cutting_circle --json`` (2.2 s simulated)
 as a new Python process (``python -m twin.cli``, as the ``twin`` script), alternating with the
 same scenario run in this process after a warm-up (built and simulated: what the run itself
 costs); ``overhead_s`` is the median of the per-repeat differences, what a user waits for
@@ -61,22 +61,22 @@ from twin.sim.runner import simulate
 CASCADE = {"kp_pos": 200.0, "kp_vel": 7.0, "ki_vel": 400.0}
 OBSERVER = {"cutoff_hz": 20.0, "order": 2}
 #: Bundled scenario of the start-up measurement.
-STARTUP_SCENARIO = "seed004_cutting_circle"
+STARTUP_SCENARIO = "choi1999_cutting_circle"
 
 
 def _cases() -> dict:
     """name -> (machine, run(seconds) -> RunResult); controllers are built here, outside the
     timed runs, so the timing is the loop's."""
     cncmt = build("cncmt", timestep_s=1e-4)
-    hinf = make_controller("seed000_hinf", 1e-4)
+    hinf = make_controller("yadav2020_hinf", 1e-4)
     googol = build("googol_xy", timestep_s=1e-4)
     sine = SumOfSines((0.01,), (0.5,), n_axes=2, axes=(0,))
     ctx = Context(1e-4, ("x", "y"), plants={a.name: googol.plant[i][i] for i, a in enumerate(googol.axes)})
     cascade_dob = with_correction(
         make_controller("cascade", 1e-4, CASCADE, axes=ctx.axes), make_observers("inverse_model", OBSERVER, ctx)
     )
-    npid = make_controller("seed002_npid", 1e-4, axes=ctx.axes)
-    cutting = prepare(load_scenario("seed004_cutting_circle"))
+    npid = make_controller("anang2017_npid", 1e-4, axes=ctx.axes)
+    cutting = prepare(load_scenario("choi1999_cutting_circle"))
     cutting.pop("duration_s")
     cutting_machine = cutting.pop("machine")
     part = prepare(load_scenario("gcode_test_piece"))
@@ -193,7 +193,7 @@ def gcode_figures(lines: int = 1_000_000, repeats: int = 5, moves: int = 10_000)
             path = Path(folder) / f"run{times}.ngc"
             path.write_text("\n".join(raster_program(max(2, moves // 12 * times))) + "\n")
             tracemalloc.start()
-            run = api.run(api.load("gcode_seed004_circle", **{"reference.file": str(path)}))
+            run = api.run(api.load("gcode_choi1999_circle", **{"reference.file": str(path)}))
             if times:
                 run_peaks[f"{run.summary['cycle_time_s']:.0f}"] = tracemalloc.get_traced_memory()[1] / 1e6
             tracemalloc.stop()

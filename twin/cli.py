@@ -276,9 +276,9 @@ def demo(
     as_json: bool = typer.Option(False, "--json", help="Print metrics as JSON"),
     plots: Path = typer.Option(None, "--plots", help="Write PNG plots to this folder"),
 ):
-    """The main job: seed 004's cutting circle (R 28 mm, 4800 mm/min, 10000 rpm end milling) on the
+    """The main job: Choi 1999's cutting circle (R 28 mm, 4800 mm/min, 10000 rpm end milling) on the
     linear-motor table under the MIMO H-infinity loop-shaping controller with ZPETC."""
-    _run("seed004_mimo_cutting", rrd, as_json, plots=plots)
+    _run("choi1999_mimo_cutting", rrd, as_json, plots=plots)
 
 
 def _gain_margin(loop: dict) -> str:
@@ -312,7 +312,7 @@ def fidelity(
 ):
     """Compare each MJCF twin with its transfer function (time, frequency, gear slip).
 
-    Cases: every machine, and linear_motor_xy+average_force (seed 004's cutting-force model
+    Cases: every machine, and linear_motor_xy+average_force (Choi 1999's cutting-force model
     against its coupled eq. (11) model).
     """
     from twin import api
@@ -339,7 +339,7 @@ def fidelity(
 @app.command()
 @_guard
 def reproduce(
-    source: str = typer.Argument(..., help="Which paper, e.g. seed000 (twin list shows them)"),
+    source: str = typer.Argument(..., help="Which paper, e.g. yadav2020 (twin list shows them)"),
     as_json: bool = typer.Option(False, "--json", help="Print everything as JSON"),
     rrd: Path = typer.Option(None, "--rrd", help="Record the nominal twin step runs to this .rrd"),
     plots: Path = typer.Option(None, "--plots", help="Write PNG step-response plots to this folder"),

@@ -9,7 +9,7 @@ integrator) from the sampling itself.
 1 V or less where that would run past a fifth of the half travel);
     RMS(twin - TF) / RMS(TF) over every output, worst case.
 (b) ``frf_max_mag_err_db`` / ``frf_max_phase_err_deg``: frequency response measured on the twin
-    as on the real table (seed 003): closed loop around the integrator with a proportional
+    as on the real table (Maharof 2021): closed loop around the integrator with a proportional
     position controller, a periodic multisine reference (Schroeder phases, one tone per
     excited bin, 0.1-50 Hz), one experiment per axis, steady-state period only (after >= 5 s of settling), and the MIMO
     estimate G = Y U^-1 at each excited bin; compared with G's ZOH equivalent incl. delay.
@@ -19,9 +19,9 @@ integrator) from the sampling itself.
 Friction is forced off (the reference models have none).
 
 Besides one case per machine, ``linear_motor_xy+average_force`` runs ``linear_motor_xy`` with
-seed 004's average cutting force (:class:`twin.process.cutting.AverageForce`, Table 1's nominal
+Choi 1999's average cutting force (:class:`twin.process.cutting.AverageForce`, Table 1's nominal
 k_il = -2500, k_c = 2500 N s/m, written into ``xfrc_applied`` every physics step) against the
-coupled 4-state model of eq. (11) (:func:`controllers.papers.seed004.cutting_coupled_plant`).
+coupled 4-state model of eq. (11) (:func:`controllers.papers.choi1999.cutting_coupled_plant`).
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ import numpy as np
 
 from controllers.blocks import error_feedback, open_loop
 from controllers.lti import SisoTf
-from controllers.papers.seed004 import cutting_coupled_plant
+from controllers.papers.choi1999 import cutting_coupled_plant
 from twin.errors import TwinInputError
 from twin.machines import MACHINES, build, get_machine, is_machine_file
 from twin.process.cutting import AverageForce
@@ -45,12 +45,12 @@ TARGETS = {"time_nrmse": 0.005, "frf_max_mag_err_db": 0.2, "frf_max_phase_err_de
 FULL_SCALE_V = 10.0
 #: Longest settling (s) the frequency check waits for before its measured periods.
 MAX_SETTLE_S = 600.0
-#: Seed 004 Table 1, up milling (N s/m).
-SEED004_CUTTING = AverageForce(k_il_N_s_per_m=-2500.0, k_c_N_s_per_m=2500.0)
+#: Choi 1999 Table 1, up milling (N s/m).
+CHOI1999_CUTTING = AverageForce(k_il_N_s_per_m=-2500.0, k_c_N_s_per_m=2500.0)
 #: Fidelity cases: name -> (machine, cutting-force model or None).
 CASES = {
     **{name: (name, None) for name in MACHINES},
-    "linear_motor_xy+average_force": ("linear_motor_xy", SEED004_CUTTING),
+    "linear_motor_xy+average_force": ("linear_motor_xy", CHOI1999_CUTTING),
 }
 
 

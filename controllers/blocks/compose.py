@@ -108,7 +108,7 @@ def cascade(
     position_ref_ff : float
         Gain (1/s) from the reference position into the velocity reference; with a P velocity
         loop ``kv`` it adds ``kv position_ref_ff ref`` to u (the feedforward that turns a PI-P
-        cascade into its integral state feedback, seed 001).
+        cascade into its integral state feedback, Sabau 2022).
     """
     v_ref, v_err = f"{name}:v_ref.{axis}", f"{name}:v_error.{axis}"
     weights: tuple[float, ...] = (1.0, velocity_ref_ff, -1.0)

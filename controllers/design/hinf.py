@@ -1,6 +1,6 @@
 """Mixed-sensitivity H-infinity synthesis with a gamma-iteration, and controller reduction.
 
-Source: seed 000 (Yadav, Pathak, Gaur 2020), eqs. (24)-(29).  The generalized plant stacks
+Source: Yadav, Pathak, Gaur (2020), eqs. (24)-(29).  The generalized plant stacks
 W1 S, W2 C S and W3 T (``control.augw``); the controller is the central (Glover-Doyle)
 controller of SLICOT SB10AD (via slycot) for a given gamma, and the gamma-iteration is a
 bisection on gamma that keeps the largest gamma for which no admissible controller exists

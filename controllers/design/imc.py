@@ -1,6 +1,6 @@
 """Internal model control (IMC): Q(s) = G(s)^-1 / (mu s + 1)^lambda, C = Q / (1 - G0 Q).
 
-Source: seed 000 (Yadav, Pathak, Gaur 2020), eqs. (20)-(23) and Appendix B (eqs. 56-59,
+Source: Yadav, Pathak, Gaur (2020), eqs. (20)-(23) and Appendix B (eqs. 56-59,
 Table 3).  With G0 = G the closed loop is T(s) = 1/(mu s + 1)^lambda, a critically damped
 (xi = 1) response with natural frequency 1/mu when lambda = 2.
 """

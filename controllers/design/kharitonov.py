@@ -1,6 +1,6 @@
 """Kharitonov's theorem for interval polynomials and the third-order stability margin.
 
-Source: seed 000 (Yadav, Pathak, Gaur 2020), eqs. (3)-(5).  Coefficients are ordered from the
+Source: Yadav, Pathak, Gaur (2020), eqs. (3)-(5).  Coefficients are ordered from the
 highest power down, as the paper writes them: P(s) = a0 s^n + a1 s^(n-1) + ... + an, with
 alpha_i <= a_i <= beta_i.
 """

@@ -6,11 +6,11 @@ shaped plant ``Gs = G Ws = (A, B, C, 0)``, strictly proper:
 
 - control ARE  ``A'X + XA - XBB'X + C'C = 0``, filter ARE ``AZ + ZA' - ZC'CZ + BB' = 0``;
 - the optimal robustness ``gamma_min = sqrt(1 + rho(XZ))``, found without a gamma-iteration
-  (seed 004 §3);
+  (Choi 1999 §3);
 - for ``gamma > gamma_min``, with ``L = (1 - gamma^2) I + XZ``, the central controller
   (Skogestad and Postlethwaite, *Multivariable Feedback Control*, eq. 9.80, D = 0)
   ``A_K = A - BB'X + gamma^2 L'^-1 ZC'C``, ``B_K = gamma^2 L'^-1 ZC'``, ``C_K = B'X``
-  for positive feedback ``u = K_inf y``.  Seed 004's eq. (8) writes the same controller with
+  for positive feedback ``u = K_inf y``.  Choi 1999's eq. (8) writes the same controller with
   ``(I + XZ - gamma^2 I)^-1``; its extraction is garbled, so the tests check this one by its
   defining property: ``||[K; I](I - Gs K)^-1 M^-1||_inf <= gamma``.
 
@@ -125,7 +125,7 @@ def loop_shaping(G: control.StateSpace, Ws: control.StateSpace, gamma_factor: fl
         Shaping precompensator (``G Ws`` is the target loop).
     gamma_factor : float
         ``gamma = gamma_factor * gamma_min``, > 1: slightly suboptimal (1.1 is Skogestad and
-        Postlethwaite's usual choice, and seed 004's advice: it improves H2 performance and
+        Postlethwaite's usual choice, and Choi 1999's advice: it improves H2 performance and
         avoids a fast controller pole).
     """
     if not gamma_factor > 1.0:

@@ -1,6 +1,6 @@
 """Robust PI from worst-case gain and phase margins on a Kharitonov polynomial.
 
-Source: seed 000 (Yadav, Pathak, Gaur 2020), eqs. (6)-(19).  The closed loop of the lead-screw
+Source: Yadav, Pathak, Gaur (2020), eqs. (6)-(19).  The closed loop of the lead-screw
 axis with C(s) = Kp + Ki/s has the characteristic polynomial
 
     p(s) = s^3 + a1 s^2 + c2 Kp s + c3 Ki                       (eq. 17 form)

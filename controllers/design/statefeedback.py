@@ -1,4 +1,4 @@
-"""State feedback for the servo axis of seed 001 and its mapping to the cascade a drive allows.
+"""State feedback for the servo axis of Sabau 2022 and its mapping to the cascade a drive allows.
 
 The axis model is eq. (5) of Sabau (2022): states ``x = [omega, theta]`` (speed, position),
 ``omega' = -omega/T + (K/T) u``, ``theta' = omega``, ``y = theta``.  A state feedback

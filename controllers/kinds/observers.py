@@ -1,5 +1,5 @@
 """Observer add-ons (``[controller.observer]``): the inverse-model disturbance observer, the
-harmonic disturbance force observer (seed 003) and both together."""
+harmonic disturbance force observer (Maharof 2021) and both together."""
 
 from __future__ import annotations
 

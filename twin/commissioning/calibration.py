@@ -28,7 +28,7 @@ nominal and the others are fitted again without them.  ``solver`` reports whethe
 converged (scipy's termination, the evaluations out of :data:`MAX_EVALUATIONS`, the final
 first-order optimality); standard errors are given only for a converged fit.  A trial the
 twin diverges on is a rejected step (a huge residual), counted in ``rejected_diverged``.
-The fit index is seed 001's NRMSE fit, 100 (1 - ||y - y_model|| /
+The fit index is Sabau 2022's NRMSE fit, 100 (1 - ||y - y_model|| /
 ||y - mean(y)||), before (nominal values) and after.
 """
 

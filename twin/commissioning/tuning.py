@@ -24,7 +24,7 @@ loop's (the table's, except ``feedback = "motor"``, a semi-closed loop), at the 
 
 Every loop is evaluated exactly as the twin runs it: G by zero-order hold with the delay in
 whole periods, the controller and filter by Tustin, on a frequency grid up to Nyquist.
-(:mod:`controllers.design.cascade`, seed 003's procedure, solves for a PI with given margins
+(:mod:`controllers.design.cascade`, Maharof 2021's procedure, solves for a PI with given margins
 exactly; this maximises the bandwidth with margins at least the targets, filter included.)
 """
 

@@ -1,6 +1,6 @@
-"""Seed-000 lead-screw axis (``cncmt``) and two stacked axes (``cncmt_xy``).
+"""Yadav 2020 lead-screw axis (``cncmt``) and two stacked axes (``cncmt_xy``).
 
-Source: Yadav, Pathak, Gaur (2020), ``000_12741b08ad2e6d82.txt``: eq. (1), Table 1, Appendix A.
+Source: Yadav, Pathak, Gaur (2020): eq. (1), Table 1, Appendix A.
 
 Equation (1) written as the twin realizes it, with screw angle theta_s (rad), motor angle
 theta_m = n theta_s and table position x = p theta_s:
@@ -31,7 +31,7 @@ from twin.machines.base import (
     set_mass,
 )
 
-SEED = "seed 000 (Yadav et al. 2020)"
+SOURCE = "Yadav et al. (2020)"
 
 
 def leadscrew_parameters(
@@ -40,18 +40,18 @@ def leadscrew_parameters(
     """Table 1 parameters of one lead-screw axis, symbols optionally suffixed (``_x``)."""
     s = suffix
     return {
-        f"K1{s}": Parameter(2.0, "V/V", f"power amplifier gain, {SEED} Table 1", (1.0, 3.0)),
-        f"K2{s}": Parameter(4.0, "N m/V", f"servomotor gain, {SEED} Table 1", (3.0, 5.0)),
-        f"m{s}": Parameter(mass_kg, "kg", f"{mass_note}, {SEED} Table 1 (m)", (0.6 * mass_kg, 1.4 * mass_kg)),
+        f"K1{s}": Parameter(2.0, "V/V", f"power amplifier gain, {SOURCE} Table 1", (1.0, 3.0)),
+        f"K2{s}": Parameter(4.0, "N m/V", f"servomotor gain, {SOURCE} Table 1", (3.0, 5.0)),
+        f"m{s}": Parameter(mass_kg, "kg", f"{mass_note}, {SOURCE} Table 1 (m)", (0.6 * mass_kg, 1.4 * mass_kg)),
         f"Im{s}": Parameter(
-            0.01, "kg m^2", f"equivalent inertia at the motor (rotor + screw/n^2), {SEED} Table 1", (0.008, 0.012)
+            0.01, "kg m^2", f"equivalent inertia at the motor (rotor + screw/n^2), {SOURCE} Table 1", (0.008, 0.012)
         ),
         f"p{s}": Parameter(
-            0.05, "m/rad", f"lead (table travel per screw radian) as eq. (2) needs; Table 1 says 5 mm pitch, {SEED}"
+            0.05, "m/rad", f"lead (table travel per screw radian) as eq. (2) needs; Table 1 says 5 mm pitch, {SOURCE}"
         ),
-        f"n{s}": Parameter(2.0, "-", f"gear ratio motor:screw, {SEED} Table 1"),
-        f"H1{s}": Parameter(1.0, "-", f"encoder gain (measured = H1 x), {SEED} Table 1"),
-        f"H2{s}": Parameter(0.1, "V s/rad", f"tachogenerator gain on screw speed, {SEED} Table 1"),
+        f"n{s}": Parameter(2.0, "-", f"gear ratio motor:screw, {SOURCE} Table 1"),
+        f"H1{s}": Parameter(1.0, "-", f"encoder gain (measured = H1 x), {SOURCE} Table 1"),
+        f"H2{s}": Parameter(0.1, "V s/rad", f"tachogenerator gain on screw speed, {SOURCE} Table 1"),
     }
 
 
@@ -62,10 +62,10 @@ def leadscrew_tf(K1, K2, m, Im, p, n, H2) -> SisoTf:
 
 
 class _LeadScrewMachine(Machine):
-    """Shared configure/plant for one or two seed-000 axes."""
+    """Shared configure/plant for one or two Yadav 2020 axes."""
 
     suffixes: tuple[str, ...] = ("",)
-    #: ours: seed 000 gives no limits; 6 m/min, 1 m/s^2, 20 m/s^3 for its 50 kg lead-screw table
+    #: ours: Yadav 2020 gives no limits; 6 m/min, 1 m/s^2, 20 m/s^3 for its 50 kg lead-screw table
     motion_limits = {a: MotionLimits(0.1, 1.0, 20.0, "ours: a 50 kg lead-screw table") for a in ("x", "y")}
     common = {
         "Js": Parameter(
@@ -76,7 +76,7 @@ class _LeadScrewMachine(Machine):
             0.0,
             "s",
             f"transport delay of eq. (2) (0.1 s in the paper's simulations;"
-            f" off by default: {SEED} analyses without it)",
+            f" off by default: {SOURCE} analyses without it)",
             positive=False,
         ),
     }
@@ -148,7 +148,7 @@ class _LeadScrewMachine(Machine):
 class CNCMT(_LeadScrewMachine):
     name = "cncmt"
     xml = "cncmt/cncmt.xml"
-    summary = "seed 000 lead-screw axis: motor, gearbox n=2, lead screw, table + workpiece (50 kg)"
+    summary = "Yadav 2020 lead-screw axis: motor, gearbox n=2, lead screw, table + workpiece (50 kg)"
     suffixes = ("",)
     parameters = {**leadscrew_parameters(""), **_LeadScrewMachine.common, **coulomb_friction_parameters(("x",))}
     axes = (Axis("x", "x_drive", "x_table", "x_motor", "x_screw"),)
@@ -158,7 +158,7 @@ class CNCMT(_LeadScrewMachine):
 class CNCMTXY(_LeadScrewMachine):
     name = "cncmt_xy"
     xml = "cncmt_xy/cncmt_xy.xml"
-    summary = "two seed-000 axes, the Y drive train and table riding on the X table"
+    summary = "two Yadav 2020 axes, the Y drive train and table riding on the X table"
     suffixes = ("_x", "_y")
     parameters = {
         **leadscrew_parameters("_x", 50.0, "mass of the X table alone (the Y axis adds its own mass on top)"),

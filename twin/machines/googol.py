@@ -1,7 +1,7 @@
-"""Googol Tech XY ball-screw table (``googol_xy``), seeds 002 and 003.
+"""Googol Tech XY ball-screw table (``googol_xy``), Anang 2017 and Maharof 2021.
 
-Source: Anang et al., ``002_0798db275c8b426e.txt`` eq. (1): G(s) = 78020/(s^2 + 163 s + 193.3)
-with a 0.0012 s delay, identified from measured FRFs on the X axis; seed 003 (Maharof) uses the
+Source: Anang et al. eq. (1): G(s) = 78020/(s^2 + 163 s + 193.3)
+with a 0.0012 s delay, identified from measured FRFs on the X axis; Maharof 2021 uses the
 same table.  Units: input in V, position in mm (the UTeM papers' convention; assumed, the
 extraction states none), i.e. 78.02 m/(V s^2) in SI.
 
@@ -33,7 +33,7 @@ from twin.machines.base import (
     set_mass,
 )
 
-SEED = "seed 002 (Anang et al.) eq. (1)"
+SOURCE = "Anang et al. (2017) eq. (1)"
 
 
 @register_machine
@@ -42,10 +42,10 @@ class GoogolXY(Machine):
     xml = "googol_xy/googol_xy.xml"
     summary = "Googol XY ball-screw table, each axis G = 78020/(s^2+163s+193.3) mm/V, 1.2 ms delay"
     parameters = {
-        "b0": Parameter(78020.0, "mm/(V s^2)", f"numerator of G, {SEED}"),
-        "a1": Parameter(163.0, "1/s", f"s-coefficient of G's denominator, {SEED}"),
-        "a0": Parameter(193.3, "1/s^2", f"constant of G's denominator, {SEED}"),
-        "Td": Parameter(0.0012, "s", f"transport delay, {SEED}", positive=False),
+        "b0": Parameter(78020.0, "mm/(V s^2)", f"numerator of G, {SOURCE}"),
+        "a1": Parameter(163.0, "1/s", f"s-coefficient of G's denominator, {SOURCE}"),
+        "a0": Parameter(193.3, "1/s^2", f"constant of G's denominator, {SOURCE}"),
+        "Td": Parameter(0.0012, "s", f"transport delay, {SOURCE}", positive=False),
         "lead_mm": Parameter(5.0, "mm/rev", "ball-screw lead (assumed)"),
         "Jm": Parameter(1.2e-4, "kg m^2", "motor rotor inertia (assumed, 400 W class servo)"),
         "Js": Parameter(1e-4, "kg m^2", "ball-screw inertia (assumed, 16 mm x 0.6 m)"),

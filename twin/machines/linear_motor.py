@@ -1,6 +1,6 @@
-"""Linear-motor XY table (``linear_motor_xy``), seed 004.
+"""Linear-motor XY table (``linear_motor_xy``), Choi 1999.
 
-Source: Choi, Hong, Kim, Kim (1999), ``004_752a35899bbc3ab8.txt``: eq. (1)
+Source: Choi, Hong, Kim, Kim (1999): eq. (1)
 m_i v_i' + b_i v_i + F_coul,i sign(v_i) = k_i u_i, Table 1 (m_x 52.3 kg, m_y 17 kg,
 b_x 193.5, b_y 36 N s/m with their uncertainty).  The Y carriage rides on the X carriage, so
 m_x is the whole mass moved by X.  Input gains k_i are not in the paper: 98.2 N/V is the
@@ -23,33 +23,33 @@ from twin.machines.base import (
     set_mass,
 )
 
-SEED = "seed 004 (Choi et al. 1999)"
+SOURCE = "Choi et al. (1999)"
 
 
 @register_machine
 class LinearMotorXY(Machine):
     name = "linear_motor_xy"
     xml = "linear_motor_xy/linear_motor_xy.xml"
-    summary = "seed 004 linear-motor XY table, m_x 52.3 kg, m_y 17 kg (Y on X), 1/2 um encoders"
+    summary = "Choi 1999 linear-motor XY table, m_x 52.3 kg, m_y 17 kg (Y on X), 1/2 um encoders"
     parameters = {
         "m_x": Parameter(
-            52.3, "kg", f"mass moved by X (X + Y carriages + workpiece), {SEED} Table 1", (52.3 * 0.7, 52.3 * 1.3)
+            52.3, "kg", f"mass moved by X (X + Y carriages + workpiece), {SOURCE} Table 1", (52.3 * 0.7, 52.3 * 1.3)
         ),
         "m_y": Parameter(
-            17.0, "kg", f"mass moved by Y (Y carriage + workpiece), {SEED} Table 1", (17.0 * 0.6, 17.0 * 1.4)
+            17.0, "kg", f"mass moved by Y (Y carriage + workpiece), {SOURCE} Table 1", (17.0 * 0.6, 17.0 * 1.4)
         ),
-        "b_x": Parameter(193.5, "N s/m", f"viscous damping X, {SEED} Table 1", (154.8, 232.2)),
-        "b_y": Parameter(36.0, "N s/m", f"viscous damping Y, {SEED} Table 1", (28.8, 43.2)),
+        "b_x": Parameter(193.5, "N s/m", f"viscous damping X, {SOURCE} Table 1", (154.8, 232.2)),
+        "b_y": Parameter(36.0, "N s/m", f"viscous damping Y, {SOURCE} Table 1", (28.8, 43.2)),
         "k_x": Parameter(98.2, "N/V", "input gain X: 982 N peak force at 10 V (assumed)"),
         "k_y": Parameter(98.2, "N/V", "input gain Y: 982 N peak force at 10 V (assumed)"),
-        **coulomb_friction_parameters(("x", "y"), f"eq. (1); no value in {SEED}"),
+        **coulomb_friction_parameters(("x", "y"), f"eq. (1); no value in {SOURCE}"),
         "m_workpiece": Parameter(2.0, "kg", "workpiece mass, part of m_y (assumed)"),
     }
-    #: seed 004: the LEB-S-8's peak force 982 N over the moving masses (52.3 kg on X, 17 kg on Y);
+    #: Choi 1999: the LEB-S-8's peak force 982 N over the moving masses (52.3 kg on X, 17 kg on Y);
     #: velocity and jerk ours (1 m/s, and the jerk that reaches the peak acceleration in 10 ms)
     motion_limits = {
-        "x": MotionLimits(1.0, 982.0 / 52.3, 100 * 982.0 / 52.3, "seed 004: peak force 982 N / 52.3 kg; v, j ours"),
-        "y": MotionLimits(1.0, 982.0 / 17.0, 100 * 982.0 / 17.0, "seed 004: peak force 982 N / 17 kg; v, j ours"),
+        "x": MotionLimits(1.0, 982.0 / 52.3, 100 * 982.0 / 52.3, "Choi 1999: peak force 982 N / 52.3 kg; v, j ours"),
+        "y": MotionLimits(1.0, 982.0 / 17.0, 100 * 982.0 / 17.0, "Choi 1999: peak force 982 N / 17 kg; v, j ours"),
     }
     axes = (Axis("x", "x_drive", "x_table"), Axis("y", "y_drive", "y_table"))
 

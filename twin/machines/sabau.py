@@ -1,6 +1,6 @@
-"""Identified X/Y servo axes with cross-coupling (``sabau_xy``), seed 001.
+"""Identified X/Y servo axes with cross-coupling (``sabau_xy``), Sabau 2022.
 
-Source: Sabau (Morar) (2022), ``001_91435e23e494fefb.txt``: eqs. (1)-(5) omega_x/u_x =
+Source: Sabau (Morar) (2022): eqs. (1)-(5) omega_x/u_x =
 1054/(s + 40.85), omega_y/u_y = 2188/(s + 87.81), position the integral of velocity; eq. (6)
 adds H_wx_uy = 15 (u_y accelerates X) and H_wy_ux = 24.5 (u_x accelerates Y), entering the
 velocity derivatives directly.  Units are not stated: u in V and positions in mm are assumed,
@@ -25,7 +25,7 @@ from twin.machines.base import (
     set_mass,
 )
 
-SEED = "seed 001 (Sabau 2022)"
+SOURCE = "Sabau (2022)"
 
 
 def _boxed(value: float, unit: str, description: str, positive: bool = True) -> Parameter:
@@ -37,20 +37,20 @@ def _boxed(value: float, unit: str, description: str, positive: bool = True) -> 
 class SabauXY(Machine):
     name = "sabau_xy"
     xml = "sabau_xy/sabau_xy.xml"
-    summary = "seed 001 identified X/Y axes 1054/(s+40.85), 2188/(s+87.81) with eq. (6) coupling"
+    summary = "Sabau 2022 identified X/Y axes 1054/(s+40.85), 2188/(s+87.81) with eq. (6) coupling"
     parameters = {
-        "K_x": _boxed(1054.0, "mm/(V s^2)", f"K_Mx/T_Mx, eq. (1), {SEED}"),
-        "a_x": _boxed(40.85, "1/s", f"1/T_Mx, eq. (1), {SEED}"),
-        "K_y": _boxed(2188.0, "mm/(V s^2)", f"K_My/T_My, eq. (3), {SEED}"),
-        "a_y": _boxed(87.81, "1/s", f"1/T_My, eq. (3), {SEED}"),
-        "H_wx_uy": _boxed(15.0, "mm/(V s^2)", f"u_y to X acceleration, eq. (6), {SEED}", positive=False),
-        "H_wy_ux": _boxed(24.5, "mm/(V s^2)", f"u_x to Y acceleration, eq. (6), {SEED}", positive=False),
+        "K_x": _boxed(1054.0, "mm/(V s^2)", f"K_Mx/T_Mx, eq. (1), {SOURCE}"),
+        "a_x": _boxed(40.85, "1/s", f"1/T_Mx, eq. (1), {SOURCE}"),
+        "K_y": _boxed(2188.0, "mm/(V s^2)", f"K_My/T_My, eq. (3), {SOURCE}"),
+        "a_y": _boxed(87.81, "1/s", f"1/T_My, eq. (3), {SOURCE}"),
+        "H_wx_uy": _boxed(15.0, "mm/(V s^2)", f"u_y to X acceleration, eq. (6), {SOURCE}", positive=False),
+        "H_wy_ux": _boxed(24.5, "mm/(V s^2)", f"u_x to Y acceleration, eq. (6), {SOURCE}", positive=False),
         "m_x": Parameter(25.0, "kg", "mass moved by X, Y carriage included (assumed)"),
         "m_y": Parameter(10.0, "kg", "mass moved by Y, workpiece included (assumed)"),
         "m_workpiece": Parameter(2.0, "kg", "workpiece mass (assumed)"),
         **coulomb_friction_parameters(("x", "y")),
     }
-    #: ours: seed 001 gives no limits; 12 m/min, 2 m/s^2, 50 m/s^3 as a small 3-axis CNC
+    #: ours: Sabau 2022 gives no limits; 12 m/min, 2 m/s^2, 50 m/s^3 as a small 3-axis CNC
     motion_limits = {a: MotionLimits(0.2, 2.0, 50.0, "ours: a small 3-axis CNC") for a in ("x", "y")}
     axes = (Axis("x", "x_drive", "x_table"), Axis("y", "y_drive", "y_table"))
 

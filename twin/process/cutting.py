@@ -20,7 +20,7 @@ the drive:
     tooth period.  The material is assumed to lie ahead of the tool in whatever direction it
     feeds (the model does not track the workpiece geometry): a reversal re-engages the same way.
 :class:`AverageForce`
-    Seed 004's average-force model, eqs. (2)-(5) and the A matrix of eq. (11):
+    Choi 1999's average-force model, eqs. (2)-(5) and the A matrix of eq. (11):
     ``F_x = k_il v_x - k_c v_y``, ``F_y = k_il v_y + k_c v_x`` (N, with ``k_il``, ``k_c`` in
     N s/m; Table 1 for up milling: ``k_il = -2500``, ``k_c = 2500``), optionally times
     ``1 + r sin(2 pi f_tooth t + phase)`` with ``r <= 0.2``: the paper's bound on the cyclic
@@ -344,7 +344,7 @@ class EndMilling:
 
 @dataclass(frozen=True)
 class AverageForce:
-    """Seed 004's average cutting force ``F = k_il v + k_c (z x v)`` on the workpiece (N).
+    """Choi 1999's average cutting force ``F = k_il v + k_c (z x v)`` on the workpiece (N).
 
     Parameters
     ----------
@@ -379,7 +379,7 @@ class AverageForce:
             raise TwinInputError(
                 "harmonic_fraction",
                 self.harmonic_fraction,
-                "must be in [0, 0.2]: seed 004 bounds the cyclic part at 20 % of the average",
+                "must be in [0, 0.2]: Choi 1999 bounds the cyclic part at 20 % of the average",
             )
         _check_cutter(self.spindle_rpm, self.n_flutes)
         _window(self.start_s, self.stop_s)
@@ -564,7 +564,7 @@ def _program_milling(par, state, qpos, t, out):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def _average_force(par, qvel, t, out):  # pragma: no cover - compiled
-    """Add seed 004's average cutting force on the workpiece (N) to ``out``."""
+    """Add Choi 1999's average cutting force on the workpiece (N) to ``out``."""
     k_il, k_c, r, w = par[AF_K_IL], par[AF_K_C], par[AF_R], par[AF_OMEGA]
     phase, lo, hi = par[AF_PHASE], par[AF_LO], par[AF_HI]
     if not (lo <= t < hi):
@@ -672,7 +672,7 @@ class EndMillingSpec(DisturbanceSpecBase):
 
 
 class AverageForceSpec(DisturbanceSpecBase):
-    """average_force: seed 004's average cutting force k_il v + k_c (z x v) (AverageForce)."""
+    """average_force: Choi 1999's average cutting force k_il v + k_c (z x v) (AverageForce)."""
 
     type: Literal["average_force"]
     k_il_N_s_per_m: float = Field(-2500.0, description="force along the velocity per velocity, N s/m")

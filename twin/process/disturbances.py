@@ -34,7 +34,7 @@ def _axis_mask(axes: tuple[int, ...] | None, n_axes: int) -> np.ndarray:
 class VoltageStep:
     """Input (voltage) disturbance: ``amplitude_V`` added from ``start_s`` on.
 
-    Seed 000 (Figs. 12-13) perturbs the input voltage; its figure is lost in the extraction, so
+    Yadav 2020 (Figs. 12-13) perturbs the input voltage; its figure is lost in the extraction, so
     the shape (a step) and its size are the twin's choice, stated where used.
 
     Parameters
@@ -68,9 +68,9 @@ MAX_INPUT_HARMONICS = 100
 
 @dataclass(frozen=True)
 class HarmonicInput:
-    """Sum of sines added to the drive input (V): seed 003's harmonic input disturbances.
+    """Sum of sines added to the drive input (V): Maharof 2021's harmonic input disturbances.
 
-    ``d(t) = sum_i A_i sin(2 pi f_i t + phase_i)``; seed 003 uses one, two and three harmonics
+    ``d(t) = sum_i A_i sin(2 pi f_i t + phase_i)``; Maharof 2021 uses one, two and three harmonics
     at 0.2, 0.5 and 0.8 Hz.  Its amplitudes are not in the extraction: they are the
     scenario's choice.
 
@@ -129,7 +129,7 @@ class HarmonicInput:
 
 
 class HarmonicInputSpec(DisturbanceSpecBase):
-    """harmonic_input: a sum of sines on the drive input, V (HarmonicInput; seed 003)."""
+    """harmonic_input: a sum of sines on the drive input, V (HarmonicInput; Maharof 2021)."""
 
     type: Literal["harmonic_input"]
     amplitudes_V: list[float] = Field(max_length=MAX_INPUT_HARMONICS)
@@ -143,7 +143,7 @@ class HarmonicInputSpec(DisturbanceSpecBase):
 
 
 class VoltageStepSpec(DisturbanceSpecBase):
-    """voltage_step: a step on the drive input, V (VoltageStep; seed 000)."""
+    """voltage_step: a step on the drive input, V (VoltageStep; Yadav 2020)."""
 
     type: Literal["voltage_step"]
     amplitude_V: float

@@ -1,19 +1,19 @@
-"""The papers' reproductions, one package per seed, each registering a
-:class:`~twin.reproductions.base.Reproduction` (every package here is imported below, so a new
-reproduction is one new package and its tests); ``twin reproduce SEED`` and ``twin.reproduce``
+"""The papers' reproductions, one package per paper named as in :mod:`controllers.papers`, each
+registering a :class:`~twin.reproductions.base.Reproduction` (every paper's package is imported
+below, in the order of the source texts, so a new reproduction is one new package, its name in
+:data:`controllers.papers.PAPERS` and its tests); ``twin reproduce PAPER`` and ``twin.reproduce``
 dispatch through :data:`REPRODUCTIONS`, ``twin sweep`` asks each for certificates.
 """
 
 from __future__ import annotations
 
 import importlib
-import pkgutil
 
+from controllers.papers import PAPERS
 from twin.reproductions.base import REPRODUCTIONS, Reproduction, register_reproduction
 
-for _module in pkgutil.iter_modules(__path__):
-    if _module.ispkg:
-        importlib.import_module(f"{__name__}.{_module.name}")
+for _paper in PAPERS:
+    importlib.import_module(f"{__name__}.{_paper}")
 
 #: ``twin reproduce``'s defaults: Monte Carlo samples, random twin samples, seed.
 DEFAULT_SAMPLES, DEFAULT_TWIN_SAMPLES, DEFAULT_SEED = 1000, 20, 0
@@ -29,9 +29,9 @@ def twin_vs_tf(label: str, twin: dict, tf: dict, keys, tol_rel: float) -> list[s
     ]
 
 
-def reproduction(seed: str) -> Reproduction:
-    """The reproduction of ``seed``."""
-    return REPRODUCTIONS[seed]
+def reproduction(paper: str) -> Reproduction:
+    """The reproduction of ``paper`` (e.g. ``choi1999``)."""
+    return REPRODUCTIONS[paper]
 
 
 def certificates(machine: str, controller: str | None, symbols: set[str], others: list[str]) -> list[dict]:

@@ -8,7 +8,7 @@ from types import ModuleType
 
 
 class Reproduction:
-    """A paper's reproduction.  Subclasses (one per seed package) set :attr:`name`,
+    """A paper's reproduction.  Subclasses (one per paper package) set :attr:`name`,
     :attr:`report_module` and a docstring whose first line is the docs line.
 
     The report module offers ``run(samples, twin_samples, seed, progress) -> dict`` (every

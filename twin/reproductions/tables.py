@@ -1,20 +1,20 @@
-"""Markdown tables of the reproductions, generated from ``twin reproduce SEED --json`` output.
+"""Markdown tables of the reproductions, generated from ``twin reproduce PAPER --json`` output.
 
-The paper pages (``docs/pages/papers/seedNNN.md``) hold blocks
+The paper pages (``docs/pages/papers/<paper>.md``) hold blocks
 
-    <!-- generated: seed002.tables_1_3 -->
+    <!-- generated: anang2017.tables_1_3 -->
     | ... the table ... |
     <!-- end generated -->
 
-whose content is what the seed's ``markdown_tables(results)`` renders for that name from the
-reproduction's JSON (``docs/results/seedNNN.json``, written by ``twin reproduce SEED --json``
+whose content is what the paper's ``markdown_tables(results)`` renders for that name from the
+reproduction's JSON (``docs/results/<paper>.json``, written by ``twin reproduce PAPER --json``
 with its default settings).  No result number in those tables is typed by hand.
 
 ``python -m twin.reproductions.tables --write`` rewrites the blocks from the JSON files;
 ``--check`` exits 1 (naming the blocks) when a page differs from them; ``--rerun`` first runs
 every reproduction again and writes its JSON (minutes), so ``--rerun --check`` verifies that
 the committed results are what the code computes.  The committed results are computed with
-OpenBLAS's Haswell kernels (``OPENBLAS_CORETYPE=Haswell``, as ``.ci/run`` sets): seed 004's
+OpenBLAS's Haswell kernels (``OPENBLAS_CORETYPE=Haswell``, as ``.ci/run`` sets): Choi 1999's
 H-infinity design differs at 1e-4 with the AVX-512 kernels, and its air-cut runs in micrometres.
 """
 
@@ -55,60 +55,60 @@ def pair(values, spec: str = ".3g", sep: str = " / ") -> str:
     return sep.join(fmt(v, spec) for v in values)
 
 
-def results_path(seed: str, folder: Path | None = None) -> Path:
-    """Where the committed JSON of ``seed`` lives."""
-    return (folder or DOCS / "results") / f"{seed}.json"
+def results_path(paper: str, folder: Path | None = None) -> Path:
+    """Where the committed JSON of ``paper`` lives."""
+    return (folder or DOCS / "results") / f"{paper}.json"
 
 
-def render(seed: str, results: dict) -> dict[str, str]:
-    """Every generated table of ``seed`` by name."""
-    return reproduction(seed).markdown_tables(results)
+def render(paper: str, results: dict) -> dict[str, str]:
+    """Every generated table of ``paper`` by name."""
+    return reproduction(paper).markdown_tables(results)
 
 
 def fill(page: str, tables: dict[str, dict[str, str]]) -> tuple[str, list[str]]:
-    """``page`` with every generated block replaced from ``tables[seed][name]``, and the names
+    """``page`` with every generated block replaced from ``tables[paper][name]``, and the names
     of the blocks whose content changed.
 
     Raises
     ------
     KeyError
-        A block names a table that its seed does not render.
+        A block names a table that its paper does not render.
     """
     changed = []
 
     def replace(match):
-        seed, name = match.group(2), match.group(3)
-        body = tables[seed][name]
+        paper, name = match.group(2), match.group(3)
+        body = tables[paper][name]
         if body != match.group(4):
-            changed.append(f"{seed}.{name}")
+            changed.append(f"{paper}.{name}")
         return match.group(1) + body + match.group(5)
 
     return _BLOCK.sub(replace, page), changed
 
 
 def blocks(page: str) -> list[str]:
-    """The ``seed.name`` of every generated block in ``page``."""
+    """The ``paper.name`` of every generated block in ``page``."""
     return [f"{m.group(2)}.{m.group(3)}" for m in _BLOCK.finditer(page)]
 
 
 def load_tables(folder: Path | None = None) -> dict[str, dict[str, str]]:
-    """Every seed's tables, rendered from its JSON in ``folder`` (default ``docs/results``)."""
-    return {seed: render(seed, json.loads(results_path(seed, folder).read_text())) for seed in REPRODUCTIONS}
+    """Every paper's tables, rendered from its JSON in ``folder`` (default ``docs/results``)."""
+    return {paper: render(paper, json.loads(results_path(paper, folder).read_text())) for paper in REPRODUCTIONS}
 
 
 def pages() -> list[Path]:
     """The pages that hold generated blocks."""
-    return sorted((DOCS / "pages" / "papers").glob("seed*.md"))
+    return sorted((DOCS / "pages" / "papers").glob("paper*.md"))
 
 
 def _rerun(folder: Path) -> None:
     """Run every reproduction with ``twin reproduce``'s defaults and write its JSON into
-    ``folder`` as ``twin reproduce SEED --json`` prints it."""
+    ``folder`` as ``twin reproduce PAPER --json`` prints it."""
     folder.mkdir(parents=True, exist_ok=True)
-    for seed in REPRODUCTIONS:
-        print(f"running twin reproduce {seed}", file=sys.stderr)
-        res = reproduction(seed).run(DEFAULT_SAMPLES, DEFAULT_TWIN_SAMPLES, DEFAULT_SEED, progress=False)
-        results_path(seed, folder).write_text(json.dumps(res, indent=1, default=float) + "\n")
+    for paper in REPRODUCTIONS:
+        print(f"running twin reproduce {paper}", file=sys.stderr)
+        res = reproduction(paper).run(DEFAULT_SAMPLES, DEFAULT_TWIN_SAMPLES, DEFAULT_SEED, progress=False)
+        results_path(paper, folder).write_text(json.dumps(res, indent=1, default=float) + "\n")
 
 
 def main(argv: list[str] | None = None) -> int:

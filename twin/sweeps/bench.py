@@ -2,7 +2,7 @@
 
 In one process: two local clusters (one and two worker processes) are started and warmed up
 (each worker loads the numba cache and builds the machine once), then the same sweep of
-``samples`` samples of ``seed004_cutting_circle`` (2 s simulated, mechanistic milling force,
+``samples`` samples of ``choi1999_cutting_circle`` (2 s simulated, mechanistic milling force,
 ``overrides.m_x`` over Table 1's box and the spindle speed uniform in 5000-12000 rpm) runs on
 each, alternating, ``repeats`` times; medians are reported.  Parallel efficiency is
 ``t(1 worker) / (2 t(2 workers))``.  Cluster start-up is not in the times.
@@ -22,7 +22,7 @@ import tempfile
 import time
 from pathlib import Path
 
-SCENARIO = "seed004_cutting_circle"
+SCENARIO = "choi1999_cutting_circle"
 SETTINGS = {"duration_s": 2.0}
 VARY = ["overrides.m_x=box", "disturbances.0.spindle_rpm=uniform(5000,12000)"]
 

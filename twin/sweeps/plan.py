@@ -6,7 +6,7 @@ machine parameter):
 - ``box``: uniform over the machine's documented uncertainty box of that symbol;
 - ``uniform(a, b)``, ``normal(mu, sigma)``, ``choice(v1, v2, ...)``: random draws;
 - ``grid(a, b, n)``: n equally spaced values; ``corners``: the two ends of the symbol's box;
-- ``line(n)``: seed 000's "samples between the lower and upper limit via nominal": every
+- ``line(n)``: Yadav 2020's "samples between the lower and upper limit via nominal": every
   ``line`` symbol moves together from its box's lower to its upper end in n steps.
 
 Structured specs (grid, corners, line) are combined as a full product; random specs are drawn

@@ -62,7 +62,7 @@ def summarize(table, plan: Plan, axes) -> dict:
 def certificates(machine: str, controller: str | None, plan: Plan) -> list[dict]:
     """The robustness certificates of ``controller`` on ``machine`` over a box containing the
     sweep's, from every reproduction that offers one (:func:`twin.reproductions.certificates`):
-    seed 000's Kharitonov verdict over Table 1's box, seed 004's mu upper bounds.  Empty when
+    Yadav 2020's Kharitonov verdict over Table 1's box, Choi 1999's mu upper bounds.  Empty when
     none applies."""
     from twin.reproductions import certificates as offered
 
