@@ -36,16 +36,6 @@ TICK_INDEX = 0
 FIRST_AXIS_INDEX = TICK_INDEX + 1
 
 
-def axis_signal_index(axis_number: int, name: str) -> int:
-    """Bus index of signal ``name`` (one of :data:`AXIS_SIGNALS`) of the ``axis_number``-th axis."""
-    return FIRST_AXIS_INDEX + len(AXIS_SIGNALS) * axis_number + OFFSET[name]
-
-
-def preview_index(n_axes: int, preview_ticks: int, axis_number: int, ticks_ahead: int) -> int:
-    """Bus index of ``preview.<axis>.<ticks_ahead>`` (1 to ``preview_ticks``) on a bus of ``n_axes``."""
-    return FIRST_AXIS_INDEX + len(AXIS_SIGNALS) * n_axes + axis_number * preview_ticks + ticks_ahead - 1
-
-
 def standard_signals(axes, preview_ticks: int = 0) -> list[str]:
     """Bus layout of the loop's signals: ``tick``, then per axis :data:`AXIS_SIGNALS`, then
     per axis ``preview.<a>.1 .. preview.<a>.P``."""

@@ -192,19 +192,6 @@ class ToolSpec(StrictSpec):
         return self
 
 
-def tool_for(tools: dict[int, ToolSpec], number: int, line: int) -> ToolSpec:
-    """The tool ``number`` (a program's T word) from ``tools``.
-
-    Raises
-    ------
-    TwinInputError
-        No such tool.
-    """
-    if number not in tools:
-        raise TwinInputError(f"program line {line}", f"T{number}", f"no such tool (tools: {sorted(tools)})")
-    return tools[number]
-
-
 class HeightMap:
     """The stock as heights (m) on a grid of square cells: -inf where there is no material.
 

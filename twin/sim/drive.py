@@ -176,6 +176,18 @@ MAX_VALUE = 1e10
 
 
 @njit(cache=True, inline="always")
+def axis_signal_index(a, offset):  # pragma: no cover - compiled
+    """Bus index of axis ``a``'s signal at ``offset`` in its block (:data:`REF` ... :data:`U_PREV`)."""
+    return FIRST_AXIS_INDEX + STRIDE * a + offset
+
+
+@njit(cache=True, inline="always")
+def preview_index(n_axes, preview_ticks, a, ticks_ahead):  # pragma: no cover - compiled
+    """Bus index of ``preview.<a>.<ticks_ahead>`` (1 to ``preview_ticks``) on a bus of ``n_axes``."""
+    return FIRST_AXIS_INDEX + STRIDE * n_axes + a * preview_ticks + ticks_ahead - 1
+
+
+@njit(cache=True, inline="always")
 def table_in_bounds(qpos, q_idx, runaway_m):  # pragma: no cover - compiled
     """Whether every table position is finite and within ``runaway_m`` (m)."""
     for a in range(q_idx.shape[0]):
@@ -232,7 +244,7 @@ def sense(
     for a in range(n_axes):
         y = _reading(qpos, q_idx[a], gains[a], resolution[a]) + noise[row, a]
         y_vel = _reading(qpos, vel_q_idx[a], vel_gains[a], vel_resolution[a]) + vel_noise[a] * noise[row, a]
-        base = FIRST_AXIS_INDEX + STRIDE * a
+        base = axis_signal_index(a, 0)
         bus[base + REF] = ref[row, a, 0]
         bus[base + REF_VEL] = ref[row, a, 1]
         bus[base + REF_ACC] = ref[row, a, 2]
@@ -245,7 +257,7 @@ def sense(
         bus[base + U_PREV] = u_prev[a]
         meas_prev[a] = y_vel
         for i in range(preview):
-            bus[FIRST_AXIS_INDEX + STRIDE * n_axes + a * preview + i] = ref[row + 1 + i, a, 0]
+            bus[preview_index(n_axes, preview, a, i + 1)] = ref[row + 1 + i, a, 0]
 
 
 @njit(cache=True, inline="always")

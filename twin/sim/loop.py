@@ -32,11 +32,18 @@ import mujoco
 import numpy as np
 from numba import njit
 
-from controllers.blocks.signals import FIRST_AXIS_INDEX
 from controllers.kernels import run_blocks
 from twin.numba_cache import configure as configure_numba_cache
 from twin.process.cutting import workpiece_forces
-from twin.sim.drive import POS, STRIDE, accelerations_ok, actuator_input, drive_command, sense, table_in_bounds
+from twin.sim.drive import (
+    POS,
+    accelerations_ok,
+    actuator_input,
+    axis_signal_index,
+    drive_command,
+    sense,
+    table_in_bounds,
+)
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
 
@@ -186,7 +193,7 @@ def end_tick(
     if every > 0 and k % every == 0:
         r = k // every
         for a in range(u.shape[0]):
-            rec_meas[r, a] = bus[FIRST_AXIS_INDEX + STRIDE * a + POS]
+            rec_meas[r, a] = bus[axis_signal_index(a, POS)]
             rec_u[r, a] = u[a]
             rec_ua[r, a] = ua[a]
         for i in range(3):
