@@ -139,8 +139,8 @@ def test_choi1999_circle_cutting_a_stock_gives_the_builtin_cutting_circles_force
     ours, window = mean_force(stock_run, start)
     theirs, _ = mean_force(builtin, 0.0)
     closed = math.degrees(math.acos((30.0**2 - 28.0**2 - 5.0**2) / (2 * 28.0 * 5.0)))
-    assert stock_run.engagement[window, 0].mean() == pytest.approx(closed, abs=1.0)
-    assert stock_run.engagement[window, 1] == pytest.approx(3.0)
+    assert stock_run.program.engagement[window, 0].mean() == pytest.approx(closed, abs=1.0)
+    assert stock_run.program.engagement[window, 1] == pytest.approx(3.0)
     assert ours == pytest.approx(theirs, rel=0.2)
 
 
@@ -156,7 +156,7 @@ def test_the_part_is_recorded_and_plotted(tmp_path):
     assert counts.get("/engagement/angle", 0) > 0 and "/contour/actual" not in counts
     written = {p.name for p in run.plots(tmp_path / "plots")}
     assert {"gcode_test_piece_part.png", "gcode_test_piece_feed.png"} <= written
-    outlines = run.result.part_outlines
+    outlines = run.result.program.outlines
     stock = outlines["stock"][0]
     assert stock[:, 0].min() == pytest.approx(-5.0) and stock[:, 1].max() == pytest.approx(43.0)
     # the program leaves the part's top standing and cuts the pocket (1.5 mm), the slot (1 mm)

@@ -95,7 +95,7 @@ def test_bore_diameter_is_the_envelope_of_the_actual_motion(bore):
     # tool's discs (radius 5 mm) along that ray from the centre, over the actual path cut below
     # Z -1.5; the diameter twice its mean over 1440 angles
     xy = bore.table_position_m() * 1e3 - [-28.0, 0.0]
-    cut = bore.reference_extra["z"] * 1e3 < -1.5
+    cut = bore.program.extra_axes["z"] * 1e3 < -1.5
     rho, angle = np.hypot(*xy[cut].T), np.arctan2(xy[cut, 1], xy[cut, 0])
     theta = np.linspace(-np.pi, np.pi, 1440, endpoint=False)[:, None]
     along, across = rho * np.cos(angle - theta), rho * np.sin(angle - theta)

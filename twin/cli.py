@@ -188,10 +188,10 @@ def _run(
             _report(api.Run(scn, exc.result, status, {"sim_time_s": exc.sim_time_s}), rrd, as_json, plots, lines, part)
         raise
     _report(done, rrd, as_json, plots, lines, part)
-    warnings = done.result.machining_warnings  # what the report printed, not computed again
-    if strict and warnings:
-        first = warnings[0]
-        total = done.result.info.get("machining_warnings_total", len(warnings))
+    program = done.result.program  # what the report printed, not computed again
+    if strict and program is not None and program.machining_warnings:
+        first = program.machining_warnings[0]
+        total = program.machining_warnings_total
         typer.echo(
             f"error: {total} machining warning(s) under --strict; the first: line {first['line']}: {first['message']}",
             err=True,

@@ -178,19 +178,19 @@ def tracking_summary(result) -> dict:
         ce = contour_error(result.table_position_m(), ref)
         out["max_contour_error_um"] = round(float(ce.max() * 1e6), 3)
         out["rms_contour_error_um"] = round(float(np.sqrt(np.mean(ce**2)) * 1e6), 3)
-    if result.program_lines.size:
-        out["cycle_time_s"] = round(float(result.info.get("program_cycle_time_s", 0.0)), 6)
-        feeding = result.program_feed_mm_per_min > 0
+    program = result.program
+    if program is not None and program.lines.size:
+        out["cycle_time_s"] = round(float(program.cycle_time_s), 6)
+        feeding = program.feed_mm_per_min > 0
         if ce is not None and feeding.any():  # the contour error on the feed moves, rapids left out
             out["max_contour_error_feed_um"] = round(float(ce[feeding].max() * 1e6), 3)
             out["rms_contour_error_feed_um"] = round(float(np.sqrt(np.mean(ce[feeding] ** 2)) * 1e6), 3)
-        if result.engagement.size:  # with a stock: the share of the recorded time the tool cuts
-            cutting = (result.engagement[:, 0] > 0) & (result.engagement[:, 1] > 0)
+        if program.engagement.size:  # with a stock: the share of the recorded time the tool cuts
+            cutting = (program.engagement[:, 0] > 0) & (program.engagement[:, 1] > 0)
             out["cutting_share"] = round(float(cutting.mean()), 4)
-            out["machining_warnings"] = result.machining_warnings
-            total = result.info.get("machining_warnings_total", 0)
-            if total > len(result.machining_warnings):
-                out["machining_warnings_total"] = total
+            out["machining_warnings"] = program.machining_warnings
+            if program.machining_warnings_total > len(program.machining_warnings):
+                out["machining_warnings_total"] = program.machining_warnings_total
         if result.part is not None:
             out["part"] = result.part.summary()
             out["inspection"] = result.inspection
@@ -207,13 +207,14 @@ def line_table(result, contour_m: np.ndarray | None) -> list[dict]:
     Parameters
     ----------
     result : RunResult
-        A run of a G-code reference (``program_lines`` at each recorded tick).
+        A run of a G-code reference (its :class:`~twin.sim.runner.ProgramTrace`).
     contour_m : ndarray or None
         The contour error at each recorded tick (m); None: the path is not 2-D.
     """
-    lines = result.program_lines
-    if lines.size == 0:
+    program = result.program
+    if program is None or program.lines.size == 0:
         return []
+    lines = program.lines
     starts = np.flatnonzero(np.concatenate([[True], lines[1:] != lines[:-1]]))
     ends = np.concatenate([starts[1:], [lines.size]])
     error_um = np.abs(result.error_m()) * 1e6
@@ -224,16 +225,16 @@ def line_table(result, contour_m: np.ndarray | None) -> list[dict]:
         ce_max = np.maximum.reduceat(contour_m, starts) * 1e6
         ce_rms = np.sqrt(np.add.reduceat(contour_m**2, starts) / (ends - starts)) * 1e6
     t, period = result.t_s, result.control_period_s * max(result.info.get("record_every", 1), 1)
-    if result.engagement.size:
-        engaged = np.add.reduceat(result.engagement[:, 0], starts) / (ends - starts)
-        depth = np.maximum.reduceat(result.engagement[:, 1], starts)
+    if program.engagement.size:
+        engaged = np.add.reduceat(program.engagement[:, 0], starts) / (ends - starts)
+        depth = np.maximum.reduceat(program.engagement[:, 1], starts)
     wall_error = result.part.line_errors() if result.part is not None else {}
     rows = []
     for i, (a, b) in enumerate(zip(starts, ends)):
         line = int(lines[a])
         row: dict[str, Any] = {
             "line": line,
-            "text": result.program_texts.get(line, ""),
+            "text": program.texts.get(line, ""),
             "t_start_s": round(float(t[a]), 6),
             "t_end_s": round(float(t[b - 1] + period), 6),
         }
@@ -242,7 +243,7 @@ def line_table(result, contour_m: np.ndarray | None) -> list[dict]:
             row["rms_contour_error_um"] = round(float(ce_rms[i]), 3)
         row["max_tracking_error_um"] = dict(zip(result.axis_names, err_max[i].round(3).tolist()))
         row["max_cutting_force_N"] = round(float(force_max[i]), 1)
-        if result.engagement.size:
+        if program.engagement.size:
             row["mean_engagement_deg"] = round(float(engaged[i]), 2)
             row["axial_depth_mm"] = round(float(depth[i]), 4)
         if line in wall_error:

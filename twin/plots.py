@@ -119,7 +119,7 @@ def write_plots(result, directory: Path, name: str = "run") -> list[Path]:
         written.append(directory / f"{name}_contour.png")
         fig.savefig(written[-1], dpi=120, bbox_inches="tight")
         plt.close(fig)
-    if result.program_lines.size and len(axes) == 2:
+    if result.program is not None and result.program.lines.size and len(axes) == 2:
         written += _program_plots(plt, result, directory, name)
     return written
 
@@ -142,7 +142,7 @@ def _program_plots(plt, result, directory: Path, name: str) -> list[Path]:
     error_um = contour_error(act * 1e-3, ref * 1e-3) * 1e6
     fig, ax = plt.subplots(figsize=(8, 7))
     for key, color, label in (("stock", "0.55", "stock"), ("machined", "k", "machined outline")):
-        for i, ring in enumerate(result.part_outlines.get(key, [])):
+        for i, ring in enumerate(result.program.outlines.get(key, [])):
             ax.plot(ring[:, 0], ring[:, 1], color=color, linewidth=1.0, label=label if i == 0 else None)
     segments = np.stack([act[:-1], act[1:]], axis=1)
     path = LineCollection(list(segments), array=error_um[1:], cmap="turbo", linewidths=2.0)
@@ -186,7 +186,7 @@ def _program_plots(plt, result, directory: Path, name: str) -> list[Path]:
     )
     ax.set_aspect("equal", adjustable="datalim")
     ax.grid(True, alpha=0.3)
-    if result.part_outlines:
+    if result.program.outlines:
         ax.legend(loc="lower right", fontsize=8)
     written = [directory / f"{name}_part.png"]
     fig.savefig(written[-1], dpi=120, bbox_inches="tight")
@@ -199,13 +199,13 @@ def _program_plots(plt, result, directory: Path, name: str) -> list[Path]:
     # each axis's velocity averaged over FEED_FILTER_S, centred, before the magnitude
     width = max(1, round(FEED_FILTER_S / (t[1] - t[0]))) if len(t) > 1 else 1
     smooth = np.stack([np.convolve(v, np.ones(width) / width, mode="same") for v in velocity.T], axis=1)
-    ax.plot(t, result.program_feed_mm_per_min, color="0.5", linewidth=1.2, label="programmed F (0: rapid)")
+    ax.plot(t, result.program.feed_mm_per_min, color="0.5", linewidth=1.2, label="programmed F (0: rapid)")
     ax.plot(t, planned, color="tab:blue", linewidth=1.0, label="planned (reference)")
     actual = np.hypot(smooth[:, 0], smooth[:, 1]) * 60e3
     ax.plot(
         t, actual, color="tab:red", linewidth=0.7, label=f"actual (table), {FEED_FILTER_S * 1e3:g} ms moving average"
     )
-    top_feed = float(result.program_feed_mm_per_min.max())
+    top_feed = float(result.program.feed_mm_per_min.max())
     if top_feed > 0:  # the feeds in view; rapids run off the top
         ax.set_ylim(0.0, 1.3 * top_feed)
     ax.set(xlabel="time (s)", ylabel="XY feed (mm/min)", title=f"{name}: feed profile (rapids above the view)")
@@ -225,7 +225,7 @@ def _wall_error_plot(plt, result, directory: Path, name: str) -> Path:
     part = result.part
     walls = part.walls
     fig, ax = plt.subplots(figsize=(8, 7))
-    for i, ring in enumerate(result.part_outlines.get("stock", [])):
+    for i, ring in enumerate(result.program.outlines.get("stock", [])):
         ax.plot(ring[:, 0], ring[:, 1], color="0.55", linewidth=1.0, label="stock" if i == 0 else None)
     order = np.argsort(np.abs(walls[:, 3]))  # the largest errors drawn last, on top
     limit = max(float(np.abs(walls[:, 3]).max()), 1e-3)

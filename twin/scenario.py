@@ -433,8 +433,8 @@ def run_scenario(scn: Scenario, progress: bool | None = None, max_physics_steps:
     kwargs = prepare(scn)
     reference = kwargs["reference"]
     result = simulate(kwargs.pop("machine"), **kwargs, progress=progress, max_physics_steps=max_physics_steps)
-    if scn.stock is not None and len(result.t_s):
-        result.part = _machined_part(result, reference, scn.stock)
+    if scn.stock is not None and result.program is not None and len(result.t_s):
+        result.part = _machined_part(result, result.program.lines, reference, scn.stock)
         result.inspection = [_inspect(f, result.part) for f in scn.inspect]
     return result
 
@@ -447,9 +447,9 @@ def _inspect(feature, part: MachinedPart) -> dict:
         return not_found(feature, str(exc))
 
 
-def _machined_part(result: RunResult, reference, stock: StockSpec) -> MachinedPart:
+def _machined_part(result: RunResult, lines: np.ndarray, reference, stock: StockSpec) -> MachinedPart:
     """The part the run's actual motion cut: the table's measured path at the recorded ticks,
-    the planned Z and the tool of the planned sample at each tick; against the nominal part of
+    the planned Z and the tool of the planned sample at each tick (its program ``lines``); against the nominal part of
     the program as far as the run went (a run stopped before the program's end, by its
     duration or a divergence, is compared with what the program had cut by then, not with
     material it never reached)."""
@@ -464,7 +464,7 @@ def _machined_part(result: RunResult, reference, stock: StockSpec) -> MachinedPa
         nominal.tip_mm[k],
         nominal.radius_mm[k],
         nominal.corner_mm[k],
-        result.program_lines,
+        lines,
     )
     part = machined_part(stock.polygon(), nominal, actual, stock.top_mm, stock.bottom_mm)
     part.maps = part_map(stock, nominal, actual)

@@ -97,12 +97,15 @@ def named_series(result, rows: slice = slice(None)) -> list[Series]:
                 strong,
             )
         )
-    if result.engagement.size:  # a stock: how the tool meets the material
+    if result.program is None:
+        return out
+    engagement = result.program.engagement
+    if engagement.size:  # a stock: how the tool meets the material
         out += [
-            Series("engagement/angle", result.engagement[rows, 0], "engaged angle", "deg", OTHER_AXIS_COLORS[0]),
-            Series("engagement/axial_depth", result.engagement[rows, 1], "axial depth", "mm", OTHER_AXIS_COLORS[1]),
+            Series("engagement/angle", engagement[rows, 0], "engaged angle", "deg", OTHER_AXIS_COLORS[0]),
+            Series("engagement/axial_depth", engagement[rows, 1], "axial depth", "mm", OTHER_AXIS_COLORS[1]),
         ]
-    for name, values in result.reference_extra.items():  # planned axes the machine has not (G-code z)
+    for name, values in result.program.extra_axes.items():  # planned axes the machine has not (G-code z)
         out.append(
             Series(f"reference/{name}", values[rows] * 1e3, f"{name} reference", "mm", OTHER_AXIS_COLORS[1], 3.0)
         )

@@ -55,14 +55,15 @@ def log_contour(rec, result, prefix: str, rows: slice, gain: int) -> None:
     root = f"{prefix}contour"
     rec.log(root, rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
     rec.log(f"{root}/reference", rr.LineStrips3D([_xyz(ref)], colors=[REFERENCE_COLOR], radii=[-1.0]), static=True)
-    if not result.program_lines.size:  # a program's actual path is drawn coloured by its error
+    is_program = result.program is not None and result.program.lines.size > 0
+    if not is_program:  # a program's actual path is drawn coloured by its error
         rec.log(f"{root}/actual", rr.LineStrips3D([_xyz(act)], colors=[ACTUAL_COLOR], radii=[-3.0]), static=True)
     rec.log(
         f"{root}/error_x{gain}",
         rr.LineStrips3D([_xyz(ref + gain * (act - ref))], colors=[ERROR_COLOR], radii=[-1.5]),
         static=True,
     )
-    if result.program_lines.size:
+    if is_program:
         log_program(rec, result, root, rows, ref, act)
     rec.log(f"{root}/tool", rr.Points3D.from_fields(colors=[TOOL_COLOR], radii=[-8.0]), static=True)
     rec.send_columns(
@@ -78,7 +79,7 @@ def log_program(rec, result, root: str, rows: slice, ref: np.ndarray, act: np.nd
     from twin.metrics import contour_error
 
     for name, color in (("stock", STOCK_COLOR), ("machined", MACHINED_COLOR)):
-        rings = result.part_outlines.get(name, [])
+        rings = result.program.outlines.get(name, [])
         if rings:
             rec.log(
                 f"{root}/{name}", rr.LineStrips3D([_xyz(r) for r in rings], colors=[color], radii=[-1.0]), static=True
@@ -93,7 +94,7 @@ def log_program(rec, result, root: str, rows: slice, ref: np.ndarray, act: np.nd
     )
     if result.part is not None and len(result.part.walls):
         log_part(rec, result, root)
-    every = [r for rings in result.part_outlines.values() for r in rings] or [act]
+    every = [r for rings in result.program.outlines.values() for r in rings] or [act]
     x_max, y_min, y_max = (
         max(r[:, 0].max() for r in every),
         min(r[:, 1].min() for r in every),

@@ -36,7 +36,7 @@ def _contour_view(result, prefix: str, gain: int) -> rrb.Spatial3DView:
     centre = (ref.min(axis=0) + ref.max(axis=0)) / 2
     height = 1.35 * max(float(np.ptp(ref, axis=0).max()), 1e-3)
     name = f"contour (mm, seen from above): reference grey, actual blue, error x{gain} red, tool yellow"
-    if result.program_lines.size:
+    if result.program is not None and result.program.lines.size:
         name = (
             f"part (mm, seen from above): path coloured by contour error (scale right), error x{gain} red, "
             "stock grey, machined outline white, tool yellow"

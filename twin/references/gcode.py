@@ -198,6 +198,9 @@ class StreamedGcodeReference(_Samples):
         self.chunks, _facts = plan_stream(moves(), limits, settings)
         self.first = 0
         self.held = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, int))
+        #: No stock is cut by a streamed program: no machining warnings.
+        self.warnings: list[dict] = []
+        self.warnings_total = 0
 
     def _window(self, t):
         dt = self.period_s

@@ -21,7 +21,7 @@ import math
 from collections.abc import Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -33,6 +33,7 @@ from twin.machines import BuiltMachine
 from twin.process.cutting import ForceModels
 from twin.sim import loop, mujoco_c
 from twin.sim.drive import MAX_VALUE, Drive, Encoder, substeps_per_tick
+from twin.sim.protocols import Disturbance, ForceModel, InputDisturbance, ProgramReference, Reference
 
 #: Table travel (m) beyond which a run counts as runaway.
 RUNAWAY_M = 10.0
@@ -58,13 +59,43 @@ FATAL_WARNINGS = (
 )
 
 
-class Disturbance(Protocol):
-    """A disturbance adds to the drive input, or acts on the workpiece before each physics step.
+@dataclass
+class ProgramTrace:
+    """What a part program's reference says of a run's recorded ticks.
 
-    ``input_V(t)`` returns ndarray (len(t), n_axes) added to the control input (V);
-    ``kernel_arrays(machine)`` returns ``(kind, params, state)`` of a compiled force model
-    (:mod:`twin.process.cutting`).  A disturbance has one of the two.
+    Attributes
+    ----------
+    lines : ndarray of int, shape (n,)
+        The program line at each recorded tick.
+    texts : dict of int to str
+        The text of each line that moved or dwelt.
+    feed_mm_per_min : ndarray, shape (n,)
+        The programmed feed at each recorded tick (0 on rapids and dwells).
+    cycle_time_s : float
+        The program's planned cycle time.
+    extra_axes : dict of str to ndarray
+        Planned axes the machine has not (a program's z), m, at the recorded ticks.
+    engagement : ndarray, shape (n, 2)
+        With a stock: the engaged angle (deg) and axial depth (mm) at each recorded tick (else
+        empty).
+    outlines : dict of str to list of ndarray
+        With a stock: ``stock`` and ``machined`` outlines (mm), as the program leaves them.
+    machining_warnings : list of dict
+        With a stock: crashes and misuse by program line
+        (:func:`twin.process.misuse.machining_warnings`), the first ones.
+    machining_warnings_total : int
+        How many there are in all.
     """
+
+    lines: np.ndarray
+    texts: dict[int, str]
+    feed_mm_per_min: np.ndarray
+    cycle_time_s: float
+    extra_axes: dict[str, np.ndarray]
+    engagement: np.ndarray
+    outlines: dict[str, list[np.ndarray]]
+    machining_warnings: list[dict]
+    machining_warnings_total: int
 
 
 @dataclass
@@ -98,23 +129,8 @@ class RunResult:
     info : dict
         ``loop`` ("compiled" or "python"), ``record_every`` (ticks; 0: metrics only),
         ``completed_ticks`` (all of them, unless the run diverged or was interrupted).
-    reference_extra : dict of str to ndarray
-        Planned axes the machine does not have (a G-code program's z), m, at the recorded ticks.
-    program_lines : ndarray of int
-        For a G-code reference, the program line at each recorded tick (else empty).
-    program_texts : dict of int to str
-        For a G-code reference, the text of each line that moved.
-    engagement : ndarray (n, 2)
-        With a stock: the engaged angle (deg) and axial depth (mm) at each recorded tick (else
-        empty).
-    program_feed_mm_per_min : ndarray (n,)
-        For a G-code reference, the programmed feed at each recorded tick (else empty).
-    part_outlines : dict of str to list of ndarray
-        With a stock: ``stock`` and ``machined`` outlines (mm), as the program leaves them.
-    machining_warnings : list of dict
-        With a stock: crashes and misuse by program line
-        (:func:`twin.process.misuse.machining_warnings`); ``info["machining_warnings_total"]``
-        counts them all.
+    program : ProgramTrace or None
+        For a part program's reference: its lines, feeds and engagement at the recorded ticks.
     part : twin.process.part.MachinedPart or None
         With a stock: the part the actual motion cut, against the nominal one.
     inspection : list of dict
@@ -136,13 +152,7 @@ class RunResult:
     error_rms_m: np.ndarray
     force_max_N: np.ndarray
     info: dict = field(default_factory=dict)
-    reference_extra: dict = field(default_factory=dict)
-    program_lines: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
-    program_texts: dict = field(default_factory=dict)
-    engagement: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
-    program_feed_mm_per_min: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    part_outlines: dict = field(default_factory=dict)
-    machining_warnings: list = field(default_factory=list)
+    program: ProgramTrace | None = None
     part: Any = None
     inspection: list = field(default_factory=list)
 
@@ -188,64 +198,65 @@ def _program(machine: BuiltMachine, controllers: Sequence[Controller], control_p
         raise TwinInputError("controller", [c.name for c in controllers], str(exc)) from None
 
 
-def simulate(
+@dataclass(frozen=True)
+class RunPlan:
+    """A run checked and laid out before anything is allocated (:func:`_plan`).
+
+    Attributes
+    ----------
+    n_ticks, substeps : int
+        Control ticks of the run and physics steps per tick.
+    control_period_s, timestep_s : float
+        The control period and the physics step (s).
+    record_every : int
+        Record every Nth tick (0: none).
+    program : controllers.blocks.Program
+        The controllers on the machine's bus.
+    preview : int
+        Reference preview the controllers read (ticks).
+    compiled : bool
+        Whether the compiled loop runs.
+    drive : Drive
+    encoder : Encoder
+    input_disturbances : list of InputDisturbance
+    force_models : list of ForceModel
+    """
+
+    n_ticks: int
+    substeps: int
+    control_period_s: float
+    timestep_s: float
+    record_every: int
+    program: Program
+    preview: int
+    compiled: bool
+    drive: Drive
+    encoder: Encoder
+    input_disturbances: list[InputDisturbance]
+    force_models: list[ForceModel]
+
+    def recorded_rows(self, ticks: int) -> int:
+        """Recorded rows among the first ``ticks`` ticks."""
+        return 0 if self.record_every == 0 else -(-ticks // self.record_every)
+
+
+def _plan(
     machine: BuiltMachine,
-    controllers: Sequence[Controller] | Controller,
-    reference,
+    controllers: list[Controller],
+    reference: Reference,
     duration_s: float,
     control_period_s: float,
-    *,
-    drive: Drive | None = None,
-    encoder: Encoder | None = None,
-    disturbances: Sequence[Disturbance] = (),
-    record_every: int | None = None,
-    progress: bool | None = None,
-    compiled: bool | None = None,
-    max_physics_steps: int = MAX_PHYSICS_STEPS,
-) -> RunResult:
-    """Run the closed loop for ``duration_s`` and return its time series and metrics.
-
-    Parameters
-    ----------
-    machine : BuiltMachine
-    controllers : Controller or sequence of Controller
-        Together they write ``u.<axis>`` for every machine axis once; each ``dt`` must equal
-        ``control_period_s``.
-    reference : object with ``n_axes`` and ``sample(t)``
-        See :mod:`twin.references`.
-    duration_s, control_period_s : float
-        Run length and control period (s).
-    drive, encoder : optional
-        Default: machine delay, no saturation; ideal encoder with the machine's sensor gains.
-    disturbances : sequence
-        See :class:`Disturbance`.
-    record_every : int or None
-        Record every Nth tick; 0 records no series (metrics only); None: every tick, or every
-        Nth for runs over ``MAX_RECORDED_TICKS`` ticks so that at most that many are kept.
-    progress : bool or None
-        Progress bar; None shows one for runs over ``PROGRESS_STEPS`` physics steps.
-    compiled : bool or None
-        Run the compiled loop (every block compiled) or the Python loop.  None picks the
-        compiled loop whenever it can run.
-    max_physics_steps : int
-        A run that would take more physics steps is refused before it starts.
-
-    Raises
-    ------
-    SimulationDiverged
-        Non-finite or huge state, acceleration or drive input, a fatal MuJoCo warning, or a
-        table beyond ``RUNAWAY_M``; with the simulated time and, as ``result``, the run up to
-        the last whole tick.
-    RunInterrupted
-        Ctrl-C (KeyboardInterrupt) during the run, with the run up to the last whole chunk.
-    TwinInputError
-        Inconsistent periods, references or controllers (a block reading a signal nothing
-        provides), or ``compiled=True`` where the compiled loop cannot run.
-    """
-    model = machine.model
-    names = [a.name for a in machine.axes]
-    n_axes = len(names)
-    dt = model.opt.timestep
+    drive: Drive | None,
+    encoder: Encoder | None,
+    disturbances: Sequence[Disturbance],
+    record_every: int | None,
+    compiled: bool | None,
+    max_physics_steps: int,
+) -> RunPlan:
+    """Check a run's inputs against each other and the machine, and lay it out (see
+    :func:`simulate` for the parameters and the errors)."""
+    n_axes = len(machine.axes)
+    dt = machine.model.opt.timestep
     substeps = substeps_per_tick(control_period_s, dt)
     if not (duration_s > 0 and math.isfinite(duration_s)):
         raise TwinInputError("duration_s", duration_s, "must be > 0")
@@ -262,7 +273,6 @@ def simulate(
         )
     if record_every is not None and (int(record_every) != record_every or record_every < 0):
         raise TwinInputError("record_every", record_every, "must be a whole number >= 0")
-    controllers = [controllers] if isinstance(controllers, Controller) else list(controllers)
     program, preview = _program(machine, controllers, control_period_s)
     program.reset()
     can_compile = mujoco_c.available() and program.compiled
@@ -270,7 +280,6 @@ def simulate(
         raise TwinInputError(
             "compiled", True, "needs compiled blocks only (no Python block) and MuJoCo's shared library"
         )
-    use_compiled = can_compile if compiled is None else compiled
     drive = drive or Drive(n_axes, substeps, dt, machine.delay_s)
     encoder = encoder or Encoder(
         np.zeros(n_axes), np.zeros(n_axes), np.array(machine.sensor_gains), feedback=machine.feedback
@@ -284,29 +293,64 @@ def simulate(
             raise TwinInputError(
                 f"encoder.{name}", getattr(encoder, name).tolist(), f"needs one value per axis ({n_axes})"
             )
-    input_disturbances = [d for d in disturbances if hasattr(d, "input_V")]
-    forces = ForceModels([d for d in disturbances if hasattr(d, "kernel_arrays")], machine)
-
-    n = round(duration_s / control_period_s)
-    if n < 1:
+    n_ticks = round(duration_s / control_period_s)
+    if n_ticks < 1:
         raise TwinInputError("duration_s", duration_s, f"shorter than one control period ({control_period_s:g} s)")
-    if record_every is None:
-        record_every = -(-n // MAX_RECORDED_TICKS)
-    data = mujoco.MjData(model)
-    n_rec = 0 if record_every == 0 else -(-n // record_every)
-    rec = loop.Recording(
-        int(record_every),
-        np.empty((n_rec, model.nq)),
-        np.empty((n_rec, model.nv)),
-        np.empty((n_rec, model.nu)),
-        np.empty((n_rec, n_axes, 3)),
-        np.empty((n_rec, n_axes)),
-        np.empty((n_rec, n_axes)),
-        np.empty((n_rec, n_axes)),
-        np.empty((n_rec, 3)),
+    return RunPlan(
+        n_ticks=n_ticks,
+        substeps=substeps,
+        control_period_s=control_period_s,
+        timestep_s=dt,
+        record_every=-(-n_ticks // MAX_RECORDED_TICKS) if record_every is None else int(record_every),
+        program=program,
+        preview=preview,
+        compiled=can_compile if compiled is None else compiled,
+        drive=drive,
+        encoder=encoder,
+        input_disturbances=[d for d in disturbances if isinstance(d, InputDisturbance)],
+        force_models=[d for d in disturbances if isinstance(d, ForceModel)],
     )
-    acc = loop.Accumulators(np.zeros((n_axes, 2)), np.zeros(n_axes))
-    mj = loop.MjViews(data.qpos, data.qvel, data.qacc, data.ctrl, data.actuator_force, data.xfrc_applied)
+
+
+@dataclass
+class LoopArrays:
+    """Everything the loop reads and writes (:mod:`twin.sim.loop`), allocated once per run."""
+
+    data: mujoco.MjData
+    mj: loop.MjViews
+    sensor: loop.Sensor
+    drive: loop.DriveState
+    force: loop.ForceState
+    recording: loop.Recording
+    accumulators: loop.Accumulators
+
+
+def _allocate(machine: BuiltMachine, plan: RunPlan) -> LoopArrays:
+    """The loop's state and recording arrays for ``plan`` on ``machine``."""
+    model = machine.model
+    n_axes = len(machine.axes)
+    data = mujoco.MjData(model)
+    rows = plan.recorded_rows(plan.n_ticks)
+    recording = loop.Recording(
+        every=plan.record_every,
+        qpos=np.empty((rows, model.nq)),
+        qvel=np.empty((rows, model.nv)),
+        actuator_force=np.empty((rows, model.nu)),
+        ref=np.empty((rows, n_axes, 3)),
+        meas=np.empty((rows, n_axes)),
+        u=np.empty((rows, n_axes)),
+        ua=np.empty((rows, n_axes)),
+        workpiece_force=np.empty((rows, 3)),
+    )
+    mj = loop.MjViews(
+        qpos=data.qpos,
+        qvel=data.qvel,
+        qacc=data.qacc,
+        ctrl=data.ctrl,
+        actuator_force=data.actuator_force,
+        xfrc_applied=data.xfrc_applied,
+    )
+    encoder = plan.encoder
 
     # each axis's encoders (twin.sim.drive.FEEDBACK): the position loop's and the velocity
     # loop's, on its table or on its motor (in table travel)
@@ -331,152 +375,276 @@ def simulate(
         vel_resolution=resolution(velocity),
         vel_noise=np.where(second, 0.0, 1.0),
         tachometer=encoder.velocity == "tachometer",
-        period_s=float(control_period_s),
+        period_s=float(plan.control_period_s),
         runaway_m=RUNAWAY_M,
         meas_prev=np.zeros(n_axes),
-        preview=preview,
+        preview=plan.preview,
     )
-    u_applied = np.zeros(n_axes)  # the drive input of the last tick (V), reported on divergence
-    drive_args = loop.DriveState(
-        np.array([program.index(f"u.{a}") for a in names]),
-        np.array([model.actuator(a.actuator).id for a in machine.axes]),
-        drive.limit_V,
-        substeps,
-        drive.delay_steps,
-        drive.delay_line(),
-        np.zeros(n_axes),
-        u_applied,
-        np.zeros(n_axes),
+    drive = loop.DriveState(
+        u_idx=np.array([plan.program.index(f"u.{a.name}") for a in machine.axes]),
+        act_idx=np.array([model.actuator(a.actuator).id for a in machine.axes]),
+        limit=plan.drive.limit_V,
+        substeps=plan.substeps,
+        delay_steps=plan.drive.delay_steps,
+        delay_line=plan.drive.delay_line(),
+        u=np.zeros(n_axes),
+        ua=np.zeros(n_axes),  # the drive input of the last tick (V), reported on divergence
+        u_sat=np.zeros(n_axes),
     )
+    forces = ForceModels(plan.force_models, machine)
     force = loop.ForceState(
-        forces.fops, forces.fpar, forces.fstate, machine.workpiece_body_id, dt, np.array([data.time]), np.zeros(3)
+        fops=forces.fops,
+        fpar=forces.fpar,
+        fstate=forces.fstate,
+        workpiece_body=machine.workpiece_body_id,
+        timestep_s=plan.timestep_s,
+        clock=np.array([data.time]),
+        f_sum=np.zeros(3),
     )
-    draw_noise = encoder.noise_source()
-    if use_compiled:
+    accumulators = loop.Accumulators(error=np.zeros((n_axes, 2)), force_max=np.zeros(n_axes))
+    return LoopArrays(data, mj, sensor, drive, force, recording, accumulators)
+
+
+class _ProgramSeries:
+    """What a program's reference says of the recorded ticks, gathered chunk by chunk as the run
+    goes (a long program's reference is planned as it is asked for and keeps no past)."""
+
+    def __init__(self, reference: ProgramReference, plan: RunPlan):
+        self.reference, self.plan = reference, plan
+        self.parts: dict[str, list] = {"extra": [], "lines": [], "engagement": [], "feeds": []}
+
+    def record(self, k0: int, k1: int) -> None:
+        """Gather ticks ``k0`` to ``k1`` (those recorded)."""
+        every = self.plan.record_every
+        if every == 0:
+            return
+        t_rec = np.arange(-(-k0 // every) * every, k1, every) * self.plan.control_period_s
+        self.parts["extra"].append(self.reference.extra_series(t_rec))
+        self.parts["lines"].append(self.reference.lines_at(t_rec))
+        self.parts["engagement"].append(self.reference.engagement_at(t_rec))
+        self.parts["feeds"].append(self.reference.feeds_at(t_rec))
+
+    def _gathered(self, name: str, rows: int, empty: np.ndarray) -> np.ndarray:
+        return np.concatenate(self.parts[name])[:rows] if self.parts[name] else empty
+
+    def trace(self, rows: int) -> ProgramTrace:
+        """The trace of the first ``rows`` recorded ticks."""
+        extra = self.parts["extra"]
+        return ProgramTrace(
+            lines=self._gathered("lines", rows, np.zeros(0, int)),
+            texts=self.reference.texts,
+            feed_mm_per_min=self._gathered("feeds", rows, np.zeros(0)),
+            cycle_time_s=self.reference.duration_s,
+            extra_axes={name: np.concatenate([part[name] for part in extra])[:rows] for name in extra[0]}
+            if extra
+            else {},
+            engagement=self._gathered("engagement", rows, np.zeros((0, 2))),
+            outlines=self.reference.outlines,
+            machining_warnings=self.reference.warnings,
+            machining_warnings_total=self.reference.warnings_total,
+        )
+
+
+def _result(
+    machine: BuiltMachine,
+    plan: RunPlan,
+    arrays: LoopArrays,
+    series: _ProgramSeries | None,
+    ticks: int,
+    accumulated: int,
+) -> RunResult:
+    """The run's first ``ticks`` ticks (metrics over the ``accumulated`` ones)."""
+    rows = plan.recorded_rows(ticks)
+    rec, acc = arrays.recording, arrays.accumulators
+    return RunResult(
+        machine=machine,
+        t_s=np.arange(rows) * plan.record_every * plan.control_period_s,
+        ref=rec.ref[:rows],
+        meas_m=rec.meas[:rows],
+        u_V=rec.u[:rows],
+        u_applied_V=rec.ua[:rows],
+        qpos=rec.qpos[:rows],
+        qvel=rec.qvel[:rows],
+        actuator_force=rec.actuator_force[:rows],
+        workpiece_force_N=rec.workpiece_force[:rows],
+        control_period_s=plan.control_period_s,
+        error_max_m=acc.error[:, 0].copy(),
+        error_rms_m=np.sqrt(acc.error[:, 1] / max(accumulated, 1)),
+        force_max_N=acc.force_max.copy(),
+        info={
+            "loop": "compiled" if plan.compiled else "python",
+            "record_every": plan.record_every,
+            "completed_ticks": ticks,
+        },
+        program=None if series is None else series.trace(rows),
+    )
+
+
+def simulate(
+    machine: BuiltMachine,
+    controllers: Sequence[Controller] | Controller,
+    reference: Reference,
+    duration_s: float,
+    control_period_s: float,
+    *,
+    drive: Drive | None = None,
+    encoder: Encoder | None = None,
+    disturbances: Sequence[Disturbance] = (),
+    record_every: int | None = None,
+    progress: bool | None = None,
+    compiled: bool | None = None,
+    max_physics_steps: int = MAX_PHYSICS_STEPS,
+) -> RunResult:
+    """Run the closed loop for ``duration_s`` and return its time series and metrics.
+
+    In four steps: check and lay out the run (:func:`_plan`), allocate the loop's arrays
+    (:func:`_allocate`), run the loop chunk by chunk (:func:`_run_loop`) and build the result
+    (:func:`_result`).
+
+    Parameters
+    ----------
+    machine : BuiltMachine
+    controllers : Controller or sequence of Controller
+        Together they write ``u.<axis>`` for every machine axis once; each ``dt`` must equal
+        ``control_period_s``.
+    reference : Reference
+        See :mod:`twin.references`; a :class:`~twin.sim.protocols.ProgramReference` adds a
+        :class:`ProgramTrace` to the result.
+    duration_s, control_period_s : float
+        Run length and control period (s).
+    drive, encoder : optional
+        Default: machine delay, no saturation; ideal encoder with the machine's sensor gains.
+    disturbances : sequence of InputDisturbance or ForceModel
+        See :mod:`twin.sim.protocols`.
+    record_every : int or None
+        Record every Nth tick; 0 records no series (metrics only); None: every tick, or every
+        Nth for runs over ``MAX_RECORDED_TICKS`` ticks so that at most that many are kept.
+    progress : bool or None
+        Progress bar; None shows one for runs over ``PROGRESS_STEPS`` physics steps.
+    compiled : bool or None
+        Run the compiled loop (every block compiled) or the Python loop.  None picks the
+        compiled loop whenever it can run.
+    max_physics_steps : int
+        A run that would take more physics steps is refused before it starts.
+
+    Raises
+    ------
+    SimulationDiverged
+        Non-finite or huge state, acceleration or drive input, a fatal MuJoCo warning, or a
+        table beyond ``RUNAWAY_M``; with the simulated time and, as ``result``, the run up to
+        the last whole tick.
+    RunInterrupted
+        Ctrl-C (KeyboardInterrupt) during the run, with the run up to the last whole chunk.
+    TwinInputError
+        Inconsistent periods, references or controllers (a block reading a signal nothing
+        provides), or ``compiled=True`` where the compiled loop cannot run.
+    """
+    controllers = [controllers] if isinstance(controllers, Controller) else list(controllers)
+    plan = _plan(
+        machine,
+        controllers,
+        reference,
+        duration_s,
+        control_period_s,
+        drive,
+        encoder,
+        disturbances,
+        record_every,
+        compiled,
+        max_physics_steps,
+    )
+    arrays = _allocate(machine, plan)
+    series = _ProgramSeries(reference, plan) if isinstance(reference, ProgramReference) else None
+    show = progress if progress is not None else plan.n_ticks * plan.substeps > PROGRESS_STEPS
+    _run_loop(machine, plan, arrays, reference, series, show)
+    return _result(machine, plan, arrays, series, plan.n_ticks, plan.n_ticks)
+
+
+def _run_loop(
+    machine: BuiltMachine,
+    plan: RunPlan,
+    arrays: LoopArrays,
+    reference: Reference,
+    series: _ProgramSeries | None,
+    show: bool,
+) -> None:
+    """Run every tick of ``plan``, chunk by chunk: sample the reference, disturbances and noise,
+    run the loop (compiled or Python), check it and update the progress bar.  A failure raises
+    with the result up to it (see :func:`simulate`)."""
+    model, data = machine.model, arrays.data
+    period, n_axes = plan.control_period_s, len(machine.axes)
+    draw_noise = plan.encoder.noise_source()
+    if plan.compiled:
         addresses = mujoco_c.struct_addresses(model, data)
-        prog = loop.ProgramArrays(program.ops, program.io, program.par, program.state, program.scratch, program.bus)
+        prog = loop.ProgramArrays(
+            ops=plan.program.ops,
+            io=plan.program.io,
+            par=plan.program.par,
+            state=plan.program.state,
+            scratch=plan.program.scratch,
+            bus=plan.program.bus,
+        )
 
     def run_chunk(k0, k1, chunk):
-        if use_compiled:
+        if plan.compiled:
             return loop.compiled_ticks(
-                k0, k1, mujoco_c.MJ_STEP, *addresses, mj, sensor, drive_args, prog, force, chunk, rec, acc
-            )
-        return loop.python_ticks(k0, k1, model, data, program, mj, sensor, drive_args, force, chunk, rec, acc)
+                k0, k1, mujoco_c.MJ_STEP, *addresses, arrays.mj, arrays.sensor, arrays.drive, prog, arrays.force,
+                chunk, arrays.recording, arrays.accumulators,
+            )  # fmt: skip
+        return loop.python_ticks(
+            k0, k1, model, data, plan.program, arrays.mj, arrays.sensor, arrays.drive, arrays.force, chunk,
+            arrays.recording, arrays.accumulators,
+        )  # fmt: skip
 
-    is_program = hasattr(reference, "lines_at")
-    # what a program's reference says of the recorded ticks, gathered chunk by chunk as the run
-    # goes (a long program's reference is planned as it is asked for and keeps no past)
-    recorded: dict[str, list] = {"extra": [], "lines": [], "engagement": [], "feeds": []}
-
-    def record_program(k0: int, k1: int) -> None:
-        if record_every == 0:
-            return
-        ticks = np.arange(-(-k0 // record_every) * record_every, k1, record_every)
-        t_rec = ticks * control_period_s
-        if hasattr(reference, "extra_series"):
-            recorded["extra"].append(reference.extra_series(t_rec))
-        if is_program:
-            recorded["lines"].append(reference.lines_at(t_rec))
-            recorded["engagement"].append(reference.engagement_at(t_rec))
-            recorded["feeds"].append(reference.feeds_at(t_rec))
-
-    def gathered(name: str, rows: int, empty: np.ndarray) -> np.ndarray:
-        return np.concatenate(recorded[name])[:rows] if recorded[name] else empty
-
-    def result(ticks: int, accumulated: int) -> RunResult:
-        """The run's first ``ticks`` ticks (metrics over the ``accumulated`` ones)."""
-        rows = 0 if record_every == 0 else -(-ticks // record_every)
-        qpos, qvel, act, ref = rec.qpos[:rows], rec.qvel[:rows], rec.actuator_force[:rows], rec.ref[:rows]
-        meas, u, ua, force_N = rec.meas[:rows], rec.u[:rows], rec.ua[:rows], rec.workpiece_force[:rows]
-        error, force_max = acc.error, acc.force_max
-        t_rec = np.arange(rows) * record_every * control_period_s
-        extra = (
-            {name: np.concatenate([part[name] for part in recorded["extra"]])[:rows] for name in recorded["extra"][0]}
-            if recorded["extra"]
-            else {}
-        )
-        return RunResult(
-            machine,
-            t_rec,
-            ref,
-            meas,
-            u,
-            ua,
-            qpos,
-            qvel,
-            act,
-            force_N,
-            control_period_s,
-            error[:, 0].copy(),
-            np.sqrt(error[:, 1] / max(accumulated, 1)),
-            force_max.copy(),
-            info={
-                "loop": "compiled" if use_compiled else "python",
-                "record_every": int(record_every),
-                "completed_ticks": ticks,
-                **({"program_cycle_time_s": reference.duration_s} if is_program else {}),
-                **({"machining_warnings_total": warnings_total} if warnings_total else {}),
-            },
-            reference_extra=extra,
-            program_lines=gathered("lines", rows, np.zeros(0, int)),
-            program_texts=reference.texts if is_program else {},
-            engagement=gathered("engagement", rows, np.zeros((0, 2))),
-            program_feed_mm_per_min=gathered("feeds", rows, np.zeros(0)),
-            part_outlines=outlines,
-            machining_warnings=warnings,
-        )
-
-    outlines = reference.outlines if hasattr(reference, "outlines") else {}
-    warnings = getattr(reference, "warnings", [])
-    warnings_total = getattr(reference, "warnings_total", 0)
-    show = progress if progress is not None else n * substeps > PROGRESS_STEPS
-    size = max(1, min(CHUNK_TICKS, CHUNK_STEPS // substeps, n))
+    size = max(1, min(CHUNK_TICKS, CHUNK_STEPS // plan.substeps, plan.n_ticks))
     warnings0 = [data.warning[w].number for w in FATAL_WARNINGS]
     messages: list[str] = []
     done = 0
     try:
         with (
             _mujoco_warnings_into(messages),
-            _progress_bar(reference, n, machine.name, show) as bar,
+            _progress_bar(reference, plan.n_ticks, machine.name, show) as bar,
         ):
-            for k0 in range(0, n, size):
-                k1 = min(n, k0 + size)
-                t = np.arange(k0, k1 + preview) * control_period_s
+            for k0 in range(0, plan.n_ticks, size):
+                k1 = min(plan.n_ticks, k0 + size)
+                t = np.arange(k0, k1 + plan.preview) * period
                 u_dist = np.zeros((k1 - k0, n_axes))
                 with np.errstate(all="ignore"):  # overflow shows as non-finite values, reported below
-                    for dist in input_disturbances:
+                    for dist in plan.input_disturbances:
                         u_dist += dist.input_V(t[: k1 - k0])
                     ref = np.ascontiguousarray(reference.sample(t))
                 bad = ~np.isfinite(ref).all(axis=(1, 2))
                 if bad.any():  # the ticks before this chunk are kept
                     exc = SimulationDiverged(
-                        (k0 + int(np.argmax(bad))) * control_period_s,
+                        (k0 + int(np.argmax(bad))) * period,
                         "the reference (position, velocity or acceleration) is not finite here: it overflows",
                     )
-                    exc.result = result(k0, k0)
+                    exc.result = _result(machine, plan, arrays, series, k0, k0)
                     raise exc
-                record_program(k0, k1)
-                chunk = loop.Chunk(ref, draw_noise(k1 - k0), u_dist)
+                if series is not None:
+                    series.record(k0, k1)
+                chunk = loop.Chunk(ref=ref, noise=draw_noise(k1 - k0), u_dist=u_dist)
                 status, k, s = run_chunk(k0, k1, chunk)
                 try:
-                    _check(status, k, s, data, sensor.q_idx, u_applied, control_period_s, dt, warnings0, messages)
+                    _check(status, k, s, data, arrays.sensor.q_idx, arrays.drive.ua, period, plan.timestep_s,
+                           warnings0, messages)  # fmt: skip
                 except SimulationDiverged as exc:  # keep what was computed: the ticks before k
-                    exc.result = result(k, k + (status in (loop.BAD_CONTROL, loop.BAD_QACC)))
+                    accumulated = k + (status in (loop.BAD_CONTROL, loop.BAD_QACC))
+                    exc.result = _result(machine, plan, arrays, series, k, accumulated)
                     raise
                 done = k1
-                if hasattr(reference, "line_at"):  # a program: progress in its lines, all of them at the end
-                    line = reference.n_lines if k1 == n else reference.line_at(k1 * control_period_s)
+                if isinstance(reference, ProgramReference):  # progress in its lines, all of them at the end
+                    line = reference.n_lines if k1 == plan.n_ticks else reference.line_at(k1 * period)
                     bar.update(max(line - bar.n, 0))
                 else:
                     bar.update(k1 - k0)
     except KeyboardInterrupt:
-        raise RunInterrupted(done * control_period_s, result(done, done)) from None
-    return result(n, n)
+        raise RunInterrupted(done * period, _result(machine, plan, arrays, series, done, done)) from None
 
 
-def _progress_bar(reference, n_ticks: int, name: str, show: bool) -> tqdm:
+def _progress_bar(reference: Reference, n_ticks: int, name: str, show: bool) -> tqdm:
     """The run's progress bar: in ticks, or in program lines for a G-code reference."""
-    if hasattr(reference, "line_at"):
+    if isinstance(reference, ProgramReference):
         return tqdm(total=reference.n_lines, desc=f"{name} program", unit="line", disable=not show, leave=False)
     return tqdm(total=n_ticks, desc=name, unit="tick", disable=not show, mininterval=0.5, leave=False)
 
