@@ -39,8 +39,10 @@ from numba import njit
 
 LINEAR, SUM, STATIC, SEQUENCE, PYTHON = 0, 1, 2, 3, 4
 NL_SATURATION, NL_DEAD_ZONE, NL_COSH_GAIN, NL_RELAY = 0, 1, 2, 3
-#: Columns of ``ops``.
-KIND, IN_START, N_IN, OUT_START, N_OUT, PAR_START, STATE_START, N_STATE = range(8)
+#: Columns of ``ops``, one row per block: its kind, where its inputs and outputs lie in ``io``,
+#: where its parameters and state start, and its state's length.
+OP_COLUMNS = ("kind", "in_start", "n_in", "out_start", "n_out", "par_start", "state_start", "n_state")
+KIND, IN_START, N_IN, OUT_START, N_OUT, PAR_START, STATE_START, N_STATE = (OP_COLUMNS.index(c) for c in OP_COLUMNS)
 
 
 @njit(cache=True, inline="always")

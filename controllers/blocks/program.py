@@ -81,14 +81,24 @@ class Program:
                 kind = getattr(b, "kind", kernels.PYTHON)
                 p = b.params() if kind != kernels.PYTHON else np.zeros(0)
                 length = len(b.values) if kind == kernels.SEQUENCE else getattr(b, "n_state", 0)
-                ops.append([kind, len(io), len(ins), len(io) + len(ins), len(outs), n_par, n_state, length])
+                row = {
+                    "kind": kind,
+                    "in_start": len(io),
+                    "n_in": len(ins),
+                    "out_start": len(io) + len(ins),
+                    "n_out": len(outs),
+                    "par_start": n_par,
+                    "state_start": n_state,
+                    "n_state": length,
+                }
+                ops.append([row[c] for c in kernels.OP_COLUMNS])
                 io += ins + outs
                 pars.append(p)
                 n_par += len(p)
                 n_state += b.n_state if kind == kernels.LINEAR else 0
                 scratch = max(scratch, len(ins) + len(outs) + (b.n_state if kind == kernels.LINEAR else 0))
                 self.blocks.append(b)
-        self.ops = np.array(ops, np.int64).reshape(-1, 8)
+        self.ops = np.array(ops, np.int64).reshape(-1, len(kernels.OP_COLUMNS))
         self.io = np.array(io, np.int64)
         self.par = np.concatenate(pars) if pars else np.zeros(0)
         self.state = np.zeros(n_state)

@@ -337,8 +337,7 @@ class EndMilling:
             },
             machine.workpiece_jacobian(),
         )
-        state = np.zeros(3 + 2 * n_hist)
-        state[1] = 1.0  # feed direction +x until the workpiece first moves
+        state = chip_state(n_hist, (1.0, 0.0))  # feed direction +x until the workpiece first moves
         return END_MILLING, params, state
 
 
@@ -443,6 +442,38 @@ PM_N_TOOLS, PM_PERIOD, PM_N_TABLE, PM_DT = _PM["n_tools"], _PM["table_period"], 
 PM_N_HIST, PM_N_JAC, PM_JACOBIAN, PM_WIDTH = _PM["n_hist"], _PM["n_jac"], len(PROGRAM_MILLING_SLOTS), len(PM_COLUMNS)
 PM_TOOL_WIDTH, PM_TOOL_FLUTES = len(PM_TOOL_COLUMNS), PM_TOOL_COLUMNS.index("n_flutes")
 PM_TOOL_LAG = PM_TOOL_COLUMNS.index("lag_rad_per_mm")
+PM_TOOL_K_FIRST, PM_TOOL_K_END = PM_TOOL_COLUMNS.index("K_tc"), PM_TOOL_COLUMNS.index("K_ae") + 1
+PM_PHI_ST1, PM_PHI_EX1, PM_DEPTH1 = (
+    PM_COLUMNS.index("phi_st1"),
+    PM_COLUMNS.index("phi_ex1"),
+    PM_COLUMNS.index("depth1_mm"),
+)
+PM_DEPTH2, PM_OMEGA = PM_COLUMNS.index("depth2_mm"), PM_COLUMNS.index("omega")
+PM_ANGLE, PM_TOOL = PM_COLUMNS.index("angle"), PM_COLUMNS.index("tool")
+#: Columns from one engaged arc's to the next's (phi_st1 to phi_st2).
+PM_ARC_STRIDE = PM_COLUMNS.index("phi_st2") - PM_PHI_ST1
+#: A milling kernel's state: the step count and the feed direction held through stops, then the
+#: ring buffer of the workpiece's XY positions (:func:`_record_position`).
+CHIP_STATE = ("steps", "feed_x", "feed_y")
+CHIP_STEPS, CHIP_FEED_X, CHIP_FEED_Y = (CHIP_STATE.index(name) for name in CHIP_STATE)
+CHIP_HISTORY = len(CHIP_STATE)
+#: Columns of :func:`workpiece_forces`'s ``fops``: each model's kind and where its parameters and
+#: state lie in ``fpar`` and ``fstate``.
+FORCE_OP_COLUMNS = ("kind", "par_start", "par_len", "state_start", "state_len")
+FORCE_KIND, FORCE_PAR_START, FORCE_PAR_LEN, FORCE_STATE_START, FORCE_STATE_LEN = (
+    FORCE_OP_COLUMNS.index(name) for name in FORCE_OP_COLUMNS
+)
+
+
+def chip_state(n_hist: int, feed_direction: tuple[float, float]) -> np.ndarray:
+    """A milling kernel's initial state (:data:`CHIP_STATE`, then a ring buffer of ``n_hist``
+    XY positions), with the feed direction held until the workpiece first moves (a unit vector,
+    or zero: no force until then)."""
+    state = np.zeros(CHIP_HISTORY + 2 * n_hist)
+    state[CHIP_FEED_X], state[CHIP_FEED_Y] = feed_direction
+    return state
+
+
 _EM = {name: i for i, name in enumerate(END_MILLING_SLOTS)}
 _AF = {name: i for i, name in enumerate(AVERAGE_FORCE_SLOTS)}
 # the kernels' slot indices (module constants: numba freezes them)
@@ -462,6 +493,7 @@ EM_OMEGA, EM_PHASE0, EM_DT, EM_LAG_LO, EM_LAG_FRAC = (
     _EM["lag_frac"],
 )
 EM_LO, EM_HI, EM_N_HIST, EM_JACOBIAN = _EM["lo"], _EM["hi"], _EM["n_hist"], len(END_MILLING_SLOTS)
+EM_K_END = _EM["K_ae"] + 1
 AF_K_IL, AF_K_C, AF_R, AF_OMEGA = _AF["k_il"], _AF["k_c"], _AF["harmonic_fraction"], _AF["omega"]
 AF_PHASE, AF_LO, AF_HI, AF_JACOBIAN = _AF["phase"], _AF["lo"], _AF["hi"], len(AVERAGE_FORCE_SLOTS)
 
@@ -476,12 +508,12 @@ def pack_slots(slots: tuple[str, ...], values: dict[str, float], jacobian: np.nd
 
 @njit(cache=True)
 def _record_position(jac, qpos, state, n):  # pragma: no cover - compiled
-    """Step count ``state[0]`` on by one and the workpiece's XY position (``jac @ qpos``, m) into
-    the ring buffer ``state[3:]`` of ``n`` rows (filled with it at the first step); returns the
-    step index and the buffer."""
-    hist = state[3:].reshape((n, 2))
-    i = int(state[0])
-    state[0] = i + 1
+    """Step count (``state``'s :data:`CHIP_STEPS`) on by one and the workpiece's XY position
+    (``jac @ qpos``, m) into the ring buffer of ``n`` rows after :data:`CHIP_STATE` (filled with
+    it at the first step); returns the step index and the buffer."""
+    hist = state[CHIP_HISTORY:].reshape((n, 2))
+    i = int(state[CHIP_STEPS])
+    state[CHIP_STEPS] = i + 1
     for r in range(2):
         acc = 0.0
         for j in range(jac.shape[1]):
@@ -496,15 +528,15 @@ def _record_position(jac, qpos, state, n):  # pragma: no cover - compiled
 @njit(cache=True)
 def _chip(hist, i, n, lag_lo, frac, state):  # pragma: no cover - compiled
     """The feed per tooth (m): the workpiece's displacement since one tooth period ago (between
-    steps ``i - lag_lo - 1`` and ``i - lag_lo``), and the feed direction, held in ``state[1:3]``
-    through stops."""
+    steps ``i - lag_lo - 1`` and ``i - lag_lo``), and the feed direction, held in ``state``
+    (:data:`CHIP_FEED_X`, :data:`CHIP_FEED_Y`) through stops."""
     p0, p1 = max(i - lag_lo, 0) % n, max(i - lag_lo - 1, 0) % n
     dx = (1.0 - frac) * hist[p0, 0] + frac * hist[p1, 0] - hist[i % n, 0]
     dy = (1.0 - frac) * hist[p0, 1] + frac * hist[p1, 1] - hist[i % n, 1]
     c_m = math.hypot(dx, dy)
     if c_m > MIN_FEED_M:
-        state[1], state[2] = dx / c_m, dy / c_m
-    return c_m, state[1], state[2]
+        state[CHIP_FEED_X], state[CHIP_FEED_Y] = dx / c_m, dy / c_m
+    return c_m, state[CHIP_FEED_X], state[CHIP_FEED_Y]
 
 
 @njit(cache=True)
@@ -518,7 +550,7 @@ def _on_workpiece(fx, fy, fz, ux, uy, out):  # pragma: no cover - compiled
 @njit(cache=True)
 def _end_milling(par, state, qpos, t, out):  # pragma: no cover - compiled
     """Add one step's mechanistic milling force on the workpiece (world frame, N) to ``out``."""
-    k = par[EM_K : EM_K + 6]
+    k = par[EM_K:EM_K_END]
     n_flutes, a, lag, phi_st, phi_ex = int(par[EM_N_FLUTES]), par[EM_DEPTH], par[EM_LAG], par[EM_PHI_ST], par[EM_PHI_EX]
     omega, phase0, dt = par[EM_OMEGA], par[EM_PHASE0], par[EM_DT]
     lag_lo, frac, lo, hi, n = int(par[EM_LAG_LO]), par[EM_LAG_FRAC], par[EM_LO], par[EM_HI], int(par[EM_N_HIST])
@@ -543,19 +575,21 @@ def _program_milling(par, state, qpos, t, out):  # pragma: no cover - compiled
     table = par[tools_end:].reshape((n_table, PM_WIDTH))
     i, hist = _record_position(jac, qpos, state, n)
     row = min(max(int(t / period), 0), n_table - 1)
-    omega = table[row, 6]
-    if (table[row, 2] <= 0.0 and table[row, 5] <= 0.0) or omega <= 0.0:
+    omega = table[row, PM_OMEGA]
+    if (table[row, PM_DEPTH1] <= 0.0 and table[row, PM_DEPTH2] <= 0.0) or omega <= 0.0:
         return
-    tool = int(table[row, 8])
-    k = tools[tool, :PM_TOOL_FLUTES]
+    tool = int(table[row, PM_TOOL])
+    k = tools[tool, PM_TOOL_K_FIRST:PM_TOOL_K_END]
     n_flutes, lag_per_mm = int(tools[tool, PM_TOOL_FLUTES]), tools[tool, PM_TOOL_LAG]
     lag_steps = 2.0 * math.pi / (omega * n_flutes) / dt
     lag_lo = int(lag_steps)
     c_m, ux, uy = _chip(hist, i, n, lag_lo, lag_steps - lag_lo, state)
-    angle = table[row, 7] + omega * (t - row * period)
+    angle = table[row, PM_ANGLE] + omega * (t - row * period)
     fx = fy = fz = 0.0
     for arc in range(2):
-        st, ex, a = table[row, 3 * arc], table[row, 3 * arc + 1], table[row, 3 * arc + 2]
+        first = PM_ARC_STRIDE * arc
+        st, ex = table[row, PM_PHI_ST1 + first], table[row, PM_PHI_EX1 + first]
+        a = table[row, PM_DEPTH1 + first]
         if ex > st and a > 0.0:
             gx, gy, gz = step_tool_forces_N(k, n_flutes, a, c_m * 1e3, st, ex, angle, omega * dt, a * lag_per_mm)
             fx, fy, fz = fx + gx, fy + gy, fz + gz
@@ -583,10 +617,11 @@ def _average_force(par, qvel, t, out):  # pragma: no cover - compiled
 def workpiece_forces(fops, fpar, fstate, qpos, qvel, t, xfrc, body, f_sum):  # pragma: no cover - compiled
     """Write the summed force of every model on the workpiece for the physics step starting at
     time ``t`` (s) into ``xfrc[body, :3]`` (N, world frame) and add it to ``f_sum`` (3,).
-    ``fops`` rows: ``kind, par_start, par_len, state_start, state_len``."""
+    ``fops`` rows: :data:`FORCE_OP_COLUMNS`."""
     out = np.zeros(3)
     for m in range(fops.shape[0]):
-        kind, p0, pn, s0, sn = fops[m, 0], fops[m, 1], fops[m, 2], fops[m, 3], fops[m, 4]
+        kind, p0, pn = fops[m, FORCE_KIND], fops[m, FORCE_PAR_START], fops[m, FORCE_PAR_LEN]
+        s0, sn = fops[m, FORCE_STATE_START], fops[m, FORCE_STATE_LEN]
         if kind == END_MILLING:
             _end_milling(fpar[p0 : p0 + pn], fstate[s0 : s0 + sn], qpos, t, out)
         elif kind == PROGRAM_MILLING:
@@ -612,11 +647,12 @@ class ForceModels:
         p0 = s0 = 0
         for m in models:
             kind, par, state = m.kernel_arrays(machine)
-            rows.append([kind, p0, len(par), s0, len(state)])
+            columns = {"kind": kind, "par_start": p0, "par_len": len(par), "state_start": s0, "state_len": len(state)}
+            rows.append([columns[name] for name in FORCE_OP_COLUMNS])
             pars.append(par)
             states.append(state)
             p0, s0 = p0 + len(par), s0 + len(state)
-        self.fops = np.array(rows, np.int64).reshape(-1, 5)
+        self.fops = np.array(rows, np.int64).reshape(-1, len(FORCE_OP_COLUMNS))
         self.fpar = np.concatenate(pars) if pars else np.zeros(0)
         self.fstate = np.concatenate(states) if states else np.zeros(0)
 

@@ -41,6 +41,7 @@ from twin.process.cutting import (
     PROGRAM_MILLING,
     PROGRAM_MILLING_SLOTS,
     CoefficientsSpec,
+    chip_state,
     helix_lag_rad_per_mm,
 )
 from twin.process.materials import MATERIALS, CuttingCoefficients
@@ -620,7 +621,8 @@ def engagement_table(
 
 def engaged_degrees(table: np.ndarray) -> np.ndarray:
     """The engaged angle of each row (degrees, both arcs together)."""
-    return np.degrees((table[:, 1] - table[:, 0]) + (table[:, 4] - table[:, 3]))
+    column = {name: table[:, COLUMNS.index(name)] for name in ("phi_st1", "phi_ex1", "phi_st2", "phi_ex2")}
+    return np.degrees((column["phi_ex1"] - column["phi_st1"]) + (column["phi_ex2"] - column["phi_st2"]))
 
 
 class ProgramMilling:
@@ -657,8 +659,9 @@ class ProgramMilling:
         turning = self.spindle_rpm >= MIN_SPINDLE_RPM
         lag = np.max(2.0 * math.pi / (omega[turning] * flutes[turning]) / dt) if turning.any() else 1.0
         n_hist = int(lag) + 2
-        rows = np.column_stack([self.table[:, :6], omega, angle, self.tool_index]).astype(float)
-        assert rows.shape[1] == len(PM_COLUMNS)
+        columns = {name: self.table[:, COLUMNS.index(name)] for name in COLUMNS}
+        columns.update(omega=omega, angle=angle, tool=self.tool_index)
+        rows = np.column_stack([columns[name] for name in PM_COLUMNS]).astype(float)
         tools = [
             np.concatenate(
                 [t.cutting_coefficients().as_array(), [t.n_flutes, helix_lag_rad_per_mm(t.helix_deg, t.diameter_mm)]]
@@ -668,7 +671,7 @@ class ProgramMilling:
         jacobian = np.asarray(machine.workpiece_jacobian(), float).ravel()
         head = dict(zip(PROGRAM_MILLING_SLOTS, (len(self.tools), self.period_s, len(rows), dt, n_hist, jacobian.size)))
         params = np.concatenate([[float(head[name]) for name in PROGRAM_MILLING_SLOTS], jacobian, *tools, rows.ravel()])
-        return PROGRAM_MILLING, params, np.zeros(3 + 2 * n_hist)
+        return PROGRAM_MILLING, params, chip_state(n_hist, (0.0, 0.0))  # no force before the first move
 
 
 @dataclass
