@@ -12,6 +12,7 @@ from twin.machines import build
 from twin.process.cutting import AverageForce
 from twin.references import Circle, Step
 from twin.sim.drive import Drive, Encoder, actuator_input
+from twin.sim.loop import DriveState
 from twin.sim.runner import simulate
 
 
@@ -49,10 +50,21 @@ def test_delay_splits_inside_a_tick():
     line = drive.delay_line()
     for k in range(4):
         line[k % len(line), 0] = 10.0 + k  # the command of tick k
+    state = DriveState(
+        u_idx=np.array([0]),
+        act_idx=np.array([1]),  # the axis drives actuator 1
+        limit=np.inf,
+        substeps=5,
+        delay_steps=drive.delay_steps,
+        delay_line=line,
+        u=np.zeros(1),
+        ua=np.zeros(1),
+        u_sat=np.zeros(1),
+    )
     seen = []
     for k, s in [(0, 1), (2, 1), (2, 2), (3, 1), (3, 2)]:
         ctrl = np.full(2, -1.0)
-        actuator_input(k, s, 5, drive.delay_steps, line, np.array([1]), ctrl)  # the axis drives actuator 1
+        actuator_input(k, s, state, ctrl)
         assert ctrl[0] == -1.0
         seen.append(ctrl[1])
     # step s of tick k sees the command of tick (5k + s - 12) // 5, none before step 12

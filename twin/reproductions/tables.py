@@ -98,7 +98,7 @@ def load_tables(folder: Path | None = None) -> dict[str, dict[str, str]]:
 
 def pages() -> list[Path]:
     """The pages that hold generated blocks."""
-    return sorted((DOCS / "pages" / "papers").glob("paper*.md"))
+    return sorted(p for p in (DOCS / "pages" / "papers").glob("*.md") if p.stem in REPRODUCTIONS)
 
 
 def _rerun(folder: Path) -> None:

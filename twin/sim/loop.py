@@ -159,45 +159,45 @@ class Accumulators(NamedTuple):
 
 
 @njit(cache=True, inline="always")
-def start_tick(
-    k, row, every, qpos, qvel, act, q_idx, runaway_m, ref, error, rec_qpos, rec_qvel, rec_act, rec_ref
-):  # pragma: no cover - compiled
-    """Tick k's error metrics and state recording; False if the table ran away."""
-    if not table_in_bounds(qpos, q_idx, runaway_m):
+def start_tick(k, row, mj, sensor, chunk, rec, acc):  # pragma: no cover - compiled
+    """Tick k's error metrics (into ``acc``) and state recording (into ``rec``); False if the
+    table ran away."""
+    qpos, q_idx, ref, error = mj.qpos, sensor.q_idx, chunk.ref, acc.error
+    if not table_in_bounds(qpos, q_idx, sensor.runaway_m):
         return False
     for a in range(q_idx.shape[0]):
         e = ref[row, a, 0] - qpos[q_idx[a]]
         error[a, 0] = max(error[a, 0], abs(e))
         error[a, 1] += e * e
-    if every > 0 and k % every == 0:
-        r = k // every
+    if rec.every > 0 and k % rec.every == 0:
+        r = k // rec.every
         for i in range(qpos.shape[0]):
-            rec_qpos[r, i] = qpos[i]
-        for i in range(qvel.shape[0]):
-            rec_qvel[r, i] = qvel[i]
-        for i in range(act.shape[0]):
-            rec_act[r, i] = act[i]
+            rec.qpos[r, i] = qpos[i]
+        for i in range(mj.qvel.shape[0]):
+            rec.qvel[r, i] = mj.qvel[i]
+        for i in range(mj.actuator_force.shape[0]):
+            rec.actuator_force[r, i] = mj.actuator_force[i]
         for a in range(q_idx.shape[0]):
             for i in range(3):
-                rec_ref[r, a, i] = ref[row, a, i]
+                rec.ref[r, a, i] = ref[row, a, i]
     return True
 
 
 @njit(cache=True, inline="always")
-def end_tick(
-    k, every, substeps, u, ua, f_sum, force_max, bus, rec_meas, rec_u, rec_ua, rec_force
-):  # pragma: no cover - compiled
-    """Record tick k's measurement, inputs and mean workpiece force; update the force maxima."""
+def end_tick(k, drive, f_sum, bus, rec, acc):  # pragma: no cover - compiled
+    """Record tick k's measurement, inputs and mean workpiece force (``f_sum`` over the tick's
+    physics steps); update the force maxima."""
+    u, ua, substeps = drive.u, drive.ua, drive.substeps
     for a in range(u.shape[0]):
-        force_max[a] = max(force_max[a], abs(f_sum[a] / substeps))
-    if every > 0 and k % every == 0:
-        r = k // every
+        acc.force_max[a] = max(acc.force_max[a], abs(f_sum[a] / substeps))
+    if rec.every > 0 and k % rec.every == 0:
+        r = k // rec.every
         for a in range(u.shape[0]):
-            rec_meas[r, a] = bus[axis_signal_index(a, POS)]
-            rec_u[r, a] = u[a]
-            rec_ua[r, a] = ua[a]
+            rec.meas[r, a] = bus[axis_signal_index(a, POS)]
+            rec.u[r, a] = u[a]
+            rec.ua[r, a] = ua[a]
         for i in range(3):
-            rec_force[r, i] = f_sum[i] / substeps
+            rec.workpiece_force[r, i] = f_sum[i] / substeps
 
 
 @njit(cache=True)
@@ -205,124 +205,53 @@ def compiled_ticks(
     k0, k1, mj_step, m_addr, d_addr, mj, sensor, drive, prog, force, chunk, rec, acc
 ):  # pragma: no cover - compiled
     """Ticks ``k0 <= k < k1``, compiled; ``mj_step`` is :data:`twin.sim.mujoco_c.MJ_STEP`
-    (an argument, so numba can cache the loop), ``m_addr``/``d_addr`` the struct addresses.
-    The groups are unpacked once, before the loop (numba reference-counts every array taken
-    out of a tuple)."""
-    qpos, qvel, qacc, ctrl, act, xfrc = mj.qpos, mj.qvel, mj.qacc, mj.ctrl, mj.actuator_force, mj.xfrc_applied
-    q_idx, encoder_q_idx, gains, resolution = sensor.q_idx, sensor.encoder_q_idx, sensor.gains, sensor.resolution
-    vel_q_idx, vel_v_idx, vel_gains = sensor.vel_q_idx, sensor.vel_v_idx, sensor.vel_gains
-    vel_resolution, vel_noise = sensor.vel_resolution, sensor.vel_noise
-    tachometer, period_s, runaway_m = sensor.tachometer, sensor.period_s, sensor.runaway_m
-    meas_prev, preview = sensor.meas_prev, sensor.preview
-    u_idx, act_idx, limit, substeps = drive.u_idx, drive.act_idx, drive.limit, drive.substeps
-    delay_steps, delay_line, u, ua, u_sat = drive.delay_steps, drive.delay_line, drive.u, drive.ua, drive.u_sat
-    fops, fpar, fstate, wp, f_sum = force.fops, force.fpar, force.fstate, force.workpiece_body, force.f_sum
-    ref, noise, u_dist = chunk.ref, chunk.noise, chunk.u_dist
-    every, rec_qpos, rec_qvel, rec_act = rec.every, rec.qpos, rec.qvel, rec.actuator_force
-    rec_ref, rec_meas, rec_u, rec_ua, rec_force = rec.ref, rec.meas, rec.u, rec.ua, rec.workpiece_force
-    error, force_max = acc.error, acc.force_max
+    (an argument, so numba can cache the loop), ``m_addr``/``d_addr`` the struct addresses."""
+    qpos, qvel, qacc, ctrl, xfrc = mj.qpos, mj.qvel, mj.qacc, mj.ctrl, mj.xfrc_applied
+    fops, fpar, fstate, f_sum, clock = force.fops, force.fpar, force.fstate, force.f_sum, force.clock
     ops, io, par, state, scratch, bus = prog.ops, prog.io, prog.par, prog.state, prog.scratch, prog.bus
-    dt, clock = force.timestep_s, force.clock
     n_blocks = ops.shape[0]
     for k in range(k0, k1):
         row = k - k0
-        if not start_tick(
-            k, row, every, qpos, qvel, act, q_idx, runaway_m, ref, error, rec_qpos, rec_qvel, rec_act, rec_ref
-        ):
+        if not start_tick(k, row, mj, sensor, chunk, rec, acc):
             return RUNAWAY, k, 0
-        sense(
-            k,
-            row,
-            qpos,
-            qvel,
-            encoder_q_idx,
-            vel_q_idx,
-            vel_v_idx,
-            gains,
-            vel_gains,
-            resolution,
-            vel_resolution,
-            vel_noise,
-            noise,
-            ref,
-            tachometer,
-            period_s,
-            meas_prev,
-            u_sat,
-            preview,
-            bus,
-        )
+        sense(k, row, qpos, qvel, sensor, chunk, drive.u_sat, bus)
         run_blocks(0, n_blocks, ops, io, par, state, scratch, bus)
-        if not drive_command(k, row, bus, u_idx, u_dist, limit, u, ua, u_sat, delay_line):
+        if not drive_command(k, row, bus, drive, chunk.u_dist):
             return BAD_CONTROL, k, 0
         f_sum[:] = 0.0
-        for s in range(substeps):
-            actuator_input(k, s, substeps, delay_steps, delay_line, act_idx, ctrl)
+        for s in range(drive.substeps):
+            actuator_input(k, s, drive, ctrl)
             if fops.shape[0]:
-                workpiece_forces(fops, fpar, fstate, qpos, qvel, clock[0], xfrc, wp, f_sum)
+                workpiece_forces(fops, fpar, fstate, qpos, qvel, clock[0], xfrc, force.workpiece_body, f_sum)
             mj_step(m_addr, d_addr)
-            clock[0] += dt
+            clock[0] += force.timestep_s
             if not accelerations_ok(qacc):
                 return BAD_QACC, k, s
-        end_tick(k, every, substeps, u, ua, f_sum, force_max, bus, rec_meas, rec_u, rec_ua, rec_force)
+        end_tick(k, drive, f_sum, bus, rec, acc)
     return OK, k1, 0
 
 
 def python_ticks(k0, k1, model, data, program, mj, sensor, drive, force, chunk, rec, acc):
     """Ticks ``k0 <= k < k1`` in Python: ``program.run()`` (Python blocks too) and
     ``mujoco.mj_step``; the simulation time is ``data.time``."""
-    qpos, qvel, qacc, ctrl, act, xfrc = mj.qpos, mj.qvel, mj.qacc, mj.ctrl, mj.actuator_force, mj.xfrc_applied
-    q_idx, encoder_q_idx, gains, resolution = sensor.q_idx, sensor.encoder_q_idx, sensor.gains, sensor.resolution
-    vel_q_idx, vel_v_idx, vel_gains = sensor.vel_q_idx, sensor.vel_v_idx, sensor.vel_gains
-    vel_resolution, vel_noise = sensor.vel_resolution, sensor.vel_noise
-    tachometer, period_s, runaway_m = sensor.tachometer, sensor.period_s, sensor.runaway_m
-    meas_prev, preview = sensor.meas_prev, sensor.preview
-    u_idx, act_idx, limit, substeps = drive.u_idx, drive.act_idx, drive.limit, drive.substeps
-    delay_steps, delay_line, u, ua, u_sat = drive.delay_steps, drive.delay_line, drive.u, drive.ua, drive.u_sat
-    fops, fpar, fstate, wp, f_sum = force.fops, force.fpar, force.fstate, force.workpiece_body, force.f_sum
-    ref, noise, u_dist = chunk.ref, chunk.noise, chunk.u_dist
-    every, rec_qpos, rec_qvel, rec_act = rec.every, rec.qpos, rec.qvel, rec.actuator_force
-    rec_ref, rec_meas, rec_u, rec_ua, rec_force = rec.ref, rec.meas, rec.u, rec.ua, rec.workpiece_force
-    error, force_max = acc.error, acc.force_max
+    qpos, qvel, qacc, ctrl, xfrc = mj.qpos, mj.qvel, mj.qacc, mj.ctrl, mj.xfrc_applied
+    fops, fpar, fstate, f_sum = force.fops, force.fpar, force.fstate, force.f_sum
     bus = program.bus
     for k in range(k0, k1):
         row = k - k0
-        if not start_tick(
-            k, row, every, qpos, qvel, act, q_idx, runaway_m, ref, error, rec_qpos, rec_qvel, rec_act, rec_ref
-        ):
+        if not start_tick(k, row, mj, sensor, chunk, rec, acc):
             return RUNAWAY, k, 0
-        sense(
-            k,
-            row,
-            qpos,
-            qvel,
-            encoder_q_idx,
-            vel_q_idx,
-            vel_v_idx,
-            gains,
-            vel_gains,
-            resolution,
-            vel_resolution,
-            vel_noise,
-            noise,
-            ref,
-            tachometer,
-            period_s,
-            meas_prev,
-            u_sat,
-            preview,
-            bus,
-        )
+        sense(k, row, qpos, qvel, sensor, chunk, drive.u_sat, bus)
         program.run()
-        if not drive_command(k, row, bus, u_idx, u_dist, limit, u, ua, u_sat, delay_line):
+        if not drive_command(k, row, bus, drive, chunk.u_dist):
             return BAD_CONTROL, k, 0
         f_sum[:] = 0.0
-        for s in range(substeps):
-            actuator_input(k, s, substeps, delay_steps, delay_line, act_idx, ctrl)
+        for s in range(drive.substeps):
+            actuator_input(k, s, drive, ctrl)
             if fops.shape[0]:
-                workpiece_forces(fops, fpar, fstate, qpos, qvel, data.time, xfrc, wp, f_sum)
+                workpiece_forces(fops, fpar, fstate, qpos, qvel, data.time, xfrc, force.workpiece_body, f_sum)
             mujoco.mj_step(model, data)
             if not accelerations_ok(qacc):
                 return BAD_QACC, k, s
-        end_tick(k, every, substeps, u, ua, f_sum, force_max, bus, rec_meas, rec_u, rec_ua, rec_force)
+        end_tick(k, drive, f_sum, bus, rec, acc)
     return OK, k1, 0

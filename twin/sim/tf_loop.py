@@ -24,29 +24,22 @@ from controllers.kernels import run_blocks
 from controllers.lti import SisoTf, discretize, tf_to_ss
 from twin.numba_cache import configure as configure_numba_cache
 from twin.sim.drive import actuator_input, drive_command, sense
+from twin.sim.loop import Chunk, DriveState, ProgramArrays, Sensor
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
 
 
 @njit(cache=True)
-def _ticks(
-    Ad, Bd, Cd, delay, ops, io, par, state, scratch, bus, u_idx, preview, ref, u_dist, plant_dist, limit, dt, pos, u
-):  # pragma: no cover - compiled
+def _ticks(Ad, Bd, Cd, prog, sensor, drive, chunk, plant_dist, pos, u):  # pragma: no cover - compiled
     """The loop on the sampled plant ``x <- Ad x + Bd v, y = Cd x``, tick by tick, with the twin's
-    own kernels: :func:`twin.sim.drive.sense` (an ideal encoder: unit gain, no quantization, no
-    noise), :func:`controllers.kernels.run_blocks`, :func:`twin.sim.drive.drive_command`
-    (disturbance, saturation, delay line) and :func:`twin.sim.drive.actuator_input` (one plant
-    step a tick)."""
+    own kernels and groups (:mod:`twin.sim.loop`): :func:`twin.sim.drive.sense` (``sensor`` an
+    ideal encoder of the plant's outputs), :func:`controllers.kernels.run_blocks` (``prog``),
+    :func:`twin.sim.drive.drive_command` (disturbance, saturation, delay line) and
+    :func:`twin.sim.drive.actuator_input` (one plant step a tick); ``plant_dist`` is added at the
+    plant input after the delay."""
     n, n_axes = pos.shape
     x = np.zeros(Ad.shape[0])
     y = np.zeros(n_axes)
-    axis = np.arange(n_axes)
-    ones, zeros = np.ones(n_axes), np.zeros(n_axes)
-    no_noise = np.zeros((n, n_axes))
-    y_prev = np.zeros(n_axes)
-    u_prev = np.zeros(n_axes)
-    command, drive_input = np.zeros(n_axes), np.zeros(n_axes)
-    delay_line = np.zeros((delay + 2, n_axes))
     applied = np.zeros(n_axes)
     for k in range(n):
         for a in range(n_axes):
@@ -54,33 +47,12 @@ def _ticks(
             for i in range(x.shape[0]):
                 y[a] += Cd[a, i] * x[i]
             pos[k, a] = y[a]
-        sense(
-            k,
-            k,
-            y,
-            y,
-            axis,
-            axis,
-            axis,
-            ones,
-            ones,
-            zeros,
-            zeros,
-            ones,
-            no_noise,
-            ref,
-            False,
-            dt,
-            y_prev,
-            u_prev,
-            preview,
-            bus,
-        )
-        run_blocks(0, ops.shape[0], ops, io, par, state, scratch, bus)
-        drive_command(k, k, bus, u_idx, u_dist, limit, command, drive_input, u_prev, delay_line)
-        actuator_input(k, 0, 1, delay, delay_line, axis, applied)
+        sense(k, k, y, y, sensor, chunk, drive.u_sat, prog.bus)
+        run_blocks(0, prog.ops.shape[0], prog.ops, prog.io, prog.par, prog.state, prog.scratch, prog.bus)
+        drive_command(k, k, prog.bus, drive, chunk.u_dist)
+        actuator_input(k, 0, drive, applied)
         for a in range(n_axes):
-            u[k, a] = command[a]
+            u[k, a] = drive.u[a]
             applied[a] += plant_dist[k, a]
         x[:] = Ad @ x + Bd @ applied
 
@@ -140,31 +112,44 @@ def tf_loop(
     n = len(ref) - preview
     if n < 1:
         raise ValueError(f"the reference has {len(ref)} rows: the controller previews {preview} ticks")
-    u_idx = np.array([program.index(f"u.{a}") for a in axes], np.int64)
 
     def per_axis(v):
         return np.zeros((n, len(axes))) if v is None else np.asarray(v, float).reshape(n, len(axes))
 
-    pos, u = np.zeros((n, len(axes))), np.zeros((n, len(axes)))
-    _ticks(
-        Ad,
-        Bd,
-        Cd,
-        round(delay_s / dt),
-        program.ops,
-        program.io,
-        program.par,
-        program.state,
-        program.scratch,
-        program.bus,
-        u_idx,
-        preview,
-        ref,
-        per_axis(u_dist_V),
-        per_axis(plant_dist_V),
-        float(saturation_V),
-        dt,
-        pos,
-        u,
+    n_axes = len(axes)
+    axis, ones, zeros = np.arange(n_axes), np.ones(n_axes), np.zeros(n_axes)
+    ideal = Sensor(  # unit gain, no quantization, no noise, the backward difference for velocity
+        q_idx=axis,
+        encoder_q_idx=axis,
+        gains=ones,
+        resolution=zeros,
+        vel_q_idx=axis,
+        vel_v_idx=axis,
+        vel_gains=ones,
+        vel_resolution=zeros,
+        vel_noise=ones,
+        tachometer=False,
+        period_s=float(dt),
+        runaway_m=np.inf,
+        meas_prev=np.zeros(n_axes),
+        preview=preview,
     )
+    delay = round(delay_s / dt)
+    drive = DriveState(
+        u_idx=np.array([program.index(f"u.{a}") for a in axes], np.int64),
+        act_idx=axis,
+        limit=float(saturation_V),
+        substeps=1,
+        delay_steps=delay,
+        delay_line=np.zeros((delay + 2, n_axes)),
+        u=np.zeros(n_axes),
+        ua=np.zeros(n_axes),
+        u_sat=np.zeros(n_axes),
+    )
+    prog = ProgramArrays(
+        ops=program.ops, io=program.io, par=program.par, state=program.state, scratch=program.scratch, bus=program.bus
+    )
+    chunk = Chunk(ref=ref, noise=np.zeros((n, n_axes)), u_dist=per_axis(u_dist_V))
+    pos, u = np.zeros((n, n_axes)), np.zeros((n, n_axes))
+    _ticks(Ad, Bd, Cd, prog, ideal, drive, chunk, per_axis(plant_dist_V), pos, u)
     return (pos[:, 0], u[:, 0]) if single else (pos, u)
