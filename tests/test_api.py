@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from cli_process import twin as _twin
 
 import twin
 from twin.errors import SimulationDiverged, TwinInputError
@@ -18,24 +19,10 @@ EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 def test_run_summary_equals_the_cli_json_and_settings_take_both_spellings():
     settings = {"duration_s": 0.2, "disturbances.0.axial_depth_mm": 1.0}
     run = twin.run("slot_linear_motor", **settings)
-    cli = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "twin.cli",
-            "run",
-            "slot_linear_motor",
-            "--json",
-            "--set",
-            "duration_s=0.2",
-            "--set",
-            "disturbances.0.axial_depth_mm=1.0",
-        ],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        check=True,
+    cli = _twin(
+        "run", "slot_linear_motor", "--json", "--set", "duration_s=0.2", "--set", "disturbances.0.axial_depth_mm=1.0"
     )
+    assert cli.returncode == 0, cli.stderr
     assert run.summary == json.loads(cli.stdout)
     same = twin.run("slot_linear_motor", duration_s=0.2, disturbances__0__axial_depth_mm=1.0)
     assert same.summary == run.summary
@@ -46,7 +33,8 @@ def test_to_pandas_is_time_indexed_with_units_in_the_names():
     run = twin.run("choi1999_mimo_air_cut", duration_s=0.1)
     frame = run.to_pandas()
     result = run.result
-    assert isinstance(frame, pd.DataFrame) and frame.index.name == "time (s)"
+    assert isinstance(frame, pd.DataFrame)
+    assert frame.index.name == "time (s)"
     np.testing.assert_array_equal(frame.index.to_numpy(), result.t_s)
     pos = result.table_position_m()
     np.testing.assert_allclose(frame["actual/y (mm)"], pos[:, 1] * 1e3)
@@ -69,7 +57,8 @@ def test_bad_settings_and_divergence_are_the_twins_errors():
     partial = twin.run(
         "step_cncmt_hinf", controller={"type": "pid", "params": {"kp": 1e9}}, duration_s=0.5, keep_partial=True
     )
-    assert partial.status == "diverged" and partial.summary["sim_time_s"] == err.value.sim_time_s
+    assert partial.status == "diverged"
+    assert partial.summary["sim_time_s"] == err.value.sim_time_s
 
 
 @pytest.mark.parametrize(
@@ -102,4 +91,6 @@ def test_examples_run(tmp_path, script, args, check):
     if script == "sweep_box.py":
         assert (tmp_path / "square_sabau_pid_sweep.parquet").is_dir()
     if script == "feed_override.py":  # two overrides at the four vertices of the m_x, m_y box
-        assert "(8 runs)" in r.stdout and "0.8" in r.stdout and "1.2" in r.stdout
+        assert "(8 runs)" in r.stdout
+        assert "0.8" in r.stdout
+        assert "1.2" in r.stdout

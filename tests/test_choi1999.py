@@ -60,7 +60,8 @@ def test_central_controller_achieves_its_gamma_and_not_below_gamma_min():
 def test_controller_orders_are_the_papers():
     d = s4.mimo_design()
     assert (control.ss(d["full"]).nstates, control.ss(d["reduced"]).nstates) == (8, 4)
-    assert len(d["dropped"]) == 4 and np.all(d["dropped"] <= d["hankel"][3])
+    assert len(d["dropped"]) == 4
+    assert np.all(d["dropped"] <= d["hankel"][3])
 
 
 def test_reduced_controller_stable_on_every_corner_of_table1():
@@ -114,7 +115,9 @@ def test_zpetc_gives_zero_phase_and_unit_dc_gain():
     num = np.array([0.0, 0.2, 0.3])  # z^-1 (0.2 + 0.3 z^-1): zero at -1.5
     den = np.array([1.0, -0.9, 0.4])  # stable
     f = zpetc(num, den)
-    assert f.delay == 1 and f.preview == 2 and np.allclose(f.unacceptable, [-1.5])
+    assert f.delay == 1
+    assert f.preview == 2
+    assert np.allclose(f.unacceptable, [-1.5])
     w = np.linspace(0.01, 3.0, 50)
     resp = f.response(num, den, w)
     np.testing.assert_allclose(np.angle(resp), 0.0, atol=1e-9)
@@ -129,12 +132,14 @@ def test_zpetc_inverts_a_well_damped_zero_near_one_and_not_one_near_minus_one():
     num = np.concatenate([[0.0], np.real(np.poly(zeros))])  # z^-1 (1 - 0.9996 z^-1)(1 + 0.999 z^-1)
     den = np.real(np.poly(poles))
     f = zpetc(num, den)
-    assert np.allclose(f.unacceptable, [-0.999]) and f.preview == 2
+    assert np.allclose(f.unacceptable, [-0.999])
+    assert f.preview == 2
     assert abs(f.response(num, den, [0.0])[0] - 1.0) < 1e-9
     filter_poles = np.roots(f.den)  # ascending in z^-1: roots are the poles in z
     assert np.allclose(filter_poles, [0.9996])
     assert max(abs(c) for c in f.num) < 1e4  # 1 / (B_u(1)^2 (1 - 0.9996)) would be ~1e10
-    assert damping_ratio(0.9996) == pytest.approx(1.0) and damping_ratio(-0.999) < 1e-3
+    assert damping_ratio(0.9996) == pytest.approx(1.0)
+    assert damping_ratio(-0.999) < 1e-3
 
 
 def test_zpetc_reduces_the_air_cut_tracking_error():
@@ -176,7 +181,9 @@ def test_pid_for_crossover_with_kp_crosses_over_with_the_given_kp():
         return 98.2 / (s * (52.3 * s + 2693.5))
 
     kp, ki, kd, tf_s = pid_for_crossover_with_kp(plant, 700.0, 4.0e4)
-    assert kp == 4.0e4 and ki == pytest.approx(4.0e4 * 70.0) and kd > 0
+    assert kp == 4.0e4
+    assert ki == pytest.approx(4.0e4 * 70.0)
+    assert kd > 0
     assert abs(pid_tf(kp, ki, kd, tf_s)(700j) * plant(np.array([700.0]))[0]) == pytest.approx(1.0, abs=1e-9)
     with pytest.raises(ValueError, match="no kd >= 0"):
         pid_for_crossover_with_kp(plant, 700.0, 1e7)

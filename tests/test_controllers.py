@@ -166,7 +166,8 @@ def test_missing_signal_names_block_and_signal():
     ctrl = make_controller("linear", 1e-3, {"inputs": ["vel.z"], "D": [[1.0]]})
     with pytest.raises(SignalError) as err:
         Program([ctrl], standard_signals("xy"))
-    assert err.value.signal == "vel.z" and "linear" in err.value.block
+    assert err.value.signal == "vel.z"
+    assert "linear" in err.value.block
     with pytest.raises(SignalError, match="already written"):
         Program([_controller([Sum((1.0,), ("error.x",), "pos.x")])], standard_signals("x"))
 

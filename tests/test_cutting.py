@@ -185,7 +185,8 @@ def test_up_and_down_milling_mirror_the_force_signs():
     down = _mean_workpiece_force(run_scenario(_slot_scenario(radial_mm=1.0, mode="down")))
     np.testing.assert_allclose(up, _expected_workpiece_force(2.0, 1.0, "up"), rtol=0.02)
     np.testing.assert_allclose(down, _expected_workpiece_force(2.0, 1.0, "down"), rtol=0.02)
-    assert np.sign(up[0]) == -np.sign(down[0]) and np.sign(up[1]) == -np.sign(down[1])
+    assert np.sign(up[0]) == -np.sign(down[0])
+    assert np.sign(up[1]) == -np.sign(down[1])
 
 
 def test_cutting_force_is_off_outside_its_window():

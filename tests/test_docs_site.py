@@ -33,4 +33,6 @@ def test_the_docs_site_builds_strict(tmp_path):
     assert "Googol Tech XY ball-screw table" in page  # the machine's README, included from mjcf/
     assert "twin.api.run" in (tmp_path / "site" / "api" / "index.html").read_text()  # the API reference
     kinds = (tmp_path / "site" / "kinds" / "index.html").read_text()  # generated from the registries
-    assert "choi1999_mimo" in kinds and "derivative filter time constant, s" in kinds and "<!-- kinds" not in kinds
+    assert "choi1999_mimo" in kinds
+    assert "derivative filter time constant, s" in kinds
+    assert "<!-- kinds" not in kinds

@@ -34,6 +34,7 @@ def test_committed_results_were_written_with_the_default_settings(seed):
     settings = json.loads(results_path(seed).read_text())["settings"]
     assert settings.get("twin", True) is True
     if "samples" in settings:
-        assert settings["samples"] == 1000 and settings["seed"] == 0
+        assert settings["samples"] == 1000
+        assert settings["seed"] == 0
     if "mc_samples" in settings:
         assert (settings["mc_samples"], settings["twin_random"], settings["seed"]) == (1000, 20, 0)

@@ -46,7 +46,11 @@ def test_strict_json_writes_null_and_names_what_was_not_finite():
 )
 def test_a_usage_error_is_one_line_and_exit_code_2(capsys, argv, words):
     code, out, err = _run(capsys, argv)
-    assert code == 2 and out == "" and len(err) == 1 and err[0].startswith("error: ") and words in err[0], err
+    assert code == 2, err
+    assert out == "", err
+    assert len(err) == 1, err
+    assert err[0].startswith("error: "), err
+    assert words in err[0], err
 
 
 def test_a_warning_inside_a_command_is_an_internal_error_not_a_warning_line(capsys, monkeypatch):
@@ -55,7 +59,9 @@ def test_a_warning_inside_a_command_is_an_internal_error_not_a_warning_line(caps
 
     monkeypatch.setattr(twin.api, "run", overflowing)
     code, out, err = _run(capsys, ["run", "demo_circle_cncmt_xy", "--json"])
-    assert code == exits.INTERNAL_ERROR and out == "" and len(err) == 1, err
+    assert code == exits.INTERNAL_ERROR, err
+    assert out == "", err
+    assert len(err) == 1, err
     assert err[0].startswith("error: internal error, a bug of the twin: RuntimeWarning: overflow"), err
     assert "tests/test_exits.py:" in err[0]
 
@@ -64,14 +70,19 @@ def test_a_failed_fidelity_target_is_exit_code_4_after_the_report(capsys, monkey
     monkeypatch.setattr(twin.fidelity, "TARGETS", {**twin.fidelity.TARGETS, "time_nrmse": 0.0})
     code, out, err = _run(capsys, ["fidelity", "--machine", "cncmt", "--json"])
     report = json.loads(out)
-    assert code == exits.CHECK_FAILED and report[0]["pass"] is False and report[0]["time_nrmse"] > 0
+    assert code == exits.CHECK_FAILED
+    assert report[0]["pass"] is False
+    assert report[0]["time_nrmse"] > 0
     assert err == ["error: 1 case(s) miss their fidelity targets: cncmt"]
 
 
 def test_an_output_the_system_cannot_write_is_one_line(capsys, tmp_path):
     long_name = tmp_path / ("a" * 300 + ".rrd")
     code, out, err = _run(capsys, ["run", "demo_circle_cncmt_xy", "--rrd", str(long_name)])
-    assert code == 2 and out == "" and len(err) == 1 and "over the system's 255 bytes" in err[0], err
+    assert code == 2, err
+    assert out == "", err
+    assert len(err) == 1, err
+    assert "over the system's 255 bytes" in err[0], err
 
 
 @pytest.mark.parametrize(
@@ -103,7 +114,10 @@ def test_an_output_the_system_cannot_write_is_one_line(capsys, tmp_path):
 )
 def test_the_hostile_rows_of_issue_33_are_one_line(capsys, argv, words):
     code, out, err = _run(capsys, [*argv, "--json"] if argv[0] == "run" else argv)
-    assert code == 2 and out == "" and len(err) == 1 and words in err[0], err
+    assert code == 2, err
+    assert out == "", err
+    assert len(err) == 1, err
+    assert words in err[0], err
 
 
 @pytest.mark.parametrize(
@@ -120,4 +134,7 @@ def test_machine_file_values_beyond_any_physical_range_are_one_line(capsys, tmp_
     path.write_text(text.replace(key, value, 1))
     for argv in (["tune", str(path), "--json", "--no-verify"], ["frf", str(path), "--json"]):
         code, out, err = _run(capsys, argv)
-        assert code == 2 and out == "" and len(err) == 1 and words in err[0], err
+        assert code == 2, err
+        assert out == "", err
+        assert len(err) == 1, err
+        assert words in err[0], err

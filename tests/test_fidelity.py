@@ -51,7 +51,8 @@ def test_the_check_loop_damps_a_ringing_table():
     lead, decay = position_controller(channel, 2.0, 5.0)
     kp = 1.0 / abs(channel(4j * math.pi))
     assert -control.poles(control.feedback(kp * channel)).real.max() < 0.2
-    assert decay > 12.0 / 5.0 and len(lead.num) == 2
+    assert decay > 12.0 / 5.0
+    assert len(lead.num) == 2
     c = control.tf(list(lead.num), list(lead.den))
     assert abs(abs(channel(4j * math.pi) * c(4j * math.pi)) - 1.0) < 1e-9
 

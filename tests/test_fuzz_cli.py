@@ -77,7 +77,9 @@ def test_any_scenario_file_gives_a_result_or_one_error_line(tmp_path, content):
     assert result.exception is None or isinstance(result.exception, SystemExit), repr(result.exception)
     if result.exit_code == 0:
         out = json.loads(result.stdout)
-        assert out["status"] == "ok" and _finite(out)
+        assert out["status"] == "ok"
+        assert _finite(out)
     else:
         errors = [line for line in result.stderr.splitlines() if line.startswith("error: ")]
-        assert len(errors) == 1 and result.stderr.rstrip().endswith(errors[0]), result.stderr
+        assert len(errors) == 1, result.stderr
+        assert result.stderr.rstrip().endswith(errors[0]), result.stderr

@@ -91,10 +91,12 @@ def _assert_contract(result, as_json: bool, what) -> None:
     if result.exit_code == 2:
         assert result.stdout == "", (result.stdout[:300], what)
         lines = result.stderr.splitlines()
-        assert len(lines) == 1 and lines[0].startswith("error: "), (result.stderr, what)
+        assert len(lines) == 1, (result.stderr, what)
+        assert lines[0].startswith("error: "), (result.stderr, what)
     elif result.exit_code:
         errors = [line for line in result.stderr.splitlines() if line.startswith("error: ")]
-        assert len(errors) == 1 and result.stderr.rstrip().endswith(errors[0]), result.stderr
+        assert len(errors) == 1, result.stderr
+        assert result.stderr.rstrip().endswith(errors[0]), result.stderr
     if as_json and result.stdout:
         _strict_json(result.stdout)
 
@@ -284,6 +286,8 @@ def test_any_trace_gives_a_fit_or_one_error_line(tmp_path, trace_columns, mutati
 
 def test_the_mutations_reach_each_door():
     """The strategies' seeds are there: a fuzz test over nothing would pass vacuously."""
-    assert len(PROGRAM_LINES) >= 10 and all(PROGRAM_LINES.values())
-    assert len(MACHINE_FILES) >= 3 and all(len(VALUE.findall(t)) > 10 for t in MACHINE_FILES.values())
+    assert len(PROGRAM_LINES) >= 10
+    assert all(PROGRAM_LINES.values())
+    assert len(MACHINE_FILES) >= 3
+    assert all(len(VALUE.findall(t)) > 10 for t in MACHINE_FILES.values())
     assert len(_number_paths(STOCK_SCENARIO["stock"])) > 100

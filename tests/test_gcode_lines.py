@@ -29,7 +29,8 @@ def test_every_line_that_moved_has_its_row_and_the_rows_add_up(part_run):
         assert row["text"] == source[row["line"] - 1].strip()
     for before, after in itertools.pairwise(rows):
         assert after["t_start_s"] == pytest.approx(before["t_end_s"])  # the spans tile the run
-    assert rows[0]["t_start_s"] == 0.0 and rows[-1]["t_end_s"] == pytest.approx(6.0, abs=1e-9)
+    assert rows[0]["t_start_s"] == 0.0
+    assert rows[-1]["t_end_s"] == pytest.approx(6.0, abs=1e-9)
     assert max(r["max_contour_error_um"] for r in rows) == summary["max_contour_error_um"]
     for axis in ("x", "y"):
         assert max(r["max_tracking_error_um"][axis] for r in rows) == summary["max_tracking_error_um"][axis]
@@ -46,7 +47,8 @@ def test_twin_run_prints_the_worst_lines_and_writes_the_table(tmp_path, part_run
     at = text.index("  worst lines (max contour error, um):")
     worst = sorted(part_run.summary["lines"], key=lambda r: r["max_contour_error_um"], reverse=True)[:5]
     for printed, row in zip(text[at + 1 : at + 6], worst):
-        assert printed.split()[0] == str(row["line"]) and printed.endswith(row["text"])
+        assert printed.split()[0] == str(row["line"])
+        assert printed.endswith(row["text"])
     read = pq.read_table(table).to_pylist()
     assert len(read) == len(part_run.summary["lines"])
     assert read[0]["max_tracking_error_um_x"] == part_run.summary["lines"][0]["max_tracking_error_um"]["x"]
@@ -54,4 +56,5 @@ def test_twin_run_prints_the_worst_lines_and_writes_the_table(tmp_path, part_run
     as_json = json.loads(short.output)
     assert as_json["lines"][0]["line"] == 11
     bad = CliRunner().invoke(app, ["run", "step_cncmt_hinf", "--lines", str(tmp_path / "x.parquet")])
-    assert bad.exit_code == 2 and "needs a G-code reference" in bad.output
+    assert bad.exit_code == 2
+    assert "needs a G-code reference" in bad.output

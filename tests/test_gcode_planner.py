@@ -209,7 +209,8 @@ def test_twin_gcode_bad_input_is_one_line_and_exit_2(tmp_path, args, words):
     out = CliRunner().invoke(app, ["gcode", *argv])
     assert out.exit_code == 2, out.output
     lines = out.output.strip().splitlines()
-    assert words in lines[-1] and lines[-1].startswith("error: "), out.output
+    assert words in lines[-1], out.output
+    assert lines[-1].startswith("error: "), out.output
     assert sum(line.startswith("error") for line in lines) == 1
 
 
@@ -228,12 +229,15 @@ def test_zpetc_reads_the_programs_preview_and_the_progress_is_in_lines():
     data["reference"] = {"type": "gcode", "file": str(PROGRAMS / "choi1999_circle.ngc")}
     data["duration_s"] = 1.0
     run = api.run(scenario_from_dict(data))
-    assert run.summary["status"] == "ok" and run.summary["max_tracking_error_um"]["y"] < 500
+    assert run.summary["status"] == "ok"
+    assert run.summary["max_tracking_error_um"]["y"] < 500
     reference = prepare(scenario_from_dict(data))["reference"]
     with _progress_bar(reference, 100, "linear_motor_xy", show=True) as bar:
-        assert (bar.total, bar.format_dict["unit"]) == (reference.n_lines, "line") and reference.n_lines == 15
+        assert (bar.total, bar.format_dict["unit"]) == (reference.n_lines, "line")
+        assert reference.n_lines == 15
     # the first move is line 10 (line 9 goes where the table is), the last line 13
-    assert reference.line_at(0.0) == 10 and reference.line_at(reference.duration_s) == 13
+    assert reference.line_at(0.0) == 10
+    assert reference.line_at(reference.duration_s) == 13
 
 
 def _speed(p):
@@ -360,7 +364,9 @@ def test_no_axis_exceeds_its_limits_on_hostile_paths_or_the_plan_says_where(seed
     worst = max(float(r.max()) for r in over)
     assert worst <= 1.000001 or p.violations, worst
     for violation in p.violations:
-        assert violation.line >= 1 and violation.axis in "xyz" and violation.ratio > 1
+        assert violation.line >= 1
+        assert violation.axis in "xyz"
+        assert violation.ratio > 1
     assert _deviation_over_tolerance(p).max() <= 1.0
 
 
@@ -405,7 +411,8 @@ def test_twin_gcode_says_which_line_and_axis_is_over_a_limit(tmp_path, monkeypat
     program.write_text("\n".join(lines) + "\n")
     limits = PlannerSettings().limits(build("googol_xy").motion_limits)
     violations = _plan(lines, limits).violations
-    assert violations and all(v.ratio > 1 for v in violations)
+    assert violations
+    assert all(v.ratio > 1 for v in violations)
     out = CliRunner().invoke(app, ["gcode", str(program), "--machine", "googol_xy"])
     assert out.exit_code == 0, out.output
     said = [line.strip() for line in out.output.splitlines() if "over a limit" in line]
@@ -434,5 +441,6 @@ def test_the_look_ahead_plans_each_window_a_bounded_number_of_times(monkeypatch)
     monkeypatch.setattr(planner._Grid, "__init__", counted)
     limits = PlannerSettings().limits(build("googol_xy").motion_limits)
     p = _plan(raster_program(400), limits)
-    assert p.cycle_time_s >= p.feed_only_time_s and not p.violations
+    assert p.cycle_time_s >= p.feed_only_time_s
+    assert not p.violations
     assert len(grids) <= 0.2 * p.cycle_time_s + 2, len(grids)

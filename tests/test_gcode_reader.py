@@ -265,5 +265,7 @@ def test_an_error_in_a_file_deep_in_folders_keeps_its_name_and_line(tmp_path):
     with pytest.raises(GcodeError) as err:
         list(read_program(deep))
     field = str(err.value).split(" = ")[0]
-    assert field.startswith("...") and field.endswith("_name_/part.ngc:3") and len(field) <= 80
+    assert field.startswith("...")
+    assert field.endswith("_name_/part.ngc:3")
+    assert len(field) <= 80
     assert str(err.value).startswith(f"{field} = 'G41 X2': cutter radius compensation")

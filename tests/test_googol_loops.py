@@ -32,8 +32,10 @@ def test_margins_and_popov_crossing_match_a_dense_grid(delay, tf_s):
     L = r.continuous_loop(delay, tf_s)
     m = loop_margins(L)
     gm, pm, ms, w_bw, crossing = _dense(L)
-    assert m.gm_db == pytest.approx(gm, abs=2e-3) and m.pm_deg == pytest.approx(pm, abs=2e-3)
-    assert m.ms_db == pytest.approx(ms, abs=1e-3) and m.w_bw == pytest.approx(w_bw, rel=1e-4)
+    assert m.gm_db == pytest.approx(gm, abs=2e-3)
+    assert m.pm_deg == pytest.approx(pm, abs=2e-3)
+    assert m.ms_db == pytest.approx(ms, abs=1e-3)
+    assert m.w_bw == pytest.approx(w_bw, rel=1e-4)
     assert popov_crossing(L)[0] == pytest.approx(crossing, rel=1e-3)
 
 
@@ -50,7 +52,8 @@ def test_ke_and_the_sector_condition():
     assert r.ke() == pytest.approx(r.PAPER["ke"], abs=1e-4)  # cosh(6 x 0.3) = 3.1075
     paper_loop = 1 / abs(popov_crossing(r.continuous_loop("pade2", 0.0))[0])
     sampled = 1 / abs(popov_crossing(r.sampled_loop(), w_max=math.pi / r.DT_S * 0.999, n=20_000)[0])
-    assert r.ke() < paper_loop and r.ke() > sampled  # within the paper's bound, beyond the 10 kHz loop's
+    assert r.ke() < paper_loop
+    assert r.ke() > sampled  # within the paper's bound, beyond the 10 kHz loop's
 
 
 def test_tf_loop_error_follows_the_sampled_sensitivity():
@@ -104,8 +107,10 @@ def test_cascade_velocity_pi_meets_the_thesis_margins(measurement):
     plant = _velocity_plant(measurement)
     kp, ki, m = pi_for_margins(plant, *THESIS_VELOCITY, guess=(0.006, 0.5))
     gm, pm, *_ = _dense(pi_loop(kp, ki, plant))
-    assert gm == pytest.approx(THESIS_VELOCITY[0], abs=0.5) and pm == pytest.approx(THESIS_VELOCITY[1], abs=2.0)
-    assert 150 < m.w_gm / (2 * math.pi) < 250 and 50 < m.w_pm / (2 * math.pi) < 96.4
+    assert gm == pytest.approx(THESIS_VELOCITY[0], abs=0.5)
+    assert pm == pytest.approx(THESIS_VELOCITY[1], abs=2.0)
+    assert 150 < m.w_gm / (2 * math.pi) < 250
+    assert 50 < m.w_pm / (2 * math.pi) < 96.4
 
 
 def test_cascade_position_gain_meets_the_phase_margin_not_both():
@@ -120,7 +125,8 @@ def test_cascade_position_gain_meets_the_phase_margin_not_both():
     k, m = gain_for_phase_margin(position, THESIS_POSITION[1], 10.0, 1000.0)
     gm, pm, *_ = _dense(lambda w: k * position(w))
     assert pm == pytest.approx(THESIS_POSITION[1], abs=2.0)
-    assert gm == pytest.approx(m.gm_db, abs=0.01) and gm - THESIS_POSITION[0] > 1.0
+    assert gm == pytest.approx(m.gm_db, abs=0.01)
+    assert gm - THESIS_POSITION[0] > 1.0
 
 
 def _cascade_gains():
@@ -139,8 +145,10 @@ def test_q_cutoff_keeps_the_observer_loop_robust():
     sup |Q Delta| <= 0.5 is 100 Hz (0.418); 200 Hz would give 0.77."""
     delta = delay_and_gain_error(1.2e-3, 0.2)
     cutoff, worst = q_cutoff(2, delta)
-    assert cutoff == 100.0 and worst == pytest.approx(0.4177, abs=1e-3)
-    assert worst_q_delta(200.0, 2, delta) > 0.5 and delta(np.array([0.0]))[0] == pytest.approx(0.2)
+    assert cutoff == 100.0
+    assert worst == pytest.approx(0.4177, abs=1e-3)
+    assert worst_q_delta(200.0, 2, delta) > 0.5
+    assert delta(np.array([0.0]))[0] == pytest.approx(0.2)
 
 
 @pytest.mark.parametrize("f_hz", [0.2, 0.5, 0.8])
@@ -174,7 +182,8 @@ def test_harmonic_estimator_interpolates_and_is_stable():
     H = harmonic_estimator([0.2, 0.5, 0.8], 5.0, targets)
     for f, value in zip([0.2, 0.5, 0.8], targets):
         assert H(2j * math.pi * f) == pytest.approx(value, abs=1e-9)
-    assert np.allclose(np.roots(H.den), -2 * math.pi * 5.0, rtol=1e-2) and H.relative_degree == 1
+    assert np.allclose(np.roots(H.den), -2 * math.pi * 5.0, rtol=1e-2)
+    assert H.relative_degree == 1
 
 
 def test_dfo_cancels_the_harmonics_and_the_combination_counts_once():
@@ -188,7 +197,8 @@ def test_dfo_cancels_the_harmonics_and_the_combination_counts_once():
     }
     base = shares["cascade"]["mte_um"]
     assert 0.005 < shares["imbdo"]["mte_um"] / base < 0.03
-    assert shares["dfo"]["mte_um"] < 1e-3 * base and shares["imbdo_dfo"]["mte_um"] < 1e-3 * base
+    assert shares["dfo"]["mte_um"] < 1e-3 * base
+    assert shares["imbdo_dfo"]["mte_um"] < 1e-3 * base
 
 
 def test_maharof2021_twin_matches_the_tf_loop_with_both_observers():
@@ -252,6 +262,7 @@ def test_feedforward_removes_the_following_error_and_the_amplitude_decides_the_r
             mte[amplitude, config] = s3.run_case(
                 10.0, 0.5, harmonics, config, False, 4.0, "velocity_acceleration", amplitude
             )["tf_loop"]["mte_um"]
-    assert plain > 150.0 and mte[0.001, "cascade"] < 1.0
+    assert plain > 150.0
+    assert mte[0.001, "cascade"] < 1.0
     reduction = {a: 1 - mte[a, "imbdo_dfo"] / mte[a, "cascade"] for a in (0.001, 1.0)}
     assert reduction[0.001] < 0.2 < 0.97 < reduction[1.0]

@@ -49,7 +49,8 @@ def test_zoh_matches_python_control(tf):
 
 def test_static_gain_and_improper_models():
     A, _B, _C, D = discretize(*tf_to_ss(SisoTf([3.0], [2.0])), 1e-3)
-    assert A.shape == (0, 0) and D[0, 0] == 1.5
+    assert A.shape == (0, 0)
+    assert D[0, 0] == 1.5
     with pytest.raises(ValueError, match="improper"):
         tf_to_ss(SisoTf([1.0, 0.0], [1.0]))
     with pytest.raises(ValueError, match="denominator is zero"):
@@ -79,7 +80,8 @@ def test_series_delay_and_summed_inputs_are_products_and_sums():
 
 def test_state_space_takes_python_control_models():
     A, _B, _C, _D, dt = state_space(control.c2d(control.tf([1.0], [1.0, 2.0]), 0.01))
-    assert dt == 0.01 and A.shape == (1, 1)
+    assert dt == 0.01
+    assert A.shape == (1, 1)
     assert state_space(SisoTf([1.0], [1.0, 2.0]))[4] is None
 
 

@@ -1,8 +1,6 @@
 """The user's own machine: machine files, compliance, FRF measurement, calibration, tuning."""
 
 import math
-import subprocess
-import sys
 from pathlib import Path
 
 import control
@@ -10,6 +8,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
+from cli_process import twin as _twin
 
 from twin.commissioning.calibration import calibrate, replay
 from twin.commissioning.frf import FrfSettings, excitation_signal, measure, peaks
@@ -21,17 +20,12 @@ from twin.machines import build, get_machine
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples" / "machines"
 MID = str(EXAMPLES / "mid_size_xy.toml")
 LINEAR = str(EXAMPLES / "linear_motor_xy.toml")
-TWIN = [sys.executable, "-m", "twin.cli"]
 RIGID = {"x_k_axial_N_per_m": math.inf, "y_k_axial_N_per_m": math.inf}
 TORSION_RIGID = {
     f"{a}_{key}": math.inf for a in "xy" for key in ("k_torsion_N_m_per_rad", "k_screw_torsion_N_m_per_rad")
 }
 RIGID |= TORSION_RIGID
 NO_COULOMB = {"x_friction_coulomb_N": 0.0, "y_friction_coulomb_N": 0.0}
-
-
-def _twin(*args):
-    return subprocess.run([*TWIN, *args], capture_output=True, text=True, timeout=300)
 
 
 def test_linear_motor_file_equals_the_bundled_machine():
@@ -70,7 +64,8 @@ def test_generated_model_masses_and_rigid_transfer_function():
     assert len(g.den) == 3
     assert g.num[-1] / g.den[0] == pytest.approx(gain / mass, rel=1e-12)
     assert g.den[1] / g.den[0] == pytest.approx(150.0 / mass, rel=1e-12)
-    assert bm.model.ntendon == 0 and bm.model.neq == 4  # rigid: today's gear equalities only
+    assert bm.model.ntendon == 0
+    assert bm.model.neq == 4  # rigid: today's gear equalities only
 
 
 @pytest.mark.parametrize(
@@ -152,7 +147,8 @@ def test_a_physics_step_too_coarse_for_the_fastest_mode_is_refused_with_the_step
     build(MID, timestep_s=5e-5)
     with pytest.raises(TwinInputError) as refused:
         build(MID, timestep_s=1e-4)
-    assert refused.value.field == "timestep_s" and f"{0.3 / (2 * math.pi * fastest):.2g} s" in str(refused.value)
+    assert refused.value.field == "timestep_s"
+    assert f"{0.3 / (2 * math.pi * fastest):.2g} s" in str(refused.value)
 
 
 @pytest.mark.parametrize("machine", ["googol_xy", MID])
@@ -214,7 +210,8 @@ def test_frf_of_a_rigid_machine_equals_its_transfer_function(machine):
     r = measure(machine, FrfSettings(), {})
     assert r["coherent_share"] > 0.95
     assert r["max_model_error_db"] < 0.6
-    assert r["resonances_hz"] == [] and r["antiresonances_hz"] == []
+    assert r["resonances_hz"] == []
+    assert r["antiresonances_hz"] == []
     assert set(r["parameters"]) == set(get_machine(machine).parameters)
 
 
@@ -264,7 +261,8 @@ def test_calibration_names_a_combination_it_cannot_identify(tmp_path):
         "x_table_mass_kg": "the data determine only its combination with y_table_mass_kg",
         "y_table_mass_kg": "the data determine only its combination with x_table_mass_kg",
     }
-    assert r["fitted"] == {} and r["parameters"]["x_table_mass_kg"] == 90.0  # both held at nominal
+    assert r["fitted"] == {}
+    assert r["parameters"]["x_table_mass_kg"] == 90.0  # both held at nominal
 
 
 def test_calibration_holds_a_combination_together_and_fits_the_rest_again(tmp_path):
@@ -281,7 +279,8 @@ def test_calibration_holds_a_combination_together_and_fits_the_rest_again(tmp_pa
     r = calibrate(MID, path, ["x_table_mass_kg", "y_table_mass_kg", "x_friction_viscous_N_s_per_m"])
     assert set(r["unidentifiable"]) == {"x_table_mass_kg", "y_table_mass_kg"}
     assert list(r["fitted"]) == ["x_friction_viscous_N_s_per_m"]
-    assert r["parameters"]["x_table_mass_kg"] == 90.0 and r["parameters"]["y_table_mass_kg"] == 45.0
+    assert r["parameters"]["x_table_mass_kg"] == 90.0
+    assert r["parameters"]["y_table_mass_kg"] == 45.0
     assert r["solver"]["converged"]
     assert r["fit_index_pct"]["after"] > r["fit_index_pct"]["before"]
 
@@ -300,7 +299,8 @@ def test_calibration_recovers_a_compliant_hidden_variant(tmp_path):
     path = tmp_path / "trace.parquet"
     pq.write_table(pa.table({"time_s": np.arange(n) * dt, "u_x_V": u[:, 0], "pos_x_m": y}), path)
     r = calibrate(MID, path, list(hidden))
-    assert r["solver"]["converged"] and r["unidentifiable"] == {}
+    assert r["solver"]["converged"]
+    assert r["unidentifiable"] == {}
     for name, value in hidden.items():
         assert r["fitted"][name] == pytest.approx(value, rel=0.005)
     truth = replay(build(MID, hidden), dt, u, np.zeros(2))[:, :1]
@@ -342,7 +342,8 @@ def test_a_fit_above_the_traces_noise_says_so(tmp_path):
     r = calibrate(MID, path, ["x_table_mass_kg"])
     assert r["solver"]["noise_floor_m"] == pytest.approx(2e-7, rel=0.1)
     assert r["solver"]["residual_rms_m"] > 1.2 * r["solver"]["noise_floor_m"]
-    assert not r["solver"]["at_noise_floor"] and "a parameter not fitted" in r["solver"]["note"]
+    assert not r["solver"]["at_noise_floor"]
+    assert "a parameter not fitted" in r["solver"]["note"]
 
 
 def test_the_noise_floor_of_a_trace():
@@ -417,7 +418,9 @@ def test_bad_traces_give_one_error_line(tmp_path, rows, message):
     path.write_text(rows)
     r = _twin("calibrate", MID, "--trace", str(path), "--fit", "x_table_mass_kg")
     assert r.returncode == 2
-    assert r.stderr.count("\n") == 1 and r.stderr.startswith("error: ") and message in r.stderr
+    assert r.stderr.count("\n") == 1
+    assert r.stderr.startswith("error: ")
+    assert message in r.stderr
 
 
 @pytest.mark.parametrize(
@@ -434,7 +437,8 @@ def test_bad_machine_files_give_one_error_line(tmp_path, edit, field):
     path.write_text(Path(MID).read_text().replace(*edit, 1))
     r = _twin("frf", str(path))
     assert r.returncode == 2
-    assert r.stderr.count("\n") == 1 and field in r.stderr
+    assert r.stderr.count("\n") == 1
+    assert field in r.stderr
 
 
 @pytest.fixture(scope="module")
@@ -505,7 +509,8 @@ def test_tuned_loops_meet_the_margins_checked_by_python_control(tuned):
     for i, design in enumerate(r["axes"].values()):
         g = design["gains"]
         velocity, position = design["velocity_loop"], design["position_loop"]
-        assert design["phase_margin_deg"] >= 45 and design["gain_margin_db"] >= 6
+        assert design["phase_margin_deg"] >= 45
+        assert design["gain_margin_db"] >= 6
         assert g["notch_hz"] > 0 or g["lowpass_hz"] > 0  # the axial resonance needs a filter
         loop = _velocity_loop(bm, i, g, dt)
         gm, pm, _, w_gm, _, _ = _margins(loop, dt)
@@ -586,7 +591,8 @@ def test_velocity_filter_notch_depth_and_low_pass():
     notch = velocity_filter(200.0, 20.0, 0.5, 0.0)
     gain = lambda g, f: abs(np.polyval(g.num, 2j * np.pi * f) / np.polyval(g.den, 2j * np.pi * f))
     assert gain(notch, 200.0) == pytest.approx(0.1, rel=1e-12)
-    assert gain(notch, 2.0) == pytest.approx(1.0, abs=1e-3) and gain(notch, 20000.0) == pytest.approx(1.0, abs=1e-3)
+    assert gain(notch, 2.0) == pytest.approx(1.0, abs=1e-3)
+    assert gain(notch, 20000.0) == pytest.approx(1.0, abs=1e-3)
     assert gain(velocity_filter(0.0, 20.0, 0.5, 300.0), 300.0) == pytest.approx(1 / 1.4, rel=1e-12)
 
 
@@ -648,7 +654,8 @@ def test_a_motor_sensor_frf_is_fitted_through_the_motors_transfer_function(tmp_p
 def test_bad_options_give_one_error_line(args, message):
     r = _twin(*args)
     assert r.returncode == 2
-    assert r.stderr.count("\n") == 1 and message in r.stderr
+    assert r.stderr.count("\n") == 1
+    assert message in r.stderr
 
 
 def _positional_machine(tmp_path, extra: str = "", name: str = "positional.toml") -> str:
@@ -698,7 +705,8 @@ def test_the_axial_mode_moves_with_the_nut_as_mujoco_linearizes_it(tmp_path):
         assert np.abs(linearized / axial - 1).min() < 2e-3
         assert np.abs(linearized / torsional - 1).min() < 1e-2
         modes[position] = axial
-    assert modes[0.5] == pytest.approx(207.7, abs=0.5) and modes[0.1] == pytest.approx(244.5, abs=0.5)
+    assert modes[0.5] == pytest.approx(207.7, abs=0.5)
+    assert modes[0.1] == pytest.approx(244.5, abs=0.5)
 
 
 def test_frf_position_measures_the_mode_where_the_nut_is(tmp_path):
@@ -707,11 +715,7 @@ def test_frf_position_measures_the_mode_where_the_nut_is(tmp_path):
     depend on the position, and past the screw's end, one error line, exit 2; a file giving
     both the stiffness and the root diameter is refused naming both."""
     path = _positional_machine(tmp_path)
-    r = subprocess.run(
-        [sys.executable, "-m", "twin.cli", "frf", path, "--position", "0.1", "--duration", "8", "--json"],
-        capture_output=True,
-        text=True,
-    )
+    r = _twin("frf", path, "--position", "0.1", "--duration", "8", "--json")
     assert r.returncode == 0, r.stderr
     import json
 
@@ -727,9 +731,11 @@ def test_frf_position_measures_the_mode_where_the_nut_is(tmp_path):
             "give k_axial_N_per_m or screw_root_diameter_m",
         ),
     ):
-        r = subprocess.run([sys.executable, "-m", "twin.cli", "frf", *args], capture_output=True, text=True)
-        assert r.returncode == 2 and r.stdout == ""
-        assert r.stderr.count("\n") == 1 and message in r.stderr, r.stderr
+        r = _twin("frf", *args)
+        assert r.returncode == 2
+        assert r.stdout == ""
+        assert r.stderr.count("\n") == 1, r.stderr
+        assert message in r.stderr, r.stderr
 
 
 @pytest.mark.parametrize("name", ["compact_xy", "heavy_xy"])

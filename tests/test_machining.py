@@ -121,7 +121,8 @@ def test_bad_stock_and_tools_are_one_error_line_naming_the_field(change, field, 
     data.update(change)
     with pytest.raises(TwinInputError) as err:
         prepare(scenario_from_dict(data))
-    assert err.value.field.startswith(field) and words in str(err.value), str(err.value)
+    assert err.value.field.startswith(field), str(err.value)
+    assert words in str(err.value), str(err.value)
 
 
 def test_choi1999_circle_cutting_a_stock_gives_the_builtin_cutting_circles_force_level():
@@ -153,12 +154,14 @@ def test_the_part_is_recorded_and_plotted(tmp_path):
     counts = read_back(run.record(tmp_path / "part.rrd"))
     for entity in ("stock", "machined", "path_by_contour_error", "scale", "scale/labels", "tool"):
         assert counts.get(f"/contour/{entity}", 0) > 0, entity
-    assert counts.get("/engagement/angle", 0) > 0 and "/contour/actual" not in counts
+    assert counts.get("/engagement/angle", 0) > 0
+    assert "/contour/actual" not in counts
     written = {p.name for p in run.plots(tmp_path / "plots")}
     assert {"gcode_test_piece_part.png", "gcode_test_piece_feed.png"} <= written
     outlines = run.result.program.outlines
     stock = outlines["stock"][0]
-    assert stock[:, 0].min() == pytest.approx(-5.0) and stock[:, 1].max() == pytest.approx(43.0)
+    assert stock[:, 0].min() == pytest.approx(-5.0)
+    assert stock[:, 1].max() == pytest.approx(43.0)
     # the program leaves the part's top standing and cuts the pocket (1.5 mm), the slot (1 mm)
     # and the band around the contour (2 mm): the height map as the engagement left it
     heights = prepare(scenario_from_dict(read_scenario_data("gcode_test_piece")))["reference"].height_map

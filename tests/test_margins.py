@@ -70,7 +70,8 @@ def test_margins_equal_python_control_and_the_exact_crossings(seed):
         return complex(response(loop, f_hz)[0])
 
     f_gm = _root(lambda f: at(f).imag, ours.f_gm_hz * 0.995, min(ours.f_gm_hz * 1.005, 0.5 / DT))
-    assert at(f_gm).real < 0 and ours.gm_db == pytest.approx(-20 * math.log10(abs(at(f_gm))), abs=0.01)
+    assert at(f_gm).real < 0
+    assert ours.gm_db == pytest.approx(-20 * math.log10(abs(at(f_gm))), abs=0.01)
     f_pm = _root(lambda f: abs(at(f)) - 1.0, ours.f_pm_hz * 0.995, ours.f_pm_hz * 1.005)
     assert ours.pm_deg == pytest.approx(math.degrees(np.angle(at(f_pm))) % 360.0 - 180.0, abs=0.05)
 
@@ -89,17 +90,21 @@ def test_every_crossing_counts_not_the_first():
     freqs = np.geomspace(1.0, 3000.0, 20_000)
     ours = crossing_margins(freqs, loop(freqs))
     first = loop_margins(lambda w: loop(w / (2 * math.pi)), w_min=2 * math.pi, w_max=2 * math.pi * 3000.0)
-    assert first.gm_db == pytest.approx(19.6, abs=0.1) and first.w_gm / (2 * math.pi) == pytest.approx(250.0, rel=0.01)
+    assert first.gm_db == pytest.approx(19.6, abs=0.1)
+    assert first.w_gm / (2 * math.pi) == pytest.approx(250.0, rel=0.01)
     f_mode = _root(lambda f: complex(loop(f)).imag, 0.99 * ours.f_gm_hz, 1.01 * ours.f_gm_hz)
     assert ours.gm_db == pytest.approx(-20 * math.log10(abs(complex(loop(f_mode)))), abs=0.01)
-    assert 1.0 < ours.gm_db < 2.0 and ours.f_gm_hz == pytest.approx(1186.0, rel=1e-3)
+    assert 1.0 < ours.gm_db < 2.0
+    assert ours.f_gm_hz == pytest.approx(1186.0, rel=1e-3)
 
 
 def test_an_infinite_margin_is_null_with_a_reason():
     # |L| = 0.5 at every frequency, phase 0: no crossing of either kind
     m = crossing_margins(FREQS, np.full(len(FREQS), 0.5 + 0j)).as_dict()
-    assert m["phase_margin_deg"] is None and m["gain_margin_db"] is None
-    assert "infinite" in m["phase_margin_note"] and "infinite" in m["gain_margin_note"]
+    assert m["phase_margin_deg"] is None
+    assert m["gain_margin_db"] is None
+    assert "infinite" in m["phase_margin_note"]
+    assert "infinite" in m["gain_margin_note"]
     json.dumps(m, allow_nan=False)  # strict JSON
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # a zero on the grid (a ZOH's at Nyquist) warns nothing

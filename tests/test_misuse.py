@@ -4,11 +4,10 @@ value the geometry gives (a rapid 1 mm into the block, a tip 2 mm below its bott
 ``twin run --strict`` ending with exit code 4."""
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
+from cli_process import twin as _twin
 
 from twin.gcode.planner import Limits, PlannerSettings, plan
 from twin.gcode.reader import Reader
@@ -32,7 +31,8 @@ def test_a_clean_program_warns_of_nothing():
     """A plunge outside the block, a slot 3 mm deep at F600 (0.03 mm a tooth) within every limit."""
     tool = ToolSpec(diameter_mm=6.0, n_flutes=2, flute_length_mm=10, max_ramp_deg=0, feed_per_tooth_mm=(0.01, 0.1))
     found, total = _warnings(["G1 Z-3 F300", "G1 X30 F600"], tool)
-    assert found == {} and total == 0
+    assert found == {}
+    assert total == 0
 
 
 @pytest.mark.parametrize(
@@ -80,15 +80,18 @@ def test_a_ramp_within_the_tools_angle_is_not_a_plunge():
 def test_strict_turns_warnings_into_exit_code_4(tmp_path):
     """The bundled test piece with 5 mm flutes on T1 (it cuts 10 mm deep at most): the JSON
     lists each line's warning, the run still reports; --strict adds one error line, exit 4."""
-    twin = [sys.executable, "-m", "twin.cli", "run", "gcode_test_piece", "--set", "tools.0.flute_length_mm=1"]
-    plain = subprocess.run([*twin, "--json", "--set", "duration_s=0.5"], capture_output=True, text=True, timeout=600)
+    twin = ["run", "gcode_test_piece", "--set", "tools.0.flute_length_mm=1"]
+    plain = _twin(*twin, "--json", "--set", "duration_s=0.5")
     assert plain.returncode == 0, plain.stderr
     warnings = json.loads(plain.stdout)["machining_warnings"]
-    assert warnings and {w["kind"] for w in warnings} == {"deeper_than_flutes"}
+    assert warnings
+    assert {w["kind"] for w in warnings} == {"deeper_than_flutes"}
     assert np.all([w["value"] > 0 for w in warnings])
-    strict = subprocess.run([*twin, "--strict", "--set", "duration_s=0.5"], capture_output=True, text=True, timeout=600)
+    strict = _twin(*twin, "--strict", "--set", "duration_s=0.5")
     assert strict.returncode == 4
-    assert strict.stderr.count("\n") == 1 and strict.stderr.startswith("error: ") and "--strict" in strict.stderr
+    assert strict.stderr.count("\n") == 1
+    assert strict.stderr.startswith("error: ")
+    assert "--strict" in strict.stderr
     assert "machining warnings" in strict.stdout
 
 
@@ -113,11 +116,12 @@ def test_a_tools_material_and_the_users_own_coefficients_reach_the_force_model()
 def test_twin_list_shows_every_material_with_its_source():
     from twin.process.materials import MATERIALS
 
-    listed = subprocess.run([sys.executable, "-m", "twin.cli", "list"], capture_output=True, text=True, timeout=300)
+    listed = _twin("list")
     assert listed.returncode == 0
     for name, material in MATERIALS.items():
         line = next(row for row in listed.stdout.splitlines() if row.strip().startswith(name + " "))
-        assert material.source in line and material.alloy in line
+        assert material.source in line
+        assert material.alloy in line
 
 
 def test_the_docs_materials_table_is_the_library():

@@ -17,5 +17,8 @@ def test_ctypes_mj_step_on_the_bindings_structs_equals_mujoco_mj_step():
     for _ in range(50):
         mujoco_c.MJ_STEP(m_addr, d_addr)
         mujoco.mj_step(bm.model, b)
-    assert a.time == b.time and a.time > 0
-    assert np.array_equal(a.qpos, b.qpos) and np.array_equal(a.qvel, b.qvel) and np.abs(a.qvel).max() > 0
+    assert a.time == b.time
+    assert a.time > 0
+    assert np.array_equal(a.qpos, b.qpos)
+    assert np.array_equal(a.qvel, b.qvel)
+    assert np.abs(a.qvel).max() > 0

@@ -7,6 +7,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parent.parent
 SATURATION = "ua[a] = min(max(u[a] + u_dist[row, a], -limit), limit)"
 
@@ -25,6 +27,7 @@ def _run(tree: Path, cache: Path) -> dict:
     return json.loads(r.stdout)
 
 
+@pytest.mark.slow
 def test_an_edited_kernel_is_recompiled_into_the_loop(tmp_path):
     tree, cache = tmp_path / "tree", tmp_path / "cache"
     for package in ("twin", "controllers", "mjcf"):

@@ -36,10 +36,12 @@ def test_wall_error_is_the_path_offset_on_each_wall():
     walls = part.walls
     straight = (walls[:, 0] > 5.5) & (walls[:, 0] < 24.5)  # the walls, not the slot's round ends
     upper, lower = straight & (walls[:, 1] > 10.0), straight & (walls[:, 1] < 10.0)
-    assert upper.sum() > 300 and lower.sum() > 300
+    assert upper.sum() > 300
+    assert lower.sum() > 300
     np.testing.assert_allclose(walls[upper, 3], -3.0, atol=0.01)
     np.testing.assert_allclose(walls[lower, 3], 3.0, atol=0.01)
-    assert set(walls[:, 4]) == {7.0} and abs(part.line_errors()[7]) == pytest.approx(3.0, abs=0.05)
+    assert set(walls[:, 4]) == {7.0}
+    assert abs(part.line_errors()[7]) == pytest.approx(3.0, abs=0.05)
 
 
 def test_a_perfect_path_leaves_no_error():
@@ -54,22 +56,27 @@ def test_line_and_width_of_a_slot():
     width = measure(
         WidthFeature(type="width", name="slot", from_mm=(15, 5), to_mm=(15, 15), width_mm=6.0, z_mm=-1.0), actual
     )
-    assert width["width_mm"] == pytest.approx(6.0, abs=1e-5) and width["deviation_um"] == pytest.approx(0.0, abs=0.01)
+    assert width["width_mm"] == pytest.approx(6.0, abs=1e-5)
+    assert width["deviation_um"] == pytest.approx(0.0, abs=0.01)
     # the slot's upper wall (material above it) 3 µm further into the material: overcut
     upper = measure(
         LineFeature(type="line", name="upper", from_mm=(8, 13), to_mm=(22, 13), z_mm=-1.0, tolerance_um=2.0), actual
     )
-    assert upper["deviation_um"] == pytest.approx(-3.0, abs=0.01) and upper["pass"] is False
-    assert upper["position_mm"][1] == pytest.approx(13.003, abs=1e-5) and upper["straightness_um"] < 0.01
+    assert upper["deviation_um"] == pytest.approx(-3.0, abs=0.01)
+    assert upper["pass"] is False
+    assert upper["position_mm"][1] == pytest.approx(13.003, abs=1e-5)
+    assert upper["straightness_um"] < 0.01
     lower = measure(LineFeature(type="line", name="lower", from_mm=(22, 7), to_mm=(8, 7), z_mm=-1.0), actual)
-    assert lower["deviation_um"] == pytest.approx(3.0, abs=0.01) and lower["pass"] is None
+    assert lower["deviation_um"] == pytest.approx(3.0, abs=0.01)
+    assert lower["pass"] is None
 
 
 def test_a_feature_not_on_the_part_says_so():
     part = machined_part(STOCK, slot(0.0), slot(0.0), 0.0, -10.0)
     _, actual = part.sections(-1.0)
     row = measure(CircleFeature(type="circle", name="none", center_mm=(5, 5), diameter_mm=1.0, z_mm=-1.0), actual)
-    assert row["found"] is False and row["pass"] is False
+    assert row["found"] is False
+    assert row["pass"] is False
 
 
 def test_ball_radius_by_height_and_levels():
@@ -131,7 +138,8 @@ def test_bore_cut_by_the_perfect_loop_measures_its_size(bore):
     stock = bore.part.stock
     feature = CircleFeature(type="circle", name="bore", center_mm=(-28, 0), diameter_mm=66.0, z_mm=-1.5)
     row = measure(feature, loop.section(stock, -1.5))
-    assert row["diameter_mm"] == pytest.approx(66.0, abs=5e-5) and row["roundness_um"] < 0.2
+    assert row["diameter_mm"] == pytest.approx(66.0, abs=5e-5)
+    assert row["roundness_um"] < 0.2
     # the planned reference runs inside the programmed circle (by its mean radius here): the
     # nominal part measures what it sweeps
     plan = bore.part.nominal
@@ -161,7 +169,8 @@ def test_the_part_is_recorded_and_plotted(bore, tmp_path):
 
     run = api.Run(api.load("gcode_choi1999_circle_stock"), bore)
     counts = read_back(run.record(tmp_path / "part.rrd"))
-    assert counts.get("/contour/part_walls", 0) > 0 and counts.get("/contour/inspection", 0) > 0
+    assert counts.get("/contour/part_walls", 0) > 0
+    assert counts.get("/contour/inspection", 0) > 0
     assert "gcode_choi1999_circle_stock_walls.png" in {p.name for p in run.plots(tmp_path / "plots")}
 
 
@@ -184,7 +193,8 @@ def test_the_part_s_files_hold_the_cut(bore, tmp_path):
     stock = run.scenario.stock
     uncut = HeightMap(stock, 1.0)
     mesh = trimesh.Trimesh(*PartMap(stock, uncut, uncut).mesh(), process=False)
-    assert part.is_watertight and mesh.is_watertight
+    assert part.is_watertight
+    assert mesh.is_watertight
     area = bore.part.stock.area - bore.part.actual.section(bore.part.stock, -1.5).area
     assert mesh.volume - part.volume == pytest.approx(3.0 * area, abs=3.0)  # mm³, of 1 783
     table = pq.read_table(parquet).to_pandas()
@@ -199,7 +209,8 @@ def test_part_files_need_a_stock():
     from twin.cli import app
 
     out = CliRunner().invoke(app, ["run", "choi1999_pid_air_cut", "--part", "somewhere"])
-    assert out.exit_code == 2 and out.output.strip().splitlines() == [
+    assert out.exit_code == 2
+    assert out.output.strip().splitlines() == [
         "error: --part = 'somewhere': the virtual part is cut from a stock: the scenario has no [stock]"
     ]
 
@@ -248,8 +259,10 @@ def test_a_level_the_tool_ramps_through_is_skipped_not_swept_disc_by_disc(monkey
         np.full(n, 7),
     )
     part = machined_part(STOCK, ramp, ramp, 0.0, -10.0)
-    assert part.levels_mm == [-0.5] and part.skipped_levels_mm == [-2.0]
+    assert part.levels_mm == [-0.5]
+    assert part.skipped_levels_mm == [-2.0]
     summary = part.summary()
-    assert summary["skipped_levels_mm"] == [-2.0] and "moves in Z" in summary["skipped_note"]
+    assert summary["skipped_levels_mm"] == [-2.0]
+    assert "moves in Z" in summary["skipped_note"]
     with pytest.raises(part_module.SectionTooComplex, match="radii at Z -2 mm"):
         ramp.section(STOCK, -2.0)

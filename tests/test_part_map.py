@@ -33,7 +33,9 @@ def slot(y_mm: float, depth_mm: float = 2.0, corner_mm: float = 0.0, n: int = 20
 
 def volume(maps) -> float:
     mesh = trimesh.Trimesh(*maps.mesh(), process=False)
-    assert mesh.is_watertight and mesh.is_winding_consistent and mesh.volume > 0
+    assert mesh.is_watertight
+    assert mesh.is_winding_consistent
+    assert mesh.volume > 0
     return float(mesh.volume)
 
 
@@ -65,7 +67,8 @@ def test_error_map_signs_where_the_path_moved(tmp_path):
     np.testing.assert_allclose(over.error_um, -2000.0)
     assert len(left) * RES**2 == pytest.approx(0.2 * 30.0, abs=RES * 30.0)
     assert len(over) * RES**2 == pytest.approx(0.2 * 30.0, abs=RES * 30.0)
-    assert left.y_mm.between(7.0, 7.2).all() and over.y_mm.between(13.0, 13.2).all()
+    assert left.y_mm.between(7.0, 7.2).all()
+    assert over.y_mm.between(13.0, 13.2).all()
 
 
 def test_a_large_map_is_meshed_coarser_and_still_closed(monkeypatch, tmp_path):
@@ -74,7 +77,8 @@ def test_a_large_map_is_meshed_coarser_and_still_closed(monkeypatch, tmp_path):
     assert len(maps.mesh().faces) < 3 * 10_000
     assert volume(maps) == pytest.approx(BLOCK_MM3 - 6.0 * 2.0 * 30.0, rel=0.01)
     mesh = trimesh.load(maps.to_stl(tmp_path / "part.stl"))  # read back from the file
-    assert mesh.is_watertight and mesh.volume == pytest.approx(volume(maps), rel=1e-6)
+    assert mesh.is_watertight
+    assert mesh.volume == pytest.approx(volume(maps), rel=1e-6)
 
 
 def test_ball_scallop_between_two_passes():
@@ -99,7 +103,8 @@ def test_ball_scallop_between_two_passes():
 def test_floor_error_leaves_walls_out_and_reads_scallops_moved():
     # a flat slot moved 0.2 mm: its floor is exact (the walls' ±2000 µm cells are not floors)
     moved = part_map(STOCK, slot(10.0), slot(10.2)).floor_error()
-    assert moved["cells"] > 0.9 * 30.0 * 5.6 / RES**2 and moved["min"] == moved["max"] == 0.0
+    assert moved["cells"] > 0.9 * 30.0 * 5.6 / RES**2
+    assert moved["min"] == moved["max"] == 0.0
     # two 6 mm ball passes 1.6 mm apart, 0.2 mm deep, the actual ones 3 µm towards +Y: at each
     # cell the floor is the nearer pass's sphere, z(y) = tip + R - sqrt(R^2 - dy^2), up to the
     # top; its error z_actual - z_nominal at the cell centres the nominal passes cut: the most

@@ -94,8 +94,10 @@ def test_contour_is_seen_from_above_with_y_up(circle_run, tmp_path):
     path = record(circle_run, tmp_path / "run.rrd")
     gain = contour_gain(circle_run)
     counts = read_back(path)
-    assert counts["/contour/tool"] == 500 + 1 and counts[f"/contour/error_x{gain}"] == 1
-    assert 10 <= gain <= 1000 and gain == round_down(gain)
+    assert counts["/contour/tool"] == 500 + 1
+    assert counts[f"/contour/error_x{gain}"] == 1
+    assert 10 <= gain <= 1000
+    assert gain == round_down(gain)
     strip = np.array(_columns(path, "/contour/actual")["LineStrips3D:strips"][0][0])
     pos_mm = circle_run.table_position_m() * 1e3
     np.testing.assert_allclose(strip[:, :2], pos_mm, atol=1e-4)  # the machine's y, not mirrored
@@ -103,12 +105,12 @@ def test_contour_is_seen_from_above_with_y_up(circle_run, tmp_path):
     coordinates = _columns(path, "/contour")["ViewCoordinates:xyz"][0]
     assert coordinates == [[3, 5, 1]]  # x Right, y Forward, z Up (Rerun codes 3, 5, 1): RIGHT_HAND_Z_UP
     (view,) = [v for v in _views(path).values() if v["ViewBlueprint:space_origin"] == ["contour"]]
-    assert (
-        view["ViewBlueprint:class_identifier"] == ["3D"] and f"error x{gain}" in view["ViewBlueprint:display_name"][0]
-    )
+    assert view["ViewBlueprint:class_identifier"] == ["3D"]
+    assert f"error x{gain}" in view["ViewBlueprint:display_name"][0]
     eye, target = view["EyeControls3D:position"][0], view["EyeControls3D:look_target"][0]
     assert view["EyeControls3D:eye_up"] == [[0.0, 1.0, 0.0]]  # +y up on the screen
-    assert eye[:2] == pytest.approx(target[:2]) and eye[2] > target[2]  # straight down from above: +x right
+    assert eye[:2] == pytest.approx(target[:2])
+    assert eye[2] > target[2]  # straight down from above: +x right
 
 
 def test_cutting_force_arrow_and_series(tmp_path):
@@ -139,7 +141,8 @@ def test_recording_decimates_long_runs(tmp_path):
     res = simulate(bm, make_controller("yadav2020_imc", 1e-4), Step(0.01), 1.0, 1e-4)
     path = record(res, tmp_path / "long.rrd", max_points=1000)
     counts = read_back(path)
-    assert counts["/actual/x"] == 1000 + 1 and counts["/machine/x_table"] == 1000
+    assert counts["/actual/x"] == 1000 + 1
+    assert counts["/machine/x_table"] == 1000
     assert "/contour/reference" not in counts
 
 
@@ -175,4 +178,5 @@ def test_short_ranges_are_widened_to_labelled_grid_lines():
 
     assert readable_y_axis([-70.0, 70.0]).range.as_arrow_array().to_pylist() == [[-112.0, 112.0]]
     assert readable_y_axis([0.02, 0.166]).range.as_arrow_array().to_pylist() == [pytest.approx([-0.012, 0.212])]
-    assert readable_y_axis([-400.0, 9000.0]) is None and readable_y_axis([5.0, 5.0]) is None
+    assert readable_y_axis([-400.0, 9000.0]) is None
+    assert readable_y_axis([5.0, 5.0]) is None

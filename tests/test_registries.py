@@ -90,7 +90,8 @@ def test_parameter_errors_name_the_parameter():
     assert err.value.reason == "not a parameter of pid (its parameters: kp, ki, kd, tf_s)"
     with pytest.raises(ParameterError) as err:
         make_controller("sabau2022", 1e-3, {"velocity_ff": "yes"}, axes=("x", "y"))
-    assert err.value.field == "velocity_ff" and "valid boolean" in err.value.reason
+    assert err.value.field == "velocity_ff"
+    assert "valid boolean" in err.value.reason
     with pytest.raises(ParameterError) as err:
         make_controller("linear", 1e-3, {"inputs": ["error", 3]})
     assert err.value.field == "inputs.1"
@@ -103,7 +104,8 @@ def test_a_kind_registered_twice_is_refused():
 
 def test_every_reproduction_offers_the_whole_interface(tmp_path: Path):
     for name, paper in REPRODUCTIONS.items():
-        assert isinstance(paper, Reproduction) and paper.name == name
+        assert isinstance(paper, Reproduction)
+        assert paper.name == name
         report = paper.report()
         for entry in ("run", "format_report", "markdown_tables", "write_plots", "twin_runs"):
             assert callable(getattr(report, entry)), (name, entry)

@@ -38,7 +38,8 @@ def test_saturation_and_delay():
     res = simulate(bm, open_loop(u, dt), Step(0.0), 0.2, dt, drive=drive)
     assert res.u_applied_V.max() == pytest.approx(10.0)
     x = res.table_position_m()[:, 0]
-    assert np.all(x[:11] == 0.0) and x[12] > 0.0  # 10 steps of delay, then motion
+    assert np.all(x[:11] == 0.0)
+    assert x[12] > 0.0  # 10 steps of delay, then motion
     plain = simulate(bm, open_loop(np.full((2000, 1), 10.0), dt), Step(0.0), 0.2, dt)
     assert np.allclose(x[10:], plain.table_position_m()[:-10, 0], rtol=0, atol=1e-12)
 
@@ -82,7 +83,8 @@ def test_encoder_quantization_and_seeded_noise():
     a = Encoder(np.array([0.0]), np.array([1e-6]), np.array([1.0]), seed=7).noise_source()
     b = Encoder(np.array([0.0]), np.array([1e-6]), np.array([1.0]), seed=7).noise_source()
     chunks = np.vstack([a(123), a(377)])
-    assert np.array_equal(chunks, b(500)) and np.std(chunks) == pytest.approx(1e-6, rel=0.15)
+    assert np.array_equal(chunks, b(500))
+    assert np.std(chunks) == pytest.approx(1e-6, rel=0.15)
 
 
 class _Harmonic:
@@ -140,7 +142,8 @@ def test_python_block_runs_in_the_python_loop_only():
     bm = build("cncmt")
     py = simulate(bm, Controller([_PythonGain(30.0)], 1e-3), Step(0.01), 0.5, 1e-3)
     compiled = simulate(bm, make_controller("pid", 1e-3, {"kp": 30.0}), Step(0.01), 0.5, 1e-3)
-    assert py.info["loop"] == "python" and compiled.info["loop"] == "compiled"
+    assert py.info["loop"] == "python"
+    assert compiled.info["loop"] == "compiled"
     np.testing.assert_allclose(py.qpos, compiled.qpos, rtol=0, atol=1e-15)
     with pytest.raises(TwinInputError, match="compiled"):
         simulate(bm, Controller([_PythonGain(30.0)], 1e-3), Step(0.01), 0.5, 1e-3, compiled=True)
@@ -160,8 +163,11 @@ def test_record_every_keeps_metrics_of_every_tick():
         for every in (1, 7, 0)
     ]
     full, sparse, none = runs
-    assert len(full.t_s) == 1000 and len(sparse.t_s) == 143 and len(none.t_s) == 0
-    assert np.array_equal(sparse.qpos, full.qpos[::7]) and np.array_equal(sparse.t_s, full.t_s[::7])
+    assert len(full.t_s) == 1000
+    assert len(sparse.t_s) == 143
+    assert len(none.t_s) == 0
+    assert np.array_equal(sparse.qpos, full.qpos[::7])
+    assert np.array_equal(sparse.t_s, full.t_s[::7])
     for r in (sparse, none):
         assert np.array_equal(r.error_max_m, full.error_max_m)
     np.testing.assert_allclose(full.error_max_m, np.abs(full.error_m()).max(axis=0), rtol=0, atol=0)
@@ -268,8 +274,10 @@ def test_long_runs_are_recorded_decimated_by_default(monkeypatch):
     full = simulate(bm, ctrl, Step(0.01), 1.0, 1e-3)
     monkeypatch.setattr(runner, "MAX_RECORDED_TICKS", 300)
     sparse = simulate(bm, ctrl, Step(0.01), 1.0, 1e-3)
-    assert sparse.info["record_every"] == 4 and len(sparse.t_s) == 250
-    assert np.array_equal(sparse.qpos, full.qpos[::4]) and np.array_equal(sparse.error_max_m, full.error_max_m)
+    assert sparse.info["record_every"] == 4
+    assert len(sparse.t_s) == 250
+    assert np.array_equal(sparse.qpos, full.qpos[::4])
+    assert np.array_equal(sparse.error_max_m, full.error_max_m)
 
 
 def test_divergence_carries_the_run_up_to_it():
@@ -278,5 +286,7 @@ def test_divergence_carries_the_run_up_to_it():
         simulate(bm, error_feedback(control.tf([-500.0], [1.0]), 1e-3), Step(0.01), 50.0, 1e-3)
     part = err.value.result
     done = part.info["completed_ticks"]
-    assert done == round(err.value.sim_time_s / 1e-3) and len(part.t_s) == done
-    assert np.isfinite(part.qpos).all() and abs(part.table_position_m()[-1, 0]) < 10.0
+    assert done == round(err.value.sim_time_s / 1e-3)
+    assert len(part.t_s) == done
+    assert np.isfinite(part.qpos).all()
+    assert abs(part.table_position_m()[-1, 0]) < 10.0

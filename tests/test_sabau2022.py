@@ -176,8 +176,10 @@ def test_bee_colony_is_reproducible_with_its_seed_and_finds_a_minimum():
 
     a = bee_colony_minimize(cost, [-1, -1], [1, 1], 15, seed=4)
     b = bee_colony_minimize(cost, [-1, -1], [1, 1], 15, seed=4)
-    assert a.x.tolist() == b.x.tolist() and a.best_cost == b.best_cost
-    assert a.cost < 1e-3 and len(a.best_cost) == 15
+    assert a.x.tolist() == b.x.tolist()
+    assert a.best_cost == b.best_cost
+    assert a.cost < 1e-3
+    assert len(a.best_cost) == 15
     assert all(x >= y for x, y in zip(a.best_cost, a.best_cost[1:]))  # the best never gets worse
 
 
@@ -202,7 +204,8 @@ def test_fit_index():
 def test_registry_builds_every_design_and_rejects_bad_input():
     for design in s1.DESIGNS:
         ctrl = make_controller("sabau2022", 1e-3, {"design": design}, axes=("x", "y"))
-        assert sorted(ctrl.drives) == ["x", "y"] and ctrl.compiled
+        assert sorted(ctrl.drives) == ["x", "y"]
+        assert ctrl.compiled
     with pytest.raises(ValueError, match="design = 'zz'"):
         make_controller("sabau2022", 1e-3, {"design": "zz"}, axes=("x",))
     with pytest.raises(ValueError, match="control_period_s"):
@@ -279,7 +282,8 @@ def test_table1_agreement_labels_say_what_is_fitted():
             y = control.step_response(control.feedback(gain * G, 1), T=t).outputs
             settle.append(step_metrics(t, y, final=1.0)["settling_time_s"])
         a = s1.MODEL[axis][1]
-        assert settle[0] == pytest.approx(settle[1], rel=0.1) and settle[0] == pytest.approx(8.0 / a, rel=0.25)
+        assert settle[0] == pytest.approx(settle[1], rel=0.1)
+        assert settle[0] == pytest.approx(8.0 / a, rel=0.25)
         gains = s1.ziegler_nichols_gains(axis, *s1.ultimate_point(axis))
         for kind in ("P", "PI", "PID"):
             kp_m, ki_m, kd_m = gains[f"modified {kind}"]

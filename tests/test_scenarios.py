@@ -23,7 +23,8 @@ def test_bundled_scenario_runs_compiled_and_equals_the_python_loop(name):
     kwargs = prepare(load_scenario(name, ["duration_s=0.2"]))
     machine = kwargs.pop("machine")
     fast, slow = (simulate(machine, **kwargs, compiled=c) for c in (True, False))
-    assert fast.info["loop"] == "compiled" and slow.info["loop"] == "python"
+    assert fast.info["loop"] == "compiled"
+    assert slow.info["loop"] == "python"
     for key in SERIES:
         assert np.array_equal(getattr(fast, key), getattr(slow, key)), key
     summary = tracking_summary(fast)
@@ -93,7 +94,8 @@ def test_tachometer_and_decimated_recording_from_a_scenario():
         sensors={"velocity": "tachometer"},
         record_every_ticks=10,
     )
-    assert len(res.t_s) == 300 and res.error_max_m[0] < 0.1 * 0.002
+    assert len(res.t_s) == 300
+    assert res.error_max_m[0] < 0.1 * 0.002
 
 
 @pytest.mark.parametrize(
@@ -135,7 +137,8 @@ def test_tachometer_and_decimated_recording_from_a_scenario():
 def test_bad_controllers_name_the_field(controller, field, words):
     with pytest.raises(TwinInputError) as err:
         _run(controller)
-    assert err.value.field == field and words in str(err.value), str(err.value)
+    assert err.value.field == field, str(err.value)
+    assert words in str(err.value), str(err.value)
 
 
 def test_inverse_model_observer_removes_a_step_input_disturbance_on_the_twin():
@@ -181,17 +184,20 @@ def test_counts_and_rates_the_loops_run_over_are_bounded(setting, field, words):
     """Each count a force model loops over, and the timestep, has a bound named in its error."""
     with pytest.raises(TwinInputError) as err:
         load_scenario("choi1999_cutting_circle", [setting])
-    assert err.value.field == field and words in err.value.reason
+    assert err.value.field == field
+    assert words in err.value.reason
 
 
 def test_harmonic_and_sine_counts_are_bounded():
     many = "[" + ", ".join(["0.001"] * 101) + "]"
     with pytest.raises(TwinInputError) as err:
         load_scenario("maharof2021_cascade", [f"disturbances.0.amplitudes_V={many}"])
-    assert err.value.field == "disturbances.0.harmonic_input.amplitudes_V" and "at most 100" in err.value.reason
+    assert err.value.field == "disturbances.0.harmonic_input.amplitudes_V"
+    assert "at most 100" in err.value.reason
     with pytest.raises(TwinInputError) as err:
         load_scenario("maharof2021_cascade", [f"reference.amplitudes_m={many}"])
-    assert err.value.field == "reference.sines.amplitudes_m" and "at most 100" in err.value.reason
+    assert err.value.field == "reference.sines.amplitudes_m"
+    assert "at most 100" in err.value.reason
 
 
 def test_a_design_that_fails_numerically_is_one_error_and_no_warning():
