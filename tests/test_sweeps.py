@@ -11,6 +11,8 @@ import time
 
 import numpy as np
 import pytest
+from cli_process import interruptible
+from cli_process import twin as twin_cli
 
 from twin.errors import TwinInputError
 from twin.machines import get_machine
@@ -225,13 +227,8 @@ def test_yadav2020_certificate_is_the_reproductions():
     assert certificates("linear_motor_xy", "pid", _plan("overrides.m_x=box")) == []
 
 
-def _cli(*args, **kw):
-    import subprocess
-    import sys
-
-    return subprocess.run(
-        [sys.executable, "-m", "twin.cli", "sweep", *args], capture_output=True, text=True, timeout=300, **kw
-    )
+def _cli(*args):
+    return twin_cli("sweep", *args)
 
 
 def test_cli_sweep_file_writes_parquet_summary_and_plots(tmp_path):
@@ -294,7 +291,11 @@ def test_cli_interrupted_sweep_keeps_its_parts_and_resume_completes_it(tmp_path)
         str(out),
     ]
     proc = subprocess.Popen(
-        [sys.executable, "-m", "twin.cli", "sweep", *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+        [sys.executable, "-m", "twin.cli", "sweep", *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=interruptible,
     )
     deadline = time.time() + 120
     while not any(out.glob("part-*.parquet")) and time.time() < deadline:
