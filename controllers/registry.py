@@ -182,8 +182,26 @@ def make_controller(
     ValueError
         Values the design cannot use.
     """
-    kind = CONTROLLERS[name]
     ctx = Context(dt, tuple(axes), method, dict(plants or {}), list(parts), delay_s)
+    return build_controller(name, params, ctx, velocity_ff=velocity_ff, acceleration_ff=acceleration_ff)
+
+
+def build_controller(
+    name: str, params: dict | None, ctx: Context, *, velocity_ff=0.0, acceleration_ff=0.0
+) -> Controller:
+    """Build controller kind ``name`` in the build context ``ctx`` (as :func:`make_controller`,
+    for a caller that holds a context already).
+
+    Raises
+    ------
+    KeyError
+        Unknown name.
+    ParameterError
+        A parameter the kind does not take, or of the wrong type or range.
+    ValueError
+        Values the design cannot use.
+    """
+    kind = CONTROLLERS[name]
     ctrl = kind.build(validate_params(name, kind.params, params), ctx)
     ctrl.name = name
     return with_feedforward(ctrl, velocity_ff, acceleration_ff)

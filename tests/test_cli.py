@@ -195,7 +195,7 @@ def test_reproduce_yadav2020_small_counts(tmp_path):
     counts = read_back(rrd)
     assert counts["/hinf/actual/x"] == 20_000 + 1  # 12 s at 10 kHz, decimated; + the legend entry
     # the text report (what `twin reproduce yadav2020` prints without --json) of the same results
-    from twin.reproductions import reproduction
+    from twin.reproductions.registry import reproduction
 
     report = reproduction("yadav2020").format_report(res)
     assert "Table 2" in report
@@ -447,7 +447,8 @@ def test_run_imports_only_what_it_needs(scenario):
     code = (
         f"import sys; from twin.cli import main; sys.argv = ['twin', 'run', {scenario!r}, '--json', '--set', "
         "'duration_s=0.01']\ntry:\n    main()\nexcept SystemExit as e:\n    assert not e.code, e.code\n"
-        "print(sorted(m for m in ('control', 'scipy.signal', 'matplotlib', 'rerun', 'pandas') if m in sys.modules))"
+        "heavy = ('control', 'scipy.signal', 'matplotlib', 'rerun', 'pandas', 'twin.reproductions.registry')\n"
+        "print(sorted(m for m in heavy if m in sys.modules))"
     )
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr

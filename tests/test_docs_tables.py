@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from twin.reproductions import REPRODUCTIONS
+from twin.reproductions.registry import REPRODUCTIONS
 from twin.reproductions.tables import blocks, fill, load_tables, markdown_table, pages, results_path
 
 

@@ -222,7 +222,7 @@ def test_a_dwell_too_long_to_hold_is_refused():
 def test_zpetc_reads_the_programs_preview_and_the_progress_is_in_lines():
     """Choi 1999's MIMO controller with ZPETC (which reads the reference ahead) on the circle
     program; the progress bar of a program counts its lines."""
-    from twin.scenario import prepare, read_scenario_data, scenario_from_dict
+    from twin.scenario import assemble, read_scenario_data, scenario_from_dict
     from twin.sim.runner import _progress_bar
 
     data = read_scenario_data("choi1999_mimo_cutting")
@@ -231,7 +231,7 @@ def test_zpetc_reads_the_programs_preview_and_the_progress_is_in_lines():
     run = api.run(scenario_from_dict(data))
     assert run.summary["status"] == "ok"
     assert run.summary["max_tracking_error_um"]["y"] < 500
-    reference = prepare(scenario_from_dict(data))["reference"]
+    reference = assemble(scenario_from_dict(data)).reference
     with _progress_bar(reference, 100, "linear_motor_xy", show=True) as bar:
         assert (bar.total, bar.format_dict["unit"]) == (reference.n_lines, "line")
         assert reference.n_lines == 15

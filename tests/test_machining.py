@@ -14,7 +14,7 @@ from twin.errors import TwinInputError
 from twin.gcode.planner import Limits, PlannerSettings, plan
 from twin.gcode.reader import Reader
 from twin.process.machining import StockSpec, ToolSpec, engaged_degrees, program_milling
-from twin.scenario import prepare, read_scenario_data, scenario_from_dict
+from twin.scenario import assemble, read_scenario_data, scenario_from_dict
 
 LIMITS = Limits((0.5, 0.5, 0.2), (5.0, 5.0, 2.0), (100.0, 100.0, 200.0))
 TOOL = ToolSpec(diameter_mm=6.0, n_flutes=2)
@@ -120,7 +120,7 @@ def test_bad_stock_and_tools_are_one_error_line_naming_the_field(change, field, 
     data = read_scenario_data("gcode_test_piece")
     data.update(change)
     with pytest.raises(TwinInputError) as err:
-        prepare(scenario_from_dict(data))
+        assemble(scenario_from_dict(data))
     assert err.value.field.startswith(field), str(err.value)
     assert words in str(err.value), str(err.value)
 
@@ -164,7 +164,7 @@ def test_the_part_is_recorded_and_plotted(tmp_path):
     assert stock[:, 1].max() == pytest.approx(43.0)
     # the program leaves the part's top standing and cuts the pocket (1.5 mm), the slot (1 mm)
     # and the band around the contour (2 mm): the height map as the engagement left it
-    heights = prepare(scenario_from_dict(read_scenario_data("gcode_test_piece")))["reference"].height_map
+    heights = assemble(scenario_from_dict(read_scenario_data("gcode_test_piece"))).reference.cut.height_map
 
     def height_mm(x_mm, y_mm):
         i = int((x_mm * 1e-3 - heights.x0_m) / heights.res_m)

@@ -19,7 +19,8 @@ from twin.kinds_doc import SECTIONS, kinds_markdown
 from twin.machines import MACHINES
 from twin.process import DISTURBANCES
 from twin.references import REFERENCES
-from twin.reproductions import REPRODUCTIONS, Reproduction
+from twin.reproductions.base import Reproduction
+from twin.reproductions.registry import REPRODUCTIONS
 from twin.scenario import scenario_from_dict
 
 REGISTRIES = {

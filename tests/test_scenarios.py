@@ -9,8 +9,8 @@ import pytest
 
 from twin.errors import TwinInputError
 from twin.metrics import tracking_summary
-from twin.scenario import bundled_scenarios, load_scenario, prepare, run_scenario, scenario_from_dict
-from twin.sim.runner import simulate
+from twin.scenario import assemble, bundled_scenarios, load_scenario, run_scenario, scenario_from_dict
+from twin.settings import parse_settings
 
 SERIES = ("qpos", "qvel", "meas_m", "u_V", "u_applied_V", "actuator_force", "workpiece_force_N")
 
@@ -20,9 +20,8 @@ def test_bundled_scenario_runs_compiled_and_equals_the_python_loop(name):
     """The Python loop is the reference: over the first 0.2 s of every bundled scenario both
     loops give the same series, bit for bit (the compiled loop accumulates the simulation time
     the milling force reads as MuJoCo does; the full-length runs are bit-identical too)."""
-    kwargs = prepare(load_scenario(name, ["duration_s=0.2"]))
-    machine = kwargs.pop("machine")
-    fast, slow = (simulate(machine, **kwargs, compiled=c) for c in (True, False))
+    inputs = assemble(load_scenario(name, {"duration_s": 0.2}))
+    fast, slow = (inputs.simulate(compiled=c) for c in (True, False))
     assert fast.info["loop"] == "compiled"
     assert slow.info["loop"] == "python"
     for key in SERIES:
@@ -183,7 +182,7 @@ def test_inverse_model_observer_removes_a_step_input_disturbance_on_the_twin():
 def test_counts_and_rates_the_loops_run_over_are_bounded(setting, field, words):
     """Each count a force model loops over, and the timestep, has a bound named in its error."""
     with pytest.raises(TwinInputError) as err:
-        load_scenario("choi1999_cutting_circle", [setting])
+        load_scenario("choi1999_cutting_circle", parse_settings([setting]))
     assert err.value.field == field
     assert words in err.value.reason
 
@@ -191,11 +190,11 @@ def test_counts_and_rates_the_loops_run_over_are_bounded(setting, field, words):
 def test_harmonic_and_sine_counts_are_bounded():
     many = "[" + ", ".join(["0.001"] * 101) + "]"
     with pytest.raises(TwinInputError) as err:
-        load_scenario("maharof2021_cascade", [f"disturbances.0.amplitudes_V={many}"])
+        load_scenario("maharof2021_cascade", parse_settings([f"disturbances.0.amplitudes_V={many}"]))
     assert err.value.field == "disturbances.0.harmonic_input.amplitudes_V"
     assert "at most 100" in err.value.reason
     with pytest.raises(TwinInputError) as err:
-        load_scenario("maharof2021_cascade", [f"reference.amplitudes_m={many}"])
+        load_scenario("maharof2021_cascade", parse_settings([f"reference.amplitudes_m={many}"]))
     assert err.value.field == "reference.sines.amplitudes_m"
     assert "at most 100" in err.value.reason
 
@@ -209,7 +208,7 @@ def test_a_design_that_fails_numerically_is_one_error_and_no_warning():
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         with pytest.raises(TwinInputError) as err:
-            prepare(scn)
+            assemble(scn)
     assert not caught, [str(w.message) for w in caught]
     assert err.value.field == "controller.params"
     assert "failed numerically" in err.value.reason or "no loop with finite margins" in err.value.reason

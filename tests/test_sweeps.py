@@ -16,8 +16,8 @@ from cli_process import twin as twin_cli
 
 from twin.errors import TwinInputError
 from twin.machines import get_machine
+from twin.sampling import Plan, parse_variation
 from twin.sweeps import prepare_sweep
-from twin.sweeps.plan import Plan, parse_variation
 from twin.sweeps.run import make_client, read_sweep, run_sweep
 from twin.sweeps.summary import certificates, summarize
 

@@ -27,9 +27,9 @@ if TYPE_CHECKING:  # the heavy modules load on first use, not with `import twin`
     import pandas as pd
     import pyarrow as pa
 
+    from twin.sampling import Plan
     from twin.scenario import Scenario
     from twin.sim.runner import RunResult
-    from twin.sweeps.plan import Plan
 
 
 def _paths(settings: dict) -> dict:
@@ -50,9 +50,9 @@ def load(source: str | Path, **settings: Any) -> Scenario:
     TwinInputError
         Unknown scenario, malformed file, a setting that leads nowhere or an invalid field.
     """
-    from twin.scenario import read_scenario_data, scenario_from_dict, set_fields
+    from twin.scenario import load_scenario
 
-    return scenario_from_dict(set_fields(read_scenario_data(source), _paths(settings)))
+    return load_scenario(source, _paths(settings))
 
 
 @dataclass
@@ -210,7 +210,8 @@ def run(
 
 def load_from_model(scenario: Scenario, settings: dict) -> Scenario:
     """A scenario model with ``settings`` applied (validated again)."""
-    from twin.scenario import scenario_from_dict, set_fields
+    from twin.scenario import scenario_from_dict
+    from twin.settings import set_fields
 
     return scenario_from_dict(set_fields(scenario.model_dump(exclude_unset=True), _paths(settings)))
 
@@ -227,7 +228,7 @@ class Sweep:
         The Parquet dataset folder, one row per sample.
     table : pyarrow.Table
         Its rows, as read back.
-    plan : twin.sweeps.plan.Plan
+    plan : twin.sampling.Plan
         The samples' plan.
     axes : tuple of str
         The machine's axes.
@@ -275,7 +276,7 @@ def sweep(
     defaults are the sweep file's, else 100 samples, seed 0, a local cluster of one worker per
     core, ``<scenario>_sweep.parquet``.
     """
-    from twin.scenario import parse_settings
+    from twin.settings import parse_settings
     from twin.sweeps import prepare_sweep, sweep_spec
     from twin.sweeps.run import make_client, read_sweep, run_sweep
     from twin.sweeps.summary import certificates, summarize
@@ -361,7 +362,7 @@ def reproduce(
     TwinInputError
         An unknown paper, or sample counts out of range.
     """
-    from twin.reproductions import REPRODUCTIONS, reproduction
+    from twin.reproductions.registry import REPRODUCTIONS, reproduction
 
     if paper not in REPRODUCTIONS:
         raise TwinInputError("source", paper, f"no reproduction of that paper yet (known: {', '.join(REPRODUCTIONS)})")

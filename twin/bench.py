@@ -54,7 +54,7 @@ from controllers.blocks import with_correction
 from controllers.registry import Context, make_observers
 from twin.machines import build
 from twin.references import Step, SumOfSines
-from twin.scenario import load_scenario, prepare, run_scenario
+from twin.scenario import assemble, load_scenario, run_scenario
 from twin.sim.runner import simulate
 
 #: Gains of case (b): P position loop (1/s), PI velocity loop (V s/m, V/m), observer (Hz, order).
@@ -76,24 +76,14 @@ def _cases() -> dict:
         make_controller("cascade", 1e-4, CASCADE, axes=ctx.axes), make_observers("inverse_model", OBSERVER, ctx)
     )
     npid = make_controller("anang2017_npid", 1e-4, axes=ctx.axes)
-    cutting = prepare(load_scenario("choi1999_cutting_circle"))
-    cutting.pop("duration_s")
-    cutting_machine = cutting.pop("machine")
-    part = prepare(load_scenario("gcode_test_piece"))
-    part.pop("duration_s")
-    part_machine = part.pop("machine")
+    cutting = assemble(load_scenario("choi1999_cutting_circle"))
+    part = assemble(load_scenario("gcode_test_piece"))
     return {
         "hinf_cncmt": (cncmt, lambda sec: simulate(cncmt, hinf, Step(0.01), sec, 1e-4, progress=False)),
         "cascade_dob_googol": (googol, lambda sec: simulate(googol, cascade_dob, sine, sec, 1e-4, progress=False)),
         "npid_googol": (googol, lambda sec: simulate(googol, npid, sine, sec, 1e-4, progress=False)),
-        "cutting_circle_linear_motor": (
-            cutting_machine,
-            lambda sec: simulate(cutting_machine, **cutting, duration_s=sec, progress=False),
-        ),
-        "gcode_test_piece_linear_motor": (
-            part_machine,
-            lambda sec: simulate(part_machine, **part, duration_s=sec, progress=False),
-        ),
+        "cutting_circle_linear_motor": (cutting.machine, lambda sec: cutting.simulate(duration_s=sec, progress=False)),
+        "gcode_test_piece_linear_motor": (part.machine, lambda sec: part.simulate(duration_s=sec, progress=False)),
     }
 
 

@@ -167,12 +167,13 @@ def _run(
     warnings end it with exit code 4 (after the report)."""
     from twin import api
     from twin.scenario import load_scenario
+    from twin.settings import parse_settings
 
     _check_output("--rrd", rrd, ".rrd")
     _check_output("--lines", lines, ".parquet")
     _check_folder(plots)
     _check_folder(part, "--part")
-    scn = load_scenario(scenario, settings)
+    scn = load_scenario(scenario, parse_settings(settings or []), "--set ")
     if part is not None and scn.stock is None:
         raise TwinInputError("--part", str(part), "the virtual part is cut from a stock: the scenario has no [stock]")
     if lines is not None and scn.reference.type != "gcode":
@@ -354,7 +355,7 @@ def reproduce(
     Exits with code 4 if a twin number departs from its transfer-function number by more than 2 %.
     """
     from twin import api
-    from twin.reproductions import reproduction
+    from twin.reproductions.registry import reproduction
 
     _check_output("--rrd", rrd, ".rrd")
     _check_folder(plots)
@@ -399,7 +400,7 @@ def sweep(
     """Run a scenario over sampled parameters on Dask: one Parquet row per sample, a summary of
     bands and the worst case, robustness certificates where one covers the box."""
     from twin import api
-    from twin.scenario import parse_settings
+    from twin.settings import parse_settings
     from twin.sweeps.summary import format_summary
 
     _check_folder(plots)
@@ -458,7 +459,7 @@ def gcode(
     reader_settings, planner = Settings(), None
     if settings or machine is not None:  # the settings' schema (pydantic) only where it is used
         from twin.references.gcode import program_settings
-        from twin.scenario import parse_settings
+        from twin.settings import parse_settings
 
         reference, planner = program_settings(str(file), parse_settings(settings or []))
         reader_settings = reference.reader_settings()
@@ -758,7 +759,7 @@ def list_things():
     from twin.process import DISTURBANCES
     from twin.process.materials import MATERIALS
     from twin.references import REFERENCES
-    from twin.reproductions import REPRODUCTIONS
+    from twin.reproductions.registry import REPRODUCTIONS
     from twin.scenario import bundled_scenarios, load_scenario
 
     def params(kind):

@@ -5,10 +5,7 @@ from __future__ import annotations
 import errno
 import stat
 from pathlib import Path
-from typing import TYPE_CHECKING
-
-if TYPE_CHECKING:
-    from twin.sim.runner import RunResult
+from typing import Any
 
 
 class TwinInputError(ValueError):
@@ -68,7 +65,9 @@ class SimulationDiverged(RuntimeError):
     def __init__(self, sim_time_s: float, reason: str):
         self.sim_time_s = sim_time_s
         self.reason = reason
-        self.result: RunResult | None = None  # the run up to the divergence, where the runner attaches it
+        # the run up to the divergence (a twin.sim.runner.RunResult), where the runner attaches it;
+        # typed Any so that the errors, the floor every module stands on, import nothing above them
+        self.result: Any = None
         super().__init__(f"simulation diverged at t = {sim_time_s:.6f} s: {_short(reason, 300)}")
 
 

@@ -107,7 +107,7 @@ def kinds_markdown(section: str) -> str:
     if section == "machines":
         return _machines()
     if section == "reproductions":
-        from twin.reproductions import REPRODUCTIONS
+        from twin.reproductions.registry import REPRODUCTIONS
 
         return "\n".join(f"- `{name}`: {paper.doc}" for name, paper in REPRODUCTIONS.items()) + "\n"
     raise KeyError(section)

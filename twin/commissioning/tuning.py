@@ -42,6 +42,8 @@ from controllers.lti import SisoTf
 from twin.commissioning.frf import discretized, model_modes, rigid_body, sensor_plant, zoh_response
 from twin.errors import TwinInputError
 from twin.machines import BuiltMachine, build, get_machine
+from twin.metrics import tracking_summary
+from twin.scenario import load_scenario, run_scenario
 from twin.sim.drive import FEEDBACK
 
 #: Stated targets (sampled loops, with the delay).
@@ -226,16 +228,14 @@ def scenario_text(result: dict, machine_path: str, reference: str = "circle") ->
 def verify(result: dict, machine_path: str, folder: Path) -> dict:
     """Run the tuned cascade on the twin: a 1 mm step (overshoot %, 2 % settling time s) and
     a circle (max tracking and contour error, um)."""
-    from twin.api import run as run_scenario
-
     out: dict[str, dict[str, float]] = {}
     for reference in ("step", "circle"):
         path = folder / f"tuned_{reference}.toml"
         path.write_text(scenario_text(result, machine_path, reference), encoding="utf-8")
-        run = run_scenario(str(path))
+        run = run_scenario(load_scenario(path))
         if reference == "step":
-            y = run.result.table_position_m()
-            t = run.result.t_s
+            y = run.table_position_m()
+            t = run.t_s
             for k, a in enumerate(result["axes"]):
                 final = 0.001
                 over = 100 * (y[:, k].max() - final) / final
@@ -243,7 +243,7 @@ def verify(result: dict, machine_path: str, folder: Path) -> dict:
                 out.setdefault(a, {})["step_overshoot_pct"] = float(max(over, 0.0))
                 out[a]["step_settling_s"] = float(t[outside[-1]] - 0.01) if outside.size else 0.0
         else:
-            summary = run.summary
+            summary = tracking_summary(run)
             out["circle"] = {
                 "max_contour_error_um": summary["max_contour_error_um"],
                 "rms_contour_error_um": summary["rms_contour_error_um"],

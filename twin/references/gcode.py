@@ -25,7 +25,9 @@ from twin.gcode.planner import (
     plan_stream,
 )
 from twin.gcode.reader import Reader, Settings
+from twin.process.machining import COLUMNS, ProgramCut, engaged_degrees
 from twin.references.kinds import ReferenceContext, ReferenceSpecBase, register, two_axes
+from twin.settings import set_fields
 from twin.spec import Millimetres, validation_error
 
 #: The work coordinate systems a program may select.
@@ -120,20 +122,30 @@ class GcodeReference(_Samples):
         Which of x, y, z (indices) the machine's axes follow, in its order.
     n_lines : int
         The program's lines read, to its end (M2, M30, the second %) (for the progress bar).
+    cut : twin.process.machining.ProgramCut or None
+        With a stock: the program through it (engagement at each sample, the stock as the program
+        leaves it, machining warnings).
     """
 
-    def __init__(self, planned: Plan, axes: tuple[int, ...], n_lines: int):
-        self.plan, self.axes, self.n_lines = planned, axes, n_lines
+    def __init__(self, planned: Plan, axes: tuple[int, ...], n_lines: int, cut: ProgramCut | None = None):
+        self.plan, self.axes, self.n_lines, self.cut = planned, axes, n_lines, cut
         self.n_axes = len(axes)
         self.period_s = planned.period_s
         self.n_samples = len(planned.position)
-        #: With a stock: the engagement at each sample (:func:`twin.process.machining.engagement_table`)
-        #: and the stock's height map as the program leaves it.
-        self.engagement: np.ndarray | None = None
-        self.height_map = None
-        #: With a stock: crashes and misuse by line (:func:`twin.process.misuse.machining_warnings`).
-        self.warnings: list[dict] = []
-        self.warnings_total = 0
+
+    def cutting(self, cut: ProgramCut) -> GcodeReference:
+        """The same program cutting a stock (``cut``, :func:`twin.process.machining.program_milling`)."""
+        return GcodeReference(self.plan, self.axes, self.n_lines, cut)
+
+    @property
+    def warnings(self) -> list[dict]:
+        """With a stock: crashes and misuse by line (:func:`twin.process.misuse.machining_warnings`)."""
+        return [] if self.cut is None else self.cut.warnings
+
+    @property
+    def warnings_total(self) -> int:
+        """Every warning, listed or not."""
+        return 0 if self.cut is None else self.cut.warnings_total
 
     def _window(self, t):
         return 0, self.plan.position, self.plan.velocity, self.plan.acceleration, self.plan.line
@@ -146,12 +158,11 @@ class GcodeReference(_Samples):
     def engagement_at(self, t) -> np.ndarray:
         """The engaged angle (deg) and axial depth (mm) at times ``t`` (s), shape (len(t), 2);
         empty without a stock."""
-        if self.engagement is None:
+        if self.cut is None:
             return np.zeros((0, 2))
-        from twin.process.machining import COLUMNS, engaged_degrees
-
-        k = np.clip(np.rint(np.asarray(t, float) / self.plan.period_s).astype(int), 0, len(self.engagement) - 1)
-        rows = self.engagement[k]
+        table = self.cut.table
+        k = np.clip(np.rint(np.asarray(t, float) / self.plan.period_s).astype(int), 0, len(table) - 1)
+        rows = table[k]
         return np.column_stack([engaged_degrees(rows), rows[:, COLUMNS.index("max_depth_mm")]])
 
     def feeds_at(self, t) -> np.ndarray:
@@ -162,7 +173,7 @@ class GcodeReference(_Samples):
     def outlines(self) -> dict[str, list[np.ndarray]]:
         """With a stock: its outline and the machined one (mm, see
         :meth:`twin.process.machining.HeightMap.outlines`, computed once); else empty."""
-        return {} if self.height_map is None else self.height_map.outlines()
+        return {} if self.cut is None else self.cut.height_map.outlines()
 
     @property
     def texts(self) -> dict[int, str]:
@@ -198,9 +209,6 @@ class StreamedGcodeReference(_Samples):
         self.chunks, _facts = plan_stream(moves(), limits, settings)
         self.first = 0
         self.held = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, int))
-        #: No stock is cut by a streamed program: no machining warnings.
-        self.warnings: list[dict] = []
-        self.warnings_total = 0
 
     def _window(self, t):
         dt = self.period_s
@@ -237,7 +245,17 @@ class StreamedGcodeReference(_Samples):
 
     @property
     def outlines(self) -> dict[str, list[np.ndarray]]:
+        """No stock is cut by a streamed program: none."""
         return {}
+
+    @property
+    def warnings(self) -> list[dict]:
+        """No stock: no machining warnings."""
+        return []
+
+    @property
+    def warnings_total(self) -> int:
+        return 0
 
     @property
     def texts(self) -> dict[int, str]:
@@ -349,7 +367,6 @@ def program_settings(file: str, settings: dict):
     from pydantic import ValidationError
 
     from twin.errors import TwinInputError
-    from twin.scenario import set_fields
 
     for path in settings:
         if not str(path).startswith(("reference.", "planner.")):

@@ -1,4 +1,5 @@
-"""What every paper's reproduction is: a :class:`Reproduction` registered under its seed name."""
+"""What every paper's reproduction is: a :class:`Reproduction` registered under its paper's name,
+and the comparison every one of them makes (:func:`twin_vs_tf`)."""
 
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ class Reproduction:
     records); it is imported on first use, so listing the reproductions stays cheap.
     """
 
-    #: The seed name (``twin reproduce <name>``).
+    #: The paper's name (``twin reproduce <name>``).
     name: str = ""
     #: The module that computes, prints and plots.
     report_module: str = ""
@@ -68,7 +69,8 @@ class Reproduction:
         return []
 
 
-#: Reproductions by seed name, in registration order.
+#: Reproductions by paper name, in registration order (every one is registered by importing
+#: :mod:`twin.reproductions.registry`).
 REPRODUCTIONS: dict[str, Reproduction] = {}
 
 
@@ -78,3 +80,13 @@ def register_reproduction(cls: type[Reproduction]) -> type[Reproduction]:
         raise ValueError(f"reproduction {cls.name!r} has no name or is registered twice")
     REPRODUCTIONS[cls.name] = cls()
     return cls
+
+
+def twin_vs_tf(label: str, twin: dict, tf: dict, keys, tol_rel: float) -> list[str]:
+    """The ``keys`` whose twin value departs from the transfer-function value by more than
+    ``tol_rel`` of it, one line each, prefixed by ``label``."""
+    return [
+        f"{label}: {key} twin {twin[key]:.4g} vs TF {tf[key]:.4g}"
+        for key in keys
+        if abs(twin[key] - tf[key]) > tol_rel * abs(tf[key])
+    ]

@@ -26,7 +26,8 @@ import re
 import sys
 from pathlib import Path
 
-from twin.reproductions import DEFAULT_SAMPLES, DEFAULT_SEED, DEFAULT_TWIN_SAMPLES, REPRODUCTIONS, reproduction
+from twin.reproductions import DEFAULT_SAMPLES, DEFAULT_SEED, DEFAULT_TWIN_SAMPLES
+from twin.reproductions.registry import REPRODUCTIONS, reproduction
 
 #: The repository's docs folder (this file is twin/reproductions/tables.py).
 DOCS = Path(__file__).resolve().parents[2] / "docs"

@@ -34,8 +34,6 @@ class ProgramReference(Reference, Protocol):
     line texts, and with a stock its outlines (mm) and machining warnings."""
 
     n_lines: int
-    warnings: list[dict]
-    warnings_total: int
 
     @property
     def duration_s(self) -> float: ...
@@ -45,6 +43,12 @@ class ProgramReference(Reference, Protocol):
 
     @property
     def outlines(self) -> dict[str, list[np.ndarray]]: ...
+
+    @property
+    def warnings(self) -> list[dict]: ...
+
+    @property
+    def warnings_total(self) -> int: ...
 
     def line_at(self, t: float) -> int: ...
 

@@ -10,8 +10,8 @@ from dataclasses import dataclass
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from twin.errors import input_file
+from twin.sampling import Plan, parse_variation
 from twin.spec import validation_error
-from twin.sweeps.plan import Plan, parse_variation
 
 
 class SweepFile(BaseModel):
@@ -84,14 +84,15 @@ def prepare_sweep(
         become ``error`` rows.
     """
     from twin.machines import get_machine
-    from twin.scenario import prepare, read_scenario_data, scenario_from_dict, set_fields
+    from twin.scenario import assemble, read_scenario_data, scenario_from_dict
+    from twin.settings import set_fields
     from twin.sweeps.run import scenario_value
 
     data = set_fields(read_scenario_data(scenario), settings, "--set ")
     scn = scenario_from_dict(data)
     plan = Plan([parse_variation(v, get_machine(scn.machine).parameters) for v in vary], samples, seed, latin_hypercube)
-    checked = prepare(scn)
+    checked = assemble(scn)
     # the varied paths lead into the scenario (a value the scenario rejects is that sample's error row)
     set_fields(data, {p: scenario_value(v) for p, v in plan.values(0).items()}, "--vary ")
     controller = scn.controller.type if scn.controller is not None else None
-    return Sweep(data, scn.name, scn.machine, controller, tuple(a.name for a in checked["machine"].axes), plan)
+    return Sweep(data, scn.name, scn.machine, controller, tuple(a.name for a in checked.machine.axes), plan)

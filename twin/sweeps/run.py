@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from twin.errors import SimulationDiverged, TwinInputError
-from twin.sweeps.plan import Plan
+from twin.sampling import Plan
 
 STATUSES = ("ok", "diverged", "error")
 
@@ -62,7 +62,8 @@ def run_sample(base: dict, index: int, values: dict, seed: int, axes) -> dict:
     error).  Never raises for the sample's own failures: a diverging run is a ``diverged`` row
     with the simulated time, an invalid or failing one an ``error`` row with the message.
     """
-    from twin.scenario import run_scenario, scenario_from_dict, set_fields
+    from twin.scenario import run_scenario, scenario_from_dict
+    from twin.settings import set_fields
 
     row = {
         "index": index,

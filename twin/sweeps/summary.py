@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from twin.sweeps.plan import Plan
+from twin.sampling import Plan
 from twin.sweeps.run import metric_columns
 
 #: The metric the worst case is chosen by: the largest max tracking error over the axes.
@@ -64,7 +64,7 @@ def certificates(machine: str, controller: str | None, plan: Plan) -> list[dict]
     sweep's, from every reproduction that offers one (:func:`twin.reproductions.certificates`):
     Yadav 2020's Kharitonov verdict over Table 1's box, Choi 1999's mu upper bounds.  Empty when
     none applies."""
-    from twin.reproductions import certificates as offered
+    from twin.reproductions.registry import certificates as offered
 
     symbols = {v.path.removeprefix("overrides.") for v in plan.variations if v.path.startswith("overrides.")}
     others = [v.path for v in plan.variations if not v.path.startswith("overrides.")]

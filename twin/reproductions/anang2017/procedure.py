@@ -37,7 +37,7 @@ from twin.machines import build
 from twin.machines.googol import GoogolXY
 from twin.process.cutting import EndMilling
 from twin.references import SumOfSines
-from twin.reproductions import twin_vs_tf
+from twin.reproductions.base import twin_vs_tf
 from twin.sim.runner import simulate
 from twin.sim.tf_loop import tf_loop
 

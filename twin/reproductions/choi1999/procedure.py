@@ -30,7 +30,7 @@ from controllers.papers import choi1999 as s4
 from controllers.papers.choi1999 import cutting_coupled_plant
 from twin.metrics import contour_error
 from twin.references import Circle
-from twin.reproductions import twin_vs_tf
+from twin.reproductions.base import twin_vs_tf
 
 KINDS = ("mimo", "pid")
 OMEGA = np.logspace(-1, 4, 121)  # rad/s, the mu plots' grid (Figs. 6-7)

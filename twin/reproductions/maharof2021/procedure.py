@@ -35,8 +35,8 @@ from twin.machines.googol import GoogolXY
 from twin.process.cutting import EndMilling
 from twin.process.disturbances import HarmonicInput
 from twin.references import SumOfSines
-from twin.reproductions import twin_vs_tf
 from twin.reproductions.anang2017.procedure import CUT, DT_S, TWIN_TOL_REL, machine, sine_reference
+from twin.reproductions.base import twin_vs_tf
 from twin.sim.runner import simulate
 from twin.sim.tf_loop import tf_loop
 

@@ -187,14 +187,14 @@ def relay_test(delay_s: float, twin: bool) -> dict:
     """The relay experiment (bundled ``sabau2022_relay``: both axes, coupling off, at the physics
     step) with ``delay_s`` of drive delay: Ku = 4 d/(pi a), Pu measured over t >= 1 s, on the TF
     loop and the twin, beside the exact ultimate point of the same sampled loop."""
-    from twin.scenario import prepare, run_scenario, scenario_from_dict
+    from twin.scenario import assemble, run_scenario, scenario_from_dict
 
     data = relay_scenario(delay_s)
     params = data["controller"]["params"]
-    kw = prepare(scenario_from_dict(data))
-    dt, duration = kw["control_period_s"], kw["duration_s"]
+    inputs = assemble(scenario_from_dict(data))
+    dt, duration = inputs.control_period_s, inputs.duration_s
     zero = np.zeros((round(duration / dt), 2, 3))
-    runs: dict[str, Any] = {"tf": tf_run(kw["controllers"][0], duration, ref=zero, delay_s=delay_s)[:2]}
+    runs: dict[str, Any] = {"tf": tf_run(inputs.controllers[0], duration, ref=zero, delay_s=delay_s)[:2]}
     if twin:
         res = run_scenario(scenario_from_dict(data), progress=False)
         runs["twin"] = (res.t_s, res.table_position_m())
@@ -596,13 +596,13 @@ def trajectory_run(path: str, experiment: int):
 
 def trajectory_tf(path: str, experiment: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(t_s, ref m (n, 2), pos m (n, 2))`` of the same cell on the TF loop (coupled eq. 6)."""
-    from twin.scenario import prepare, scenario_from_dict
+    from twin.scenario import assemble, scenario_from_dict
 
-    kw = prepare(scenario_from_dict(trajectory_scenario(path, experiment)))
-    n = round(kw["duration_s"] / DT)
+    inputs = assemble(scenario_from_dict(trajectory_scenario(path, experiment)))
+    n = round(inputs.duration_s / DT)
     t = np.arange(n) * DT
-    ref = kw["reference"].sample(t)
-    _, pos, _ = tf_run(kw["controllers"][0], kw["duration_s"], coupled=True, ref=ref)
+    ref = inputs.reference.sample(t)
+    _, pos, _ = tf_run(inputs.controllers[0], inputs.duration_s, coupled=True, ref=ref)
     return t, ref[:, :, 0], pos
 
 

@@ -420,8 +420,8 @@ def twin_step(controller, params: dict[str, float]) -> dict:
 
 
 def _box_plan(spec: str, samples: int, seed: int = 0):
-    """A :class:`twin.sweeps.plan.Plan` varying K1, K2, m and Im of cncmt by ``spec``."""
-    from twin.sweeps.plan import Plan, parse_variation
+    """A :class:`twin.sampling.Plan` varying K1, K2, m and Im of cncmt by ``spec``."""
+    from twin.sampling import Plan, parse_variation
 
     params = get_machine("cncmt").parameters
     return Plan([parse_variation(f"overrides.{s}={spec}", params) for s in BOX_SYMBOLS], samples, seed)

@@ -1,0 +1,26 @@
+"""Every paper's reproduction, registered: importing this module imports each paper's package
+(in the order of the source texts, :data:`controllers.papers.PAPERS`)."""
+
+from __future__ import annotations
+
+import importlib
+
+from controllers.papers import PAPERS
+from twin.reproductions.base import REPRODUCTIONS, Reproduction
+
+for _paper in PAPERS:
+    importlib.import_module(f"twin.reproductions.{_paper}")
+
+
+def reproduction(paper: str) -> Reproduction:
+    """The reproduction of ``paper`` (e.g. ``choi1999``)."""
+    return REPRODUCTIONS[paper]
+
+
+def certificates(machine: str, controller: str | None, symbols: set[str], others: list[str]) -> list[dict]:
+    """Every reproduction's robustness certificates for ``controller`` on ``machine`` when a sweep
+    varies the machine parameters ``symbols`` (and the other scenario paths ``others``)."""
+    return [c for r in REPRODUCTIONS.values() for c in r.certificates(machine, controller, symbols, others)]
+
+
+__all__ = ["REPRODUCTIONS", "certificates", "reproduction"]

@@ -1,0 +1,61 @@
+"""Running a scenario: its run, and with a stock the part the actual motion cut and its
+inspected features."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from twin.process.inspection import measure, not_found
+from twin.process.machining import StockSpec
+from twin.process.part import MachinedPart, SectionTooComplex, Sweep, machined_part
+from twin.process.part_map import part_map
+from twin.scenario.assembly import assemble
+from twin.scenario.schema import Scenario
+from twin.sim.runner import MAX_PHYSICS_STEPS, RunResult
+
+
+def run_scenario(scn: Scenario, progress: bool | None = None, max_physics_steps: int = MAX_PHYSICS_STEPS) -> RunResult:
+    """Assemble and run a scenario (see :func:`twin.sim.runner.simulate`); with a stock, the part
+    the run cut and its inspected features."""
+    inputs = assemble(scn)
+    result = inputs.simulate(progress=progress, max_physics_steps=max_physics_steps)
+    if scn.stock is not None and result.program is not None and len(result.t_s):
+        result.part = _machined_part(result, result.program.lines, inputs.reference, scn.stock)
+        result.inspection = [_inspect(f, result.part) for f in scn.inspect]
+    return result
+
+
+def _inspect(feature, part: MachinedPart) -> dict:
+    """A feature measured on the actual part's section at its height, or why it cannot be."""
+    try:
+        return measure(feature, part.actual.section(part.stock, feature.z_mm))
+    except SectionTooComplex as exc:
+        return not_found(feature, str(exc))
+
+
+def _machined_part(result: RunResult, lines: np.ndarray, reference, stock: StockSpec) -> MachinedPart:
+    """The part the run's actual motion cut: the table's measured path at the recorded ticks,
+    the planned Z and the tool of the planned sample at each tick (its program ``lines``); against
+    the nominal part of the program (the ``reference`` cutting the stock) as far as the run went
+    (a run stopped before the program's end, by its duration or a divergence, is compared with
+    what the program had cut by then, not with material it never reached)."""
+    plan, cut = reference.plan, reference.cut
+    full = Sweep(
+        plan.position[:, :2] * 1e3, plan.position[:, 2] * 1e3, cut.radius_m * 1e3, cut.corner_m * 1e3, plan.line
+    )
+    k = np.clip(np.rint(result.t_s / plan.period_s).astype(int), 0, len(full.line) - 1)
+    reached = slice(0, int(k[-1]) + 1 if k.size else 0)
+    nominal = Sweep(
+        full.xy_mm[reached], full.tip_mm[reached], full.radius_mm[reached], full.corner_mm[reached], full.line[reached]
+    )
+    actual = Sweep(
+        result.table_position_m()[:, :2] * 1e3,
+        nominal.tip_mm[k],
+        nominal.radius_mm[k],
+        nominal.corner_mm[k],
+        lines,
+    )
+    part = machined_part(stock.polygon(), nominal, actual, stock.top_mm, stock.bottom_mm)
+    part.maps = part_map(stock, nominal, actual)
+    part.floor_error_um = part.maps.floor_error()
+    return part
