@@ -45,7 +45,7 @@ def calibration(machine: str, folder: Path) -> dict:
     hidden = hidden_variant(machine)
     measured = twin.frf(
         machine, hidden, loop="open", excitation="prbs", amplitude_V=2.0, duration_s=3.3, f_max_hz=500.0
-    )["run"]
+    ).run
     trace = folder / f"{Path(machine).stem}_trace.parquet"
     start = measured.t_s[np.flatnonzero(measured.u_applied_V[:, 0])[0]]  # after the FRF's settling
     first = measured.t_s < start + 0.6  # at rest until then; the open loop drifts: 0.6 s of it
@@ -57,7 +57,7 @@ def calibration(machine: str, folder: Path) -> dict:
         "pos_x_m": np.round(position / SCALE_M) * SCALE_M + noise,  # as a scale reads it
     }
     write_table(columns, trace)
-    result = twin.calibrate(machine, trace, list(hidden))
+    result = twin.calibrate(machine, trace, list(hidden)).summary
     errors = {k: result["fitted"][k] / v - 1 for k, v in hidden.items() if k in result["fitted"]}
     return {
         "hidden": hidden,
@@ -76,10 +76,10 @@ def main(machines: list[str]) -> list[dict]:
         for machine in machines:
             row = {"machine": machine, "modes": {}}
             for axis in ("x", "y"):
-                f = twin.frf(machine, axis=axis)
+                f = twin.frf(machine, axis=axis).summary
                 row["modes"][axis] = (f["resonances_hz"], f["model_resonances_hz"])
             row["calibration"] = calibration(machine, Path(folder))
-            row["tune"] = twin.tune(machine)
+            row["tune"] = twin.tune(machine).summary
             rows.append(row)
             print(Path(machine).name)
             for axis, (measured, model) in row["modes"].items():

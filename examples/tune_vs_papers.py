@@ -27,7 +27,7 @@ def main(duration_s: float | None) -> list[dict]:
     for scenario, paper in CASES:
         settings = {} if duration_s is None else {"duration_s": duration_s}
         base = twin.load(scenario, **settings)
-        design = twin.tune(base.machine, dict(base.overrides), base.control_period_s)
+        design = twin.tune(base.machine, dict(base.overrides), base.control_period_s).summary
         tuned = {a: {"type": "servo_cascade", "params": r["gains"]} for a, r in design["axes"].items()}
         ours = twin.run(scenario, controller=None, controllers=tuned, **settings).summary
         theirs = twin.run(scenario, **settings).summary

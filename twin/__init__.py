@@ -9,14 +9,32 @@ command line start fast::
 
 ``twin.load``, ``twin.run``, ``twin.sweep``, ``twin.fidelity``, ``twin.reproduce``,
 ``twin.program`` (a part program read and planned, as ``twin gcode``), ``twin.frf``,
-``twin.calibrate`` and ``twin.tune`` (a machine's FRF, calibration and tuning), and the
-classes ``twin.Run`` and ``twin.Sweep``; errors are :class:`twin.errors.TwinInputError` and
+``twin.calibrate`` and ``twin.tune`` (a machine's FRF, calibration and tuning), and what they
+return (:mod:`twin.results`): ``twin.Run``, ``twin.Sweep``, ``twin.Program``, ``twin.Frf``,
+``twin.Calibration``, ``twin.Tuning`` and ``twin.Fidelity``; errors are :class:`twin.errors.TwinInputError` and
 :class:`twin.errors.SimulationDiverged`.
 """
 
 from __future__ import annotations
 
-__all__ = ["Run", "Sweep", "calibrate", "fidelity", "frf", "load", "program", "reproduce", "run", "sweep", "tune"]
+__all__ = [
+    "Calibration",
+    "Fidelity",
+    "Frf",
+    "Program",
+    "Run",
+    "Sweep",
+    "Tuning",
+    "calibrate",
+    "fidelity",
+    "frf",
+    "load",
+    "program",
+    "reproduce",
+    "run",
+    "sweep",
+    "tune",
+]
 
 
 def __getattr__(name: str):

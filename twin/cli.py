@@ -17,7 +17,7 @@ from pathlib import Path
 import typer
 
 from twin import exits
-from twin.errors import RunInterrupted, SimulationDiverged, TwinInputError
+from twin.errors import TwinInputError
 from twin.reproductions import DEFAULT_SAMPLES, DEFAULT_SEED, DEFAULT_TWIN_SAMPLES
 
 app = typer.Typer(
@@ -181,14 +181,10 @@ def _run(
         raise TwinInputError("--lines", str(lines), f"a per-line table needs a G-code reference, not {kind}")
     if rrd is not None and scn.record_every_ticks == 0:
         raise TwinInputError("record_every_ticks", 0, "the run keeps metrics only: nothing to write to --rrd")
-    try:
-        done = api.run(scn, progress=False if as_json else None, max_physics_steps=max_steps)
-    except (SimulationDiverged, RunInterrupted) as exc:
-        status = "diverged" if isinstance(exc, SimulationDiverged) else "interrupted"
-        if exc.result is not None:
-            _report(api.Run(scn, exc.result, status, {"sim_time_s": exc.sim_time_s}), rrd, as_json, plots, lines, part)
-        raise
-    _report(done, rrd, as_json, plots, lines, part)
+    done = api.run(scn, progress=False if as_json else None, max_physics_steps=max_steps, keep_partial=True)
+    _report(done, rrd, as_json, plots, lines, part)  # a run that stopped early too: what it computed
+    if done.stopped is not None:
+        raise done.stopped
     program = done.result.program  # what the report printed, not computed again
     if strict and program is not None and program.machining_warnings:
         first = program.machining_warnings[0]
@@ -321,17 +317,17 @@ def fidelity(
 
     results = api.fidelity(machine or [], **_parse_sets(sets or []))
     if not as_json:
-        for r in results:
+        for r in results.cases:
             typer.echo(
                 f"{r['case']:<30} nrmse {r['time_nrmse']:.2e}  |dmag| {r['frf_max_mag_err_db']:.4f} dB  "
                 f"|dphase| {r['frf_max_phase_err_deg']:.3f} deg  slip {r['coupling_slip_um']:.4f} um  "
                 f"{'PASS' if r['pass'] else 'FAIL'}"
             )
     if as_json:
-        _echo_json(results, 2)
+        _echo_json(results.summary, 2)
     else:
         typer.echo("targets: " + ", ".join(f"{k} <= {v}" for k, v in TARGETS.items()))
-    failed = [r["case"] for r in results if not r["pass"]]
+    failed = results.failed
     if failed:
         typer.echo(f"error: {len(failed)} case(s) miss their fidelity targets: {', '.join(failed)}", err=True)
         raise typer.Exit(exits.CHECK_FAILED)
@@ -458,12 +454,12 @@ def gcode(
 
     reader_settings, planner = Settings(), None
     if settings or machine is not None:  # the settings' schema (pydantic) only where it is used
-        from twin.references.gcode import program_settings
+        from twin.references.gcode import planned_for, program_settings
         from twin.settings import parse_settings
 
         reference, planner = program_settings(str(file), parse_settings(settings or []))
         reader_settings = reference.reader_settings()
-    plan = None if machine is None else (lambda moves: _planned(file, moves, machine, planner))
+    plan = None if machine is None else (lambda moves: planned_for(file, moves, machine, planner))
     planned = list_program(file, reader_settings, as_json, plan)
     if planned is not None and not as_json:
         typer.echo(f"planned for {machine}:")
@@ -479,19 +475,6 @@ def gcode(
                 f"a {top['acceleration_m_per_s2']:.4g}/{lim['acceleration_m_per_s2']:.4g} m/s^2, "
                 f"j {top['jerk_m_per_s3']:.4g}/{lim['jerk_m_per_s3']:.4g} m/s^3 (largest/limit)"
             )
-
-
-def _planned(file: Path, moves: list, machine: str, planner) -> dict:
-    """The ``planned`` table of ``twin gcode --machine``."""
-    from twin.gcode.planner import PlanningError, plan
-    from twin.gcode.report import planned_summary
-    from twin.machines import build
-
-    limits = planner.limits(build(machine).motion_limits)
-    try:
-        return planned_summary(plan(moves, limits, planner), limits)
-    except PlanningError as exc:
-        raise TwinInputError("file", str(file), str(exc)) from None
 
 
 @app.command()
@@ -516,17 +499,14 @@ def frf(
 ):
     """Measure an axis's frequency response on the twin as a commissioning tool does (excite,
     H1 with coherence, resonances and anti-resonances) beside the model's."""
-    from twin.commissioning.frf import FrfSettings, measure, write_bode
-    from twin.machines import get_machine
-    from twin.machines.datasheet import DatasheetMachine
+    from twin import api
+    from twin.commissioning.frf import nut_stiffness
 
     _check_output("--rrd", rrd, ".rrd")
     _check_folder(plots)
     overrides = _parse_sets(sets or [])
-    at_position = ""  # the stiffness where the nut is, for the summary
     if position is not None:
-        spec = get_machine(machine)
-        if not isinstance(spec, DatasheetMachine) or f"{axis}_nut_position_m" not in spec.parameters:
+        if nut_stiffness(machine, axis) is None:
             raise TwinInputError(
                 "--position",
                 position,
@@ -534,23 +514,19 @@ def frf(
                 "nut's position)",
             )
         overrides[f"{axis}_nut_position_m"] = position
-        params = spec.resolve(overrides)
-        at_position = (
-            f"  nut at {position:g} m: axial stiffness {spec.axial_N_per_m(params, axis) / 1e6:.4g} N/um, "
-            f"torsion {spec.torsion_N_m_per_rad(params, axis):.4g} N m/rad"
-        )
-    settings = FrfSettings(
+    measured = api.frf(
+        machine,
+        overrides,
         axis=axis,
-        loop=loop,  # type: ignore[arg-type]
-        sensor=sensor,  # type: ignore[arg-type]
-        excitation=excitation,  # type: ignore[arg-type]
+        loop=loop,
+        sensor=sensor,
+        excitation=excitation,
         amplitude_V=amplitude,
         duration_s=duration,
         f_max_hz=f_max,
-        feedback=feedback,  # type: ignore[arg-type]
+        feedback=feedback,
     )
-    result = measure(machine, settings, overrides)
-    run = result.pop("run")
+    result = measured.summary
     if as_json:
         _echo_json(result, 1)
     else:
@@ -559,11 +535,15 @@ def frf(
             f"{excitation} {amplitude:g} V, "
             f"{len(result['frequency_hz'])} lines {result['frequency_hz'][0]:.2f}-{result['frequency_hz'][-1]:.0f} Hz"
         )
-        if at_position:
-            typer.echo(at_position)
+        nut = measured.nut_stiffness
+        if position is not None and nut is not None:
+            typer.echo(
+                f"  nut at {position:g} m: axial stiffness {nut['axial_N_per_m'] / 1e6:.4g} N/um, "
+                f"torsion {nut['torsion_N_m_per_rad']:.4g} N m/rad"
+            )
         for label, key in (("resonances", "resonances_hz"), ("anti-resonances", "antiresonances_hz")):
-            measured, model = (", ".join(f"{f:.1f}" for f in result[k]) or "none" for k in (key, f"model_{key}"))
-            typer.echo(f"  {label} (Hz): {measured}   model: {model}")
+            found, model = (", ".join(f"{f:.1f}" for f in result[k]) or "none" for k in (key, f"model_{key}"))
+            typer.echo(f"  {label} (Hz): {found}   model: {model}")
         error = result["max_model_error_db"]
         typer.echo(
             f"  coherence >= 0.9 on {100 * result['coherent_share']:.0f} % of the lines; "
@@ -571,13 +551,10 @@ def frf(
         )
     if plots is not None:
         plots.mkdir(parents=True, exist_ok=True)
-        path = plots / f"frf_{Path(machine).stem}_{axis}_{loop}_{sensor}.png"
-        write_bode(result, path)
+        path = measured.write_bode(plots / f"frf_{Path(machine).stem}_{axis}_{loop}_{sensor}.png")
         typer.echo(f"plot written to {path}", err=as_json)
     if rrd is not None:
-        from twin.recording import record
-
-        record(run, rrd)
+        measured.record(rrd)
         typer.echo(f"recording written to {rrd} (view with: rerun {rrd})", err=as_json)
 
 
@@ -595,15 +572,17 @@ def calibrate(
 ):
     """Fit named machine parameters to a measured time trace or FRF (least squares through the
     twin), with standard errors and the fit index before and after."""
-    from twin.commissioning.calibration import calibrate as fit_machine
+    from twin import api
     from twin.machines import get_machine, is_machine_file
-    from twin.machines.datasheet import DatasheetMachine, machine_file_text
 
     _check_output("--out", out, ".toml")
     if out is not None and not is_machine_file(machine):
         raise TwinInputError("--out", str(out), "writes a machine file: calibrate a machine file (FILE.toml)")
     symbols = [s.strip() for s in fit.split(",") if s.strip()]
-    result = fit_machine(machine, trace, symbols, _parse_sets(sets or []), axis, progress=not as_json, sensor=sensor)
+    calibration = api.calibrate(
+        machine, trace, symbols, _parse_sets(sets or []), axis, sensor=sensor, progress=not as_json
+    )
+    result = calibration.summary
     if as_json:
         _echo_json(result, 2)
     else:
@@ -632,12 +611,7 @@ def calibrate(
         for s, why in result["not_excited"].items():
             typer.echo(f"  {s}: not excited: {why}")
     if out is not None:
-        note = f"calibrated by twin calibrate against {trace}: " + ", ".join(
-            f"{s} = {v:.6g}" for s, v in result["fitted"].items()
-        )
-        calibrated = get_machine(machine)
-        assert isinstance(calibrated, DatasheetMachine)  # --out was refused above for a bundled machine
-        out.write_text(machine_file_text(calibrated, result["fitted"], note), encoding="utf-8")
+        calibration.write_machine_file(out)
         typer.echo(f"calibrated machine file written to {out}", err=as_json)
 
 
@@ -691,19 +665,15 @@ def tune(
     """Design each axis's position P / velocity PI cascade with feedforward and a notch or
     low-pass where a resonance needs it (phase margin >= 45 deg, gain margin >= 6 dB on the
     sampled loop with its delay), verify it on the twin and write it as a scenario."""
-    import tempfile
-
-    from twin.commissioning import tuning
-    from twin.machines import is_machine_file
+    from twin import api
 
     _check_output("--out", out, ".toml")
     if control_period is not None and not (1e-6 <= control_period <= 0.1):
         raise TwinInputError("--control-period", control_period, "must be in [1e-6, 0.1] s")
-    result = tuning.tune(machine, _parse_sets(sets or []), control_period, feedback)
-    where = str(Path(machine).resolve()) if is_machine_file(machine) else machine
+    tuned = api.tune(machine, _parse_sets(sets or []), control_period, feedback)
     if check:
-        with tempfile.TemporaryDirectory() as folder:
-            result["verification"] = tuning.verify(result, where, Path(folder))
+        tuned.verify()
+    result = tuned.summary
     if as_json:
         _echo_json(result, 2)
     else:
@@ -726,7 +696,7 @@ def tune(
         for a, v in result.get("verification", {}).items():
             typer.echo(f"  verified on the twin, {a}: " + ", ".join(f"{k} {x:.4g}" for k, x in v.items()))
     if out is not None:
-        out.write_text(tuning.scenario_text(result, where), encoding="utf-8")
+        out.write_text(tuned.scenario_text(), encoding="utf-8")
         typer.echo(f"scenario written to {out} (run it: twin run {out})", err=as_json)
 
 

@@ -29,7 +29,8 @@ from scipy import signal
 from controllers.blocks import error_feedback, open_loop, sum_of
 from controllers.lti import SisoTf
 from twin.errors import SimulationDiverged, TwinInputError
-from twin.machines import BuiltMachine, build
+from twin.machines import BuiltMachine, build, get_machine
+from twin.machines.datasheet import DatasheetMachine
 from twin.references import Step
 from twin.sim.drive import Encoder
 from twin.sim.runner import simulate
@@ -356,6 +357,22 @@ def model_modes(bm: BuiltMachine, axis: int, sensor: str) -> tuple[list[float], 
 
     g = sensor_plant(bm, axis, sensor)
     return frequencies(g.den), frequencies(g.num)
+
+
+def nut_stiffness(machine: str, axis: str, overrides: dict[str, float] | None = None) -> dict | None:
+    """On a machine file whose stiffness follows the nut (``screw_root_diameter_m`` on ``axis``):
+    the nut's position (m) and the axial (N/m) and torsional (N m/rad) stiffness there; else
+    None."""
+    spec = get_machine(machine)
+    key = f"{axis}_nut_position_m"
+    if not isinstance(spec, DatasheetMachine) or key not in spec.parameters:
+        return None
+    params = spec.resolve(overrides or {})
+    return {
+        "position_m": params[key],
+        "axial_N_per_m": spec.axial_N_per_m(params, axis),
+        "torsion_N_m_per_rad": spec.torsion_N_m_per_rad(params, axis),
+    }
 
 
 def measure(machine: str, settings: FrfSettings, overrides: dict[str, float] | None = None) -> dict:

@@ -8,12 +8,15 @@ the machine having no Z axis.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from functools import cached_property
 from typing import ClassVar, Literal
 
 import numpy as np
 from pydantic import Field
 
+from twin.errors import TwinInputError, input_file
 from twin.gcode.planner import (
     MAX_PROGRAM_SAMPLES,
     MAX_SAMPLES,
@@ -22,9 +25,12 @@ from twin.gcode.planner import (
     PlannerSettings,
     PlanningError,
     hold_or_count,
+    plan,
     plan_stream,
 )
 from twin.gcode.reader import Reader, Settings
+from twin.gcode.report import planned_summary
+from twin.machines import build as build_machine
 from twin.process.machining import COLUMNS, ProgramCut, engaged_degrees
 from twin.references.kinds import ReferenceContext, ReferenceSpecBase, register, two_axes
 from twin.settings import set_fields
@@ -305,8 +311,6 @@ def build(spec: GcodeRef, ctx: ReferenceContext) -> GcodeReference | StreamedGco
     TwinInputError
         ``reference.file`` naming the program's line and the reason; or the planner's settings.
     """
-    from twin.errors import TwinInputError, input_file
-
     two_axes(spec.type, ctx.axis_names)
     if ctx.machine is None:
         raise TwinInputError("reference.type", spec.type, "a program is planned for a machine: give one")
@@ -319,12 +323,10 @@ def build(spec: GcodeRef, ctx: ReferenceContext) -> GcodeReference | StreamedGco
     limits = settings.limits(ctx.machine.motion_limits)
     axes = tuple("xyz".index(a) for a in ctx.axis_names)
     reader = Reader(None, reader_settings, str(path), path=path)
-    try:
+    with planning_errors("reference.file", spec.file):
         held, facts, samples = hold_or_count(
             reader.moves(), limits, settings, MAX_SAMPLES if ctx.stock else HELD_SAMPLES
         )
-    except PlanningError as exc:
-        raise TwinInputError("reference.file", spec.file, str(exc)) from None
     if held is not None:
         return GcodeReference(held, axes, reader.lines_read)
     if samples > MAX_PROGRAM_SAMPLES:
@@ -354,6 +356,31 @@ def build(spec: GcodeRef, ctx: ReferenceContext) -> GcodeReference | StreamedGco
 register("gcode", GcodeRef, build)
 
 
+@contextmanager
+def planning_errors(field: str, file) -> Iterator[None]:
+    """A program's planning error (:class:`~twin.gcode.planner.PlanningError`) as the twin's input
+    error under ``field``, naming the program ``file``: the one translation of every door that
+    plans a program (a run's reference, ``twin gcode --machine``, ``twin.program``)."""
+    try:
+        yield
+    except PlanningError as exc:
+        raise TwinInputError(field, str(file), str(exc)) from None
+
+
+def planned_for(file, moves: list, machine: str, planner: PlannerSettings) -> dict:
+    """The ``planned`` table of ``twin gcode --machine``: the ``moves`` of ``file`` planned for
+    ``machine`` (:func:`twin.gcode.report.planned_summary`).
+
+    Raises
+    ------
+    TwinInputError
+        An unknown machine, or a program the planner refuses (named as ``file``).
+    """
+    limits = planner.limits(build_machine(machine).motion_limits)
+    with planning_errors("file", file):
+        return planned_summary(plan(moves, limits, planner), limits)
+
+
 def program_settings(file: str, settings: dict):
     """The reader's table and the planner's settings for ``twin gcode FILE``: ``settings`` are
     dotted paths below ``reference.`` (work_offsets_mm, tool_lengths_mm, g28_home_mm) and
@@ -365,8 +392,6 @@ def program_settings(file: str, settings: dict):
         A path outside those tables, or a value they cannot take (named).
     """
     from pydantic import ValidationError
-
-    from twin.errors import TwinInputError
 
     for path in settings:
         if not str(path).startswith(("reference.", "planner.")):

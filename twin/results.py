@@ -1,0 +1,362 @@
+"""What the API returns for each command, typed: the command line prints their ``summary``
+(``--json``) or formats it, and writes their files (``--plots``, ``--rrd``, ``--out``) through them.
+
+:class:`Run` and :class:`Sweep` (``twin run``, ``twin sweep``), :class:`Program` (``twin gcode``),
+:class:`Frf` (``twin frf``), :class:`Calibration` (``twin calibrate``), :class:`Tuning` (``twin
+tune``) and :class:`Fidelity` (``twin fidelity``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from twin.errors import RunInterrupted, SimulationDiverged, TwinInputError
+
+if TYPE_CHECKING:  # the heavy modules load on first use, not with `import twin`
+    import pandas as pd
+    import pyarrow as pa
+
+    from twin.commissioning.frf import FrfSettings
+    from twin.gcode.reader import Move
+    from twin.sampling import Plan
+    from twin.scenario import Scenario
+    from twin.sim.runner import RunResult
+
+
+@dataclass
+class Run:
+    """One closed-loop run.
+
+    Attributes
+    ----------
+    scenario : twin.scenario.Scenario
+    result : twin.sim.runner.RunResult
+        The raw arrays (SI units) at the recorded ticks, and metrics over every tick.
+    stopped : SimulationDiverged or RunInterrupted or None
+        What stopped a run early (see :func:`twin.api.run`'s ``keep_partial``); None for a run
+        that went to its end.
+    """
+
+    scenario: Scenario
+    result: RunResult
+    stopped: SimulationDiverged | RunInterrupted | None = None
+
+    @property
+    def status(self) -> str:
+        """``ok``, or ``diverged`` / ``interrupted`` for a run that stopped early."""
+        if self.stopped is None:
+            return "ok"
+        return "diverged" if isinstance(self.stopped, SimulationDiverged) else "interrupted"
+
+    @property
+    def summary(self) -> dict:
+        """What ``twin run --json`` prints: scenario, machine, status, completed ticks, max and
+        RMS tracking error per axis (µm), the largest cutting force (N), the contour error for
+        2-D paths (µm) and the loop that ran."""
+        from twin.metrics import tracking_summary
+
+        done = self.result.info["completed_ticks"]
+        return {
+            "scenario": self.scenario.name,
+            "machine": self.scenario.machine,
+            "status": self.status,
+            **({} if self.stopped is None else {"sim_time_s": self.stopped.sim_time_s}),
+            "completed_ticks": done,
+            **(tracking_summary(self.result) if done else {}),
+            "loop": self.result.info["loop"],
+        }
+
+    def lines_to_parquet(self, path: str | Path) -> Path:
+        """Write the per-line table of a G-code run (``summary["lines"]``, the per-axis
+        tracking errors as columns ``max_tracking_error_um_<axis>``) to a Parquet file.
+
+        Raises
+        ------
+        TwinInputError
+            The run has no G-code reference.
+        """
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        rows = self.summary.get("lines")
+        if not rows:
+            raise TwinInputError("lines", str(path), "the run has no G-code reference: no per-line table")
+        flat = []
+        for row in rows:
+            per_axis = {f"max_tracking_error_um_{a}": v for a, v in row["max_tracking_error_um"].items()}
+            flat.append({**{k: v for k, v in row.items() if k != "max_tracking_error_um"}, **per_axis})
+        pq.write_table(pa.Table.from_pylist(flat), Path(path))
+        return Path(path)
+
+    def to_pandas(self) -> pd.DataFrame:
+        """The run's named series as a ``pandas.DataFrame`` indexed by simulated time (s), one
+        column per series of the recording, named ``<path> (<unit>)``: ``reference/x (mm)``,
+        ``actual/x (mm)``, ``error/x (µm)``, ``control/x (V)``, ``force/drive/x (N)`` or
+        ``torque/drive/x (N m)``, ``force/cutting/x (N)``, ``joints/x/motor/angle (rad)``..."""
+        import pandas as pd
+
+        from twin.series import named_series
+
+        columns = {f"{s.path} ({s.unit})": s.values for s in named_series(self.result)}
+        return pd.DataFrame(columns, index=pd.Index(self.result.t_s, name="time (s)"))
+
+    def record(self, path: str | Path) -> Path:
+        """Write the Rerun recording (``.rrd``) of the run and return its path."""
+        from twin.recording import record
+
+        path = Path(path)
+        record(self.result, path)
+        return path
+
+    def write_part(self, folder: str | Path) -> list[Path]:
+        """Write the virtual part of a run with a stock into ``folder`` (created if missing):
+        ``<scenario>_part.stl``, the actual part's closed mesh (mm), and
+        ``<scenario>_part_map.parquet``, the nominal and actual height maps and their
+        difference by cell (:mod:`twin.process.part_map`); their paths.
+
+        Raises
+        ------
+        TwinInputError
+            The run has no virtual part (no stock, or it stopped early).
+        """
+        part = self.result.part
+        if part is None or part.maps is None:
+            raise TwinInputError("part", str(folder), "the run has no virtual part: give [stock] and run to the end")
+        folder = Path(folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        name = self.scenario.name
+        return [
+            part.maps.to_stl(folder / f"{name}_part.stl"),
+            part.maps.to_parquet(folder / f"{name}_part_map.parquet"),
+        ]
+
+    def plots(self, folder: str | Path) -> list[Path]:
+        """Write the PNG plots of ``twin run --plots`` into ``folder``; their paths."""
+        from twin.plots import write_plots
+
+        return write_plots(self.result, Path(folder), self.scenario.name)
+
+
+@dataclass
+class Sweep:
+    """A finished (or interrupted) sweep.
+
+    Attributes
+    ----------
+    summary : dict
+        What ``twin sweep --json`` prints: bands, the worst case, certificates, counts.
+    out : Path
+        The Parquet dataset folder, one row per sample.
+    table : pyarrow.Table
+        Its rows, as read back.
+    plan : twin.sampling.Plan
+        The samples' plan.
+    axes : tuple of str
+        The machine's axes.
+    interrupted : bool
+        Whether Ctrl-C stopped it (``resume=True`` with the same ``out`` completes it).
+    """
+
+    summary: dict
+    out: Path
+    table: pa.Table
+    plan: Plan
+    axes: tuple[str, ...]
+    interrupted: bool = False
+
+    def to_pandas(self) -> pd.DataFrame:
+        """Every sample's row (its parameters, status and metrics) as a ``pandas.DataFrame``."""
+        return self.table.to_pandas()
+
+    def plots(self, folder: str | Path) -> list[Path]:
+        """Write the PNGs of ``twin sweep --plots`` into ``folder``; their paths."""
+        from twin.sweeps.summary import write_sweep_plots
+
+        return write_sweep_plots(self.table, self.plan, self.axes, Path(folder))
+
+
+@dataclass
+class Program:
+    """A part program as read, and planned for a machine (``twin gcode FILE [--machine M]``).
+
+    Attributes
+    ----------
+    file : str
+    moves : list of twin.gcode.reader.Move
+        The moves as LinuxCNC reads them.
+    planned : dict or None
+        With a machine: the plan's cycle time (s), feed-only time, limits and largest values per
+        axis and path deviation (:func:`twin.gcode.report.planned_summary`).
+    """
+
+    file: str
+    moves: list[Move]
+    planned: dict | None = None
+
+    @property
+    def summary(self) -> dict:
+        """What ``twin gcode --json`` prints: ``file``, ``moves`` (line, kind, end_mm, arcs' plane,
+        center_mm and turns, feed, spindle) and, with a machine, ``planned``."""
+        out: dict[str, Any] = {"file": self.file, "moves": [m.as_dict() for m in self.moves]}
+        if self.planned is not None:
+            out["planned"] = self.planned
+        return out
+
+
+@dataclass
+class Frf:
+    """An axis's frequency response measured on the twin (``twin frf``).
+
+    Attributes
+    ----------
+    machine : str
+    settings : twin.commissioning.frf.FrfSettings
+    summary : dict
+        What ``twin frf --json`` prints: the lines (Hz), magnitude (dB), phase (deg) and
+        coherence, the model's, the resonances and anti-resonances found, the settings.
+    run : twin.sim.runner.RunResult
+        The simulated experiment.
+    nut_stiffness : dict or None
+        On a machine file whose stiffness depends on the nut's position: the position (m) and
+        the axial (N/m) and torsional (N m/rad) stiffness there.
+    """
+
+    machine: str
+    settings: FrfSettings
+    summary: dict
+    run: RunResult
+    nut_stiffness: dict | None = None
+
+    def to_pandas(self) -> pd.DataFrame:
+        """The measured and the model's response by frequency (Hz): ``magnitude_db``,
+        ``phase_deg``, ``coherence``, ``model_magnitude_db``, ``model_phase_deg``."""
+        import pandas as pd
+
+        columns = ("magnitude_db", "phase_deg", "coherence", "model_magnitude_db", "model_phase_deg")
+        index = pd.Index(self.summary["frequency_hz"], name="frequency_hz")
+        return pd.DataFrame({c: self.summary[c] for c in columns}, index=index)
+
+    def write_bode(self, path: str | Path) -> Path:
+        """The Bode plot (PNG) of the measured response beside the model's, with the coherence."""
+        from twin.commissioning.frf import write_bode
+
+        write_bode(self.summary, path)
+        return Path(path)
+
+    def record(self, path: str | Path) -> Path:
+        """The experiment as a Rerun recording (``.rrd``)."""
+        from twin.recording import record
+
+        record(self.run, Path(path))
+        return Path(path)
+
+
+@dataclass
+class Calibration:
+    """Machine parameters fitted to a measured trace or FRF (``twin calibrate``).
+
+    Attributes
+    ----------
+    machine : str
+        The machine or machine file calibrated.
+    trace : str
+        The measured trace.
+    summary : dict
+        What ``twin calibrate --json`` prints: ``fitted`` values, ``standard_errors``,
+        ``nominal`` ones, the fit index before and after, the solver's report.
+    """
+
+    machine: str
+    trace: str
+    summary: dict
+
+    @property
+    def fitted(self) -> dict[str, float]:
+        """The fitted parameters by symbol, in the machine's units."""
+        return self.summary["fitted"]
+
+    def write_machine_file(self, path: str | Path) -> Path:
+        """The calibrated machine file (TOML): the machine file with the fitted values, a comment
+        naming the trace they come from.
+
+        Raises
+        ------
+        TwinInputError
+            The machine is a bundled one, not a machine file.
+        """
+        from twin.machines import get_machine
+        from twin.machines.datasheet import DatasheetMachine, machine_file_text
+
+        machine = get_machine(self.machine)
+        if not isinstance(machine, DatasheetMachine):
+            raise TwinInputError("--out", str(path), "writes a machine file: calibrate a machine file (FILE.toml)")
+        note = f"calibrated by twin calibrate against {self.trace}: " + ", ".join(
+            f"{s} = {v:.6g}" for s, v in self.fitted.items()
+        )
+        Path(path).write_text(machine_file_text(machine, self.fitted, note), encoding="utf-8")
+        return Path(path)
+
+
+@dataclass
+class Tuning:
+    """Each axis's tuned position P / velocity PI cascade (``twin tune``).
+
+    Attributes
+    ----------
+    machine : str
+        The machine, or a machine file's absolute path (what the scenario it writes names).
+    summary : dict
+        What ``twin tune --json`` prints: the control period, the feedback, per axis the gains,
+        the margins and bandwidths; ``verification`` once :meth:`verify` has run.
+    """
+
+    machine: str
+    summary: dict
+
+    def verify(self) -> dict:
+        """Run the tuned cascade on the twin (a 1 mm step, a circle) and add what it measured to
+        :attr:`summary` as ``verification``; returns it."""
+        import tempfile
+
+        from twin.commissioning.tuning import verify
+
+        with tempfile.TemporaryDirectory() as folder:
+            self.summary["verification"] = verify(self.summary, self.machine, Path(folder))
+        return self.summary["verification"]
+
+    def scenario_text(self, reference: str = "circle") -> str:
+        """The tuned cascade as a scenario (TOML) on a 10 mm circle (or a 1 mm ``step``)."""
+        from twin.commissioning.tuning import scenario_text
+
+        return scenario_text(self.summary, self.machine, reference)
+
+
+@dataclass
+class Fidelity:
+    """Each machine's twin against its transfer function (``twin fidelity``).
+
+    Attributes
+    ----------
+    cases : list of dict
+        Per case: time NRMSE, FRF errors (dB, deg), gear slip (µm) and ``pass``.
+    """
+
+    cases: list[dict]
+
+    @property
+    def summary(self) -> list[dict]:
+        """What ``twin fidelity --json`` prints: the cases."""
+        return self.cases
+
+    @property
+    def failed(self) -> list[str]:
+        """The cases that miss a target."""
+        return [c["case"] for c in self.cases if not c["pass"]]
+
+    def to_pandas(self) -> pd.DataFrame:
+        """One row per case, by its name."""
+        import pandas as pd
+
+        return pd.DataFrame(self.cases).set_index("case")
