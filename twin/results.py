@@ -287,7 +287,8 @@ class Calibration:
             The machine is a bundled one, not a machine file.
         """
         from twin.machines import get_machine
-        from twin.machines.datasheet import DatasheetMachine, machine_file_text
+        from twin.machines.datasheet import DatasheetMachine
+        from twin.machines.machine_file import machine_file_text
 
         machine = get_machine(self.machine)
         if not isinstance(machine, DatasheetMachine):
@@ -295,7 +296,7 @@ class Calibration:
         note = f"calibrated by twin calibrate against {self.trace}: " + ", ".join(
             f"{s} = {v:.6g}" for s, v in self.fitted.items()
         )
-        Path(path).write_text(machine_file_text(machine, self.fitted, note), encoding="utf-8")
+        Path(path).write_text(machine_file_text(machine.spec, self.fitted, note), encoding="utf-8")
         return Path(path)
 
 
