@@ -82,7 +82,7 @@ def _programs():
     ]
 
 
-@pytest.mark.parametrize("machine", ["linear_motor_xy", "googol_xy", "sabau_xy"])
+@pytest.mark.parametrize("machine", ["linear_motor_xy", "googol_xy", "coupled_servo_xy"])
 def test_no_axis_exceeds_its_limits_and_the_path_stays_within_the_tolerance(machine):
     settings = PlannerSettings()
     limits = settings.limits(build(machine).motion_limits)

@@ -202,7 +202,7 @@ def test_compliant_modes_at_the_closed_forms():
     assert r["antiresonances_hz"] == [pytest.approx(model_dip[0], rel=0.015)] == [pytest.approx(anti, rel=0.02)]
 
 
-@pytest.mark.parametrize("machine", ["cncmt", "googol_xy", "sabau_xy", "linear_motor_xy"])
+@pytest.mark.parametrize("machine", ["cncmt", "googol_xy", "coupled_servo_xy", "linear_motor_xy"])
 def test_frf_of_a_rigid_machine_equals_its_transfer_function(machine):
     """The papers' machines (no friction by default): the measured FRF within 0.6 dB of the
     transfer function on every coherent line, 1.2 Hz - 1 kHz (the largest departures are the

@@ -71,7 +71,7 @@ def test_open_loop_step_matches_tf(name):
 
 def test_sabau_cross_coupling_eq6():
     """u_x accelerates Y by 24.5 mm/s^2 per V and u_y accelerates X by 15 (eq. 6)."""
-    bm = build("sabau_xy")
+    bm = build("coupled_servo_xy")
     m, d = bm.model, mujoco.MjData(bm.model)
     d.ctrl[:] = [1.0, 0.0]
     mujoco.mj_forward(m, d)
@@ -97,7 +97,7 @@ def test_googol_realizes_identified_g_with_any_masses():
 
 @pytest.mark.parametrize(
     "name, overrides, field",
-    [("sabau_xy", {"m_y": 1.0}, "overrides.m_y"), ("linear_motor_xy", {"m_x": 10.0}, "overrides.m_x")],
+    [("coupled_servo_xy", {"m_y": 1.0}, "overrides.m_y"), ("linear_motor_xy", {"m_x": 10.0}, "overrides.m_x")],
 )
 def test_stacked_axes_mass_order(name, overrides, field):
     with pytest.raises(TwinInputError) as err:

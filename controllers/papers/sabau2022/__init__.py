@@ -1,7 +1,7 @@
 """Sabau (Morar) (2022), PhD abstract: the published numbers, and every design of
 the thesis done here on its identified models.
 
-Units: the thesis states none.  As the ``sabau_xy`` machine, positions are taken in mm and the
+Units: the thesis states none.  As the ``coupled_servo_xy`` machine, positions are taken in mm and the
 input in V, so eq. (1) reads ``omega_x/u_x = 1054/(s + 40.85)`` mm/s per V.  Every design
 below works in mm, V and s (gains in V/mm, V/(mm/s), ...); :data:`MM_PER_M` converts to the
 loops' SI units.  The choices the abstract leaves open are constants here, each with its

@@ -1,4 +1,4 @@
-"""Sabau 2022's designs (Sabau 2022) on the sabau_xy axes: mm units in the design, SI on the bus."""
+"""Sabau 2022's designs (Sabau 2022) on the coupled_servo_xy axes: mm units in the design, SI on the bus."""
 
 from __future__ import annotations
 
@@ -71,7 +71,7 @@ def _one_axis(p: Sabau2022Params, ctx: Context, a: str) -> Controller:
 
 @controller_kind("sabau2022", Sabau2022Params)
 def build_sabau2022(p: Sabau2022Params, ctx: Context) -> Controller:
-    """Sabau 2022's designs on the sabau_xy axes (control_period_s = 1e-3): ZN and modified ZN
+    """Sabau 2022's designs on the coupled_servo_xy axes (control_period_s = 1e-3): ZN and modified ZN
     P/PI/PID, cascades, state feedback (pole placement, LQR, LMI) and its PI-P forms, the
     fractional-order PI, the bee-colony cascade and the MIMO state feedback."""
     if p.design not in sabau2022.DESIGNS:

@@ -1,6 +1,6 @@
 """Sabau (2022): every part of the thesis's abstract, computed on the transfer
 functions (the TF loop, :func:`twin.sim.tf_loop.tf_loop`, the twin's timing on eq. (6)'s
-model) and on the twin (``sabau_xy``).
+model) and on the twin (``coupled_servo_xy``).
 
 Steps are 1 mm on both axes at once, with the coupling of eq. (6) switched off (the SISO
 models of eqs. 1-5, on which the thesis designs), except where the coupling is the point (the
@@ -71,7 +71,7 @@ def plant_si(coupled: bool, scale: dict | None = None):
 def _overrides(coupled: bool, scale: dict | None) -> dict:
     out: dict[str, Any] = {} if coupled else dict(UNCOUPLED)
     for key, f in (scale or {}).items():
-        out[key] = get_machine("sabau_xy").parameters[key].value * f
+        out[key] = get_machine("coupled_servo_xy").parameters[key].value * f
     return out
 
 
@@ -119,7 +119,7 @@ def twin_run(
     delay_s: float = 0.0,
 ):
     """The same on the twin: :class:`~twin.sim.runner.RunResult`."""
-    machine = build("sabau_xy", _overrides(coupled, scale))
+    machine = build("coupled_servo_xy", _overrides(coupled, scale))
     substeps = round(ctrl.dt / machine.model.opt.timestep)
     dist = [VoltageStep(DISTURBANCE_V, DISTURBANCE_AT_S, 2)] if disturbance else []
     return simulate(

@@ -103,7 +103,7 @@ def format_report(res: dict) -> str:
     rl = res["relay"]
     t0 = rl["tests"][0]
     out = [
-        "Sabau (2022) reproduced on sabau_xy: mm and V assumed, 1 ms control period, 1 mm steps "
+        "Sabau (2022) reproduced on coupled_servo_xy: mm and V assumed, 1 ms control period, 1 mm steps "
         "(coupling of eq. (6) off unless said), velocity by backward difference",
         "",
         f"1. Relay test (sabau2022_relay: relay {t0['amplitude_V']:g} V, hysteresis {t0['hysteresis_mm']:g} mm, run at "

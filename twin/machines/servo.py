@@ -1,4 +1,4 @@
-"""Identified X/Y servo axes with cross-coupling (``sabau_xy``), Sabau 2022.
+"""Identified X/Y servo axes with cross-coupling (``coupled_servo_xy``), Sabau 2022.
 
 Source: Sabau (Morar) (2022): eqs. (1)-(5) omega_x/u_x =
 1054/(s + 40.85), omega_y/u_y = 2188/(s + 87.81), position the integral of velocity; eq. (6)
@@ -34,9 +34,9 @@ def _boxed(value: float, unit: str, description: str, positive: bool = True) -> 
 
 
 @register_machine
-class SabauXY(Machine):
-    name = "sabau_xy"
-    xml = "sabau_xy/sabau_xy.xml"
+class CoupledServoXY(Machine):
+    name = "coupled_servo_xy"
+    xml = "coupled_servo_xy/coupled_servo_xy.xml"
     summary = "Sabau 2022 identified X/Y axes 1054/(s+40.85), 2188/(s+87.81) with eq. (6) coupling"
     parameters = {
         "K_x": _boxed(1054.0, "mm/(V s^2)", f"K_Mx/T_Mx, eq. (1), {SOURCE}"),
