@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Annotated, Literal
+from typing import Annotated, Literal, NamedTuple
 
 import numpy as np
 import shapely
@@ -68,6 +68,64 @@ COLUMNS = (
     *("phi_st1", "phi_ex1", "depth1_mm", "phi_st2", "phi_ex2", "depth2_mm", "max_depth_mm", "radius_mm"),
     *("over_flutes_mm", "under_tip_mm"),
 )
+# the kernels' column indices, from the names (module constants: numba freezes them)
+PHI_ST1, PHI_EX1, DEPTH1 = COLUMNS.index("phi_st1"), COLUMNS.index("phi_ex1"), COLUMNS.index("depth1_mm")
+MAX_DEPTH, RADIUS = COLUMNS.index("max_depth_mm"), COLUMNS.index("radius_mm")
+OVER_FLUTES, UNDER_TIP = COLUMNS.index("over_flutes_mm"), COLUMNS.index("under_tip_mm")
+#: Columns from one engaged arc's to the next's (phi_st1 to phi_st2).
+ARC_STRIDE = COLUMNS.index("phi_st2") - PHI_ST1
+
+
+class Grid(NamedTuple):
+    """A height map as the kernels read it: the heights (m, -inf where there is no material) on
+    square cells of ``res_m`` from (``x0_m``, ``y0_m``), and the stock's top and bottom (m)."""
+
+    heights: np.ndarray
+    x0_m: float
+    y0_m: float
+    res_m: float
+    top_m: float
+    bottom_m: float
+
+
+class ToolPath(NamedTuple):
+    """What :func:`_along` walks (:func:`_path_arrays`): the tips (n, 3, m), the XY distance
+    travelled to each (m), the feed direction held through stops, and the last sample of the
+    motion each one belongs to."""
+
+    pos: np.ndarray
+    travelled: np.ndarray
+    dir_x: np.ndarray
+    dir_y: np.ndarray
+    run_end: np.ndarray
+
+
+class Pose(NamedTuple):
+    """The tool at one sample: its :class:`ToolPath`, the sample and its tip height (m)."""
+
+    path: ToolPath
+    k: int
+    cz: float
+
+
+class Edge(NamedTuple):
+    """The cutter at one sample: its radius, corner radius and flute length (m)."""
+
+    radius_m: float
+    corner_m: float
+    flute_m: float
+
+
+class Tools(NamedTuple):
+    """The cutter at every sample (n, m): radius, corner radius, flute length and shank radius
+    (0: the cutter's)."""
+
+    radius_m: np.ndarray
+    corner_m: np.ndarray
+    flute_m: np.ndarray
+    shank_m: np.ndarray
+
+
 #: The map is cut this many cells beyond the tool's radius (half a cell's diagonal): a cell any
 #: part of which the tool passes over is cut, so that a wall the tool left reads as cut at the
 #: tool's own radius whichever way the cells fall.
@@ -225,6 +283,10 @@ class HeightMap:
         self.x0_m, self.y0_m, self.res_m = x0 * 1e-3, y0 * 1e-3, res * 1e-3
         self.top_m, self.bottom_m = stock.top_mm * 1e-3, stock.bottom_mm * 1e-3
 
+    def grid(self) -> Grid:
+        """The map as the kernels read it (its heights shared, not copied)."""
+        return Grid(self.heights, self.x0_m, self.y0_m, self.res_m, self.top_m, self.bottom_m)
+
     def centres_mm(self) -> tuple[np.ndarray, np.ndarray]:
         """The cells' centres along X and along Y (mm)."""
         nx, ny = self.heights.shape
@@ -249,9 +311,9 @@ class HeightMap:
 
 @njit(cache=True)
 def _height_at(grid, x, y):  # pragma: no cover - compiled
-    """The height (m) in the cell holding the point (x, y) (m) of ``grid`` (heights, x0, y0,
-    res, top, bottom: see :func:`_engage`); -inf off the map."""
-    heights, x0, y0, res = grid[0], grid[1], grid[2], grid[3]
+    """The height (m) in the cell holding the point (x, y) (m) of ``grid`` (a :class:`Grid`); -inf
+    off the map."""
+    heights, x0, y0, res = grid.heights, grid.x0_m, grid.y0_m, grid.res_m
     i = math.floor((x - x0) / res)
     j = math.floor((y - y0) / res)
     if 0 <= i < heights.shape[0] and 0 <= j < heights.shape[1]:
@@ -271,11 +333,9 @@ def _ahead(rho, sin_phi, margin):  # pragma: no cover - compiled
 @njit(cache=True)
 def _along(path, k, distance):  # pragma: no cover - compiled
     """The tool centre (x, y, m) and feed direction ``distance`` (m) along the path in XY from
-    sample ``k``, or where the tool next stops if that is sooner (linear between samples).
-    ``path`` is (pos, travelled, dir_x, dir_y, run_end): the samples (n, 3), the XY distance
-    travelled to each (m), the feed direction held through stops, and the last sample of the
-    motion each one belongs to (:func:`_path_arrays`)."""
-    pos, travelled, dir_x, dir_y, run_end = path
+    sample ``k``, or where the tool next stops if that is sooner (linear between samples), on
+    the :class:`ToolPath` ``path``."""
+    pos, travelled, dir_x, dir_y, run_end = path.pos, path.travelled, path.dir_x, path.dir_y, path.run_end
     goal = travelled[k] + distance
     end = run_end[k]
     if travelled[end] <= goal:
@@ -326,7 +386,7 @@ def _corner_has_material(u, ahead, tool, sp, cp, cz, grid):  # pragma: no cover 
     """Whether there is material at the corner's surface a fraction ``u`` of its height up, at
     the angle of sine ``sp`` and cosine ``cp`` of the tool at ``ahead`` (x, y, ux, uy)."""
     fx, fy, ux, uy = ahead
-    r, rc = tool[0], tool[1]
+    r, rc = tool.radius_m, tool.corner_m
     rho = r - rc + math.sqrt(max(rc * rc - (rc - u * rc) ** 2, 0.0))
     nx_, ny_ = sp * ux - cp * uy, sp * uy + cp * ux
     return _height_at(grid, fx + rho * nx_, fy + rho * ny_) > cz + u * rc
@@ -339,12 +399,12 @@ def _extent_at(phi, pose, tool, grid):  # pragma: no cover - compiled
     that place lies :data:`TEST_MARGIN_CELLS` outside the tool's surface now, or where the tool
     stops if sooner), between the tip, the stock's bottom and the flute length.  The cylinder
     takes one reading; a corner (ball or bull nose) :data:`CORNER_DISCS` discs, each change
-    between two discs found by bisection.  ``pose`` is (path, k, cz): :func:`_along`'s path, the
-    sample and its tip height."""
-    path, k, cz = pose
-    r, rc, flute = tool
-    top, bottom = grid[4], grid[5]
-    margin = TEST_MARGIN_CELLS * grid[3]
+    between two discs found by bisection.  ``pose`` is a :class:`Pose`, ``tool`` an :class:`Edge`,
+    ``grid`` a :class:`Grid`."""
+    path, k, cz = pose.path, pose.k, pose.cz
+    r, rc, flute = tool.radius_m, tool.corner_m, tool.flute_m
+    top, bottom = grid.top_m, grid.bottom_m
+    margin = TEST_MARGIN_CELLS * grid.res_m
     sp, cp = math.sin(phi), math.cos(phi)
     # the corner's discs are nearer the axis: at the cylinder's distance ahead they are as far
     # outside the tool now, or further
@@ -427,8 +487,8 @@ def _side_engagement(pose, tool, grid, n_steps, step, extent, row):  # pragma: n
     largest = 0.0
     for s in range(n_steps):
         largest = max(largest, extent[s])
-    row[6] = largest * 1e3
-    row[8] = over * 1e3
+    row[MAX_DEPTH] = largest * 1e3
+    row[OVER_FLUTES] = over * 1e3
     runs = 0
     start = 0
     for s in range(n_steps + 1):
@@ -447,9 +507,9 @@ def _side_engagement(pose, tool, grid, n_steps, step, extent, row):  # pragma: n
                 leave = (n_steps - 1) * step
                 if s < n_steps:
                     leave = _edge_angle((s - 1) * step, s * step, True, pose, tool, grid)
-                row[3 * runs] = entry
-                row[3 * runs + 1] = leave
-                row[3 * runs + 2] = total / (s - start) * 1e3
+                row[PHI_ST1 + ARC_STRIDE * runs] = entry
+                row[PHI_EX1 + ARC_STRIDE * runs] = leave
+                row[DEPTH1 + ARC_STRIDE * runs] = total / (s - start) * 1e3
             runs += 1
 
 
@@ -471,13 +531,14 @@ def _disc_columns(x0, res, nx, cx, dy, reach):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _cut(heights, x0, y0, res, margin, cx, cy, cz, r, rc, crescent, px, py, pr):  # pragma: no cover - compiled
-    """Lower the height map to the tool's surface at (cx, cy) with tip cz (m): every cell whose
+def _cut(grid, margin, cx, cy, cz, r, rc, crescent, px, py, pr):  # pragma: no cover - compiled
+    """Lower ``grid``'s heights to the tool's surface at (cx, cy) with tip cz (m): every cell whose
     centre lies within the tool's radius and ``margin`` cells (the engagement's
     :data:`CUT_MARGIN_CELLS`) goes
     down to the tool's bottom there (flat inside ``r - rc``, the corner's arc outside it, the
     corner's top beyond ``r``).  With ``crescent`` (a flat tool at the height of its last cut, at
     (px, py) with radius pr) only the cells the disc newly covers on each row are visited."""
+    heights, x0, y0, res = grid.heights, grid.x0_m, grid.y0_m, grid.res_m
     nx, ny = heights.shape
     reach = r + margin * res
     j_lo, j_hi = _disc_rows(y0, res, ny, cy, reach)
@@ -501,30 +562,30 @@ def _cut(heights, x0, y0, res, margin, cx, cy, cz, r, rc, crescent, px, py, pr):
 
 
 @njit(cache=True)
-def _cut_sample(heights, x0, y0, res, margin, pos, radius, corner, k):  # pragma: no cover - compiled
+def _cut_sample(grid, margin, pos, radius, corner, k):  # pragma: no cover - compiled
     """:func:`_cut` for sample ``k`` of tips ``pos`` (n, 3, m) with tools ``radius``, ``corner``
     (n, m): a flat tool no lower than at sample k - 1 and of its radius cuts only the crescent
     that sample's disc left."""
     cx, cy, cz, r, rc = pos[k, 0], pos[k, 1], pos[k, 2], radius[k], corner[k]
     crescent = k > 0 and rc == 0.0 and cz >= pos[k - 1, 2] - 1e-12 and r == radius[k - 1]
     px, py = (pos[k - 1, 0], pos[k - 1, 1]) if k > 0 else (cx, cy)
-    _cut(heights, x0, y0, res, margin, cx, cy, cz, r, rc, crescent, px, py, radius[k - 1] if k > 0 else r)
+    _cut(grid, margin, cx, cy, cz, r, rc, crescent, px, py, radius[k - 1] if k > 0 else r)
 
 
 @njit(cache=True)
-def cut_path(heights, x0, y0, res, pos, radius, corner):  # pragma: no cover - compiled
-    """Cut ``heights`` (m, cells of ``res`` from (x0, y0)) along tool tips ``pos`` (n, 3, m)
+def cut_path(grid, pos, radius, corner):  # pragma: no cover - compiled
+    """Cut ``grid``'s heights (a :class:`Grid`) along tool tips ``pos`` (n, 3, m)
     with tool radius and corner radius ``radius``, ``corner`` (n, m): each cell whose centre
     the tool's surface passes over goes down to it (no margin: the part as it is)."""
     for k in range(pos.shape[0]):
-        _cut_sample(heights, x0, y0, res, 0.0, pos, radius, corner, k)
+        _cut_sample(grid, 0.0, pos, radius, corner, k)
 
 
 @njit(cache=True)
 def _highest_in_disc(grid, cx, cy, r):  # pragma: no cover - compiled
     """The highest material (m) of the cells of ``grid`` whose centres lie within ``r`` (m) of
     (cx, cy); -inf if none."""
-    heights, x0, y0, res = grid[0], grid[1], grid[2], grid[3]
+    heights, x0, y0, res = grid.heights, grid.x0_m, grid.y0_m, grid.res_m
     nx, ny = heights.shape
     best = -np.inf
     j_lo, j_hi = _disc_rows(y0, res, ny, cy, r)
@@ -536,24 +597,24 @@ def _highest_in_disc(grid, cx, cy, r):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _engage(pos, vel, radius, corner, flute, shank, heights, x0, y0, res, top, bottom, step, out):  # pragma: no cover
+def _engage(pos, vel, tools, grid, step, out):  # pragma: no cover - compiled
     """The engagement table ``out`` (n, :data:`COLUMNS`, angles in rad, lengths in mm) along
-    tool tips ``pos`` (n, 3, m) moving at ``vel`` (n, 3), tool radius, corner radius, flute
-    length and shank radius ``radius``, ``corner``, ``flute``, ``shank`` (n, m; a shank of 0:
-    the cutter's), the spindle turning or not; cuts ``heights`` (m) as it goes: each sample is
-    read before the tool's surface there is cut."""
+    tool tips ``pos`` (n, 3, m) moving at ``vel`` (n, 3) with the cutters ``tools`` (a
+    :class:`Tools`), the spindle turning or not, every angle ``step`` (rad); cuts ``grid``'s
+    heights as it goes: each sample is read before the tool's surface there is cut."""
+    radius, corner, flute, shank = tools.radius_m, tools.corner_m, tools.flute_m, tools.shank_m
+    top, bottom = grid.top_m, grid.bottom_m
     n = pos.shape[0]
     n_steps = round(math.pi / step) + 1
     extent = np.zeros(n_steps)
     travelled, dir_x, dir_y, run_end = _path_arrays(pos, vel)
-    path = (pos, travelled, dir_x, dir_y, run_end)
-    grid = (heights, x0, y0, res, top, bottom)
+    path = ToolPath(pos, travelled, dir_x, dir_y, run_end)
     under = 0.0  # the depth (m) the tip has gone down into material, to the last sample
     for k in range(n):
         cx, cy, cz, r, rc = pos[k, 0], pos[k, 1], pos[k, 2], radius[k], corner[k]
         for c in range(out.shape[1]):
             out[k, c] = 0.0
-        out[k, 7] = r * 1e3
+        out[k, RADIUS] = r * 1e3
         if cz >= top:
             under = 0.0
             continue
@@ -562,15 +623,16 @@ def _engage(pos, vel, radius, corner, flute, shank, heights, x0, y0, res, top, b
             # straight down, the cell under the axis was cut to the last tip: the depth gone into
             # the material adds up; moving sideways, each new cell gives the depth itself
             if fresh > 0.0:
-                out[k, 9] = max(fresh, under + (pos[k - 1, 2] - cz) if under > 0.0 else 0.0) * 1e3
-        under = out[k, 9] * 1e-3
+                out[k, UNDER_TIP] = max(fresh, under + (pos[k - 1, 2] - cz) if under > 0.0 else 0.0) * 1e3
+        under = out[k, UNDER_TIP] * 1e-3
         # side milling: the tool must move in XY (a plunge's bottom cutting is not modelled,
         # though it removes the material under the tool)
         if math.hypot(vel[k, 0], vel[k, 1]) > MOVING_M_PER_S:
-            _side_engagement((path, k, cz), (r, rc, flute[k]), grid, n_steps, step, extent, out[k])
+            _side_engagement(Pose(path, k, cz), Edge(r, rc, flute[k]), grid, n_steps, step, extent, out[k])
         if shank[k] > 0.0 and cz + flute[k] < top:  # a shank of its own: the material within it
-            out[k, 8] = max(out[k, 8], (_highest_in_disc(grid, cx, cy, shank[k]) - cz - flute[k]) * 1e3)
-        _cut_sample(heights, x0, y0, res, CUT_MARGIN_CELLS, pos, radius, corner, k)
+            highest = _highest_in_disc(grid, cx, cy, shank[k])
+            out[k, OVER_FLUTES] = max(out[k, OVER_FLUTES], (highest - cz - flute[k]) * 1e3)
+        _cut_sample(grid, CUT_MARGIN_CELLS, pos, radius, corner, k)
 
 
 def engagement_table(
@@ -603,16 +665,8 @@ def engagement_table(
     _engage(
         np.ascontiguousarray(position_m, float),
         np.ascontiguousarray(velocity_m_per_s, float),
-        radius,
-        corner,
-        flute,
-        shank,
-        height_map.heights,
-        height_map.x0_m,
-        height_map.y0_m,
-        height_map.res_m,
-        height_map.top_m,
-        height_map.bottom_m,
+        Tools(radius_m=radius, corner_m=corner, flute_m=flute, shank_m=shank),
+        height_map.grid(),
         math.radians(ANGLE_STEP_DEG),
         out,
     )

@@ -46,10 +46,7 @@ def cut_height_map(stock: StockSpec, sweep: Sweep, margin_mm: float) -> HeightMa
     height_map = HeightMap(stock, margin_mm)
     tips = np.column_stack([sweep.xy_mm, sweep.tip_mm]) * 1e-3
     cut_path(
-        height_map.heights,
-        height_map.x0_m,
-        height_map.y0_m,
-        height_map.res_m,
+        height_map.grid(),
         np.ascontiguousarray(tips),
         np.ascontiguousarray(sweep.radius_mm * 1e-3),
         np.ascontiguousarray(sweep.corner_mm * 1e-3),
