@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import NamedTuple
 
 import mujoco
 import numpy as np
@@ -91,6 +92,16 @@ class Axis:
         return self.motor_joint if feedback in ("motor", "dual") and self.motor_joint else self.table_joint
 
 
+class Coupling(NamedTuple):
+    """A gear coupling of axis ``axis``: joint ``first`` = ``ratio`` x joint ``second`` (a motor to
+    its screw, a screw to its table in rad/m)."""
+
+    axis: str
+    first: str
+    second: str
+    ratio: float
+
+
 @dataclass(frozen=True)
 class MotionLimits:
     """One axis's kinematic limits, what the G-code interpolator plans within.
@@ -130,9 +141,9 @@ class BuiltMachine:
         input to axis i's position; :meth:`plant_lti` gives it as a python-control model.
     delay_s : float
         Transport delay (s) of the drive, applied by the runner's drive model.
-    couplings : list of (str, str, float)
-        Gear couplings ``(joint_a, joint_b, ratio)`` meaning ``q_a = ratio * q_b``; used to measure
-        slip. Ratios of nut couplings are in rad/m.
+    couplings : list of Coupling
+        Gear couplings of an axis, ``q_first = ratio * q_second``; used to measure slip. Ratios of
+        nut couplings are in rad/m.
     table_per_screw_m_per_rad : dict of str to float
         Lead p (m/rad) per axis, to express screw-side slip as table travel.
     sensor_gains : tuple of float
@@ -160,7 +171,7 @@ class BuiltMachine:
     axes: tuple[Axis, ...]
     plant: tuple[tuple[SisoTf, ...], ...]
     delay_s: float
-    couplings: list[tuple[str, str, float]] = field(default_factory=list)
+    couplings: list[Coupling] = field(default_factory=list)
     table_per_screw_m_per_rad: dict[str, float] = field(default_factory=dict)
     sensor_gains: tuple[float, ...] = ()
     motion_limits: dict[str, MotionLimits] = field(default_factory=dict)
@@ -248,14 +259,13 @@ class BuiltMachine:
             ``|q_a - ratio q_b|`` converted to table travel with the axis lead.
         """
         cols = []
-        for a, b, ratio in self.couplings:
-            axis = a[0]
-            lead = self.table_per_screw_m_per_rad[axis]
-            qa = qpos[:, self.joint_qpos_index(a)]
-            qb = qpos[:, self.joint_qpos_index(b)]
+        for c in self.couplings:
+            lead = self.table_per_screw_m_per_rad[c.axis]
+            qa = qpos[:, self.joint_qpos_index(c.first)]
+            qb = qpos[:, self.joint_qpos_index(c.second)]
             # motor-screw residual is in motor rad: table travel = residual * lead / n
-            scale = lead / ratio if self.model.joint(b).type == mujoco.mjtJoint.mjJNT_HINGE else lead
-            cols.append(np.abs(qa - ratio * qb) * scale)
+            scale = lead / c.ratio if self.model.joint(c.second).type == mujoco.mjtJoint.mjJNT_HINGE else lead
+            cols.append(np.abs(qa - c.ratio * qb) * scale)
         return np.stack(cols, axis=1) if cols else np.zeros((len(qpos), 0))
 
 
@@ -339,7 +349,7 @@ class Machine:
         """Drive transport delay (s)."""
         return 0.0
 
-    def couplings(self, params: dict[str, float]) -> tuple[list, dict]:
+    def couplings(self, params: dict[str, float]) -> tuple[list[Coupling], dict[str, float]]:
         """Gear couplings and leads (see :class:`BuiltMachine`)."""
         return [], {}
 
@@ -355,7 +365,7 @@ class Machine:
         """Table travel per motor radian (m/rad) per axis with a motor: the lead over the
         motor-screw coupling's ratio."""
         couplings, leads = self.couplings(params)
-        ratios = {a.name: r for a in self.axes for j, _, r in couplings if j == a.motor_joint}
+        ratios = {a.name: c.ratio for a in self.axes for c in couplings if c.first == a.motor_joint}
         return {a: leads[a] / r for a, r in ratios.items()}
 
     def encoder_resolution(self, params: dict[str, float]) -> tuple[float, ...]:

@@ -20,6 +20,7 @@ from controllers.lti import SisoTf
 from twin.errors import TwinInputError
 from twin.machines.base import (
     Axis,
+    Coupling,
     Machine,
     MotionLimits,
     Parameter,
@@ -134,8 +135,8 @@ class _LeadScrewMachine(Machine):
         for axis, s in zip(self.axes, self.suffixes):
             a = axis.name
             pairs += [
-                (f"{a}_motor", f"{a}_screw", params[f"n{s}"]),
-                (f"{a}_screw", f"{a}_table", 1.0 / params[f"p{s}"]),
+                Coupling(a, f"{a}_motor", f"{a}_screw", params[f"n{s}"]),
+                Coupling(a, f"{a}_screw", f"{a}_table", 1.0 / params[f"p{s}"]),
             ]
             leads[a] = params[f"p{s}"]
         return pairs, leads

@@ -48,7 +48,7 @@ import mujoco
 import numpy as np
 
 from twin.errors import TwinInputError
-from twin.machines.base import Axis, Machine, MotionLimits, Parameter, diagonal_plant
+from twin.machines.base import Axis, Coupling, Machine, MotionLimits, Parameter, diagonal_plant
 from twin.machines.datasheet_mjcf import machine_spec
 from twin.machines.drive_train import (
     AxisValues,
@@ -192,9 +192,9 @@ class DatasheetMachine(Machine):
                 continue
             a, lead = axis.name, axis.lead_m_per_rad
             if math.isinf(torsion_N_m_per_rad(axis)):
-                pairs.append((f"{a}_motor", f"{a}_screw", axis.values.gear_ratio))
+                pairs.append(Coupling(a, f"{a}_motor", f"{a}_screw", axis.values.gear_ratio))
             if math.isinf(axial_N_per_m(axis)):
-                pairs.append((f"{a}_screw", f"{a}_table", 1.0 / lead))
+                pairs.append(Coupling(a, f"{a}_screw", f"{a}_table", 1.0 / lead))
             leads[a] = lead
         return pairs, leads
 

@@ -22,6 +22,7 @@ from controllers.lti import SisoTf
 from twin.errors import TwinInputError
 from twin.machines.base import (
     Axis,
+    Coupling,
     Machine,
     MotionLimits,
     Parameter,
@@ -108,5 +109,5 @@ class GoogolXY(Machine):
         p = self.lead_m_per_rad(params)
         pairs = []
         for a in ("x", "y"):
-            pairs += [(f"{a}_motor", f"{a}_screw", 1.0), (f"{a}_screw", f"{a}_table", 1.0 / p)]
+            pairs += [Coupling(a, f"{a}_motor", f"{a}_screw", 1.0), Coupling(a, f"{a}_screw", f"{a}_table", 1.0 / p)]
         return pairs, {"x": p, "y": p}
