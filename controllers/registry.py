@@ -189,18 +189,8 @@ def make_controller(
 def build_controller(
     name: str, params: dict | None, ctx: Context, *, velocity_ff=0.0, acceleration_ff=0.0
 ) -> Controller:
-    """Build controller kind ``name`` in the build context ``ctx`` (as :func:`make_controller`,
-    for a caller that holds a context already).
-
-    Raises
-    ------
-    KeyError
-        Unknown name.
-    ParameterError
-        A parameter the kind does not take, or of the wrong type or range.
-    ValueError
-        Values the design cannot use.
-    """
+    """Build controller kind ``name`` in the build context ``ctx``: :func:`make_controller` for a
+    caller that holds a context already (the same errors)."""
     kind = CONTROLLERS[name]
     ctrl = kind.build(validate_params(name, kind.params, params), ctx)
     ctrl.name = name
