@@ -117,6 +117,17 @@ def test_every_reproduction_offers_the_whole_interface(tmp_path: Path):
     assert REPRODUCTIONS["anang2017"].certificates("googol_xy", "anang2017_pid", {"m"}, []) == []
 
 
+def test_the_reproductions_and_the_kinds_keep_the_order_of_the_source_texts():
+    """Whatever a process imported first, the papers come in the order of shared/seeds (the
+    command line's lists and error lines do not depend on which test ran before)."""
+    from controllers.papers import PAPERS
+    from controllers.registry import CONTROLLERS
+
+    assert tuple(REPRODUCTIONS) == PAPERS
+    papers_of_kinds = [name.split("_")[0] for name in CONTROLLERS if name.split("_")[0] in PAPERS]
+    assert list(dict.fromkeys(papers_of_kinds)) == list(PAPERS)
+
+
 def test_each_machine_readme_states_its_motion_limits():
     from twin.kinds_doc import motion_limits_table
 

@@ -69,16 +69,17 @@ class Reproduction:
         return []
 
 
-#: Reproductions by paper name, in registration order (every one is registered by importing
-#: :mod:`twin.reproductions.registry`).
-REPRODUCTIONS: dict[str, Reproduction] = {}
+#: Reproductions by paper name, as their packages are imported (in whatever order a process
+#: imports them); :data:`twin.reproductions.registry.REPRODUCTIONS` holds them all in the order
+#: of the source texts.
+REGISTERED: dict[str, Reproduction] = {}
 
 
 def register_reproduction(cls: type[Reproduction]) -> type[Reproduction]:
-    """Class decorator: add an instance of ``cls`` to :data:`REPRODUCTIONS` under its name."""
-    if not cls.name or cls.name in REPRODUCTIONS:
+    """Class decorator: add an instance of ``cls`` to :data:`REGISTERED` under its name."""
+    if not cls.name or cls.name in REGISTERED:
         raise ValueError(f"reproduction {cls.name!r} has no name or is registered twice")
-    REPRODUCTIONS[cls.name] = cls()
+    REGISTERED[cls.name] = cls()
     return cls
 
 

@@ -6,10 +6,14 @@ from __future__ import annotations
 import importlib
 
 from controllers.papers import PAPERS
-from twin.reproductions.base import REPRODUCTIONS, Reproduction
+from twin.reproductions.base import REGISTERED, Reproduction
 
 for _paper in PAPERS:
     importlib.import_module(f"twin.reproductions.{_paper}")
+
+#: Every reproduction by paper name, in the order of the source texts (whatever order a process
+#: imported the packages in: a test may import one paper's before this module).
+REPRODUCTIONS: dict[str, Reproduction] = {paper: REGISTERED[paper] for paper in PAPERS}
 
 
 def reproduction(paper: str) -> Reproduction:
