@@ -68,10 +68,11 @@ def test_bad_settings_and_divergence_are_the_twins_errors():
         ("compare_controllers.py", ["--duration", "0.3"], "MIMO H-infinity"),
         ("sweep_box.py", ["--samples", "4", "--workers", "1"], "4 samples in"),
         ("tune_vs_papers.py", ["--duration", "0.3"], "tuned servo_cascade (ours)"),
-        (
+        pytest.param(
             "feed_override.py",
             ["--overrides", "0.8", "1.2", "--workers", "1", "--duration", "1.0"],
             "largest feed override with rms_contour_error_feed_um < 10 µm:",
+            marks=pytest.mark.slow,  # eight 1 s runs on a Dask cluster
         ),
     ],
 )

@@ -127,6 +127,7 @@ def test_results_are_bit_identical_for_one_and_two_workers(tmp_path):
     assert min(one.column("max_cutting_force_N_x").to_pylist()) > 0
 
 
+@pytest.mark.slow  # a worker killed and its batch run again
 def test_a_killed_worker_loses_no_sample(tmp_path):
     _, reference = _sweep(tmp_path, "ref.parquet", 2, samples=40, batch=2)
     client = make_client(2)
@@ -270,6 +271,7 @@ def test_cli_sweep_file_writes_parquet_summary_and_plots(tmp_path):
     ]
 
 
+@pytest.mark.slow  # 300 samples in a process interrupted, then resumed
 def test_cli_interrupted_sweep_keeps_its_parts_and_resume_completes_it(tmp_path):
     import subprocess
     import sys
