@@ -97,9 +97,19 @@ def _disturbance(row: dict, axis: int) -> str:
 
 
 def format_report(res: dict) -> str:
-    """Plain-text tables: paper | TF loop | twin."""
-    twin = res["settings"]["twin"]
-    head = "TF loop | twin" if twin else "TF loop"
+    """Plain-text tables: paper | TF loop | twin, one section per design of the thesis."""
+    sections = (_relay_and_table1, _cascades, _state_feedback, _fractional, _bee_colony, _lmi, _table2)
+    return "\n".join(line for section in sections for line in section(res))
+
+
+def _sides(res: dict) -> str:
+    """The columns beside the paper's: the transfer-function loop, and the twin where it ran."""
+    return "TF loop | twin" if res["settings"]["twin"] else "TF loop"
+
+
+def _relay_and_table1(res: dict) -> list[str]:
+    """1. The relay test and Table 1's rows from it: its text lines."""
+    head = _sides(res)
     rl = res["relay"]
     t0 = rl["tests"][0]
     out = [
@@ -148,6 +158,12 @@ def format_report(res: dict) -> str:
         )
         for i, a in enumerate("xy"):
             out.append(f"      {a}: paper {paper[a][1]:4.0f} % {paper[a][0]:.2f} s | {_steps(row, i)}")
+    return out
+
+
+def _cascades(res: dict) -> list[str]:
+    """2. The cascades with a P speed loop: its text lines."""
+    out: list[str] = []
     out += [
         "",
         f"2. Cascades with a P speed loop (speed pole {s1.SPEED_LOOP_FACTOR:g} a, critically damped P, PI "
@@ -168,6 +184,12 @@ def format_report(res: dict) -> str:
             "      coupling, X while Y steps 1 mm: "
             + " | ".join(f"{cpl[s]['x_peak_um']:.2f} / {cpl[s]['x_final_um']:.2f}" for s in ("tf", "twin") if s in cpl)
         )
+    return out
+
+
+def _state_feedback(res: dict) -> list[str]:
+    """3-5. State feedback, the energy weights and the MIMO coupling: its text lines."""
+    out: list[str] = []
     sf = res["state_feedback"]
     out += [
         "",
@@ -209,6 +231,12 @@ def format_report(res: dict) -> str:
         + ", y "
         + _steps(m["state_feedback_mimo"], 1)
     )
+    return out
+
+
+def _fractional(res: dict) -> list[str]:
+    """6. The fractional PI of eq. (14) and the mu cascade: its text lines."""
+    out: list[str] = []
     fr = res["fractional"]
     out += [
         "",
@@ -260,6 +288,12 @@ def format_report(res: dict) -> str:
             + _pair([c[1]["settling_time_s"] if c[1]["stable"] else math.nan for c in rows["tf"][1:]])
             + " (nan: not settled or unstable)"
         )
+    return out
+
+
+def _bee_colony(res: dict) -> list[str]:
+    """7. The bee colony on the LQR weights: its text lines."""
+    out: list[str] = []
     ab = res["abc"]
     out += [
         "",
@@ -277,6 +311,12 @@ def format_report(res: dict) -> str:
             " settling by iteration " + ", ".join(f"{v:.3f}" for v in q["settling_by_iteration_s"][::5])
         )
         out.append(f"           as P-P in the 1 ms loop, x: {_steps(q['step'], 0)}")
+    return out
+
+
+def _lmi(res: dict) -> list[str]:
+    """8. The LMI pole regions: its text lines."""
+    out: list[str] = []
     lm = res["lmi"]
     reg = lm["region"]
     out += ["", f"8. LMI regions: Re s < -{reg['alpha']:g}, damping >= {reg['damping']:g}, |s| < {reg['radius']:g}:"]
@@ -288,6 +328,14 @@ def format_report(res: dict) -> str:
         )
         for i, a in enumerate("xy"):
             out.append(f"      {a}: {_steps(row['step'], i)}; disturbance {_disturbance(row, i)}")
+    return out
+
+
+def _table2(res: dict) -> list[str]:
+    """9. Table 2's fitting indices, and the twin's verdict: its text lines."""
+    out: list[str] = []
+    twin = res["settings"]["twin"]
+    head = _sides(res)
     out += [
         "",
         f"9. Table 2, fitting index 100 (1 - |y - r| / |r - mean r|) per axis (%), {r.FEED_MM_PER_MIN:g} mm/min; "
@@ -308,7 +356,7 @@ def format_report(res: dict) -> str:
         )
     else:
         out.append("twin left out (--twin-samples 0)")
-    return "\n".join(out)
+    return out
 
 
 def _step_cell(metrics: dict) -> str:
