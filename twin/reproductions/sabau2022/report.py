@@ -107,6 +107,17 @@ def _sides(res: dict) -> str:
     return "TF loop | twin" if res["settings"]["twin"] else "TF loop"
 
 
+def _axis_steps(row: dict, without_ff: bool = False) -> list[str]:
+    """A design's step and disturbance response per axis; with ``without_ff``, its step without
+    feedforward too where it ran."""
+    lines = []
+    for i, a in enumerate("xy"):
+        shown = without_ff and "step_without_ff" in row
+        extra = f"; without feedforward {_steps(row['step_without_ff'], i)}" if shown else ""
+        lines.append(f"      {a}: {_steps(row['step'], i)}; disturbance {_disturbance(row, i)}{extra}")
+    return lines
+
+
 def _relay_and_table1(res: dict) -> list[str]:
     """1. The relay test and Table 1's rows from it: its text lines."""
     head = _sides(res)
@@ -163,8 +174,7 @@ def _relay_and_table1(res: dict) -> list[str]:
 
 def _cascades(res: dict) -> list[str]:
     """2. The cascades with a P speed loop: its text lines."""
-    out: list[str] = []
-    out += [
+    out = [
         "",
         f"2. Cascades with a P speed loop (speed pole {s1.SPEED_LOOP_FACTOR:g} a, critically damped P, PI "
         "corner kp/10): "
@@ -177,8 +187,7 @@ def _cascades(res: dict) -> list[str]:
             f"  {d:<6} kp {_pair([x['kp'] for x in g])} 1/s, ki {_pair([x['ki'] for x in g])} 1/s^2, kd "
             f"{_pair([x['kd'] for x in g])}, kv {_pair([x['kv'] for x in g], '{:.4f}')} V/(mm/s)"
         )
-        for i, a in enumerate("xy"):
-            out.append(f"      {a}: {_steps(row['step'], i)}; disturbance {_disturbance(row, i)}")
+        out += _axis_steps(row)
         cpl = row["coupling"]
         out.append(
             "      coupling, X while Y steps 1 mm: "
@@ -189,9 +198,8 @@ def _cascades(res: dict) -> list[str]:
 
 def _state_feedback(res: dict) -> list[str]:
     """3-5. State feedback, the energy weights and the MIMO coupling: its text lines."""
-    out: list[str] = []
     sf = res["state_feedback"]
-    out += [
+    out = [
         "",
         f"3-5. State feedback (poles {', '.join(f'{p:g}' for p in s1.POLES)}; PI-P adds {s1.INTEGRAL_POLE:g}) "
         "as the cascade the drive runs:",
@@ -204,9 +212,7 @@ def _state_feedback(res: dict) -> list[str]:
             f"{_pair([x['kv'] for x in g], '{:.4f}')} kr {_pair([x['kr'] for x in g])}; poles x "
             + ", ".join(f"{p[0]:.1f}{p[1]:+.1f}j" for p in row["poles"][0])
         )
-        for i, a in enumerate("xy"):
-            extra = f"; without feedforward {_steps(row['step_without_ff'], i)}" if "step_without_ff" in row else ""
-            out.append(f"      {a}: {_steps(row['step'], i)}; disturbance {_disturbance(row, i)}{extra}")
+        out += _axis_steps(row, without_ff=True)
     ew = res["energy_weights"]
     out.append(
         "  energy weights (eqs. 7-9): J = T_M/K_M "
@@ -236,9 +242,8 @@ def _state_feedback(res: dict) -> list[str]:
 
 def _fractional(res: dict) -> list[str]:
     """6. The fractional PI of eq. (14) and the mu cascade: its text lines."""
-    out: list[str] = []
     fr = res["fractional"]
-    out += [
+    out = [
         "",
         f"6. Fractional PI eq. (14): Oustaloup {s1.OUSTALOUP_BAND[0]:g}..{s1.OUSTALOUP_BAND[1]:g} rad/s, order "
         f"{s1.OUSTALOUP_ORDER}: max error 0.1..100 rad/s "
@@ -293,9 +298,8 @@ def _fractional(res: dict) -> list[str]:
 
 def _bee_colony(res: dict) -> list[str]:
     """7. The bee colony on the LQR weights: its text lines."""
-    out: list[str] = []
     ab = res["abc"]
-    out += [
+    out = [
         "",
         f"7. Bee colony on LQR Q = diag(10^q1, 10^q2), R = 1, X axis (q in {ab['bounds_log10']}, "
         f"{ab['iterations']} iterations, colony {ab['population']}, seed {ab['seed']}):",
@@ -316,27 +320,24 @@ def _bee_colony(res: dict) -> list[str]:
 
 def _lmi(res: dict) -> list[str]:
     """8. The LMI pole regions: its text lines."""
-    out: list[str] = []
     lm = res["lmi"]
     reg = lm["region"]
-    out += ["", f"8. LMI regions: Re s < -{reg['alpha']:g}, damping >= {reg['damping']:g}, |s| < {reg['radius']:g}:"]
+    out = ["", f"8. LMI regions: Re s < -{reg['alpha']:g}, damping >= {reg['damping']:g}, |s| < {reg['radius']:g}:"]
     for d in ("lmi", "pi_p_lmi"):
         row = lm[d]
         out.append(
             f"  {d:<9} in region {row['in_region']}; poles x "
             + ", ".join(f"{p[0]:.1f}{p[1]:+.1f}j" for p in row["poles"][0])
         )
-        for i, a in enumerate("xy"):
-            out.append(f"      {a}: {_steps(row['step'], i)}; disturbance {_disturbance(row, i)}")
+        out += _axis_steps(row)
     return out
 
 
 def _table2(res: dict) -> list[str]:
     """9. Table 2's fitting indices, and the twin's verdict: its text lines."""
-    out: list[str] = []
     twin = res["settings"]["twin"]
     head = _sides(res)
-    out += [
+    out = [
         "",
         f"9. Table 2, fitting index 100 (1 - |y - r| / |r - mean r|) per axis (%), {r.FEED_MM_PER_MIN:g} mm/min; "
         "experiments: 1 modified P, 2 pole placement as P-P, 3 PI-P (part 5) + velocity feedforward; paper | " + head,
