@@ -91,3 +91,10 @@ def twin_vs_tf(label: str, twin: dict, tf: dict, keys, tol_rel: float) -> list[s
         for key in keys
         if abs(twin[key] - tf[key]) > tol_rel * abs(tf[key])
     ]
+
+
+def mismatch_lines(heading: str, mismatches: list[str]) -> list[str]:
+    """The text report's closing lines: ``heading`` (what was compared, with its tolerance), then
+    "all within" or each twin number outside its tolerance (:func:`twin_vs_tf`)."""
+    verdict = "all within" if not mismatches else f"{len(mismatches)} outside:"
+    return ["", f"{heading}: {verdict}", *(f"  {m}" for m in mismatches)]

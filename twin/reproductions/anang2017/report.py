@@ -9,6 +9,7 @@ import numpy as np
 from tqdm import tqdm
 
 from twin.reproductions.anang2017 import procedure as r
+from twin.reproductions.base import mismatch_lines
 from twin.reproductions.tables import fmt, markdown_table
 
 
@@ -123,12 +124,9 @@ def format_report(res: dict) -> str:
             f"  {row['f_hz']} Hz {row['a_mm']} mm: e in mm {_f(row['mm'], '.2f')} %, "
             f"e in um {_f(row['um'], '.2f')}" + (" %" if row["um"] is not None else "")
         )
-    mism = res["twin_vs_tf_mismatches"]
-    out += [
-        "",
-        f"Twin vs transfer-function loop (tolerance {r.TWIN_TOL_REL:.0%}): "
-        + ("all within" if not mism else f"{len(mism)} outside:"),
-    ] + [f"  {m}" for m in mism]
+    out += mismatch_lines(
+        f"Twin vs transfer-function loop (tolerance {r.TWIN_TOL_REL:.0%})", res["twin_vs_tf_mismatches"]
+    )
     return "\n".join(out)
 
 

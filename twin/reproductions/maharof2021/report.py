@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
+from twin.reproductions.base import mismatch_lines
 from twin.reproductions.maharof2021 import procedure as r
 from twin.reproductions.tables import markdown_table
 
@@ -135,12 +136,9 @@ def format_report(res: dict) -> str:
                     + " | "
                     + " ".join(f"{b:.3g}" for b in tf["disturbance"]["fft_um"])
                 )
-    mism = res["twin_vs_tf_mismatches"]
-    out += [
-        "",
-        f"Twin vs transfer-function loop (MTE, RMSE; tolerance {r.TWIN_TOL_REL:.0%}): "
-        + ("all within" if not mism else f"{len(mism)} outside:"),
-    ] + [f"  {m}" for m in mism]
+    out += mismatch_lines(
+        f"Twin vs transfer-function loop (MTE, RMSE; tolerance {r.TWIN_TOL_REL:.0%})", res["twin_vs_tf_mismatches"]
+    )
     return "\n".join(out)
 
 

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from twin.reproductions.base import mismatch_lines
 from twin.reproductions.tables import fmt, markdown_table
 from twin.reproductions.yadav2020 import procedure as r
 
@@ -198,12 +199,10 @@ def format_report(res: dict) -> str:
             f"{d['disturbance_dev_peak_m']:>12.4g} {d['disturbance_dev_final_m']:>13.4g} "
             f"{d['noise_dev_rms_m']:>12.4g} {d['noise_u_rms_V']:>14.4g}"
         )
-    mism = res["twin_vs_tf_mismatches"]
-    out += [
-        "",
-        f"Twin vs transfer function (tolerance {r.TWIN_TOL_REL:.0%}, OS floor {r.TWIN_TOL_OS_PP} pp): "
-        + ("all within" if not mism else f"{len(mism)} outside:"),
-    ] + [f"  {m}" for m in mism]
+    out += mismatch_lines(
+        f"Twin vs transfer function (tolerance {r.TWIN_TOL_REL:.0%}, OS floor {r.TWIN_TOL_OS_PP} pp)",
+        res["twin_vs_tf_mismatches"],
+    )
     return "\n".join(out)
 
 
