@@ -633,8 +633,9 @@ def _run_loop(
                     exc.result = _result(machine, plan, arrays, series, k, accumulated)
                     raise
                 done = k1
-                if isinstance(reference, ProgramReference):  # progress in its lines, all of them at the end
-                    line = reference.n_lines if k1 == plan.n_ticks else reference.line_at(k1 * period)
+                if series is not None:  # a program: progress in its lines, all of them at the end
+                    program = series.reference
+                    line = program.n_lines if k1 == plan.n_ticks else program.line_at(k1 * period)
                     bar.update(max(line - bar.n, 0))
                 else:
                     bar.update(k1 - k0)
