@@ -573,11 +573,12 @@ def calibrate(
     """Fit named machine parameters to a measured time trace or FRF (least squares through the
     twin), with standard errors and the fit index before and after."""
     from twin import api
-    from twin.machines import get_machine, is_machine_file
+    from twin.machines import get_machine
+    from twin.results import check_calibrated_output
 
     _check_output("--out", out, ".toml")
-    if out is not None and not is_machine_file(machine):
-        raise TwinInputError("--out", str(out), "writes a machine file: calibrate a machine file (FILE.toml)")
+    if out is not None:  # before the fit's minutes
+        check_calibrated_output(machine, "--out", out)
     symbols = [s.strip() for s in fit.split(",") if s.strip()]
     calibration = api.calibrate(
         machine, trace, symbols, _parse_sets(sets or []), axis, sensor=sensor, progress=not as_json

@@ -290,14 +290,28 @@ class Calibration:
         from twin.machines.datasheet import DatasheetMachine
         from twin.machines.machine_file import machine_file_text
 
+        check_calibrated_output(self.machine, "path", path)
         machine = get_machine(self.machine)
-        if not isinstance(machine, DatasheetMachine):
-            raise TwinInputError("--out", str(path), "writes a machine file: calibrate a machine file (FILE.toml)")
+        assert isinstance(machine, DatasheetMachine)  # a machine file, checked above
         note = f"calibrated by twin calibrate against {self.trace}: " + ", ".join(
             f"{s} = {v:.6g}" for s, v in self.fitted.items()
         )
         Path(path).write_text(machine_file_text(machine.spec, self.fitted, note), encoding="utf-8")
         return Path(path)
+
+
+def check_calibrated_output(machine: str, field: str, path: str | Path) -> None:
+    """Refuse to write a calibrated machine file for ``machine`` unless it is a machine file.
+
+    Raises
+    ------
+    TwinInputError
+        ``field`` = ``path``: ``machine`` is a bundled machine.
+    """
+    from twin.machines import is_machine_file
+
+    if not is_machine_file(machine):
+        raise TwinInputError(field, str(path), "writes a machine file: calibrate a machine file (FILE.toml)")
 
 
 @dataclass
