@@ -157,7 +157,6 @@ def frequency_response_errors(
     # transient has decayed by e^-12 (6e-6)
     channels = [control.minreal(reference[i, i], verbose=False) for i in range(n_axes)]
     designs = [position_controller(channel, crossover_hz, settle_s) for channel in channels]
-    kp = [abs(c.num[-1] / c.den[-1]) for c, _ in designs]  # the gain at low frequency, for the amplitude
     decay = min(d for _, d in designs)
     if decay < 12.0 / MAX_SETTLE_S:
         raise TwinInputError(
@@ -176,7 +175,7 @@ def frequency_response_errors(
     Y = np.zeros((len(bins), n_axes, n_axes), complex)
     U = np.zeros((len(bins), n_axes, n_axes), complex)
     for k in range(n_axes):
-        amp = 0.2 / kp[k]  # about 0.2 V per tone at high frequency (a lead's 9x that: 1.8 V)
+        amp = tone_amplitude_m(channels[k], crossover_hz)
         ref = SumOfSines((amp,) * len(bins), tuple(freqs), tuple(phases), n_axes=n_axes, axes=(k,))
         ctrls = [error_feedback(designs[i][0], dt, (a.name,), name=f"P.{a.name}") for i, a in enumerate(bm.axes)]
         res = simulate(
@@ -251,6 +250,16 @@ def position_controller(channel, crossover_hz: float, settle_s: float) -> tuple[
     lead = SisoTf((gain / zero, gain), (1.0 / pole, 1.0))
     lead_decay = -control.poles(control.feedback(gain * shape * channel)).real.max()
     return (lead, lead_decay) if lead_decay > decay else (p_only, decay)
+
+
+def tone_amplitude_m(channel, crossover_hz: float) -> float:
+    """Each tone's amplitude (m) in the frequency check's reference for an axis's ``channel`` (V to
+    m): about 0.2 V per tone at high frequency under a gain with loop gain 1 at ``crossover_hz``
+    (a lead's 3x that). Taken from the plant, whatever the controller: a lead's lower gain at low
+    frequency made the tones 3x larger, and compact_xy's Y table ran past its travel (its
+    lowest bins 1.7 dB / 157 deg off)."""
+    kp = 1.0 / abs(channel(2j * math.pi * crossover_hz))  # the gain with loop gain 1 at the crossover
+    return 0.2 / kp
 
 
 #: Recorded samples per period of the highest tone in the frequency check, at least.
