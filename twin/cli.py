@@ -728,7 +728,7 @@ def list_things():
     from controllers import CONTROLLERS, OBSERVERS
     from twin.machines import MACHINES
     from twin.process import DISTURBANCES
-    from twin.process.materials import MATERIALS
+    from twin.process.materials import KIENZLE_AXIAL_RATIO, KIENZLE_RADIAL_RATIO, MATERIALS
     from twin.references import REFERENCES
     from twin.reproductions.registry import REPRODUCTIONS
     from twin.scenario import bundled_scenarios, load_scenario
@@ -750,13 +750,19 @@ def list_things():
     for name, kind in DISTURBANCES.items():
         typer.echo(f"  {name:<22} {kind.doc.removeprefix(name + ': ')}")
     typer.echo(
-        "materials ([tool] / [[tools]] / end_milling material = ...): K_tc K_rc K_ac N/mm^2, K_te K_re K_ae N/mm"
+        "materials ([tool] / [[tools]] / end_milling material = ...): linear K_tc K_rc K_ac N/mm^2, K_te K_re K_ae"
+        f" N/mm; Kienzle kc1 N/mm^2 and mc (kc = kc1 h^-mc), radial and axial {KIENZLE_RADIAL_RATIO:g} and"
+        f" {KIENZLE_AXIAL_RATIO:g} of the tangential (our ratios, no source)"
     )
     for name, material in MATERIALS.items():
         k = material.coefficients
-        values = f"{k.K_tc:g} {k.K_rc:g} {k.K_ac:g}, {k.K_te:g} {k.K_re:g} {k.K_ae:g}"
+        if k.mc:
+            values = f"kc1 {k.K_tc:.0f}, mc {k.mc:.3f}"
+        else:
+            values = f"{k.K_tc:g} {k.K_rc:g} {k.K_ac:g}, {k.K_te:g} {k.K_re:g} {k.K_ae:g}"
         typer.echo(
-            f"  {name:<24} {material.alloy}, {material.cutter}, {material.lubrication}: {values} ({material.source})"
+            f"  {name:<24} {material.model}: {material.alloy}, {material.cutter}, {material.lubrication}: {values}"
+            f" ({material.source})"
         )
     typer.echo("references ([reference] type = ...):")
     for name, kind in REFERENCES.items():

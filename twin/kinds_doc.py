@@ -1,6 +1,7 @@
 """The docs site's reference of every registered kind, generated from the registries
 (``docs/hooks.py`` puts it where a page says ``<!-- kinds: NAME -->``), so the docs cannot drift
-from the code: each kind's docs line, and its parameters with defaults, limits and units."""
+from the code: each kind's docs line, and its parameters with defaults, limits and units; and
+the tables of other libraries (``<!-- table: NAME -->``: the materials)."""
 
 from __future__ import annotations
 
@@ -78,6 +79,44 @@ def _machines() -> str:
         limits = motion_limits_table(machine)
         parts += [f"### `{name}`", "", machine.summary, "", *rows, "", "Motion limits:", "", limits, ""]
     return "\n".join(parts)
+
+
+#: What each ``<!-- table: NAME -->`` marker expands to (:func:`table_markdown`).
+TABLES = ("materials",)
+
+
+def materials_table() -> str:
+    """The materials library (:data:`twin.process.materials.MATERIALS`) as a markdown table:
+    each entry's model, alloy, cutter, lubrication, coefficients, Kienzle exponent, fit residual
+    and source."""
+    from twin.process.materials import ALUMINIUM_7075_T6, MATERIALS
+
+    rows = [
+        "| name | model | alloy | cutter | lubrication | K_tc or kc1 | K_rc | K_ac | K_te | K_re | K_ae | mc "
+        "| fit residual | source |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for name, m in MATERIALS.items():
+        k = m.coefficients
+        default = " (default)" if k == ALUMINIUM_7075_T6 else ""
+        values = " | ".join(f"{v:g}" for v in k.as_array())
+        residual = f"{m.fit.max_relative_residual:.1%}" if m.fit else ""
+        described = " | ".join(_cell(text) for text in (m.model, m.alloy, m.cutter, m.lubrication))
+        rows.append(f"| `{name}`{default} | {described} | {values} | {residual} | {_cell(m.source)} |")
+    return "\n".join(rows) + "\n"
+
+
+def table_markdown(name: str) -> str:
+    """The markdown of one table of :data:`TABLES`, from the code.
+
+    Raises
+    ------
+    KeyError
+        A name that is not one of :data:`TABLES`.
+    """
+    if name == "materials":
+        return materials_table()
+    raise KeyError(name)
 
 
 def kinds_markdown(section: str) -> str:

@@ -31,6 +31,16 @@ the drive:
 Default cutting coefficients: aluminium Al7075-T6 with a carbide cutter, dry:
 K_tc 767.01, K_rc 168.8, K_ac 222 N/mm^2, K_te 27.7, K_re 26.6, K_ae 0.7 N/mm
 (:mod:`twin.process.materials`, with the other materials and their sources).
+
+A Kienzle material (``kc = kc1 h^-mc``, the coefficients' ``mc > 0``) reaches the same closed
+forms linearised: each step, its cutting coefficients are taken at the mean chip thickness of
+the engaged arc at the step's feed per tooth, ``h_m = c (cos phi_st - cos phi_ex)/(phi_ex -
+phi_st)`` (:func:`kienzle_coefficients`).  The mean force over a tooth period, and so the mean
+power, is then ``kc(h_m)`` times the chip area, as in the tool makers' power formulas the
+entries come from; the force's shape within the arc stays ``sin(phi)`` where Kienzle's is
+``sin(phi)^(1 - mc)`` (the closed forms, exact impulse per step and helical flutes included,
+need a force linear in h).  The linear coefficients (``mc = 0``) skip it: their forces are
+those of the model above, bit for bit.
 """
 
 from __future__ import annotations
@@ -41,12 +51,12 @@ from typing import Literal
 
 import numpy as np
 from numba import njit
-from pydantic import Field, PositiveFloat
+from pydantic import Field, PositiveFloat, model_validator
 
 from twin.errors import TwinInputError
 from twin.numba_cache import configure as configure_numba_cache
 from twin.process.kinds import DisturbanceSpecBase, register
-from twin.process.materials import ALUMINIUM_7075_T6, MATERIALS, CuttingCoefficients
+from twin.process.materials import ALUMINIUM_7075_T6, MATERIALS, CuttingCoefficients, kienzle
 from twin.spec import StrictSpec
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
@@ -83,6 +93,26 @@ def immersion_angles(radial_depth_mm: float, diameter_mm: float, mode: str) -> t
 
 
 @njit(cache=True)
+def kienzle_coefficients(k, feed_per_tooth_mm, phi_st, phi_ex):  # pragma: no cover - compiled
+    """``k`` (:meth:`CuttingCoefficients.as_array`) itself if its ``mc`` (``k[6]``) is 0, else a
+    copy with the cutting coefficients times ``h_m^-mc``: the Kienzle form linearised about the
+    mean chip thickness ``h_m = c (cos phi_st - cos phi_ex)/(phi_ex - phi_st)`` (mm) of the arc
+    at feed per tooth ``c`` (mm); unchanged where no chip is cut (``h_m <= 0``)."""
+    mc = k[6]
+    if mc == 0.0:
+        return k
+    span = phi_ex - phi_st
+    h_m = feed_per_tooth_mm * (math.cos(phi_st) - math.cos(phi_ex)) / span if span > 0.0 else 0.0
+    if not h_m > 0.0:
+        return k
+    out = k.copy()
+    scale = h_m**-mc
+    for i in range(3):
+        out[i] = k[i] * scale
+    return out
+
+
+@njit(cache=True)
 def flute_force_integral(k, axial_depth_mm, feed_per_tooth_mm, phi):  # pragma: no cover - compiled
     """Primitive ``Q(phi)`` of one engaged flute's force on the tool over its angle (N rad).
 
@@ -106,10 +136,12 @@ def mean_tool_forces_N(
 ) -> np.ndarray:
     """Closed-form average force on the tool over a tooth period, feed frame (N), shape (3,).
 
-    ``N/(2 pi) [Q(phi_ex) - Q(phi_st)]`` with :func:`flute_force_integral` (Altintas eq. 2.64).
+    ``N/(2 pi) [Q(phi_ex) - Q(phi_st)]`` with :func:`flute_force_integral` (Altintas eq. 2.64);
+    a Kienzle material's coefficients at the arc's mean chip thickness (:func:`kienzle_coefficients`).
     """
-    hi = flute_force_integral(k.as_array(), axial_depth_mm, feed_per_tooth_mm, phi_ex)
-    lo = flute_force_integral(k.as_array(), axial_depth_mm, feed_per_tooth_mm, phi_st)
+    ka = kienzle_coefficients(k.as_array(), feed_per_tooth_mm, phi_st, phi_ex)
+    hi = flute_force_integral(ka, axial_depth_mm, feed_per_tooth_mm, phi_ex)
+    lo = flute_force_integral(ka, axial_depth_mm, feed_per_tooth_mm, phi_st)
     return n_flutes / (2.0 * math.pi) * (np.array(hi) - np.array(lo))
 
 
@@ -320,7 +352,7 @@ class EndMilling:
         params = pack_slots(
             END_MILLING_SLOTS,
             {
-                **dict(zip(("K_tc", "K_rc", "K_ac", "K_te", "K_re", "K_ae"), self.coefficients.as_array())),
+                **dict(zip(("K_tc", "K_rc", "K_ac", "K_te", "K_re", "K_ae", "mc"), self.coefficients.as_array())),
                 "n_flutes": int(self.n_flutes),
                 "axial_depth_mm": self.axial_depth_mm,
                 "lag_rad": self.axial_depth_mm * helix_lag_rad_per_mm(self.helix_deg, self.diameter_mm),
@@ -413,6 +445,7 @@ END_MILLING_SLOTS = (
     "K_te",
     "K_re",
     "K_ae",
+    "mc",
     "n_flutes",
     "axial_depth_mm",
     "lag_rad",
@@ -432,8 +465,9 @@ AVERAGE_FORCE_SLOTS = ("k_il", "k_c", "harmonic_fraction", "omega", "phase", "lo
 #: Jacobian (2 x nq), each tool's :data:`PM_TOOL_COLUMNS`, and the engagement table of
 #: ``n_table`` rows of :data:`PM_COLUMNS`, one every ``table_period`` seconds.
 PROGRAM_MILLING_SLOTS = ("n_tools", "table_period", "n_table", "dt", "n_hist", "n_jac")
-#: A tool's values: its coefficients, flutes and helix lag per depth (:func:`helix_lag_rad_per_mm`).
-PM_TOOL_COLUMNS = ("K_tc", "K_rc", "K_ac", "K_te", "K_re", "K_ae", "n_flutes", "lag_rad_per_mm")
+#: A tool's values: its coefficients (:meth:`CuttingCoefficients.as_array`), flutes and helix lag
+#: per depth (:func:`helix_lag_rad_per_mm`).
+PM_TOOL_COLUMNS = ("K_tc", "K_rc", "K_ac", "K_te", "K_re", "K_ae", "mc", "n_flutes", "lag_rad_per_mm")
 #: The table's columns: the two engaged arcs (rad) each with its mean axial depth (mm), spindle
 #: speed (rad/s), spindle angle at the row's start (rad), tool index.
 PM_COLUMNS = ("phi_st1", "phi_ex1", "depth1_mm", "phi_st2", "phi_ex2", "depth2_mm", "omega", "angle", "tool")
@@ -442,7 +476,7 @@ PM_N_TOOLS, PM_PERIOD, PM_N_TABLE, PM_DT = _PM["n_tools"], _PM["table_period"], 
 PM_N_HIST, PM_N_JAC, PM_JACOBIAN, PM_WIDTH = _PM["n_hist"], _PM["n_jac"], len(PROGRAM_MILLING_SLOTS), len(PM_COLUMNS)
 PM_TOOL_WIDTH, PM_TOOL_FLUTES = len(PM_TOOL_COLUMNS), PM_TOOL_COLUMNS.index("n_flutes")
 PM_TOOL_LAG = PM_TOOL_COLUMNS.index("lag_rad_per_mm")
-PM_TOOL_K_FIRST, PM_TOOL_K_END = PM_TOOL_COLUMNS.index("K_tc"), PM_TOOL_COLUMNS.index("K_ae") + 1
+PM_TOOL_K_FIRST, PM_TOOL_K_END = PM_TOOL_COLUMNS.index("K_tc"), PM_TOOL_COLUMNS.index("mc") + 1
 PM_PHI_ST1, PM_PHI_EX1, PM_DEPTH1 = (
     PM_COLUMNS.index("phi_st1"),
     PM_COLUMNS.index("phi_ex1"),
@@ -493,7 +527,7 @@ EM_OMEGA, EM_PHASE0, EM_DT, EM_LAG_LO, EM_LAG_FRAC = (
     _EM["lag_frac"],
 )
 EM_LO, EM_HI, EM_N_HIST, EM_JACOBIAN = _EM["lo"], _EM["hi"], _EM["n_hist"], len(END_MILLING_SLOTS)
-EM_K_END = _EM["K_ae"] + 1
+EM_K_END = _EM["mc"] + 1
 AF_K_IL, AF_K_C, AF_R, AF_OMEGA = _AF["k_il"], _AF["k_c"], _AF["harmonic_fraction"], _AF["omega"]
 AF_PHASE, AF_LO, AF_HI, AF_JACOBIAN = _AF["phase"], _AF["lo"], _AF["hi"], len(AVERAGE_FORCE_SLOTS)
 
@@ -558,6 +592,7 @@ def _end_milling(par, state, qpos, t, out):  # pragma: no cover - compiled
     if not (lo <= t < hi):
         return
     c_m, ux, uy = _chip(hist, i, n, lag_lo, frac, state)
+    k = kienzle_coefficients(k, c_m * 1e3, phi_st, phi_ex)
     fx, fy, fz = step_tool_forces_N(k, n_flutes, a, c_m * 1e3, phi_st, phi_ex, phase0 + omega * t, omega * dt, lag)
     _on_workpiece(fx, fy, fz, ux, uy, out)
 
@@ -591,7 +626,8 @@ def _program_milling(par, state, qpos, t, out):  # pragma: no cover - compiled
         st, ex = table[row, PM_PHI_ST1 + first], table[row, PM_PHI_EX1 + first]
         a = table[row, PM_DEPTH1 + first]
         if ex > st and a > 0.0:
-            gx, gy, gz = step_tool_forces_N(k, n_flutes, a, c_m * 1e3, st, ex, angle, omega * dt, a * lag_per_mm)
+            ka = kienzle_coefficients(k, c_m * 1e3, st, ex)
+            gx, gy, gz = step_tool_forces_N(ka, n_flutes, a, c_m * 1e3, st, ex, angle, omega * dt, a * lag_per_mm)
             fx, fy, fz = fx + gx, fy + gy, fz + gz
     _on_workpiece(fx, fy, fz, ux, uy, out)
 
@@ -668,7 +704,10 @@ class ForceModels:
 
 
 class CoefficientsSpec(StrictSpec):
-    """Overrides of the material's cutting (N/mm^2) and edge (N/mm) coefficients."""
+    """Overrides of the material's coefficients: linear cutting (N/mm^2) and edge (N/mm) ones,
+    or the Kienzle form ``kc1_N_per_mm2`` with ``mc`` (radial and axial then our ratios of it,
+    :data:`~twin.process.materials.KIENZLE_RADIAL_RATIO`, unless ``K_rc``, ``K_ac`` are given:
+    at h = 1 mm)."""
 
     K_tc: float | None = None
     K_rc: float | None = None
@@ -676,11 +715,28 @@ class CoefficientsSpec(StrictSpec):
     K_te: float | None = None
     K_re: float | None = None
     K_ae: float | None = None
+    kc1_N_per_mm2: float | None = Field(
+        None, gt=0, description="Kienzle: specific cutting force at h = 1 mm, N/mm^2 (give mc with it)"
+    )
+    mc: float | None = Field(None, ge=0, lt=1, description="Kienzle exponent, kc = kc1 h^-mc (give kc1_N_per_mm2)")
+
+    @model_validator(mode="after")
+    def _kienzle_form(self):
+        if self.kc1_N_per_mm2 is not None and self.mc is None:
+            raise ValueError("kc1_N_per_mm2 needs mc (the Kienzle exponent, 0 <= mc < 1) beside it")
+        if self.mc is not None and self.kc1_N_per_mm2 is None:
+            raise ValueError("mc needs kc1_N_per_mm2 (N/mm^2 at h = 1 mm) beside it")
+        if self.kc1_N_per_mm2 is not None and self.K_tc is not None:
+            raise ValueError("give kc1_N_per_mm2 (Kienzle) or K_tc (linear), not both")
+        return self
 
     def applied_to(self, material: str) -> CuttingCoefficients:
         """The coefficients of ``material`` (:data:`~twin.process.materials.MATERIALS`) with the
-        ones given here in their place."""
-        return replace(MATERIALS[material].coefficients, **self.model_dump(exclude_none=True))
+        ones given here in their place; a Kienzle form given replaces the material's whole."""
+        given = self.model_dump(exclude_none=True)
+        kc1 = given.pop("kc1_N_per_mm2", None)
+        base = MATERIALS[material].coefficients if kc1 is None else kienzle(kc1, given.pop("mc"))
+        return replace(base, **given)
 
 
 class EndMillingSpec(DisturbanceSpecBase):
