@@ -51,8 +51,7 @@ def test_a_perfect_path_leaves_no_error():
 
 
 def test_line_and_width_of_a_slot():
-    part = machined_part(STOCK, slot(0.0), slot(0.003), 0.0, -10.0)
-    _, actual = part.sections(-1.0)
+    actual = machined_part(STOCK, slot(0.0), slot(0.003), 0.0, -10.0)
     width = measure(
         WidthFeature(type="width", name="slot", from_mm=(15, 5), to_mm=(15, 15), width_mm=6.0, z_mm=-1.0), actual
     )
@@ -73,8 +72,7 @@ def test_line_and_width_of_a_slot():
 
 def test_a_feature_not_on_the_part_says_so():
     part = machined_part(STOCK, slot(0.0), slot(0.0), 0.0, -10.0)
-    _, actual = part.sections(-1.0)
-    row = measure(CircleFeature(type="circle", name="none", center_mm=(5, 5), diameter_mm=1.0, z_mm=-1.0), actual)
+    row = measure(CircleFeature(type="circle", name="none", center_mm=(5, 5), diameter_mm=1.0, z_mm=-1.0), part)
     assert row["found"] is False
     assert row["pass"] is False
 
@@ -137,7 +135,7 @@ def test_bore_cut_by_the_perfect_loop_measures_its_size(bore):
     )
     stock = bore.part.stock
     feature = CircleFeature(type="circle", name="bore", center_mm=(-28, 0), diameter_mm=66.0, z_mm=-1.5)
-    row = measure(feature, loop.section(stock, -1.5))
+    row = measure(feature, machined_part(stock, loop, loop, 0.0, -10.0))
     assert row["diameter_mm"] == pytest.approx(66.0, abs=5e-5)
     assert row["roundness_um"] < 0.2
     # the planned reference runs inside the programmed circle (by its mean radius here): the
@@ -145,7 +143,7 @@ def test_bore_cut_by_the_perfect_loop_measures_its_size(bore):
     plan = bore.part.nominal
     on = plan.line == 12
     radius = np.hypot(plan.xy_mm[on, 0] + 28, plan.xy_mm[on, 1]).mean()
-    row = measure(feature, plan.section(stock, -1.5))
+    row = measure(feature, machined_part(stock, plan, plan, 0.0, -10.0))
     assert row["diameter_mm"] == pytest.approx(2 * (radius + 5.0), abs=1e-4)
 
 

@@ -1,9 +1,10 @@
 """Inspection of the virtual part as a coordinate measuring machine reports it.
 
 Each ``[[inspect]]`` feature names a place on the nominal part; it is measured on the actual
-part's section at its ``z_mm`` (:mod:`twin.process.part`), from points every
-:data:`PROBE_STEP_MM` along the section's boundary within :data:`BAND_MM` of the nominal
-feature:
+part at its ``z_mm`` by probes every :data:`PROBE_STEP_MM` along the nominal feature
+(:meth:`twin.process.part.MachinedPart.probe`): each finds the nearest point of the actual cut's
+boundary (the side of the nearest capsule the tool swept), and those within :data:`BAND_MM` of
+the nominal feature are its measured points:
 
 - ``circle`` (a bore or a boss): the least-squares circle (geometric, scipy's
   ``least_squares`` from the algebraic fit); its diameter, centre and roundness (the spread of
@@ -12,7 +13,8 @@ feature:
   points' principal axis); its position where the nominal line's middle falls on it, the signed
   offset from the nominal (positive: material left) and straightness (peak to valley);
 - ``width`` (a slot or pocket): the two-point size along the line ``from_mm`` to ``to_mm``
-  across it: the length of the open gap that holds the line's middle.
+  across it: the length of the open gap that holds the line's middle, each end where the line
+  meets the side of the capsule nearest the first probe in material (or the stock's outline).
 
 ``deviation_um`` is the measured less the nominal; ``pass`` holds it within ``tolerance_um``.
 """
@@ -27,7 +29,7 @@ import shapely
 from pydantic import Field, PositiveFloat
 from scipy.optimize import least_squares
 
-from twin.process.part import points_along
+from twin.process.part import MachinedPart
 from twin.spec import MAX_MM, Millimetres, StrictSpec
 
 #: Distance from a nominal feature (mm) within which the boundary counts as its points.
@@ -101,18 +103,50 @@ def not_found(feature, message: str) -> dict:
     }
 
 
-def measure(feature, material: shapely.Geometry) -> dict:
-    """One feature of ``inspection`` measured on the section ``material`` at its height."""
+def _circle_hits(centre: np.ndarray, radius_mm: float, origin: np.ndarray, direction: np.ndarray) -> np.ndarray:
+    """Where the line ``origin + t direction`` (unit) meets the circle (mm): the values of t, none,
+    one or two."""
+    offset = origin - centre
+    b = float(offset @ direction)
+    disc = b * b - (float(offset @ offset) - radius_mm**2)
+    return np.array([]) if disc < 0.0 else -b + np.array([-1.0, 1.0]) * math.sqrt(disc)
+
+
+def _gap_end(part: MachinedPart, z_mm: float, middle: np.ndarray, end: np.ndarray) -> np.ndarray | None:
+    """Where the line from ``middle`` (in the cut) towards ``end`` first meets material (mm): the
+    stock's outline or the side of the capsule nearest the first probe in material; None when the
+    line reaches ``end`` without."""
+    length = float(np.linalg.norm(end - middle))
+    direction = (end - middle) / length
+    at = np.arange(0.0, length + PROBE_STEP_MM, PROBE_STEP_MM).clip(max=length)
+    pts = middle + at[:, None] * direction
+    found = part.probe(pts, z_mm)
+    in_stock = shapely.contains_xy(part.stock, pts[:, 0], pts[:, 1])
+    material = np.flatnonzero(in_stock & (found.distance > 0.0))
+    if len(material) == 0:
+        return None
+    k = int(material[0])
+    if k > 0 and not in_stock[k - 1]:  # the stock's own outline
+        crossing = shapely.intersection(shapely.LineString([pts[k - 1], pts[k]]), part.stock.boundary)
+        return shapely.get_coordinates(crossing)[0]
+    if k == 0 or not np.isfinite(found.axis[k, 0]):
+        return pts[k]
+    back = _circle_hits(found.axis[k], float(found.reach[k]), pts[k], -direction)
+    back = back[back >= -1e-9]
+    return pts[k] - direction * float(back.min()) if len(back) else pts[k]
+
+
+def measure(feature, part: MachinedPart) -> dict:
+    """One feature of ``inspection`` measured on the actual ``part`` at its height (see the
+    module docstring): probes every :data:`PROBE_STEP_MM` along the nominal feature."""
     row: dict = {"name": feature.name, "type": feature.type, "z_mm": feature.z_mm}
     if feature.type == "circle":
         centre, r = np.asarray(feature.center_mm), feature.diameter_mm / 2
         band = min(BAND_MM, r / 2)
-        zone = (
-            shapely.Point(centre)
-            .buffer(r + band, quad_segs=256)
-            .difference(shapely.Point(centre).buffer(r - band, quad_segs=256))
-        )
-        pts = points_along(shapely.intersection(material.boundary, zone), PROBE_STEP_MM)
+        turn = np.arange(0.0, 2 * math.pi, PROBE_STEP_MM / r)
+        found = part.probe(centre + r * np.column_stack([np.cos(turn), np.sin(turn)]), feature.z_mm, band)
+        near = np.abs(found.distance) < band
+        pts = found.surface()[near]
         if len(pts) < MIN_POINTS:
             return not_found(feature, f"no wall within {band} mm of the circle")
         fitted, radius, residual = fit_circle(pts)
@@ -128,8 +162,10 @@ def measure(feature, material: shapely.Geometry) -> dict:
             return not_found(feature, "from_mm and to_mm are one point")
         u = (b - a) / np.linalg.norm(b - a)
         n = np.array([-u[1], u[0]])
-        zone = shapely.buffer(shapely.LineString([a, b]), BAND_MM, cap_style="flat")
-        pts = points_along(shapely.intersection(material.boundary, zone), PROBE_STEP_MM)
+        along = np.arange(0.0, np.linalg.norm(b - a) + PROBE_STEP_MM / 2, PROBE_STEP_MM)
+        found = part.probe(a + along[:, None] * u, feature.z_mm, BAND_MM)
+        near = np.abs(found.distance) < BAND_MM
+        pts = found.surface()[near]
         if len(pts) < MIN_POINTS:
             return not_found(feature, f"no wall within {BAND_MM} mm of the line")
         mean = pts.mean(axis=0)
@@ -138,8 +174,9 @@ def measure(feature, material: shapely.Geometry) -> dict:
         residual = (pts - mean) @ normal
         middle = 0.5 * (a + b)
         on_fit = mean + direction * ((middle - mean) @ direction)  # the middle's foot on the fit
-        # the material's side: +1 where it lies along n; material left moves the wall against it
-        side = 1.0 if material.contains(shapely.Point(on_fit + BAND_MM * n)) else -1.0
+        # the material's side: +1 where it lies along n (away from the tools' axes); material
+        # left moves the wall against it
+        side = 1.0 if float(np.mean((found.xy[near] - found.axis[near]) @ n)) > 0.0 else -1.0
         deviation = -side * float((on_fit - middle) @ n) * 1e3
         row |= {
             "position_mm": [round(float(v), 6) for v in on_fit],
@@ -147,14 +184,17 @@ def measure(feature, material: shapely.Geometry) -> dict:
         }
     else:
         a, b = np.asarray(feature.from_mm), np.asarray(feature.to_mm)
-        middle = shapely.Point(0.5 * (a + b))
-        gaps = shapely.get_parts(shapely.difference(shapely.LineString([a, b]), material))
-        gap = min(gaps, key=lambda g: g.distance(middle), default=None) if len(gaps) else None
-        if gap is None or gap.distance(middle) > 0.0 or gap.length == 0.0:
+        middle = 0.5 * (a + b)
+        inside = part.probe(middle[None, :], feature.z_mm)
+        in_stock = shapely.contains_xy(part.stock, middle[0], middle[1])
+        if np.allclose(a, b) or (in_stock and inside.distance[0] > 0.0):
             return not_found(feature, "the line's middle is in material: no gap across it")
-        deviation = (gap.length - feature.width_mm) * 1e3
+        ends = [_gap_end(part, feature.z_mm, middle, end) for end in (a, b)]
+        gap = [end if end is not None else whole for end, whole in zip(ends, (a, b))]
+        width = float(np.linalg.norm(gap[1] - gap[0]))
+        deviation = (width - feature.width_mm) * 1e3
         row |= {
-            "width_mm": round(gap.length, 6),
-            "center_mm": [round(float(v), 6) for v in shapely.get_coordinates(gap.centroid)[0]],
+            "width_mm": round(width, 6),
+            "center_mm": [round(float(v), 6) for v in 0.5 * (gap[0] + gap[1])],
         }
     return {**row, "deviation_um": round(deviation, 3), "pass": _verdict(deviation, feature.tolerance_um)}

@@ -1,17 +1,32 @@
 """The virtual part: the stock cut a second time where the twin actually moved the tool, and
-its walls against the nominal part's.
+its walls against the nominal part's, at a cost set by the part, not by the run's samples.
 
-A wall's place must be known to a micrometre whatever the height map's cell, so the part is
-held here as exact sections: at a height z the material is the stock's outline less every disc
-the tool swept at that height (its radius there: the full radius above a ball or bull-nose
-corner, the corner's circle within it), a shapely polygon whose circles are drawn within
-:data:`CIRCLE_TOLERANCE_MM`.  The nominal section is swept along the planned reference (the
-program within the planner's path tolerance); the actual one along the table's measured path
-at the recorded ticks, with the planned Z (this twin moves X and Y).  Along the nominal
-section's machined boundary (not the stock's own outline), every :data:`WALL_STEP_MM`, the
-signed distance to the actual section's boundary is the wall error: positive where material is
-left (the actual wall stands in what the program removes), negative where the tool overcut.
-Each wall point is credited to the program line of the nearest nominal tool position.
+At a height z the material is the stock's outline less every capsule the tool swept there: the
+segment between two samples of the tool's axis widened by the tool's radius at that height (the
+full radius above a ball or bull-nose corner, the corner's circle within it).
+
+- The **nominal** part's section is exact polygons (shapely): the planned reference (the
+  program within the planner's path tolerance) is smooth, so each run of one radius is
+  simplified within :data:`NOMINAL_SIMPLIFY_MM` (0.01 µm) before it is swept, and its cost is
+  the path's geometry, whatever its sample count.
+- The **actual** part (the table's measured path at the recorded ticks, with the planned Z: this
+  twin moves X and Y) is never built as a polygon: a path with micrometre jitter at one sample
+  per tick made gigabytes of polygons.  Instead each wall point is a probe, and the actual
+  samples stream once past the probes (:func:`nearest_cuts`, compiled, the probes bucketed on a
+  grid): each probe keeps the smallest signed distance ``|p - q| - r`` to a swept capsule (q the
+  nearest point of its axis segment, r its radius there), the capsule's axis point and the
+  program line of its sample.  Outside every capsule (material left) that minimum is the exact
+  distance to the cut; inside (overcut) it is the depth in the deepest capsule, which is the
+  exact depth wherever the cut's boundary is smooth (one capsule's arc: every wall the tool's
+  side forms).  Memory: the probes (at most :data:`MAX_WALL_POINTS`) and their grid; time:
+  linear in the samples.
+
+Along the nominal section's machined boundary (not the stock's own outline), every
+:data:`WALL_STEP_MM` (each point then moved onto the exact side of the nominal capsule it lies
+on, the same probe against the plan), that signed distance is the wall error: positive where material is left,
+negative where the tool overcut, clipped at :data:`WALL_WINDOW_MM` (no actual capsule within a
+millimetre: at least that much material left).  Each wall point is credited to the program line
+of the actual sample whose capsule is nearest it: the pass that formed that wall.
 
 The sections are taken at :func:`wall_levels`: the middle of each band between the heights the
 tool cut at (the floors of a 2.5-D part), so that each wall is read once per step-down.
@@ -21,17 +36,25 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 import shapely
-from scipy.spatial import cKDTree
+from numba import njit
+
+from twin.numba_cache import configure as configure_numba_cache
 
 if TYPE_CHECKING:
     from twin.process.part_map import PartMap
 
+configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
+
 #: The tool's circles are polygons within this of the true circle (mm): 0.05 µm.
 CIRCLE_TOLERANCE_MM = 5e-5
+#: The planned path is simplified within this (mm) before it is swept: 0.01 µm.
+NOMINAL_SIMPLIFY_MM = 1e-5
+#: Vertices of one simplified run swept at once (GEOS buffers long self-crossing lines slowly).
+RUN_PIECE_VERTICES = 5_000
 #: Spacing of the wall points along the nominal part's machined boundary (mm).
 WALL_STEP_MM = 0.05
 #: Wall points at most over all levels (the spacing grows past it: memory stays bounded).
@@ -44,8 +67,16 @@ MIN_FLOOR_SAMPLES = 10
 SAME_RADIUS_MM = 1e-6
 #: A nominal boundary point this near the stock's own outline (mm) is not machined.
 ON_STOCK_MM = 1e-4
-#: Runs of one radius a section sweeps at most (about 5 s of GEOS buffering and union).  A
-#: tool that moves in Z through a level (a 3-D surface, a long ramp) sweeps a new radius at
+#: The wall error is resolved within this of the nominal wall (mm): a probe no actual capsule
+#: comes this near reads it (material left, at least this much).
+WALL_WINDOW_MM = 1.0
+#: Samples of the actual path offered to the probes together, within a box this wide (mm).
+CHUNK_SAMPLES = 256
+CHUNK_MM = 0.2
+#: Cells of the probes' grid at most (4 million: 32 MB of cell starts).
+MAX_BINS = 4_000_000
+#: Runs of one radius a nominal section sweeps at most (about 5 s of GEOS buffering and union).
+#: A tool that moves in Z through a level (a 3-D surface, a long ramp) sweeps a new radius at
 #: every sample there: such a level is not sectioned, and its surface is in the height maps'
 #: floor error instead (:mod:`twin.process.part_map`).
 MAX_SECTION_RUNS = 20_000
@@ -72,8 +103,14 @@ def swept_radius_mm(tip_mm: np.ndarray, radius_mm: np.ndarray, corner_mm: np.nda
     return np.where(h > 0.0, out, 0.0)
 
 
+def _swept(shapes: list, radius: float) -> shapely.Geometry:
+    """The union of ``shapes`` (lines and points, mm) widened by ``radius`` (mm)."""
+    return shapely.buffer(shapely.GeometryCollection(shapes), radius, quad_segs=quad_segs(radius))
+
+
 def section(stock: shapely.Geometry, xy_mm, tip_mm, radius_mm, corner_mm, z_mm: float) -> shapely.Geometry:
-    """The material at height ``z_mm``: ``stock`` less the tool's discs at that height.
+    """The material a smooth path leaves at height ``z_mm``: ``stock`` less the tool's capsules
+    there, each run of one radius simplified within :data:`NOMINAL_SIMPLIFY_MM` first.
 
     Parameters
     ----------
@@ -108,12 +145,17 @@ def section(stock: shapely.Geometry, xy_mm, tip_mm, radius_mm, corner_mm, z_mm: 
             continue
         # a run is joined to the sample before it, so that the sweep has no gap between runs
         pts = xy_mm[max(a - 1, 0) if a > 0 and on[a - 1] else a : b]
-        shape = shapely.LineString(pts) if len(pts) > 1 else shapely.Point(pts[0])
-        by_radius.setdefault(round(float(r[a:b].min()), 9), []).append(shape)
-    swept = [
-        shapely.buffer(shapely.GeometryCollection(shapes), radius, quad_segs=quad_segs(radius))
-        for radius, shapes in by_radius.items()
-    ]
+        if len(pts) == 1:
+            by_radius.setdefault(round(float(r[a:b].min()), 9), []).append(shapely.Point(pts[0]))
+            continue
+        line = shapely.simplify(shapely.LineString(pts), NOMINAL_SIMPLIFY_MM, preserve_topology=False)
+        coords = shapely.get_coordinates(line)
+        pieces = range(0, max(len(coords) - 1, 1), RUN_PIECE_VERTICES)
+        by_radius.setdefault(round(float(r[a:b].min()), 9), []).extend(
+            shapely.LineString(coords[i : i + RUN_PIECE_VERTICES + 1]) if len(coords) > 1 else shapely.Point(coords[0])
+            for i in pieces
+        )
+    swept = [_swept(shapes, radius) for radius, shapes in by_radius.items()]
     return shapely.difference(stock, shapely.union_all(swept)) if swept else stock
 
 
@@ -166,8 +208,219 @@ class Sweep:
     line: np.ndarray
 
     def section(self, stock: shapely.Geometry, z_mm: float) -> shapely.Geometry:
-        """The material this sweep leaves of ``stock`` at ``z_mm`` (:func:`section`)."""
+        """The material this sweep leaves of ``stock`` at ``z_mm`` (:func:`section`): for a
+        smooth path (the plan); an actual path is probed (:func:`nearest_cuts`)."""
         return section(stock, self.xy_mm, self.tip_mm, self.radius_mm, self.corner_mm, z_mm)
+
+
+class Probes(NamedTuple):
+    """Probe points and what :func:`nearest_cuts` finds for each, all in mm.
+
+    Attributes
+    ----------
+    xy : ndarray (m, 2)
+        The points.
+    z : ndarray (m,)
+        The height each is probed at.
+    distance : ndarray (m,)
+        The signed distance to the nearest swept capsule (positive outside every capsule, in
+        the material), clipped at the window it was probed within.
+    axis : ndarray (m, 2)
+        That capsule's nearest axis point (NaN: none within the window).
+    reach : ndarray (m,)
+        That capsule's radius at ``z``.
+    line : ndarray (m,) of int
+        The program line of that capsule's sample (-1: none).
+    """
+
+    xy: np.ndarray
+    z: np.ndarray
+    distance: np.ndarray
+    axis: np.ndarray
+    reach: np.ndarray
+    line: np.ndarray
+
+    def surface(self) -> np.ndarray:
+        """Each probe's nearest point of the cut's boundary (m, 2; NaN where none): the point of
+        the nearest capsule's side on the line from its axis through the probe."""
+        away = self.xy - self.axis
+        norm = np.hypot(away[:, 0], away[:, 1])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return self.axis + away * (self.reach / norm)[:, None]
+
+
+class _Bins(NamedTuple):
+    """Probes bucketed on a square grid (mm): ``order[start[c]:start[c + 1]]`` are cell c's."""
+
+    x0: float
+    y0: float
+    cell: float
+    nx: int
+    ny: int
+    start: np.ndarray
+    order: np.ndarray
+
+
+def _bins(xy: np.ndarray, cell_mm: float) -> _Bins:
+    """``xy`` (m, 2) bucketed in cells of ``cell_mm`` (larger where there would be over
+    :data:`MAX_BINS` cells)."""
+    span = np.ptp(xy, axis=0) + 3 * cell_mm
+    cell_mm = max(cell_mm, math.sqrt(float(span[0] * span[1]) / MAX_BINS))
+    x0, y0 = xy.min(axis=0) - cell_mm
+    nx = int((xy[:, 0].max() - x0) / cell_mm) + 2
+    ny = int((xy[:, 1].max() - y0) / cell_mm) + 2
+    index = ((xy[:, 0] - x0) / cell_mm).astype(np.int64) * ny + ((xy[:, 1] - y0) / cell_mm).astype(np.int64)
+    order = np.argsort(index, kind="stable")
+    start = np.searchsorted(index[order], np.arange(nx * ny + 1))
+    return _Bins(float(x0), float(y0), float(cell_mm), nx, ny, start, order)
+
+
+@njit(cache=True)
+def _radius_at(tip, radius, corner, z):  # pragma: no cover - compiled
+    """:func:`swept_radius_mm` of one sample."""
+    h = z - tip
+    if h <= 0.0:
+        return 0.0
+    within = min(max(corner - h, 0.0), corner)
+    return radius - corner + math.sqrt(max(corner * corner - within * within, 0.0))
+
+
+@njit(cache=True)
+def _offer(probes, m, ax, ay, bx, by, r, line):  # pragma: no cover - compiled
+    """Offer probe ``m`` the capsule from (ax, ay) to (bx, by) of radius ``r``: it keeps the
+    nearest (:class:`Probes`)."""
+    px, py = probes.xy[m, 0], probes.xy[m, 1]
+    dx, dy = bx - ax, by - ay
+    length2 = dx * dx + dy * dy
+    t = 0.0
+    if length2 > 0.0:
+        t = min(max(((px - ax) * dx + (py - ay) * dy) / length2, 0.0), 1.0)
+    qx, qy = ax + t * dx, ay + t * dy
+    d = math.hypot(px - qx, py - qy) - r
+    if d < probes.distance[m]:
+        probes.distance[m] = d
+        probes.axis[m, 0], probes.axis[m, 1] = qx, qy
+        probes.reach[m] = r
+        probes.line[m] = line
+
+
+@njit(cache=True)
+def _stream(probes, level_of, bins, levels, path, window):  # pragma: no cover - compiled
+    """Every capsule of a path offered to the probes (:func:`nearest_cuts`): at each level, the
+    segment between consecutive samples where the tool reaches the level at both (the smaller
+    radius), the sample alone where it reaches it first.
+
+    The samples go in chunks of at most :data:`CHUNK_SAMPLES` within :data:`CHUNK_MM`: a probe
+    whose distance to the chunk's box, less the chunk's widest radius at its level, is no nearer
+    than what it holds skips the chunk's capsules (most probes, once a pass went by)."""
+    xy, tip, radius, corner, line = path
+    n, n_levels = xy.shape[0], len(levels)
+    rad = np.zeros((CHUNK_SAMPLES + 1, n_levels))  # the chunk's radii, the sample before it first
+    widest = np.zeros(n_levels)
+    k0 = 0
+    while k0 < n:
+        x_lo, x_hi, y_lo, y_hi = (
+            xy[max(k0 - 1, 0), 0],
+            xy[max(k0 - 1, 0), 0],
+            xy[max(k0 - 1, 0), 1],
+            xy[max(k0 - 1, 0), 1],
+        )
+        k1 = k0
+        while k1 < n and k1 - k0 < CHUNK_SAMPLES:
+            x_lo, x_hi = min(x_lo, xy[k1, 0]), max(x_hi, xy[k1, 0])
+            y_lo, y_hi = min(y_lo, xy[k1, 1]), max(y_hi, xy[k1, 1])
+            k1 += 1
+            if x_hi - x_lo > CHUNK_MM or y_hi - y_lo > CHUNK_MM:
+                break
+        for s in range(k0 - 1, k1):  # rad[0]: the sample before the chunk (none: nothing)
+            for level in range(n_levels):
+                rad[s - k0 + 1, level] = _radius_at(tip[s], radius[s], corner[s], levels[level]) if s >= 0 else 0.0
+        reach = 0.0
+        for level in range(n_levels):
+            widest[level] = 0.0
+            for s in range(1, k1 - k0 + 1):
+                widest[level] = max(widest[level], rad[s, level])
+            reach = max(reach, widest[level])
+        if reach > 0.0:
+            reach += window
+            i0 = max(int((x_lo - reach - bins.x0) / bins.cell), 0)
+            i1 = min(int((x_hi + reach - bins.x0) / bins.cell), bins.nx - 1)
+            j0 = max(int((y_lo - reach - bins.y0) / bins.cell), 0)
+            j1 = min(int((y_hi + reach - bins.y0) / bins.cell), bins.ny - 1)
+            for i in range(i0, i1 + 1):
+                for j in range(j0, j1 + 1):
+                    c = i * bins.ny + j
+                    for at in range(bins.start[c], bins.start[c + 1]):
+                        m = bins.order[at]
+                        level = level_of[m]
+                        if widest[level] <= 0.0:
+                            continue
+                        px, py = probes.xy[m, 0], probes.xy[m, 1]
+                        gap_x = max(x_lo - px, 0.0, px - x_hi)
+                        gap_y = max(y_lo - py, 0.0, py - y_hi)
+                        if math.hypot(gap_x, gap_y) - widest[level] >= probes.distance[m]:
+                            continue
+                        for s in range(1, k1 - k0 + 1):
+                            k = k0 + s - 1
+                            now, before = rad[s, level], rad[s - 1, level]
+                            if now > 0.0 and before > 0.0:
+                                _offer(
+                                    probes, m, xy[k - 1, 0], xy[k - 1, 1], xy[k, 0], xy[k, 1], min(now, before), line[k]
+                                )
+                            elif now > 0.0:
+                                _offer(probes, m, xy[k, 0], xy[k, 1], xy[k, 0], xy[k, 1], now, line[k])
+        k0 = k1
+
+
+class _Path(NamedTuple):
+    """A :class:`Sweep`'s arrays as the compiled stream reads them."""
+
+    xy: np.ndarray
+    tip: np.ndarray
+    radius: np.ndarray
+    corner: np.ndarray
+    line: np.ndarray
+
+
+def nearest_cuts(xy_mm: np.ndarray, z_mm: np.ndarray, sweep: Sweep, window_mm: float = WALL_WINDOW_MM) -> Probes:
+    """Probe points against the capsules a path sweeps: for each point, the nearest capsule at
+    its height within ``window_mm`` (:class:`Probes`), the path's samples streamed once.
+
+    Parameters
+    ----------
+    xy_mm : ndarray (m, 2)
+        The probe points (mm).
+    z_mm : ndarray (m,)
+        Their heights (mm): a few distinct values (the wall levels, at most
+        :data:`MAX_WALL_LEVELS` and the inspected features').
+    sweep : Sweep
+        The path (its samples in time order).
+    window_mm : float
+        Capsules further than this from a probe are not looked at (mm).
+    """
+    m = len(xy_mm)
+    probes = Probes(
+        np.ascontiguousarray(xy_mm, float).reshape(m, 2),
+        np.ascontiguousarray(z_mm, float).reshape(m),
+        np.full(m, float(window_mm)),
+        np.full((m, 2), np.nan),
+        np.zeros(m),
+        np.full(m, -1, np.int64),
+    )
+    if m == 0 or len(sweep.line) == 0:
+        return probes
+    levels, level_of = np.unique(probes.z, return_inverse=True)
+    widest = float(sweep.radius_mm.max())
+    path = _Path(
+        np.ascontiguousarray(sweep.xy_mm, float),
+        np.ascontiguousarray(sweep.tip_mm, float),
+        np.ascontiguousarray(sweep.radius_mm, float),
+        np.ascontiguousarray(sweep.corner_mm, float),
+        np.ascontiguousarray(sweep.line, np.int64),
+    )
+    bins = _bins(probes.xy, max((widest + window_mm) / 2.0, 0.05))
+    _stream(probes, level_of.astype(np.int64), bins, levels, path, float(window_mm))
+    return probes
 
 
 @dataclass
@@ -202,9 +455,9 @@ class MachinedPart:
     maps: PartMap | None = None
     floor_error_um: dict = field(default_factory=dict)
 
-    def sections(self, z_mm: float) -> tuple[shapely.Geometry, shapely.Geometry]:
-        """The nominal and the actual material at ``z_mm``."""
-        return self.nominal.section(self.stock, z_mm), self.actual.section(self.stock, z_mm)
+    def probe(self, xy_mm: np.ndarray, z_mm: float, window_mm: float = WALL_WINDOW_MM) -> Probes:
+        """Points at height ``z_mm`` probed against the actual cut (:func:`nearest_cuts`)."""
+        return nearest_cuts(xy_mm, np.full(len(xy_mm), z_mm), self.actual, window_mm)
 
     def summary(self) -> dict:
         """``part`` of ``twin run --json``: the wall error's min, max and RMS (µm), the levels
@@ -237,49 +490,44 @@ class MachinedPart:
     def line_errors(self) -> dict[int, float]:
         """Per program line, its wall points' error furthest from zero (µm, signed)."""
         out: dict[int, float] = {}
-        for line in np.unique(self.walls[:, 4]).astype(int):
-            err = self.walls[self.walls[:, 4] == line, 3]
+        lines = self.walls[:, 4].astype(int)
+        for line in np.unique(lines):
+            err = self.walls[lines == line, 3]
             out[int(line)] = round(float(err[np.argmax(np.abs(err))]), 3)
         return out
 
 
-def wall_errors(stock, nominal: Sweep, actual: Sweep, levels_mm: list[float]) -> tuple[np.ndarray, list[float]]:
-    """Wall points of the nominal part at each of ``levels_mm`` with their signed error against
-    the actual part (µm) and line, shape (m, 5): see :class:`MachinedPart`; and the levels not
-    read (:class:`SectionTooComplex`)."""
+def wall_points(stock, nominal: Sweep, levels_mm: list[float]) -> tuple[np.ndarray, list[float]]:
+    """Points every :data:`WALL_STEP_MM` (more where there would be over
+    :data:`MAX_WALL_POINTS`) along the nominal part's machined boundary at each of ``levels_mm``,
+    shape (m, 3): x, y, z (mm); and the levels not read (:class:`SectionTooComplex`)."""
     outline = stock.boundary
-    sections, skipped = {}, []
+    boundaries, skipped = {}, []
     for z in levels_mm:
         try:
-            sections[z] = (nominal.section(stock, z), actual.section(stock, z))
+            boundaries[z] = nominal.section(stock, z).boundary
         except SectionTooComplex:
             skipped.append(z)
-    length = sum(want.boundary.length for want, _ in sections.values())
-    step = max(WALL_STEP_MM, length / MAX_WALL_POINTS)
+    step = max(WALL_STEP_MM, sum(b.length for b in boundaries.values()) / MAX_WALL_POINTS)
     rows = []
-    for z, (want, got) in sections.items():
-        pts = points_along(want.boundary, step)
-        if len(pts) == 0:
-            continue
-        pts = pts[shapely.distance(shapely.points(pts), outline) > ON_STOCK_MM]
-        if len(pts) == 0:
-            continue
-        distance = (
-            shapely.distance(shapely.points(pts), got.boundary) if not got.is_empty else np.full(len(pts), np.inf)
-        )
-        sign = np.where(shapely.contains_xy(got, pts[:, 0], pts[:, 1]), 1.0, -1.0)
-        below = swept_radius_mm(nominal.tip_mm, nominal.radius_mm, nominal.corner_mm, z) > 0.0
-        _, nearest = cKDTree(nominal.xy_mm[below]).query(pts)
-        line = nominal.line[below][nearest]
-        rows.append(np.column_stack([pts, np.full(len(pts), z), sign * distance * 1e3, line]))
-    return (np.concatenate(rows) if rows else np.zeros((0, 5))), skipped
+    for z, boundary in boundaries.items():
+        pts = points_along(boundary, step)
+        pts = pts[shapely.distance(shapely.points(pts), outline) > ON_STOCK_MM] if len(pts) else pts
+        rows.append(np.column_stack([pts, np.full(len(pts), z)]))
+    return (np.concatenate(rows) if rows else np.zeros((0, 3))), skipped
 
 
 def machined_part(stock, nominal: Sweep, actual: Sweep, top_mm: float, bottom_mm: float) -> MachinedPart:
-    """The virtual part of a run: the walls of the nominal sweep's part read against the actual
-    sweep's at :func:`wall_levels` of the nominal path."""
+    """The virtual part of a run: the walls of the nominal sweep's part (exact sections at
+    :func:`wall_levels` of the nominal path) probed against the actual sweep's capsules."""
     step = np.diff(nominal.xy_mm, axis=0, prepend=nominal.xy_mm[:1])
     moving = np.hypot(step[:, 0], step[:, 1]) > 1e-6
     levels = wall_levels(nominal.tip_mm, moving, top_mm, bottom_mm)
-    walls, skipped = wall_errors(stock, nominal, actual, levels)
+    points, skipped = wall_points(stock, nominal, levels)
+    # each point onto the exact side of the nominal capsule it lies on (the polygons' circles
+    # are chords within CIRCLE_TOLERANCE_MM of it)
+    on_plan = nearest_cuts(points[:, :2], points[:, 2], nominal).surface()
+    points[:, :2] = np.where(np.isfinite(on_plan), on_plan, points[:, :2])
+    found = nearest_cuts(points[:, :2], points[:, 2], actual)
+    walls = np.column_stack([points, found.distance * 1e3, found.line]) if len(points) else np.zeros((0, 5))
     return MachinedPart(stock, nominal, actual, [z for z in levels if z not in skipped], walls, skipped)

@@ -7,7 +7,7 @@ import numpy as np
 
 from twin.process.inspection import measure, not_found
 from twin.process.machining import StockSpec
-from twin.process.part import MachinedPart, SectionTooComplex, Sweep, machined_part
+from twin.process.part import MachinedPart, Sweep, machined_part
 from twin.process.part_map import part_map
 from twin.scenario.assembly import assemble
 from twin.scenario.schema import Scenario
@@ -21,16 +21,17 @@ def run_scenario(scn: Scenario, progress: bool | None = None, max_physics_steps:
     result = inputs.simulate(progress=progress, max_physics_steps=max_physics_steps)
     if scn.stock is not None and result.program is not None and len(result.t_s):
         result.part = _machined_part(result, result.program.lines, inputs.reference, scn.stock)
-        result.inspection = [_inspect(f, result.part) for f in scn.inspect]
+        result.inspection = [_inspect(f, result.part, scn.stock) for f in scn.inspect]
     return result
 
 
-def _inspect(feature, part: MachinedPart) -> dict:
-    """A feature measured on the actual part's section at its height, or why it cannot be."""
-    try:
-        return measure(feature, part.actual.section(part.stock, feature.z_mm))
-    except SectionTooComplex as exc:
-        return not_found(feature, str(exc))
+def _inspect(feature, part: MachinedPart, stock: StockSpec) -> dict:
+    """A feature measured on the actual part at its height, or why it cannot be."""
+    if not stock.bottom_mm <= feature.z_mm <= stock.top_mm:
+        return not_found(
+            feature, f"z_mm {feature.z_mm:g} is outside the stock (Z {stock.bottom_mm:g} to {stock.top_mm:g} mm)"
+        )
+    return measure(feature, part)
 
 
 def _machined_part(result: RunResult, lines: np.ndarray, reference, stock: StockSpec) -> MachinedPart:
