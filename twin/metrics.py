@@ -162,6 +162,126 @@ def _contour_walk(p, path, window, out):  # pragma: no cover - compiled
         lo, hi = max(furthest - window, 0), min(furthest + window + 1, n_seg)
 
 
+#: The path searched about each tick's reference point: the parts of it within this many times
+#: the tick's tracking error, along the path, of that point (:func:`tick_contour_error`).
+CONTOUR_REACH = 2.0
+
+
+def tick_contour_error(actual: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """Distance from each actual point to the path of the reference near the same tick's
+    reference point, in O(n) (times the path's samples within reach).
+
+    Parameters
+    ----------
+    actual, reference : ndarray, shape (n, d)
+        The tool's points and the reference's points at the same ticks, in time order (any
+        number of axes: a program's planned z beside the machine's x and y gives the distance
+        in 3-D, to a plunge, a ramp or a helix as well as to a move in XY).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        The shortest distance from ``actual[i]`` to the reference's polyline (its samples in
+        time order, the path standing still left out) over the part of it within
+        :data:`CONTOUR_REACH` times the tracking error ``|actual[i] - reference[i]|``, in arc
+        length, of ``reference[i]``, that point itself included: never more than the tracking
+        error, and the distance to the part of the path the tool is on however the path comes
+        back near itself or over itself (the walk of :func:`contour_error` can lose it there).
+        On a straight path the nearest point lies within the tracking error of the reference
+        point along it, on an arc within about 1.4 times for a tool up to half the radius inside.
+    """
+    p = np.ascontiguousarray(actual, float)
+    ref = np.ascontiguousarray(reference, float)
+    if p.shape != ref.shape:
+        raise ValueError(f"actual {p.shape} and reference {ref.shape} are not one series of ticks")
+    out = np.empty(len(p))
+    if len(p):
+        _tick_walk(p, ref, CONTOUR_REACH, out)
+    return out
+
+
+@njit(cache=True)
+def _point_segment(p, a, b):  # pragma: no cover - compiled
+    """Distance from point p to the segment a-b (any number of axes; a zero-length one a point)."""
+    len2, dot = 0.0, 0.0
+    for c in range(p.shape[0]):
+        d = b[c] - a[c]
+        len2 += d * d
+        dot += (p[c] - a[c]) * d
+    s = 0.0 if len2 <= 0.0 else min(max(dot / len2, 0.0), 1.0)
+    total = 0.0
+    for c in range(p.shape[0]):
+        d = p[c] - a[c] - s * (b[c] - a[c])
+        total += d * d
+    return math.sqrt(total)
+
+
+@njit(cache=True)
+def _tick_walk(p, ref, reach, out):  # pragma: no cover - compiled
+    """:func:`tick_contour_error`'s search."""
+    n, dims = ref.shape
+    # the path's vertices, each sample that has moved over STILL_M (any axis) from the last kept
+    vertex = np.empty(n, np.int64)  # each tick's vertex: the last kept at or before it
+    kept = np.empty(n, np.int64)
+    n_kept = 0
+    for i in range(n):
+        moved = n_kept == 0
+        if not moved:
+            for c in range(dims):
+                if abs(ref[i, c] - ref[kept[n_kept - 1], c]) > STILL_M:
+                    moved = True
+        if moved:
+            kept[n_kept] = i
+            n_kept += 1
+        vertex[i] = n_kept - 1
+    path = np.empty((n_kept, dims))
+    arc = np.zeros(n_kept)
+    for v in range(n_kept):
+        path[v] = ref[kept[v]]
+        if v > 0:
+            total = 0.0
+            for c in range(dims):
+                d = path[v, c] - path[v - 1, c]
+                total += d * d
+            arc[v] = arc[v - 1] + math.sqrt(total)
+    for i in range(n):
+        tracking = 0.0
+        for c in range(dims):
+            d = p[i, c] - ref[i, c]
+            tracking += d * d
+        best = math.sqrt(tracking)  # the reference point itself: on the path
+        v = vertex[i]
+        s_lo, s_hi = arc[v] - reach * best, arc[v] + reach * best
+        # segments j (path[j] to path[j + 1]) whose span of arc length meets [s_lo, s_hi], from
+        # the one that starts at the tick's vertex forwards and the one before it backwards
+        j = v
+        while j < n_kept - 1 and (j == v or arc[j] <= s_hi):
+            best = min(best, _point_segment(p[i], path[j], path[j + 1]))
+            j += 1
+        j = v - 1
+        while j >= 0 and (j == v - 1 or arc[j + 1] >= s_lo):
+            best = min(best, _point_segment(p[i], path[j], path[j + 1]))
+            j -= 1
+        out[i] = best
+
+
+def run_contour_error(result) -> np.ndarray | None:
+    """The contour error (m) of a run with a 2-D path at each recorded tick
+    (:func:`tick_contour_error`), in the move's own axes: a part program's planned axes the
+    machine has not (its z) are added to the tool's point and to the reference, so that a
+    plunge, a ramp or a helix is measured against itself; None for a path that is not 2-D."""
+    ref = result.ref[:, :, 0]
+    if not (ref.shape[1] == 2 and len(ref) > 1 and (np.ptp(ref, axis=0) > 0).all()):
+        return None
+    actual = result.table_position_m()
+    program = result.program
+    extra = [] if program is None else [np.asarray(v, float)[: len(ref)] for v in program.extra_axes.values()]
+    if extra and all(len(v) == len(ref) for v in extra):
+        ref = np.column_stack([ref, *extra])
+        actual = np.column_stack([actual, *extra])
+    return tick_contour_error(actual, ref)
+
+
 def tracking_summary(result) -> dict:
     """Max and RMS tracking error per axis (um) and the largest cutting force per axis (N,
     tick means, when there is one), all over every tick of the run; for 2-D paths, max and RMS
@@ -172,10 +292,8 @@ def tracking_summary(result) -> dict:
     }
     if result.force_max_N.any():  # cutting: tick-mean force on the workpiece along each axis
         out["max_cutting_force_N"] = dict(zip(result.axis_names, result.force_max_N.round(1).tolist()))
-    ref = result.ref[:, :, 0]
-    ce = None
-    if ref.shape[1] == 2 and len(ref) > 1 and (np.ptp(ref, axis=0) > 0).all():  # a 2-D path
-        ce = contour_error(result.table_position_m(), ref)
+    ce = run_contour_error(result)
+    if ce is not None:  # a 2-D path
         out["max_contour_error_um"] = round(float(ce.max() * 1e6), 3)
         out["rms_contour_error_um"] = round(float(np.sqrt(np.mean(ce**2)) * 1e6), 3)
     program = result.program

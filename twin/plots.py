@@ -136,10 +136,11 @@ def _program_plots(plt, result, directory: Path, name: str) -> list[Path]:
     contour error, the worst lines labelled) and its feed profile (programmed, planned, actual)."""
     from matplotlib.collections import LineCollection
 
-    from twin.metrics import contour_error, line_table
+    from twin.metrics import contour_error, line_table, run_contour_error
 
     ref, act = result.ref[:, :, 0] * 1e3, result.table_position_m() * 1e3
-    error_um = contour_error(act * 1e-3, ref * 1e-3) * 1e6
+    ce = run_contour_error(result)  # the per-line table's own (None: a path that is not 2-D)
+    error_um = (contour_error(act * 1e-3, ref * 1e-3) if ce is None else ce) * 1e6
     fig, ax = plt.subplots(figsize=(8, 7))
     for key, color, label in (("stock", "0.55", "stock"), ("machined", "k", "machined outline")):
         for i, ring in enumerate(result.program.outlines.get(key, [])):

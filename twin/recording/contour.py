@@ -76,7 +76,7 @@ def log_contour(rec, result, prefix: str, rows: slice, gain: int) -> None:
 def log_program(rec, result, root: str, rows: slice, ref: np.ndarray, act: np.ndarray) -> None:
     """A program's part: the stock and machined outlines, the path coloured by its contour error
     (``path_by_contour_error``) and the colour scale beside it with its ends labelled (µm)."""
-    from twin.metrics import contour_error
+    from twin.metrics import contour_error, run_contour_error
 
     for name, color in (("stock", STOCK_COLOR), ("machined", MACHINED_COLOR)):
         rings = result.program.outlines.get(name, [])
@@ -84,7 +84,8 @@ def log_program(rec, result, root: str, rows: slice, ref: np.ndarray, act: np.nd
             rec.log(
                 f"{root}/{name}", rr.LineStrips3D([_xyz(r) for r in rings], colors=[color], radii=[-1.0]), static=True
             )
-    error_um = contour_error(act * 1e-3, ref * 1e-3) * 1e6
+    ce = run_contour_error(result)  # the per-line table's own (None: a path that is not 2-D)
+    error_um = (contour_error(act * 1e-3, ref * 1e-3) if ce is None else ce[rows]) * 1e6
     top = float(error_um.max()) if error_um.size else 0.0
     segments = np.stack([_xyz(act[:-1]), _xyz(act[1:])], axis=1)
     rec.log(
