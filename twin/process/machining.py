@@ -130,6 +130,11 @@ class Tools(NamedTuple):
 #: part of which the tool passes over is cut, so that a wall the tool left reads as cut at the
 #: tool's own radius whichever way the cells fall.
 CUT_MARGIN_CELLS = 0.71
+#: A sample whose next one is straight below it within this many cells leaves its cut to it
+#: (a plunge, the actual path's micrometre jitter included: 0.02 cells is 1 µm at 0.05 mm).
+SAME_AXIS_CELLS = 0.02
+#: Room around the stock in its height map (mm): off the map reads "no material" as well.
+MAP_MARGIN_MM = 1.0
 #: The engagement reads the map this many cells outside the tool's surface, just ahead of it
 #: along the feed: beyond the cells the tool's own cut (with its margin) has reached.
 TEST_MARGIN_CELLS = 1.5
@@ -531,34 +536,56 @@ def _disc_columns(x0, res, nx, cx, dy, reach):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
+def _lower_row(grid, j, i_lo, i_hi, cx, cy, cz, r, rc):  # pragma: no cover - compiled
+    """Lower row ``j``'s cells ``i_lo..i_hi`` of ``grid`` to the tool's bottom at (cx, cy) with
+    tip cz (m): flat inside ``r - rc``, the corner's arc outside it, the corner's top beyond r."""
+    heights, x0, y0, res = grid.heights, grid.x0_m, grid.y0_m, grid.res_m
+    dy = y0 + (j + 0.5) * res - cy
+    for i in range(i_lo, i_hi + 1):
+        floor = cz
+        if rc > 0.0:
+            rho = math.hypot(x0 + (i + 0.5) * res - cx, dy)
+            out = min(max(rho - (r - rc), 0.0), rc)
+            floor = cz + rc - math.sqrt(rc * rc - out * out)
+        if heights[i, j] > floor:
+            heights[i, j] = floor
+
+
+@njit(cache=True)
 def _cut(grid, margin, cx, cy, cz, r, rc, crescent, px, py, pr):  # pragma: no cover - compiled
     """Lower ``grid``'s heights to the tool's surface at (cx, cy) with tip cz (m): every cell whose
     centre lies within the tool's radius and ``margin`` cells (the engagement's
-    :data:`CUT_MARGIN_CELLS`) goes
-    down to the tool's bottom there (flat inside ``r - rc``, the corner's arc outside it, the
-    corner's top beyond ``r``).  With ``crescent`` (a flat tool at the height of its last cut, at
-    (px, py) with radius pr) only the cells the disc newly covers on each row are visited."""
-    heights, x0, y0, res = grid.heights, grid.x0_m, grid.y0_m, grid.res_m
-    nx, ny = heights.shape
+    :data:`CUT_MARGIN_CELLS`) goes down to the tool's bottom there (:func:`_lower_row`).  With
+    ``crescent`` (a flat tool at the height of its last cut, at (px, py) with radius pr) only the
+    cells the disc newly covers on each row are visited: O(r) a sample, not O(r^2)."""
+    x0, y0, res = grid.x0_m, grid.y0_m, grid.res_m
+    nx, ny = grid.heights.shape
     reach = r + margin * res
     j_lo, j_hi = _disc_rows(y0, res, ny, cy, reach)
     for j in range(j_lo, j_hi):
         yc = y0 + (j + 0.5) * res
-        dy = yc - cy
-        a, b = _disc_columns(x0, res, nx, cx, dy, reach)
-        old_a, old_b = 1, 0  # empty
-        if crescent:
-            old_a, old_b = _disc_columns(x0, res, nx, px, yc - py, pr + margin * res)
-        for i in range(a, b + 1):
-            if old_a <= i <= old_b:
-                continue
-            floor = cz
-            if rc > 0.0:
-                rho = math.hypot(x0 + (i + 0.5) * res - cx, dy)
-                out = min(max(rho - (r - rc), 0.0), rc)
-                floor = cz + rc - math.sqrt(rc * rc - out * out)
-            if heights[i, j] > floor:
-                heights[i, j] = floor
+        a, b = _disc_columns(x0, res, nx, cx, yc - cy, reach)
+        if not crescent:
+            _lower_row(grid, j, a, b, cx, cy, cz, r, rc)
+            continue
+        old_a, old_b = _disc_columns(x0, res, nx, px, yc - py, pr + margin * res)
+        if old_a > old_b:  # the old disc is not on this row
+            _lower_row(grid, j, a, b, cx, cy, cz, r, rc)
+            continue
+        _lower_row(grid, j, a, min(b, old_a - 1), cx, cy, cz, r, rc)
+        _lower_row(grid, j, max(a, old_b + 1), b, cx, cy, cz, r, rc)
+
+
+@njit(cache=True)
+def _covered_by_next(grid, pos, radius, corner, k):  # pragma: no cover - compiled
+    """Whether sample k + 1 is the same tool straight below sample ``k`` (within
+    :data:`SAME_AXIS_CELLS`): its cut then covers k's, which is left to it (a plunge cuts the
+    tool's disc once, at its bottom, not at every sample on the way down)."""
+    if k + 1 >= pos.shape[0] or radius[k + 1] != radius[k] or corner[k + 1] != corner[k]:
+        return False
+    moved = math.hypot(pos[k + 1, 0] - pos[k, 0], pos[k + 1, 1] - pos[k, 1])
+    # lower by more than the crescent's allowance: the next sample cuts its whole disc
+    return pos[k + 1, 2] < pos[k, 2] - 1e-12 and moved <= SAME_AXIS_CELLS * grid.res_m
 
 
 @njit(cache=True)
@@ -578,7 +605,8 @@ def cut_path(grid, pos, radius, corner):  # pragma: no cover - compiled
     with tool radius and corner radius ``radius``, ``corner`` (n, m): each cell whose centre
     the tool's surface passes over goes down to it (no margin: the part as it is)."""
     for k in range(pos.shape[0]):
-        _cut_sample(grid, 0.0, pos, radius, corner, k)
+        if not _covered_by_next(grid, pos, radius, corner, k):
+            _cut_sample(grid, 0.0, pos, radius, corner, k)
 
 
 @njit(cache=True)
@@ -632,7 +660,12 @@ def _engage(pos, vel, tools, grid, step, out):  # pragma: no cover - compiled
         if shank[k] > 0.0 and cz + flute[k] < top:  # a shank of its own: the material within it
             highest = _highest_in_disc(grid, cx, cy, shank[k])
             out[k, OVER_FLUTES] = max(out[k, OVER_FLUTES], (highest - cz - flute[k]) * 1e3)
-        _cut_sample(grid, CUT_MARGIN_CELLS, pos, radius, corner, k)
+        # a plunge's disc is cut at its bottom, unless the next sample reads the map sideways
+        if not (
+            _covered_by_next(grid, pos, radius, corner, k)
+            and math.hypot(vel[k + 1, 0], vel[k + 1, 1]) <= MOVING_M_PER_S
+        ):
+            _cut_sample(grid, CUT_MARGIN_CELLS, pos, radius, corner, k)
 
 
 def engagement_table(
@@ -809,7 +842,7 @@ def program_milling(plan, stock: StockSpec, tool: ToolSpec | None, tools: list[T
     flute = np.array([math.inf if t.flute_length_mm is None else t.flute_length_mm for t in chosen])[index] * 1e-3
     shank = np.array([t.shank_diameter_mm or 0.0 for t in chosen])[index] * 0.5e-3
     rpm = plan.per_sample(plan.spindle_rpm, 0.0)
-    height_map = HeightMap(stock, max(t.diameter_mm for t in chosen) + 1.0)
+    height_map = HeightMap(stock, MAP_MARGIN_MM)
     table = engagement_table(plan.position, plan.velocity, radius, height_map, corner, flute, shank)
     model = ProgramMilling(table, rpm, index, chosen, plan.period_s, _spindle_phase(None, seed))
     warnings, total = machining_warnings(plan, table, chosen, index, rpm, stock)

@@ -25,7 +25,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from twin.process.machining import HeightMap, StockSpec, cut_path
+from twin.process.machining import MAP_MARGIN_MM, HeightMap, StockSpec, cut_path
 from twin.process.part import Sweep
 
 #: Cells the mesh takes at most (every k-th cell each way beyond it): about a million
@@ -196,8 +196,7 @@ class PartMap:
 
 def part_map(stock: StockSpec, nominal: Sweep, actual: Sweep) -> PartMap:
     """The nominal and the actual part's height maps: ``stock`` cut along each sweep, on one
-    grid with the engagement's margin (the largest tool's diameter and a millimetre) rounded up
+    grid with the engagement's margin (:data:`~twin.process.machining.MAP_MARGIN_MM`) rounded up
     to whole cells, so that the cells' edges fall on the stock's corner."""
-    reach_mm = float(2.0 * nominal.radius_mm.max()) + 1.0 if len(nominal.line) else 1.0
-    margin_mm = math.ceil(reach_mm / stock.resolution_mm) * stock.resolution_mm
+    margin_mm = math.ceil(MAP_MARGIN_MM / stock.resolution_mm) * stock.resolution_mm
     return PartMap(stock, cut_height_map(stock, nominal, margin_mm), cut_height_map(stock, actual, margin_mm))
