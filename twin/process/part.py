@@ -68,8 +68,10 @@ MAX_WALL_POINTS = 200_000
 MAX_WALL_LEVELS = 16
 #: A height the tool cut at counts as a floor with at least this many samples moving in XY.
 MIN_FLOOR_SAMPLES = 10
-#: Samples whose swept radius differs by less than this (mm) are swept as one line.
-SAME_RADIUS_MM = 1e-6
+#: Samples whose swept radius differs by less than this (mm) are swept as one line, at the
+#: run's smallest radius rounded to it: the section only places the wall points, which are then
+#: moved onto the exact sweep (:func:`machined_part`).
+SAME_RADIUS_MM = 1e-3
 #: A nominal boundary point this near the stock's own outline (mm) is not machined.
 ON_STOCK_MM = 1e-4
 #: The wall error is resolved within this of the nominal wall (mm): a probe no actual capsule
@@ -153,13 +155,14 @@ def section(stock: shapely.Geometry, xy_mm, tip_mm, radius_mm, corner_mm, z_mm: 
             continue
         # a run is joined to the sample before it, so that the sweep has no gap between runs
         pts = xy_mm[max(a - 1, 0) if a > 0 and on[a - 1] else a : b]
+        key = round(float(r[a:b].min()), 3)
         if len(pts) == 1:
-            by_radius.setdefault(round(float(r[a:b].min()), 9), []).append(shapely.Point(pts[0]))
+            by_radius.setdefault(key, []).append(shapely.Point(pts[0]))
             continue
         line = shapely.simplify(shapely.LineString(pts), NOMINAL_SIMPLIFY_MM, preserve_topology=False)
         coords = shapely.get_coordinates(line)
         pieces = range(0, max(len(coords) - 1, 1), RUN_PIECE_VERTICES)
-        by_radius.setdefault(round(float(r[a:b].min()), 9), []).extend(
+        by_radius.setdefault(key, []).extend(
             shapely.LineString(coords[i : i + RUN_PIECE_VERTICES + 1]) if len(coords) > 1 else shapely.Point(coords[0])
             for i in pieces
         )
