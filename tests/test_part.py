@@ -264,3 +264,45 @@ def test_a_level_the_tool_ramps_through_is_skipped_not_swept_disc_by_disc(monkey
     assert "moves in Z" in summary["skipped_note"]
     with pytest.raises(part_module.SectionTooComplex, match="radii at Z -2 mm"):
         ramp.section(STOCK, -2.0)
+
+
+@pytest.fixture(scope="module")
+def slot_passes():
+    return api.run("gcode_slot_passes").result
+
+
+def test_four_passes_and_a_through_cut(slot_passes):
+    # the floors -2, -4 and the block's bottom (the through-cut's tip 2 mm under it): walls read
+    # between them; the slot's width through the block from the actual motion alone: the
+    # furthest reach of the 5 mm discs along X 50 each way, over the samples cutting below Z -10
+    part = slot_passes.part
+    assert part.levels_mm == [-1.0, -3.0, -12.0]
+    xy = slot_passes.table_position_m() * 1e3
+    deep = part.actual.tip_mm < -10.0
+    half = np.sqrt(np.maximum(25.0 - (xy[deep, 0] - 50.0) ** 2, 0.0))
+    on = half > 0.0
+    width = (xy[deep][on, 1] + half[on]).max() - (xy[deep][on, 1] - half[on]).min()
+    row = next(r for r in slot_passes.inspection if r["name"] == "through slot")
+    assert row["width_mm"] == pytest.approx(width, abs=1e-4)
+    # the pass stepped over widened the slot near the top only
+    stepped = next(r for r in slot_passes.inspection if r["name"] == "stepped slot")
+    assert stepped["width_mm"] == pytest.approx(15.0, abs=0.05)
+    # every wall point lies on a wall the nominal tool formed: the slot's sides, Y 20 and 30/35
+    walls = part.walls
+    inside = (walls[:, 0] > 5.0) & (walls[:, 0] < 95.0)
+    assert set(np.round(walls[inside, 1], 3)) <= {20.0, 30.0, 35.0}
+
+
+def test_bench_programs_read_as_written():
+    from twin.bench import finish_program, slot_variants
+    from twin.gcode.reader import Reader
+    from twin.scenario.files import bundled_scenarios
+
+    lines = list(finish_program(2_000))
+    assert 1_990 <= len(lines) <= 2_100
+    moves = list(Reader(lines).moves())
+    assert len(moves) >= 1_900
+    program = bundled_scenarios()["gcode_slot_passes"].parent / "programs" / "slot_passes.ngc"
+    variants = slot_variants(program.read_text().splitlines())
+    assert [text for text in variants["slot_through_cut"] if text.startswith("G1")] == ["G1 Z-22 F600", "G1 X120 F1200"]
+    assert sum(text == "G1 X120 F1200" for text in variants["slot_two_passes"]) == 2

@@ -31,6 +31,15 @@ feed, spindle and tool, which the per-line results report), and of a whole run o
 (``run_peak_mb``, by cycle time in s: both under the 600 s of motion a run holds whole, so it
 grows with them; a longer program is streamed, and the recording keeps at most 100 000 ticks).
 
+The virtual part (``part``): per case, a whole closed-loop run of a bundled program with a stock
+and then its virtual part (walls, height maps, inspection), alternating, at most
+:data:`PART_REPEATS` times: the medians of each wall time (``run_s``, ``part_s``) and of the
+per-repeat ratio part/run (``part_over_run``), and tracemalloc's peak while the part is
+computed (``part_peak_mb``).  Cases: ``gcode_slot_passes`` (four passes, a through-cut), its
+first two passes, its through-cut alone, its 0.05 s start with a 100 mm cutter, and the bundled
+pocket and test piece.  ``finish``: a generated ball finishing program of ``finish_lines``
+lines (:func:`finish_figures`).
+
 Start-up (``startup``): wall time of ``twin run choi1999_cutting_circle --json`` (2.2 s simulated)
 as a new Python process (``python -m twin.cli``, as the ``twin`` script), alternating with the
 same scenario run in this process after a warm-up (built and simulated: what the run itself
@@ -40,6 +49,7 @@ imports, the numba cache and writing the summary.  Also ``twin --help`` as a new
 
 from __future__ import annotations
 
+import math
 import statistics
 import subprocess
 import sys
@@ -48,6 +58,7 @@ from collections.abc import Iterator
 from typing import Any
 
 import mujoco
+import numpy as np
 
 from controllers import make_controller
 from controllers.blocks import with_correction
@@ -60,6 +71,8 @@ from twin.sim.runner import simulate
 #: Gains of case (b): P position loop (1/s), PI velocity loop (V s/m, V/m), observer (Hz, order).
 CASCADE = {"kp_pos": 200.0, "kp_vel": 7.0, "ki_vel": 400.0}
 OBSERVER = {"cutoff_hz": 20.0, "order": 2}
+#: Alternating repeats of the virtual part's cases at most (each runs a whole program).
+PART_REPEATS = 3
 #: Bundled scenario of the start-up measurement.
 STARTUP_SCENARIO = "choi1999_cutting_circle"
 
@@ -202,6 +215,182 @@ def gcode_figures(lines: int = 1_000_000, repeats: int = 5, moves: int = 10_000)
     }
 
 
+def finish_program(n_lines: int, side_mm: float = 100.0) -> Iterator[str]:
+    """A 3-D finishing program of about ``n_lines`` lines: a 6 mm ball end mill (T1) over the
+    surface ``z = -3 + 1.5 sin(x / 8 mm) cos(y / 8 mm)`` of a ``side_mm`` square, in rows along X
+    (alternating) of G1 XYZ moves, as CAM writes a ball finishing pass (four decimals)."""
+    rows = max(2, round(math.sqrt(n_lines)))
+    per_row = max(2, n_lines // rows)
+    yield "%"
+    yield "(generated for twin bench: a ball finishing pass over a sine surface)"
+    yield "G21 G90 G17 G94 G40 G49 G80"
+    yield "G64 P0.01"
+    yield "T1 M6"
+    yield "S12000 M3"
+    xs = np.linspace(0.0, side_mm, per_row)
+    for row, y in enumerate(np.linspace(0.0, side_mm, rows)):
+        z = -3.0 + 1.5 * np.sin(xs / 8.0) * math.cos(y / 8.0)
+        order = range(per_row) if row % 2 == 0 else range(per_row - 1, -1, -1)
+        if row == 0:
+            yield f"G0 X{xs[0]:.4f} Y{y:.4f} Z1.0000"
+            yield f"G1 Z{z[0]:.4f} F600"
+            yield "F3000"
+        else:
+            yield f"G1 Y{y:.4f}"
+        for k in order:
+            yield f"G1 X{xs[k]:.4f} Z{z[k]:.4f}"
+    yield "G0 Z5"
+    yield "M30"
+    yield "%"
+
+
+def _run_and_part(scenario) -> tuple[float, float, Any]:
+    """One closed-loop run of a scenario with a stock and then its virtual part: the two wall
+    times (s) and the run's result (its part computed)."""
+    from twin.scenario.running import cut_part
+
+    inputs = assemble(scenario)
+    t0 = time.perf_counter()
+    result = inputs.simulate(progress=False)
+    run_s = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    cut_part(result, inputs.reference, scenario)
+    return run_s, time.perf_counter() - t0, result
+
+
+def _part_peak_mb(scenario) -> float:
+    """tracemalloc's peak while a run's virtual part is computed, less what the run holds (MB)."""
+    import tracemalloc
+
+    from twin.scenario.running import cut_part
+
+    inputs = assemble(scenario)
+    result = inputs.simulate(progress=False)
+    tracemalloc.start()
+    cut_part(result, inputs.reference, scenario)
+    peak = tracemalloc.get_traced_memory()[1] / 1e6
+    tracemalloc.stop()
+    return peak
+
+
+def slot_variants(lines: list[str]) -> dict[str, list[str]]:
+    """The bundled ``slot_passes.ngc`` (``lines``) cut down to its first two passes, and to its
+    pass through the block alone."""
+    passes = [i for i, text in enumerate(lines) if text == "G1 X120 F1200"]
+    head = lines[: lines.index("G1 Z-2 F600")]  # set-up, spindle, over the start at Z1
+    end = ["G0 Z5", "M5", "M30", "%"]
+    return {
+        "slot_two_passes": [*lines[: passes[1] + 1], *end],
+        "slot_through_cut": [*head, "G1 Z-22 F600", "G1 X120 F1200", *end],
+    }
+
+
+def part_figures(repeats: int = 3, finish_lines: int = 17_000) -> dict:
+    """The virtual part's cost beside its run's (see the module docstring): per case the run's
+    and the part's wall time (medians of alternating repeats), their ratio and the part's peak
+    memory (tracemalloc); and a generated ball finishing program's planning, engagement and part
+    (:func:`finish_program`)."""
+    import tempfile
+    from pathlib import Path
+
+    from twin.scenario.files import bundled_scenarios
+
+    out: dict[str, Any] = {"cases": {}}
+    with tempfile.TemporaryDirectory() as folder:
+        slot = load_scenario("gcode_slot_passes")
+        cases = {"slot_four_passes": slot}
+        program = bundled_scenarios()["gcode_slot_passes"].parent / "programs" / "slot_passes.ngc"
+        for name, text in slot_variants(program.read_text().splitlines()).items():
+            path = Path(folder) / f"{name}.ngc"
+            path.write_text("\n".join(text) + "\n")
+            cases[name] = load_scenario("gcode_slot_passes", {"reference.file": str(path), "inspect": []})
+        cases["slot_100mm_cutter_0.05s"] = load_scenario(
+            "gcode_slot_passes", {"tools.0.diameter_mm": 100.0, "duration_s": 0.05, "inspect": []}
+        )
+        cases["pocket_ball_finish"] = load_scenario("gcode_pocket_ball_finish")
+        cases["test_piece"] = load_scenario("gcode_test_piece")
+        for name, scenario in cases.items():
+            _run_and_part(scenario)  # warm-up: compiled kernels loaded
+            runs, parts = [], []
+            for _ in range(repeats):
+                run_s, part_s, result = _run_and_part(scenario)
+                runs.append(run_s)
+                parts.append(part_s)
+            out["cases"][name] = {
+                "ticks": len(result.t_s),
+                "run_s": statistics.median(runs),
+                "part_s": statistics.median(parts),
+                "part_over_run": statistics.median(p / r for p, r in zip(parts, runs)),
+                "part_peak_mb": _part_peak_mb(scenario),
+                "wall_points": len(result.part.walls),
+            }
+    out["finish"] = finish_figures(finish_lines)
+    return out
+
+
+def finish_figures(lines: int) -> dict:
+    """A generated ball finishing program (:func:`finish_program`) of ``lines`` lines: its
+    planning and engagement time and their peak memory, then its virtual part's time and peak
+    (tracemalloc, beyond what the plan holds) against a stand-in for a run's actual path: the plan
+    with seeded 1 µm noise in XY (a run of it is not part of the bench)."""
+    import tempfile
+    import tracemalloc
+    from pathlib import Path
+
+    from twin.gcode.planner import PlannerSettings, plan
+    from twin.gcode.reader import read_program
+    from twin.process.machining import StockSpec, ToolSpec, program_milling
+    from twin.process.part import Sweep, machined_part
+    from twin.process.part_map import part_map
+
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "finish.ngc"
+        path.write_text("\n".join(finish_program(lines)) + "\n")
+        settings = PlannerSettings()
+        limits = settings.limits(build("linear_motor_xy").motion_limits)
+        tracemalloc.start()
+        t0 = time.perf_counter()
+        planned = plan(list(read_program(path)), limits, settings)
+        plan_s = time.perf_counter() - t0
+        stock = StockSpec(corners_mm=((-5.0, -5.0), (105.0, 105.0)), top_mm=0.0, bottom_mm=-10.0, resolution_mm=0.1)
+        ball = ToolSpec(number=1, diameter_mm=6.0, n_flutes=2, corner_radius_mm=3.0)
+        t0 = time.perf_counter()
+        cut = program_milling(planned, stock, None, [ball], 0)
+        engagement_s = time.perf_counter() - t0
+        plan_peak = tracemalloc.get_traced_memory()[1] / 1e6
+        tracemalloc.reset_peak()
+        held = tracemalloc.get_traced_memory()[0] / 1e6
+        nominal = Sweep(
+            planned.position[:, :2] * 1e3,
+            planned.position[:, 2] * 1e3,
+            cut.radius_m * 1e3,
+            cut.corner_m * 1e3,
+            planned.line,
+        )
+        # a stand-in for a run's actual path: the plan with seeded 1 µm noise in XY
+        noise = np.random.default_rng(0).normal(0.0, 1e-3, nominal.xy_mm.shape)
+        actual = Sweep(nominal.xy_mm + noise, nominal.tip_mm, nominal.radius_mm, nominal.corner_mm, nominal.line)
+        t0 = time.perf_counter()
+        part = machined_part(stock.polygon(), nominal, actual, stock.top_mm, stock.bottom_mm)
+        part.maps = part_map(stock, nominal, actual)
+        part.floor_error_um = part.maps.floor_error()
+        part_s = time.perf_counter() - t0
+        part_peak = tracemalloc.get_traced_memory()[1] / 1e6 - held
+        tracemalloc.stop()
+    return {
+        "lines": lines,
+        "samples": len(planned.position),
+        "cycle_time_s": planned.cycle_time_s,
+        "resolution_mm": stock.resolution_mm,
+        "plan_s": plan_s,
+        "engagement_s": engagement_s,
+        "plan_and_engagement_peak_mb": plan_peak,
+        "part_s": part_s,
+        "part_peak_mb": part_peak,
+        "floor_error_um": part.floor_error_um,
+    }
+
+
 def _bare_steps_per_s(model, n: int) -> float:
     data = mujoco.MjData(model)
     data.ctrl[:] = 0.1
@@ -237,7 +426,13 @@ def startup(repeats: int = 5) -> dict:
     }
 
 
-def run_bench(seconds: float = 2.0, repeats: int = 5, gcode_lines: int = 1_000_000, gcode_moves: int = 10_000) -> dict:
+def run_bench(
+    seconds: float = 2.0,
+    repeats: int = 5,
+    gcode_lines: int = 1_000_000,
+    gcode_moves: int = 10_000,
+    finish_lines: int = 17_000,
+) -> dict:
     """Measure every case and the start-up; figures as in the module docstring.
 
     Returns
@@ -253,6 +448,7 @@ def run_bench(seconds: float = 2.0, repeats: int = 5, gcode_lines: int = 1_000_0
         "cases": {},
         "startup": startup(repeats),
         "gcode": gcode_figures(gcode_lines, repeats, gcode_moves),
+        "part": part_figures(min(repeats, PART_REPEATS), finish_lines),
     }
     for name, (bm, run) in _cases().items():
         dt = bm.model.opt.timestep

@@ -788,6 +788,9 @@ def bench(
     ),
     gcode_lines: int = typer.Option(1_000_000, "--gcode-lines", help="Lines of the G-code reader's program"),
     gcode_moves: int = typer.Option(10_000, "--gcode-moves", help="Moves of the planner's and engagement's program"),
+    finish_lines: int = typer.Option(
+        17_000, "--finish-lines", help="Lines of the generated ball finishing program of the part's figures"
+    ),
 ):
     """Steps per second, bare mj_step vs the closed loop, for four controller kinds and a part
     program, start-up time, the G-code reader's lines/s and the planner's time (twin/bench.py);
@@ -803,10 +806,12 @@ def bench(
         raise TwinInputError("--gcode-lines", gcode_lines, "must be in 2..10000000")
     if not 2 <= gcode_moves <= 100_000:
         raise TwinInputError("--gcode-moves", gcode_moves, "must be in 2..100000")
+    if not 2 <= finish_lines <= 1_000_000:
+        raise TwinInputError("--finish-lines", finish_lines, "must be in 2..1000000")
     if sweep:
         _bench_sweep(as_json, samples, memory_samples, repeats)
         return
-    figures = run_bench(seconds, repeats, gcode_lines, gcode_moves)
+    figures = run_bench(seconds, repeats, gcode_lines, gcode_moves, finish_lines)
     if as_json:
         _echo_json(figures, 2)
         return
@@ -832,6 +837,24 @@ def bench(
         + ", ".join(f"{mb:.1f} MB for {length} s" for length, mb in g["stream_peak_mb"].items())
         + "; a run's "
         + ", ".join(f"{mb:.1f} MB for {length} s" for length, mb in g["run_peak_mb"].items())
+    )
+    _print_part_bench(figures["part"])
+
+
+def _print_part_bench(part: dict) -> None:
+    """``twin bench``'s virtual part figures: each case's run beside its part, and the finishing
+    program's."""
+    typer.echo(f"{'virtual part':<30} {'ticks':>8} {'run s':>8} {'part s':>8} {'part/run':>9} {'part peak MB':>13}")
+    for name, f in part["cases"].items():
+        typer.echo(
+            f"{name:<30} {f['ticks']:>8,} {f['run_s']:>8.2f} {f['part_s']:>8.2f} "
+            f"{f['part_over_run']:>9.2f} {f['part_peak_mb']:>13.1f}"
+        )
+    f = part["finish"]
+    typer.echo(
+        f"ball finishing program: {f['lines']:,} lines, {f['samples']:,} samples ({f['cycle_time_s']:.0f} s of motion) "
+        f"at {f['resolution_mm']:g} mm cells: planned in {f['plan_s']:.1f} s, engagement {f['engagement_s']:.1f} s "
+        f"(peak {f['plan_and_engagement_peak_mb']:.0f} MB), part {f['part_s']:.1f} s (peak {f['part_peak_mb']:.0f} MB)"
     )
 
 

@@ -19,10 +19,16 @@ def run_scenario(scn: Scenario, progress: bool | None = None, max_physics_steps:
     the run cut and its inspected features."""
     inputs = assemble(scn)
     result = inputs.simulate(progress=progress, max_physics_steps=max_physics_steps)
-    if scn.stock is not None and result.program is not None and len(result.t_s):
-        result.part = _machined_part(result, result.program.lines, inputs.reference, scn.stock)
-        result.inspection = [_inspect(f, result.part, scn.stock) for f in scn.inspect]
+    cut_part(result, inputs.reference, scn)
     return result
+
+
+def cut_part(result: RunResult, reference, scn: Scenario) -> None:
+    """With a stock: the part a run's actual motion cut (``result.part``) and its inspected
+    features (``result.inspection``); the run's ``reference`` is its program's."""
+    if scn.stock is not None and result.program is not None and len(result.t_s):
+        result.part = _machined_part(result, result.program.lines, reference, scn.stock)
+        result.inspection = [_inspect(f, result.part, scn.stock) for f in scn.inspect]
 
 
 def _inspect(feature, part: MachinedPart, stock: StockSpec) -> dict:
