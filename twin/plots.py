@@ -230,7 +230,9 @@ def _wall_error_plot(plt, result, directory: Path, name: str) -> Path:
         ax.plot(ring[:, 0], ring[:, 1], color="0.55", linewidth=1.0, label="stock" if i == 0 else None)
     order = np.argsort(np.abs(walls[:, 3]))  # the largest errors drawn last, on top
     limit = max(float(np.abs(walls[:, 3]).max()), 1e-3)
-    dots = ax.scatter(walls[order, 0], walls[order, 1], c=walls[order, 3], s=4, cmap="RdBu_r", vmin=-limit, vmax=limit)
+    dots = ax.scatter(
+        walls[order, 0], walls[order, 1], c=walls[order, 3], s=8, cmap="coolwarm", vmin=-limit, vmax=limit
+    )
     fig.colorbar(dots, ax=ax, label="wall error (µm): + material left, − overcut")
     report = [
         f"{row['name']}: "

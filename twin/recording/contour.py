@@ -13,14 +13,15 @@ REFERENCE_COLOR, ACTUAL_COLOR, ERROR_COLOR, TOOL_COLOR = (150, 150, 150), (30, 1
 STOCK_COLOR, MACHINED_COLOR = (110, 110, 110), (235, 235, 235)
 #: The contour-error colour scale, low to high: blue, green, yellow, red.
 SCALE_STOPS = np.array([[40, 90, 220], [40, 190, 90], [250, 220, 40], [230, 40, 40]], float)
-#: The wall error's colours: overcut blue, exact white, material left red.
+#: The wall error's colours: overcut blue, exact violet (apart from the white machined outline
+#: it is drawn over), material left red.
 OVERCUT_COLOR, EXACT_COLOR, LEFT_COLOR = (
     np.array([40, 90, 220.0]),
-    np.array([235, 235, 235.0]),
+    np.array([190, 140, 255.0]),
     np.array([230, 40, 40.0]),
 )
 #: The inspection's labels are this share of the part's height apart.
-LABEL_SPACING = 0.06
+LABEL_SPACING = 0.12
 #: Segments of the colour scale drawn beside the part.
 SCALE_STEPS = 10
 
@@ -34,7 +35,7 @@ def scale_colors(values: np.ndarray, top: float) -> np.ndarray:
 
 
 def wall_colors(error_um: np.ndarray) -> np.ndarray:
-    """RGB (uint8) of signed wall errors: white at 0, red (material left) or blue (overcut) at
+    """RGB (uint8) of signed wall errors: violet at 0, red (material left) or blue (overcut) at
     the largest magnitude of either sign."""
     top = float(np.abs(error_um).max()) if error_um.size else 0.0
     frac = (np.abs(error_um) / top if top > 0 else np.zeros_like(error_um))[:, None]
@@ -95,7 +96,7 @@ def log_program(rec, result, root: str, rows: slice, ref: np.ndarray, act: np.nd
     )
     if result.part is not None and len(result.part.walls):
         log_part(rec, result, root)
-    every = [r for rings in result.program.outlines.values() for r in rings] or [act]
+    every = [*(r for rings in result.program.outlines.values() for r in rings), act]  # the scale right of all
     x_max, y_min, y_max = (
         max(r[:, 0].max() for r in every),
         min(r[:, 1].min() for r in every),
@@ -123,7 +124,8 @@ def log_part(rec, result, root: str) -> None:
         rr.Points3D(walls[:, :3], colors=wall_colors(walls[:, 3]), radii=[-3.0]),
         static=True,
     )
-    span = float(np.ptp(walls[:, 1])) if len(walls) else 1.0
+    outline = [ring for rings in result.program.outlines.values() for ring in rings]
+    span = float(np.ptp(np.concatenate([walls[:, 1], *(ring[:, 1] for ring in outline)]))) if len(walls) else 1.0
     places: list[list[float]] = []
     labels: list[str] = []
     for row in result.inspection:
