@@ -83,6 +83,9 @@ CHUNK_MM = 0.2
 #: Pieces of a segment along which the tool's radius at a level changes (a ramp, a plunge
 #: reaching the level), each swept as the hull of its end discs.
 RAMP_PIECES = 32
+#: The nominal section's wall points lie this near the plan's exact sweep at most (mm): its
+#: polygons' tolerance and its runs' radii rounded to :data:`SAME_RADIUS_MM`, with room.
+ON_PLAN_MM = 0.01
 #: Cells of the probes' grid at most (4 million: 32 MB of cell starts).
 MAX_BINS = 4_000_000
 #: Runs of one radius a nominal section sweeps at most (about 5 s of GEOS buffering and union).
@@ -177,8 +180,10 @@ def points_along(lines: shapely.Geometry, step_mm: float) -> np.ndarray:
     for line in shapely.get_parts(lines):
         if line.geom_type not in ("LineString", "LinearRing") or line.length == 0.0:
             continue
-        at = np.arange(0.0, line.length, step_mm)
-        out.append(shapely.get_coordinates(shapely.line_interpolate_point(line, at)))
+        xy = shapely.get_coordinates(line)
+        along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
+        at = np.arange(0.0, along[-1], step_mm)
+        out.append(np.column_stack([np.interp(at, along, xy[:, 0]), np.interp(at, along, xy[:, 1])]))
     return np.concatenate(out) if out else np.zeros((0, 2))
 
 
@@ -582,7 +587,7 @@ def machined_part(stock, nominal: Sweep, actual: Sweep, top_mm: float, bottom_mm
     points, skipped = wall_points(stock, nominal, levels)
     # each point onto the exact side of the nominal capsule it lies on (the polygons' circles
     # are chords within CIRCLE_TOLERANCE_MM of it)
-    on_plan = nearest_cuts(points[:, :2], points[:, 2], nominal).surface()
+    on_plan = nearest_cuts(points[:, :2], points[:, 2], nominal, ON_PLAN_MM).surface()
     points[:, :2] = np.where(np.isfinite(on_plan), on_plan, points[:, :2])
     found = nearest_cuts(points[:, :2], points[:, 2], actual)
     walls = np.column_stack([points, found.distance * 1e3, found.line]) if len(points) else np.zeros((0, 5))
