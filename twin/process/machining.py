@@ -138,6 +138,8 @@ MAP_MARGIN_MM = 1.0
 #: The engagement reads the map this many cells outside the tool's surface, just ahead of it
 #: along the feed: beyond the cells the tool's own cut (with its margin) has reached.
 TEST_MARGIN_CELLS = 1.5
+#: Feed directions whose cosine is over this are one straight line (0.08 degrees).
+STRAIGHT_COS = 1.0 - 1e-6
 #: The leading half circle is read every this many angle steps; the steps between are read too
 #: where the two readings differ (an edge of the material, a change of depth over
 #: :data:`SMOOTH_EXTENT_M`), else filled in between them.  A feature narrower than the stride
@@ -337,14 +339,32 @@ def _ahead(rho, sin_phi, margin):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def _along(path, k, distance):  # pragma: no cover - compiled
-    """The tool centre (x, y, m) and feed direction ``distance`` (m) along the path in XY from
-    sample ``k``, or where the tool next stops if that is sooner (linear between samples), on
-    the :class:`ToolPath` ``path``."""
+    """The tool's tip (x, y, z, m) and feed direction ``distance`` (m) along the path in XY from
+    sample ``k`` (linear between samples), on the :class:`ToolPath` ``path``.  Past the place
+    where the tool next stops, when it comes to the stop straight (its feed direction at k and
+    there within :data:`STRAIGHT_COS`), the point goes on straight at the stop's height: the
+    material ahead of a tool that stops is still there up to the stop; else it is the stop.
+    Last, how far (m) the point went on past the stop (0 short of it or at it)."""
     pos, travelled, dir_x, dir_y, run_end = path.pos, path.travelled, path.dir_x, path.dir_y, path.run_end
     goal = travelled[k] + distance
     end = run_end[k]
     if travelled[end] <= goal:
-        return pos[end, 0], pos[end, 1], dir_x[end], dir_y[end]
+        # straight on past the stop where the tool comes to it straight (a slot's end); a curve's
+        # tangent would leave the material it cut, so there the read stays at the stop
+        beyond = goal - travelled[end]
+        # the sample as far before the stop as the read goes past it: the path straight from it
+        lo, hi = 0, end
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            if travelled[end] - travelled[mid] >= beyond:
+                lo = mid
+            else:
+                hi = mid
+        for j in (k, lo):
+            if dir_x[j] * dir_x[end] + dir_y[j] * dir_y[end] <= STRAIGHT_COS:
+                beyond = 0.0
+        x, y = pos[end, 0] + beyond * dir_x[end], pos[end, 1] + beyond * dir_y[end]
+        return x, y, pos[end, 2], dir_x[end], dir_y[end], beyond
     lo, step = k, 1
     hi = min(k + step, end)
     while travelled[hi] <= goal:  # galloping: the place is a few samples on, as a rule
@@ -360,7 +380,8 @@ def _along(path, k, distance):  # pragma: no cover - compiled
     w = (goal - travelled[lo]) / (travelled[hi] - travelled[lo])
     x = pos[lo, 0] + w * (pos[hi, 0] - pos[lo, 0])
     y = pos[lo, 1] + w * (pos[hi, 1] - pos[lo, 1])
-    return x, y, dir_x[lo], dir_y[lo]
+    z = pos[lo, 2] + w * (pos[hi, 2] - pos[lo, 2])
+    return x, y, z, dir_x[lo], dir_y[lo], 0.0
 
 
 @njit(cache=True)
@@ -401,24 +422,32 @@ def _corner_has_material(u, ahead, tool, sp, cp, cz, grid):  # pragma: no cover 
 def _extent_at(phi, pose, tool, grid):  # pragma: no cover - compiled
     """The engaged axial extent (m) of the edge at angle ``phi`` and the material above the flute
     length there (m): the material at the edge's place a little further along the path (where
-    that place lies :data:`TEST_MARGIN_CELLS` outside the tool's surface now, or where the tool
-    stops if sooner), between the tip, the stock's bottom and the flute length.  The cylinder
+    that place lies :data:`TEST_MARGIN_CELLS` outside the tool's surface now, straight on past
+    a stop), between the tool's tip there (a helix or ramp goes on down to it), the stock's
+    bottom and the flute length; the material above the flutes from the tip now, at the stop
+    rather than past it.  The cylinder
     takes one reading; a corner (ball or bull nose) :data:`CORNER_DISCS` discs, each change
     between two discs found by bisection.  ``pose`` is a :class:`Pose`, ``tool`` an :class:`Edge`,
     ``grid`` a :class:`Grid`."""
-    path, k, cz = pose.path, pose.k, pose.cz
+    path, k, tip = pose.path, pose.k, pose.cz
     r, rc, flute = tool.radius_m, tool.corner_m, tool.flute_m
     top, bottom = grid.top_m, grid.bottom_m
     margin = TEST_MARGIN_CELLS * grid.res_m
     sp, cp = math.sin(phi), math.cos(phi)
     # the corner's discs are nearer the axis: at the cylinder's distance ahead they are as far
     # outside the tool now, or further
-    ahead = _along(path, k, _ahead(r, sp, margin))
-    fx, fy, ux, uy = ahead
+    fx, fy, cz, ux, uy, beyond = _along(path, k, _ahead(r, sp, margin))
+    ahead = (fx, fy, ux, uy)
     nx_, ny_ = sp * ux - cp * uy, sp * uy + cp * ux  # the edge's direction at phi there
     h = _height_at(grid, fx + r * nx_, fy + r * ny_)
     total = max(min(h, top, cz + flute) - max(cz + rc, bottom), 0.0)
-    over = max(min(h, top) - max(cz + flute, bottom), 0.0)
+    # the material above the flutes is the shank's, which is where it is now: from the tip now
+    # (a slot's end blending into a plunge reads a lower tip ahead), and none past a stop: what
+    # the read past it stands for is the sliver in front of the edge, thinner than a cell as the
+    # tool comes to the stop (going down into a plunge, it stood 0.028 mm over 2 mm flutes)
+    if beyond > 0.0:
+        h = _height_at(grid, fx - beyond * ux + r * nx_, fy - beyond * uy + r * ny_)
+    over = max(min(h, top) - max(tip + flute, bottom), 0.0)
     if rc > 0.0:
         # the corner's height fractions that count: above the stock's bottom, under the flutes
         u_lo = min(max((bottom - cz) / rc, 0.0), 1.0)
