@@ -581,12 +581,30 @@ def _lower_row(grid, j, i_lo, i_hi, cx, cy, cz, r, rc):  # pragma: no cover - co
 
 
 @njit(cache=True)
-def _cut(grid, margin, cx, cy, cz, r, rc, crescent, px, py, pr):  # pragma: no cover - compiled
+def _nearer_columns(x0, res, yc, a, b, cx, cy, px, py):  # pragma: no cover - compiled
+    """Columns ``a..b`` of a row at ``yc`` (m) narrowed to the cells whose centres lie nearer
+    (cx, cy) than (px, py), one cell to spare each way: ``|c - p_new|^2 < |c - p_old|^2`` is
+    ``2 x (px - cx) < |p|^2 - |c|^2 - 2 yc (py - cy)`` along the row."""
+    d = 2.0 * (px - cx)
+    k = (px * px + py * py) - (cx * cx + cy * cy) - 2.0 * yc * (py - cy)
+    if d == 0.0:
+        return (a, b) if k > 0.0 else (1, 0)
+    edge = (k / d - x0) / res - 0.5  # the bisector's column
+    if d > 0.0:
+        return a, min(b, math.floor(edge) + 1)
+    return max(a, math.ceil(edge) - 1), b
+
+
+@njit(cache=True)
+def _cut(grid, margin, cx, cy, cz, r, rc, crescent, px, py, pr, lead=False):  # pragma: no cover - compiled
     """Lower ``grid``'s heights to the tool's surface at (cx, cy) with tip cz (m): every cell whose
     centre lies within the tool's radius and ``margin`` cells (the engagement's
     :data:`CUT_MARGIN_CELLS`) goes down to the tool's bottom there (:func:`_lower_row`).  With
     ``crescent`` (a flat tool at the height of its last cut, at (px, py) with radius pr) only the
-    cells the disc newly covers on each row are visited: O(r) a sample, not O(r^2)."""
+    cells the disc newly covers on each row are visited: O(r) a sample, not O(r^2).  With
+    ``lead`` (a ball or bull-nose tool of the same size at the height of its last cut, at
+    (px, py)) only the cells nearer (cx, cy) than (px, py): the tool's bottom rises with the
+    distance from its axis, so elsewhere the last cut went as deep (half the disc)."""
     x0, y0, res = grid.x0_m, grid.y0_m, grid.res_m
     nx, ny = grid.heights.shape
     reach = r + margin * res
@@ -594,6 +612,8 @@ def _cut(grid, margin, cx, cy, cz, r, rc, crescent, px, py, pr):  # pragma: no c
     for j in range(j_lo, j_hi):
         yc = y0 + (j + 0.5) * res
         a, b = _disc_columns(x0, res, nx, cx, yc - cy, reach)
+        if lead:  # a corner tool at its last cut's height: only cells nearer the new centre
+            a, b = _nearer_columns(x0, res, yc, a, b, cx, cy, px, py)
         if not crescent:
             _lower_row(grid, j, a, b, cx, cy, cz, r, rc)
             continue
@@ -621,11 +641,12 @@ def _covered_by_next(grid, pos, radius, corner, k):  # pragma: no cover - compil
 def _cut_sample(grid, margin, pos, radius, corner, k):  # pragma: no cover - compiled
     """:func:`_cut` for sample ``k`` of tips ``pos`` (n, 3, m) with tools ``radius``, ``corner``
     (n, m): a flat tool no lower than at sample k - 1 and of its radius cuts only the crescent
-    that sample's disc left."""
+    that sample's disc left, a ball or bull-nose tool at its height only the half nearer it."""
     cx, cy, cz, r, rc = pos[k, 0], pos[k, 1], pos[k, 2], radius[k], corner[k]
     crescent = k > 0 and rc == 0.0 and cz >= pos[k - 1, 2] - 1e-12 and r == radius[k - 1]
+    lead = k > 0 and rc > 0.0 and cz == pos[k - 1, 2] and r == radius[k - 1] and rc == corner[k - 1]
     px, py = (pos[k - 1, 0], pos[k - 1, 1]) if k > 0 else (cx, cy)
-    _cut(grid, margin, cx, cy, cz, r, rc, crescent, px, py, radius[k - 1] if k > 0 else r)
+    _cut(grid, margin, cx, cy, cz, r, rc, crescent, px, py, radius[k - 1] if k > 0 else r, lead)
 
 
 @njit(cache=True)
