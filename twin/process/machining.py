@@ -649,7 +649,7 @@ def _cut_sample(grid, margin, pos, radius, corner, k):  # pragma: no cover - com
     _cut(grid, margin, cx, cy, cz, r, rc, crescent, px, py, radius[k - 1] if k > 0 else r, lead)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def cut_path(grid, pos, radius, corner):  # pragma: no cover - compiled
     """Cut ``grid``'s heights (a :class:`Grid`) along tool tips ``pos`` (n, 3, m)
     with tool radius and corner radius ``radius``, ``corner`` (n, m): each cell whose centre
