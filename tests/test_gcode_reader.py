@@ -269,3 +269,64 @@ def test_an_error_in_a_file_deep_in_folders_keeps_its_name_and_line(tmp_path):
     assert field.endswith("_name_/part.ngc:3")
     assert len(field) <= 80
     assert str(err.value).startswith(f"{field} = 'G41 X2': cutter radius compensation")
+
+
+def test_a_line_separator_before_percent_is_a_bad_character(tmp_path):
+    """U+2028 is white space to Python's ``str.strip``, not to LinuxCNC's ``isspace``. rs274
+    (``rs274 -g`` as regenerate.py runs it) on this file: ``Bad character '\\342' used``, rc=1, at
+    line 1 (a vertical tab before the % it reads; its .canon cannot hold the line: U+2028 splits
+    it). The no-break space is ``refused/nbsp_percent.ngc``."""
+    path = tmp_path / "separator.ngc"
+    path.write_bytes("\u2028%\nG21\nG0 X1\n%\n".encode())
+    with pytest.raises(GcodeError) as err:
+        list(read_program(path))
+    assert err.value.line == 1
+    assert "bad character" in err.value.reason and "\\u2028" in err.value.reason
+    path.write_bytes(b"\x0b%\nG21\nG0 X1\n%\n")
+    assert len(list(read_program(path))) == 1
+
+
+def test_a_percent_never_closed_is_read_to_m2():
+    """rs274 reads ``%`` / ``G21`` / ``G0 X1`` / ``M2`` (rc=0, with the comment "interpreter:
+    percent sign missing from end of file"); without the M2 it refuses the last line ("File
+    ended with no percent sign": ``refused/percent_not_closed.ngc``)."""
+    assert len(_read("%\nG21\nG0 X1\nM2\n")) == 1
+    with pytest.raises(GcodeError) as err:
+        _read("%\nG21\nG0 X1\n")
+    assert err.value.line == 3
+    assert "without its closing %" in err.value.reason
+
+
+def test_a_negative_dwell_in_a_cycle_is_refused():
+    """rs274 refuses G82 / G89 with P-1 (its "P word missing": ``refused/g82_negative_p.ngc``),
+    but reads ``G82 X1 Y1 Z-1 R1 P-2`` with ``DWELL(-2.0000)`` (rc=0): the twin refuses every
+    negative dwell, as for G4 (a negative time has no meaning for the machine)."""
+    for program in ("G21 F100\nG82 X1 Y1 Z-1 R1 P-2", "G21 F100\nG89 X1 Y1 Z-1 R1 P1\nX2 P-0.5"):
+        with pytest.raises(GcodeError) as err:
+            _read(program)
+        assert err.value.line == program.count("\n") + 1
+        assert "a dwell cannot be negative" in err.value.reason
+
+
+@pytest.mark.parametrize(
+    "program, line, words",
+    [
+        ("G21 F100\nG17 G2 X1 I0.5 K1", 2, "K = 1: K word given for an arc in the XY plane"),
+        ("G21 F100\nG18 G2 X1 I0.5 J-2", 2, "J = -2: J word given for an arc in the ZX plane"),
+        ("G21\no1 while [0]\no1 endwhile\no1 if [1]\no1 endif", 4, "already defined on line 2 (o1 while)"),
+        ("G21\no7 if [1]\no7 endif\no7 else", 4, ""),
+        ("G21\no1 if [0]\no1 endrepeat\no1 endif", 3, "o1 is an if, not a loop"),
+        ("G21\no100 sub\no1 endif\no100 endsub\no1 if [1]\no1 endif\no100 call", 3, "without its if"),
+    ],
+)
+def test_labels_and_arc_words_refused_as_rs274_refuses(program, line, words):
+    """Each refused by rs274 at the same line (the 4th not: rs274 takes ``o7 else`` after its
+    endif as a branch to skip and reads on to the end of the file for an ``o7 endif``: "File
+    ended with no percent sign or program end"; the twin runs the else as a branch: 0 moves)."""
+    if not words:
+        assert _read(program) == []
+        return
+    with pytest.raises(GcodeError) as err:
+        _read(program)
+    assert err.value.line == line
+    assert words in err.value.reason, str(err.value)

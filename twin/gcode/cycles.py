@@ -124,6 +124,8 @@ def cycle_calls(
         if "p" not in words and not same:
             raise BlockError(f"dwell time P word missing with {g}")
         p = words.get("p", memory.p)
+        if p < 0.0:  # rs274 refuses P-1 (its "no P"), reads P-2 as a dwell of -2 s: a dwell is not negative
+            raise BlockError(f"P = {p:g}: a dwell cannot be negative (with {g})")
     if motion in (730, 830):
         if "q" not in words and not same:
             raise BlockError(f"Q word missing with {g}")

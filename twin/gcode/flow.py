@@ -151,6 +151,9 @@ class _Frame:
     back: Position | None
     loops: dict[str, _Loop] = field(default_factory=dict)
     ifs: set[str] = field(default_factory=set)
+    #: Each label an if, while, do or repeat of this call has run: its keyword and line (LinuxCNC's
+    #: offset map: a label is defined once, and an elseif, else or endif needs its if).
+    labels: dict[str, tuple[str, int]] = field(default_factory=dict)
 
 
 @dataclass
@@ -225,7 +228,8 @@ class Flow:
         Raises
         ------
         BlockError
-            A subroutine defined inside the one being defined (LinuxCNC refuses nesting).
+            A subroutine defined inside the one being defined (LinuxCNC refuses nesting); an
+            elseif, else or endif of a loop's label, an endwhile or endrepeat of an if's.
         """
         skip = self.skip
         assert skip is not None
@@ -233,7 +237,16 @@ class Flow:
             raise BlockError(f"nested subroutine definition: o{o.label} sub inside o{self.defining}")
         if self.searching is not None and o.keyword == "sub" and o.label == self.searching[0]:
             return True
-        return o.label == skip.label and o.keyword in skip.keywords
+        if o.label != skip.label:
+            return False
+        if o.keyword in skip.keywords:
+            return True
+        if self.searching is None and self.defining is None:  # a block of this label, skipped
+            if o.keyword in ("elseif", "else", "endif"):
+                self._of_if(o)
+            elif o.keyword in ("endwhile", "endrepeat") and self.frames[-1].labels.get(o.label, ("",))[0] == "if":
+                raise BlockError(f"o{o.label} {o.keyword}: o{o.label} is an if, not a loop")
+        return False
 
     def o_line(self, o: OLine) -> None:
         """Run an O line (read with its values evaluated)."""
@@ -316,6 +329,30 @@ class Flow:
         assert frame.back is not None
         self.text.seek(frame.back)
 
+    # --- labels ---------------------------------------------------------------------------
+
+    def _label(self, o: OLine) -> None:
+        """An if, while, do or repeat: its label is this one's (LinuxCNC refuses a label defined
+        twice in a call, also after its block ended; the same line run again is no second one)."""
+        labels = self.frames[-1].labels
+        line = self.line_start.number
+        known = labels.get(o.label)
+        if known is None:
+            labels[o.label] = (o.keyword, line)
+        elif known[1] != line:
+            raise BlockError(
+                f"o{o.label} {o.keyword}: the label o{o.label} is already defined on line {known[1]} "
+                f"(o{o.label} {known[0]}); LinuxCNC refuses a label defined twice"
+            )
+
+    def _of_if(self, o: OLine) -> None:
+        """An elseif, else or endif: its label is an if's, run before it in this call."""
+        known = self.frames[-1].labels.get(o.label)
+        if known is None:
+            raise BlockError(f"o{o.label} {o.keyword} without its if: no o{o.label} if ran before it")
+        if known[0] != "if":
+            raise BlockError(f"o{o.label} {o.keyword}: o{o.label} is a {known[0]} (line {known[1]}), not an if")
+
     # --- loops ----------------------------------------------------------------------------
 
     def _jump_back(self, position: Position) -> None:
@@ -325,6 +362,7 @@ class Flow:
         self.text.seek(position)
 
     def _do(self, o: OLine) -> None:
+        self._label(o)
         start = self.text.tell()
         self.text.keep(start)
         self.frames[-1].loops[o.label] = _Loop("do", start)
@@ -338,6 +376,7 @@ class Flow:
             else:
                 del loops[o.label]
             return
+        self._label(o)
         if o.values[0] != 0.0:
             if loop is None:
                 self.text.keep(self.line_start)
@@ -353,6 +392,7 @@ class Flow:
         self._jump_back(loop.start)
 
     def _repeat(self, o: OLine) -> None:
+        self._label(o)
         count = int(o.values[0])
         if count <= 0:
             self._skip_to(o.label, ("endrepeat",), "pass")
@@ -396,12 +436,14 @@ class Flow:
     # --- conditions -----------------------------------------------------------------------
 
     def _if(self, o: OLine) -> None:
+        self._label(o)
         if o.values[0] != 0.0:
             self.frames[-1].ifs.add(o.label)
         else:
             self._skip_to(o.label, ("elseif", "else", "endif"), "run")
 
     def _elseif(self, o: OLine) -> None:
+        self._of_if(o)
         ifs = self.frames[-1].ifs
         if o.label in ifs:  # a branch before was taken
             self._skip_to(o.label, ("endif",), "run")
@@ -411,6 +453,7 @@ class Flow:
             self._skip_to(o.label, ("elseif", "else", "endif"), "run")
 
     def _else(self, o: OLine) -> None:
+        self._of_if(o)
         ifs = self.frames[-1].ifs
         if o.label in ifs:
             self._skip_to(o.label, ("endif",), "run")
@@ -418,4 +461,5 @@ class Flow:
             ifs.add(o.label)
 
     def _endif(self, o: OLine) -> None:
+        self._of_if(o)
         self.frames[-1].ifs.discard(o.label)

@@ -65,6 +65,8 @@ PLANES = {"xy": (0, 1, 2), "zx": (2, 0, 1), "yz": (1, 2, 0)}
 CENTER_WORDS = {"xy": ("i", "j"), "zx": ("k", "i"), "yz": ("j", "k")}
 _PLANE_OF = {170: "xy", 180: "zx", 190: "yz"}
 _AXES = "xyz"
+#: The white space C's isspace() knows (LinuxCNC's around a % line; Python's str.strip takes more).
+C_SPACE = " \t\n\v\f\r"
 
 #: What the twin refuses of LinuxCNC's G codes (ten times the number), with why.
 REFUSED_G = {
@@ -409,9 +411,11 @@ class Reader:
                     self.lines_read, self.text = self.text_source.number, ""
                     self.error(str(exc))
                 if text is None:
+                    if opened:  # rs274: "File ended with no percent sign" (M2 / M30 would end it)
+                        self.error("the file ends without its closing % (it opens with a % line) and without M2 or M30")
                     return
                 self.lines_read, self.text = self.text_source.number, text.strip()
-                if self.text == "%":
+                if text.strip(C_SPACE) == "%":  # U+2028 or a no-break space before it is no space to LinuxCNC
                     if opened:
                         return  # the second %: nothing after it is read
                     if started:
@@ -985,8 +989,9 @@ class Reader:
         if s.feed <= 0:
             raise BlockError(f"cannot do G{motion // 10} with zero feed rate (give F)")
         plane = _PLANE_OF[s.plane]
-        first, second, _normal = PLANES[plane]
+        first, second, normal = PLANES[plane]
         i_word, j_word = CENTER_WORDS[plane]
+        normal_word = "ijk"[normal]
         end = self._ends(words, machine=False)
         p = words.get("p", 1.0)
         turns = round(p)
@@ -999,10 +1004,15 @@ class Reader:
         clockwise = motion == 20
         tolerance = RADIUS_TOLERANCE[s.inch]
         if "r" in words:
-            if i_word in words or j_word in words:
+            if i_word in words or j_word in words or normal_word in words:
                 raise BlockError("give the arc's centre (I, J, K) or its radius R, not both")
             center = _arc_center_r(clockwise, a0, b0, a1, b1, words["r"], tolerance)
         else:
+            if normal_word in words:
+                raise BlockError(
+                    f"{normal_word.upper()} = {words[normal_word]:g}: {normal_word.upper()} word given for an arc in "
+                    f"the {plane.upper()} plane (G{s.plane // 10}: its centre is {i_word.upper()} and {j_word.upper()})"
+                )
             if i_word not in words and j_word not in words:
                 raise BlockError(
                     f"R, I, J and K words all missing for the arc (in this plane: {i_word.upper()}, "

@@ -24,8 +24,9 @@ MAX_LINE_CHARS = 252
 #: Largest magnitude of any word or expression (ours: LinuxCNC has none; 1e9 mm is 1000 km,
 #: 1e9 mm/min 16 700 m/s).
 MAX_VALUE = 1e9
-#: Two numbers compare equal within this (LinuxCNC's TOLERANCE_EQUAL).
-TOLERANCE_EQUAL = 1e-6
+#: EQ and NE: two numbers closer than this are equal (LinuxCNC's TOLERANCE_EQUAL; LE, GE, LT and
+#: GT compare exactly, as rs274 does: ``[1 EQ 1.00001]`` is 1, ``[1 LE 0.99999]`` 0).
+TOLERANCE_EQUAL = 0.0001
 #: Numbered parameters are 1 .. 5601 (LinuxCNC's RS274NGC_MAX_PARAMETERS is 5602).
 MAX_PARAMETER = 5601
 #: Arguments an O-word call may pass (#1 .. #30).
@@ -658,5 +659,5 @@ def _binary(left: float, operator: str, right: float) -> float:
     if operator == "gt":
         return 1.0 if left > right else 0.0
     if operator == "le":
-        return 1.0 if diff < TOLERANCE_EQUAL or left <= right else 0.0
-    return 1.0 if diff < TOLERANCE_EQUAL or left >= right else 0.0  # ge
+        return 1.0 if left <= right else 0.0
+    return 1.0 if left >= right else 0.0  # ge
