@@ -5,9 +5,11 @@ At a height z the material is the stock's outline less every capsule the tool sw
 segment between two samples of the tool's axis widened by the tool's radius at that height (the
 full radius above a ball or bull-nose corner, the corner's circle within it).  Where the tip
 moves along the segment (a ramp, a helix, a plunge reaching the level) the radius changes along
-it: the segment is swept in :data:`RAMP_PIECES` pieces, the tip linear along it, each the hull
-of its end discs (within 0.22 µm of the continuous sweep on a 20 mm ramp in one segment; exact
-on a sampled path, tested against a brute force in ``tests/test_part_bruteforce.py``).
+it: the part of the segment where the tool reaches the level is swept in :data:`RAMP_PIECES`
+pieces spaced as the squares of their index from its shallow end (a corner's radius grows as
+the square root of the depth), each the hull of its end discs (within 0.5 µm of the continuous
+sweep on a 20 mm ramp in one segment, 0.01 µm on a sampled one: a brute force in
+``tests/test_part_bruteforce.py``).
 
 - The **nominal** part's section is exact polygons (shapely): the planned reference (the
   program within the planner's path tolerance) is smooth, so each run of one radius is
@@ -68,9 +70,10 @@ MAX_WALL_POINTS = 200_000
 MAX_WALL_LEVELS = 16
 #: A height the tool cut at counts as a floor with at least this many samples moving in XY.
 MIN_FLOOR_SAMPLES = 10
-#: Samples whose swept radius differs by less than this (mm) are swept as one line, at the
-#: run's smallest radius rounded to it: the section only places the wall points, which are then
-#: moved onto the exact sweep (:func:`machined_part`).
+#: Consecutive samples whose swept radius falls in one step of this (mm) are swept as one line,
+#: at the run's smallest radius (the sample it joins included) rounded down to it: the section
+#: lies within the exact sweep and only places the wall points, which are then moved onto it
+#: (:func:`machined_part`).
 SAME_RADIUS_MM = 1e-3
 #: A nominal boundary point this near the stock's own outline (mm) is not machined.
 ON_STOCK_MM = 1e-4
@@ -82,10 +85,16 @@ CHUNK_SAMPLES = 256
 CHUNK_MM = 0.2
 #: Pieces of a segment along which the tool's radius at a level changes (a ramp, a plunge
 #: reaching the level), each swept as the hull of its end discs.
-RAMP_PIECES = 32
-#: The nominal section's wall points lie this near the plan's exact sweep at most (mm): its
-#: polygons' tolerance and its runs' radii rounded to :data:`SAME_RADIUS_MM`, with room.
-ON_PLAN_MM = 0.01
+RAMP_PIECES = 64
+#: Pieces of a section's sample pair whose radius changes (a divisor of :data:`RAMP_PIECES`).
+SECTION_RAMP_PIECES = 4
+#: A section's hull of two discs of different radius (a ramp's sample pair) lies within this of
+#: the discs (mm): it only places the wall points, which are then moved onto the exact sweep.
+HULL_TOLERANCE_MM = 1e-3
+#: Passes of a section's wall points onto the exact sweep at most, and the move (mm) under which
+#: a point has arrived.
+PROJECTIONS = 8
+PROJECTED_MM = 1e-7
 #: Cells of the probes' grid at most (4 million: 32 MB of cell starts).
 MAX_BINS = 4_000_000
 #: Runs of one radius a nominal section sweeps at most (about 5 s of GEOS buffering and union).
@@ -122,8 +131,11 @@ def _swept(shapes: list, radius: float) -> shapely.Geometry:
 
 
 def section(stock: shapely.Geometry, xy_mm, tip_mm, radius_mm, corner_mm, z_mm: float) -> shapely.Geometry:
-    """The material a smooth path leaves at height ``z_mm``: ``stock`` less the tool's capsules
-    there, each run of one radius simplified within :data:`NOMINAL_SIMPLIFY_MM` first.
+    """The material a smooth path leaves at height ``z_mm``: ``stock`` less the tool's sweep
+    there, inside it by at most :func:`_section_slack_mm`: each run of samples at one radius (a
+    step of :data:`SAME_RADIUS_MM`) a line simplified within :data:`NOMINAL_SIMPLIFY_MM` and
+    widened by the run's smallest radius, each pair of samples between which the radius changes
+    the hull of their discs (:func:`_disc_hulls`).
 
     Parameters
     ----------
@@ -138,39 +150,79 @@ def section(stock: shapely.Geometry, xy_mm, tip_mm, radius_mm, corner_mm, z_mm: 
     Raises
     ------
     SectionTooComplex
-        More than :data:`MAX_SECTION_RUNS` runs of one radius.
+        More than :data:`MAX_SECTION_RUNS` runs and pairs.
     """
+    xy_mm = np.asarray(xy_mm, float)
     r = swept_radius_mm(np.asarray(tip_mm), np.asarray(radius_mm), np.asarray(corner_mm), z_mm)
     on = r > 0.0
-    # runs of samples the tool sweeps at one radius: each a line (one sample: a point)
-    change = np.flatnonzero(np.diff(on.astype(int)) != 0) + 1
-    change = np.union1d(change, np.flatnonzero(np.abs(np.diff(r)) > SAME_RADIUS_MM) + 1)
-    starts = np.concatenate([[0], change])
-    ends = np.concatenate([change, [len(r)]])
-    runs = int(np.count_nonzero(on[starts]))
-    if runs > MAX_SECTION_RUNS:
+    if len(r) == 1:
+        return shapely.difference(stock, _swept([shapely.Point(xy_mm[0])], float(r[0]))) if on[0] else stock
+    # a pair of consecutive samples is steady where the tool sweeps one radius (within a step of
+    # SAME_RADIUS_MM) at both; else, where it reaches the level at either, the radius changes
+    step = np.floor(r / SAME_RADIUS_MM)
+    steady = on[:-1] & on[1:] & (step[:-1] == step[1:])
+    changing = (on[:-1] | on[1:]) & ~steady
+    edges = np.diff(np.concatenate([[0], steady.astype(int), [0]]))
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)  # runs of steady pairs
+    pieces = len(starts) + int(np.count_nonzero(changing))
+    if pieces > MAX_SECTION_RUNS:
         raise SectionTooComplex(
-            f"the tool sweeps {runs} radii at Z {z_mm:g} mm (it moves in Z there), over {MAX_SECTION_RUNS}"
+            f"the tool sweeps {pieces} radii at Z {z_mm:g} mm (it moves in Z there), over {MAX_SECTION_RUNS}"
         )
     by_radius: dict[float, list] = {}
-    for a, b in zip(starts, ends):
-        if not on[a]:
-            continue
-        # a run is joined to the sample before it, so that the sweep has no gap between runs
-        pts = xy_mm[max(a - 1, 0) if a > 0 and on[a - 1] else a : b]
-        key = round(float(r[a:b].min()), 3)
-        if len(pts) == 1:
-            by_radius.setdefault(key, []).append(shapely.Point(pts[0]))
-            continue
-        line = shapely.simplify(shapely.LineString(pts), NOMINAL_SIMPLIFY_MM, preserve_topology=False)
+    for a, b in zip(starts, ends):  # pairs a..b-1: samples a..b, one line
+        key = math.floor(float(r[a : b + 1].min()) / SAME_RADIUS_MM) * SAME_RADIUS_MM  # within the sweep
+        line = shapely.simplify(shapely.LineString(xy_mm[a : b + 1]), NOMINAL_SIMPLIFY_MM, preserve_topology=False)
         coords = shapely.get_coordinates(line)
-        pieces = range(0, max(len(coords) - 1, 1), RUN_PIECE_VERTICES)
         by_radius.setdefault(key, []).extend(
-            shapely.LineString(coords[i : i + RUN_PIECE_VERTICES + 1]) if len(coords) > 1 else shapely.Point(coords[0])
-            for i in pieces
+            shapely.LineString(coords[i : i + RUN_PIECE_VERTICES + 1])
+            for i in range(0, max(len(coords) - 1, 1), RUN_PIECE_VERTICES)
         )
     swept = [_swept(shapes, radius) for radius, shapes in by_radius.items()]
+    pairs = np.flatnonzero(changing)
+    if len(pairs):
+        discs = _ramp_discs(xy_mm, np.asarray(tip_mm), np.asarray(radius_mm), np.asarray(corner_mm), pairs, z_mm)
+        swept.append(shapely.union_all(_disc_hulls(*discs)))
     return shapely.difference(stock, shapely.union_all(swept)) if swept else stock
+
+
+def _ramp_discs(xy_mm, tip_mm, radius_mm, corner_mm, pairs: np.ndarray, z_mm: float) -> tuple[np.ndarray, ...]:
+    """The discs a section sweeps between the samples of ``pairs`` (index k: samples k, k + 1)
+    whose radius at ``z_mm`` changes: :data:`SECTION_RAMP_PIECES` even pieces each, a piece's end
+    where the tool does not reach the level moved to where the tip crosses it (with the radius
+    just over the tip): chords of the tool's concave profile, inside the sweep; the wall points
+    are then moved onto it.  Returns the start discs' centres and radii and the end discs', (m,
+    2), (m,), (m, 2), (m,).
+    """
+    t = np.linspace(0.0, 1.0, SECTION_RAMP_PIECES + 1)
+    k = pairs[:, None]
+    tips = tip_mm[k] + t * (tip_mm[k + 1] - tip_mm[k])  # (pairs, pieces + 1)
+    centres = xy_mm[pairs][:, None, :] + t[None, :, None] * (xy_mm[pairs + 1] - xy_mm[pairs])[:, None, :]
+    radii = swept_radius_mm(tips, radius_mm[k], corner_mm[k], z_mm)
+    a_xy, a_r, b_xy, b_r = centres[:, :-1], radii[:, :-1].copy(), centres[:, 1:], radii[:, 1:].copy()
+    a_xy, b_xy = a_xy.copy(), b_xy.copy()
+    enter, leave = (a_r <= 0.0) & (b_r > 0.0), (a_r > 0.0) & (b_r <= 0.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cross = (z_mm - tips[:, :-1]) / (tips[:, 1:] - tips[:, :-1])
+    at = a_xy + cross[..., None] * (b_xy - a_xy)
+    flat = np.broadcast_to((radius_mm - corner_mm)[k], a_r.shape)
+    a_xy[enter], a_r[enter] = at[enter], flat[enter]
+    b_xy[leave], b_r[leave] = at[leave], flat[leave]
+    keep = (a_r > 0.0) | (b_r > 0.0)
+    return a_xy[keep], a_r[keep], b_xy[keep], b_r[keep]
+
+
+def _disc_hulls(a_xy: np.ndarray, a_r: np.ndarray, b_xy: np.ndarray, b_r: np.ndarray) -> np.ndarray:
+    """The convex hull of each pair of discs (centres (m, 2), radii (m,), mm; a radius 0 is a
+    point): polygons inside the discs within :data:`HULL_TOLERANCE_MM`."""
+    top = float(max(a_r.max(), b_r.max()))
+    n = 4 * max(1, math.ceil((math.pi / 2) / (2 * math.acos(1 - min(HULL_TOLERANCE_MM / top, 1.0)))))
+    turn = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+    ring = np.column_stack([np.cos(turn), np.sin(turn)])
+    pts = np.concatenate(
+        [a_xy[:, None, :] + a_r[:, None, None] * ring, b_xy[:, None, :] + b_r[:, None, None] * ring], axis=1
+    )
+    return shapely.convex_hull(shapely.multipoints(pts.reshape(-1, 2), indices=np.repeat(np.arange(len(a_r)), 2 * n)))
 
 
 def points_along(lines: shapely.Geometry, step_mm: float) -> np.ndarray:
@@ -344,23 +396,36 @@ def _offer(probes, m, a, b, line):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
+def _ramp_disc(path, k, t, z):  # pragma: no cover - compiled
+    """The tool's disc at height ``z`` a fraction ``t`` along from sample k - 1 to k (the tip
+    linear between them): ``(x, y, radius)``, mm; where the tip is at z, the radius just over
+    it (the flat part's: 0 for a ball, the full radius for a flat end mill)."""
+    xy, tip, radius, corner = path.xy, path.tip, path.radius, path.corner
+    at = tip[k - 1] + t * (tip[k] - tip[k - 1])
+    r = radius[k] - corner[k] if at == z else _radius_at(at, radius[k], corner[k], z)
+    return (xy[k - 1, 0] + t * (xy[k, 0] - xy[k - 1, 0]), xy[k - 1, 1] + t * (xy[k, 1] - xy[k - 1, 1]), r)
+
+
+@njit(cache=True)
 def _offer_ramp(probes, m, path, k, z, line):  # pragma: no cover - compiled
     """Offer probe ``m`` the sweep from sample k - 1 to k of a tool whose tip moves (its radius at
-    height ``z`` changes along the segment): :data:`RAMP_PIECES` pieces, the tip linear along
-    the segment, each piece the hull of its end discs."""
-    xy, tip, radius, corner = path.xy, path.tip, path.radius, path.corner
-    ax, ay, bx, by = xy[k - 1, 0], xy[k - 1, 1], xy[k, 0], xy[k, 1]
-    a = (ax, ay, _radius_at(tip[k - 1], radius[k - 1], corner[k - 1], z))
-    for piece in range(1, RAMP_PIECES + 1):
-        t = piece / RAMP_PIECES
-        b = (
-            ax + t * (bx - ax),
-            ay + t * (by - ay),
-            _radius_at(tip[k - 1] + t * (tip[k] - tip[k - 1]), radius[k], corner[k], z),
-        )
-        if a[2] > 0.0 or b[2] > 0.0:
-            _offer(probes, m, a, b, line)
-        a = b
+    height ``z`` changes along the segment): the part of the segment where the tool reaches z
+    (from where the tip crosses it), in :data:`RAMP_PIECES` pieces spaced as the square of their
+    index from the shallow end (a corner's radius grows as the square root of the depth there),
+    each the hull of its end discs (:func:`_ramp_disc`)."""
+    tip = path.tip
+    h_a, h_b = z - tip[k - 1], z - tip[k]  # the depth of the level over the tip at each end
+    if h_a <= 0.0 and h_b <= 0.0:
+        return
+    t0 = h_a / (h_a - h_b) if h_a <= 0.0 else 0.0  # where the tip crosses z
+    t1 = h_a / (h_a - h_b) if h_b <= 0.0 else 1.0
+    before = _ramp_disc(path, k, t0 if h_a < h_b else t1, z)  # from the shallow end
+    for j in range(1, RAMP_PIECES + 1):
+        s = (j / RAMP_PIECES) ** 2
+        t = t0 + s * (t1 - t0) if h_a < h_b else t1 - s * (t1 - t0)
+        here = _ramp_disc(path, k, t, z)
+        _offer(probes, m, before, here, line)
+        before = here
 
 
 @njit(cache=True)
@@ -578,6 +643,35 @@ def wall_points(stock, nominal: Sweep, levels_mm: list[float]) -> tuple[np.ndarr
     return (np.concatenate(rows) if rows else np.zeros((0, 3))), skipped
 
 
+def _section_slack_mm(sweep: Sweep, levels_mm: list[float]) -> float:
+    """How far inside the exact sweep a section's boundary may lie (mm, :func:`section`): the
+    largest change of the swept radius between two samples at any of ``levels_mm`` (a run is
+    swept at its smallest), its rounding and the polygons' tolerance, with room; at most
+    :data:`WALL_WINDOW_MM`."""
+    step = 0.0
+    for z in levels_mm:
+        r = swept_radius_mm(sweep.tip_mm, sweep.radius_mm, sweep.corner_mm, z)
+        both = (r[1:] > 0.0) & (r[:-1] > 0.0)
+        step = max(step, float(np.abs(np.diff(r))[both].max(initial=0.0)))
+    return min(step + 2 * SAME_RADIUS_MM + 10 * CIRCLE_TOLERANCE_MM, WALL_WINDOW_MM)
+
+
+def _onto_sweep(points: np.ndarray, sweep: Sweep, slack_mm: float) -> None:
+    """Move ``points`` (m, 3: x, y, z in mm; in place), which lie on a section's boundary within
+    ``slack_mm`` inside the exact sweep, onto the sweep's boundary: each onto the side of the
+    capsule it lies deepest in, again while that side lies in another (a ramp's pieces), at most
+    :data:`PROJECTIONS` times; a point within :data:`PROJECTED_MM` of its last place stays."""
+    active = np.arange(len(points))
+    for _ in range(PROJECTIONS):
+        if not len(active):
+            return
+        surface = nearest_cuts(points[active, :2], points[active, 2], sweep, slack_mm).surface()
+        moved = np.isfinite(surface[:, 0])
+        step = np.where(moved, np.hypot(*(surface - points[active, :2]).T), 0.0)
+        points[active[moved], :2] = surface[moved]
+        active = active[step > PROJECTED_MM]
+
+
 def machined_part(stock, nominal: Sweep, actual: Sweep, top_mm: float, bottom_mm: float) -> MachinedPart:
     """The virtual part of a run: the walls of the nominal sweep's part (exact sections at
     :func:`wall_levels` of the nominal path) probed against the actual sweep's capsules."""
@@ -585,10 +679,7 @@ def machined_part(stock, nominal: Sweep, actual: Sweep, top_mm: float, bottom_mm
     moving = np.hypot(step[:, 0], step[:, 1]) > 1e-6
     levels = wall_levels(nominal.tip_mm, moving, top_mm, bottom_mm)
     points, skipped = wall_points(stock, nominal, levels)
-    # each point onto the exact side of the nominal capsule it lies on (the polygons' circles
-    # are chords within CIRCLE_TOLERANCE_MM of it)
-    on_plan = nearest_cuts(points[:, :2], points[:, 2], nominal, ON_PLAN_MM).surface()
-    points[:, :2] = np.where(np.isfinite(on_plan), on_plan, points[:, :2])
+    _onto_sweep(points, nominal, _section_slack_mm(nominal, levels))
     found = nearest_cuts(points[:, :2], points[:, 2], actual)
     walls = np.column_stack([points, found.distance * 1e3, found.line]) if len(points) else np.zeros((0, 5))
     return MachinedPart(stock, nominal, actual, [z for z in levels if z not in skipped], walls, skipped)
