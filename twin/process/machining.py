@@ -571,9 +571,12 @@ def _lower_row(grid, j, i_lo, i_hi, cx, cy, cz, r, rc):  # pragma: no cover - co
     heights, x0, y0, res = grid.heights, grid.x0_m, grid.y0_m, grid.res_m
     dy = y0 + (j + 0.5) * res - cy
     for i in range(i_lo, i_hi + 1):
+        if heights[i, j] <= cz:  # no lower than the tip already: nothing to cut
+            continue
         floor = cz
         if rc > 0.0:
-            rho = math.hypot(x0 + (i + 0.5) * res - cx, dy)
+            dx = x0 + (i + 0.5) * res - cx
+            rho = math.sqrt(dx * dx + dy * dy)
             out = min(max(rho - (r - rc), 0.0), rc)
             floor = cz + rc - math.sqrt(rc * rc - out * out)
         if heights[i, j] > floor:
