@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import copy
 import math
-from collections.abc import Generator, Iterable, Iterator
+from collections.abc import Generator, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -336,17 +336,25 @@ def _filter_length(limits: Limits) -> tuple[float, int]:
     return (n * SAMPLE_PERIOD_S if n > 1 else 0.0), n
 
 
+def _context(limits: Limits, settings: PlannerSettings) -> _Context:
+    filter_s, n_filter = _filter_length(limits)
+    window = max(filter_s, SAMPLE_PERIOD_S)
+    budget = min(j * window for j in limits.jerk_m_per_s3)
+    return _Context(limits, settings.feed_override, filter_s, n_filter, budget)
+
+
 # --- path ---------------------------------------------------------------------------------
 
 
-def _programmed(moves: Iterable[Move], settings: PlannerSettings, facts: ProgramFacts) -> Iterator[Segment]:
-    """The programmed segments (machine m), null moves dropped; the facts gathered."""
+def _programmed(moves: Iterable[Move], settings: PlannerSettings, facts: ProgramFacts | None) -> Iterator[Segment]:
+    """The programmed segments (machine m), null moves dropped; the facts gathered (if given)."""
     position = None
     for move in moves:
         if position is None:
             position = (np.asarray(move.start_mm) + np.asarray(move.offset_mm)) * 1e-3
         seg = move_segment(move, position, settings.tolerance_m(move))
-        facts.record(move, seg)
+        if facts is not None:
+            facts.record(move, seg)
         if seg is None:
             continue
         position = seg.end
@@ -373,6 +381,45 @@ def _blended(programmed: Iterable[Segment]) -> Iterator[Segment]:
             previous = seg
     if previous is not None:
         yield previous
+
+
+def _least_time(path: Iterable[Segment], ctx: _Context, most_s: float, limit: str) -> Iterator[Segment]:
+    """The path's segments as they pass, and a lower bound of the motion's time counted on the way:
+    each segment at its speed limit (:func:`_segment_speed_limit`, which the look-ahead never
+    exceeds), each dwell its time. Where the bound passes ``most_s`` the program is refused at
+    that segment's line, before it is planned.
+
+    Raises
+    ------
+    PlanningError
+        Naming the line, the bound and ``limit`` (what ``most_s`` is).
+    """
+    total = 0.0
+    for seg in path:
+        if seg.kind == "dwell":
+            total += seg.dwell_s
+        else:
+            total += seg.length / _segment_speed_limit(seg, ctx.limits, ctx.override, ctx.filter_s)
+        if total > most_s:
+            raise PlanningError(
+                f"line {seg.line}: the program runs longer than {limit}: its moves to this line take at least "
+                f"{total:.0f} s ({total / 3600:.1f} h) at their feeds and the axes' velocity limits"
+            )
+        yield seg
+
+
+def refuse_long(moves: Iterable[Move], limits: Limits, settings: PlannerSettings, most_s: float, limit: str) -> None:
+    """Count a lower bound of the program's motion time from its moves alone, before (and
+    without) planning them: time linear in its length, memory bounded.
+
+    Raises
+    ------
+    PlanningError
+        The bound passes ``most_s`` (``limit`` says what that is): the line where it does, and
+        the bound.
+    """
+    for _seg in _least_time(_blended(_programmed(moves, settings, None)), _context(limits, settings), most_s, limit):
+        pass
 
 
 def _junction_speed(a: Segment, b: Segment, ctx: _Context) -> float:
@@ -737,15 +784,22 @@ def _excess(velocity: np.ndarray, acceleration: np.ndarray, previous_acceleratio
 class _Stream:
     """The planner over a stream of moves (:func:`plan_stream`)."""
 
-    def __init__(self, moves: Iterable[Move], limits: Limits, settings: PlannerSettings, keep_programmed: bool):
+    def __init__(
+        self,
+        moves: Iterable[Move],
+        limits: Limits,
+        settings: PlannerSettings,
+        keep_programmed: bool,
+        most_s: float = math.inf,
+        limit: str = "",
+    ):
         self.limits, self.settings = limits, settings
-        filter_s, n_filter = _filter_length(limits)
-        window = max(filter_s, SAMPLE_PERIOD_S)
-        budget = min(j * window for j in limits.jerk_m_per_s3)
-        self.ctx = _Context(limits, settings.feed_override, filter_s, n_filter, budget)
+        self.ctx = _context(limits, settings)
         self.facts = ProgramFacts(limits)
         self.programmed: list[Segment] | None = [] if keep_programmed else None
         self.path = _blended(self._keep(_programmed(moves, settings, self.facts)))
+        if most_s < math.inf:
+            self.path = _least_time(self.path, self.ctx, most_s, limit)
         self.smoother: _Smoother | None = None
         self.first = 0
 
@@ -981,13 +1035,19 @@ def plan(moves: Iterable[Move], limits: Limits, settings: PlannerSettings | None
     PlanningError
         A program with no motion, or one too long to hold (:data:`MAX_SAMPLES`).
     """
-    held, _facts, _samples = hold_or_count(moves, limits, settings, MAX_SAMPLES, MAX_SAMPLES)
+    held, _facts, _samples = hold_or_count(moves, limits, settings, MAX_SAMPLES, MAX_SAMPLES, HELD_LIMIT)
     if held is None:
-        raise PlanningError(
-            f"the program runs longer than the {MAX_SAMPLES * SAMPLE_PERIOD_S:.0f} s of motion a reference held "
-            "whole may hold: run it without a stock (the run then streams it) or split it"
-        )
+        raise PlanningError(f"the program runs longer than {HELD_LIMIT}")
     return held
+
+
+#: What :func:`plan` refuses a longer program for.
+HELD_LIMIT = (
+    f"the {MAX_SAMPLES * SAMPLE_PERIOD_S:.0f} s of motion a reference held whole may hold (run it without a "
+    "stock, which streams it, or split it)"
+)
+#: What a run refuses a program longer than :data:`MAX_PROGRAM_SAMPLES` for.
+PROGRAM_LIMIT = f"the {MAX_PROGRAM_SAMPLES * SAMPLE_PERIOD_S / 3600:.0f} hours of motion a run may plan"
 
 
 def hold_or_count(
@@ -996,10 +1056,14 @@ def hold_or_count(
     settings: PlannerSettings | None,
     most: int,
     count_to: int = MAX_PROGRAM_SAMPLES,
+    limit: str | None = None,
 ) -> tuple[Plan | None, ProgramFacts, int]:
     """Plan a program: held whole (a :class:`Plan`) if it has at most ``most`` samples, else
     only counted (memory stays bounded; a second pass, :func:`plan_stream`, gives the samples),
-    up to ``count_to`` samples (a longer program counts as ``count_to + 1``).
+    up to ``count_to`` samples (a longer program counts as ``count_to + 1``). With ``limit``
+    (what ``count_to`` is, in words), a program whose moves alone take longer than
+    ``count_to`` samples is refused before it is planned (:func:`refuse_long`: at once for a
+    list of moves, else as each move is read).
 
     Returns
     -------
@@ -1011,9 +1075,13 @@ def hold_or_count(
     Raises
     ------
     PlanningError
-        A program with no motion.
+        A program with no motion, or (with ``limit``) one whose moves alone take longer.
     """
-    stream = _Stream(moves, limits, settings or PlannerSettings(), keep_programmed=True)
+    settings = settings or PlannerSettings()
+    most_s = math.inf if limit is None else count_to * SAMPLE_PERIOD_S
+    if limit is not None and isinstance(moves, Sequence):
+        refuse_long(moves, limits, settings, most_s, limit)
+    stream = _Stream(moves, limits, settings, keep_programmed=True, most_s=most_s, limit=limit or "")
     parts: list[Chunk] | None = []
     total = 0
     for chunk in stream.chunks():

@@ -20,6 +20,7 @@ from twin.errors import TwinInputError, input_file
 from twin.gcode.planner import (
     MAX_PROGRAM_SAMPLES,
     MAX_SAMPLES,
+    PROGRAM_LIMIT,
     SAMPLE_PERIOD_S,
     Plan,
     PlannerSettings,
@@ -27,6 +28,7 @@ from twin.gcode.planner import (
     hold_or_count,
     plan,
     plan_stream,
+    refuse_long,
 )
 from twin.gcode.reader import Reader, Settings
 from twin.gcode.report import planned_summary
@@ -39,6 +41,12 @@ from twin.spec import Millimetres, validation_error
 #: The work coordinate systems a program may select.
 WORK_SYSTEMS = ("G54", "G55", "G56", "G57", "G58", "G59")
 
+
+#: What a run with a stock refuses a longer program for.
+STOCK_LIMIT = (
+    f"the {MAX_SAMPLES * SAMPLE_PERIOD_S:.0f} s a program cut in a stock may run (it is planned whole: split it, "
+    "or run it without the stock)"
+)
 
 #: Samples (1 ms each) a run's reference holds whole at most; a longer program without a stock
 #: is planned again as the run asks for it (a second pass: memory stays bounded).
@@ -323,7 +331,17 @@ def build(spec: GcodeRef, ctx: ReferenceContext) -> GcodeReference | StreamedGco
     limits = settings.limits(ctx.machine.motion_limits)
     axes = tuple("xyz".index(a) for a in ctx.axis_names)
     reader = Reader(None, reader_settings, str(path), path=path)
+    most, limit = (MAX_SAMPLES, STOCK_LIMIT) if ctx.stock else (MAX_PROGRAM_SAMPLES, PROGRAM_LIMIT)
     with planning_errors("reference.file", spec.file):
+        # a lower bound of its time from the moves alone first: a program too long is refused
+        # before any of it is planned
+        refuse_long(
+            Reader(None, reader_settings, str(path), path=path).moves(),
+            limits,
+            settings,
+            most * SAMPLE_PERIOD_S,
+            limit,
+        )
         held, facts, samples = hold_or_count(
             reader.moves(), limits, settings, MAX_SAMPLES if ctx.stock else HELD_SAMPLES
         )
