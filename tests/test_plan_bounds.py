@@ -73,3 +73,21 @@ def test_a_run_refuses_a_program_over_ten_hours_at_the_line_that_passes_them(tmp
         "run may plan: its moves to this line take at least 36600 s (10.2 h) at their feeds and the axes' velocity "
         "limits"
     )
+
+
+def test_a_stretch_slowed_to_rest_is_refused_before_it_is_sampled(monkeypatch):
+    """Repairs that multiply a place's speed limit down to nothing (0 m/s over a grid interval:
+    1e300 s of motion, once a MemoryError) end in one planning error naming the line."""
+    import twin.gcode.planner as planner
+
+    def to_rest(grid, s_lo, s_hi, speed, acceleration):
+        near = (grid.s >= s_lo) & (grid.s <= s_hi)
+        grid.vmax[near] *= 0.0
+
+    monkeypatch.setattr(planner._Grid, "lower", to_rest)
+    fuzzed = Limits((0.1, 0.1, 0.05), (1.5, 1.5, 1.0), (1500.0, 1500.0, 1000.0))  # the issue's: no filter
+    program = ["G21 G90 G17 G0 X0 Y0 Z0", "G1 X1 F400", "G1 X1.001 Z-0.001", "G1 X2 Z-0.001"]
+    t0 = time.perf_counter()
+    with pytest.raises(PlanningError, match=r"^line [234]: the planned speed falls to 0 m/s here .* more than 3600 s"):
+        plan(Reader(program).moves(), fuzzed, PlannerSettings())
+    assert time.perf_counter() - t0 < 5.0

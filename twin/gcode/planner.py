@@ -73,6 +73,10 @@ PIECE_POINTS = 4_000
 #: Samples a program's reference may have (10 hours at 1 ms; ours: a run streams it, but its
 #: length is counted first, and a program longer than this is refused).
 MAX_PROGRAM_SAMPLES = 36_000_000
+#: Longest stretch (s) the look-ahead may plan and sample at once (it cuts one at a cruise within
+#: :data:`WINDOW_TIME_S`); a stretch that repairs slow past it is refused before it is sampled
+#: (its samples would not fit in memory).
+MAX_STRETCH_S = 3600.0
 #: Most grid points the look-ahead window may grow to; a path with no cruise over that length
 #: (more than 50 m of continuous motion without one) comes to a stop there, reported.
 MAX_WINDOW_POINTS = 1_000_000
@@ -654,6 +658,30 @@ class _Grid:
         self.a_t[near] *= acceleration
 
 
+def _bounded(grid: _Grid, v: np.ndarray) -> None:
+    """Refuse a stretch whose profile would take longer than :data:`MAX_STRETCH_S` (a speed of 0,
+    or next to it, over a grid interval: repairs that multiplied a place's speed limit and
+    acceleration down to nothing), before its samples are made.
+
+    Raises
+    ------
+    PlanningError
+        Naming the line of the slowest interval, its speed and the stretch's time.
+    """
+    ds = np.diff(grid.s)
+    mean = 0.5 * (v[1:] + v[:-1])
+    slow = ds > mean * MAX_STRETCH_S  # an interval alone over the bound (or at rest)
+    total = float(np.sum(np.where(ds > 0, ds / np.maximum(mean, 1e-300), 0.0))) if not slow.any() else math.inf
+    if total > MAX_STRETCH_S:
+        k = int(np.argmin(np.where(ds > 0, mean, math.inf)))
+        line = grid.segments[int(grid.index[k])].line
+        raise PlanningError(
+            f"line {line}: the planned speed falls to {float(mean[k]):.3g} m/s here (its feed, or its limits lowered "
+            f"where the sampled reference was over one): a stretch of more than {MAX_STRETCH_S:.0f} s of motion "
+            "between two cruises, more than the planner samples at once"
+        )
+
+
 def _time_of(s: np.ndarray, v: np.ndarray, v0: float = 0.0) -> np.ndarray:
     """Time (s) at each grid point: ``ds / mean(v)`` per interval (exact for constant
     acceleration, where ``v^2`` is linear in s)."""
@@ -876,6 +904,7 @@ class _Stream:
         settle = ctx.n_filter - 1 if to_end else 0  # after a stop, the filter's window of rest
         for attempt in range(MAX_REPAIRS + 1):
             v = grid.speeds(ctx.filter_s, ctx.budget)
+            _bounded(grid, v)
             raw, next_phase = _sample(grid, v, phase, to_end)
             if settle:
                 raw = _Raw(
