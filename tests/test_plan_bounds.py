@@ -91,3 +91,62 @@ def test_a_stretch_slowed_to_rest_is_refused_before_it_is_sampled(monkeypatch):
     with pytest.raises(PlanningError, match=r"^line [234]: the planned speed falls to 0 m/s here .* more than 3600 s"):
         plan(Reader(program).moves(), fuzzed, PlannerSettings())
     assert time.perf_counter() - t0 < 5.0
+
+
+def _arcs():
+    """Circles, helices and spirals of many turns, whole and split."""
+    from twin.gcode.planner import _programmed
+
+    out = []
+    for code, z, end_x, turns in (("G2", 0, 0, 7), ("G3", -10, 0, 20), ("G2", 0.01, 0, 20), ("G3", 0, 0.001, 7)):
+        lines = ["G21 G90 G17 G0 X0 Y0 Z0", f"{code} X{end_x} Y0 Z{z} I-5 J0 P{turns} F600"]
+        seg = list(_programmed(Reader(lines).moves(), PlannerSettings(), None))[-1]
+        out += [seg, *seg.split(0.37 * seg.length)]
+    return out
+
+
+@pytest.mark.parametrize("seg", _arcs())
+def test_an_arcs_distance_looks_at_the_turns_near_a_point_only_and_finds_the_nearest(seg):
+    """The distance to a many-turn arc is the smallest over every turn (the brute force: each
+    turn's Newton refinement from the point's angle), points near it and 1 mm off."""
+    import math
+
+    import numpy as np
+
+    from twin.gcode.path import SPIRAL_NEWTON_STEPS
+
+    rng = np.random.default_rng(1)
+    s = rng.uniform(0.0, seg.length, 400)
+    p = seg.points(s) + rng.normal(size=(400, 3)) * np.repeat([1e-7, 1e-5, 1e-4, 1e-3], 100)[:, None]
+    rel = p - seg.center
+    angle = np.mod(np.arctan2(rel @ seg.v, rel @ seg.u), 2 * math.pi)
+    k, h = (seg.radius_end - seg.radius) / seg.sweep, seg.rise / seg.sweep
+    brute = np.minimum(np.linalg.norm(p - seg.start, axis=1), np.linalg.norm(p - seg.end, axis=1))
+    for turn in range(math.ceil(seg.sweep / (2 * math.pi)) + 1):
+        phi = angle + 2 * math.pi * turn
+        for _ in range(SPIRAL_NEWTON_STEPS + 1):
+            c, si = np.cos(phi)[:, None], np.sin(phi)[:, None]
+            r = (seg.radius + k * phi)[:, None]
+            point = seg.center + r * (c * seg.u + si * seg.v) + (h * phi)[:, None] * seg.normal
+            d1 = k * (c * seg.u + si * seg.v) + r * (-si * seg.u + c * seg.v) + h * seg.normal
+            d2 = 2 * k * (-si * seg.u + c * seg.v) - r * (c * seg.u + si * seg.v)
+            grad = np.einsum("ij,ij->i", point - p, d1)
+            curv = np.einsum("ij,ij->i", d1, d1) + np.einsum("ij,ij->i", point - p, d2)
+            phi = np.clip(phi - grad / np.where(curv > 0, curv, 1.0), 0.0, seg.sweep)
+        inside = angle + 2 * math.pi * turn <= seg.sweep
+        brute[inside] = np.minimum(brute[inside], np.linalg.norm(point - p, axis=1)[inside])
+    assert np.allclose(seg.distance(p), brute, rtol=0.0, atol=1e-12)
+
+
+def test_a_thousand_turn_arcs_distance_takes_time_linear_in_its_points():
+    """A pass over every point for each turn made 300 turns 25 s; a few per point now."""
+    import numpy as np
+
+    from twin.gcode.planner import _programmed
+
+    lines = ["G21 G90 G17 G0 X1 Y0 Z0", "G2 X1 Y0 Z-20 I-1 J0 P1000 F600"]
+    seg = list(_programmed(Reader(lines).moves(), PlannerSettings(), None))[-1]
+    p = seg.points(np.linspace(0.0, seg.length, 50_000)) + 1e-6
+    t0 = time.perf_counter()
+    assert seg.distance(p).max() < 2e-6
+    assert time.perf_counter() - t0 < 5.0

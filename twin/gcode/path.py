@@ -210,42 +210,81 @@ def _spiral_length(r0: float, k: float, h: float, angle):
 
 
 def _arc_distance(seg: Segment, p: np.ndarray) -> np.ndarray:
-    """Distance to an arc: the nearest of its end points and, at each turn the point's angle
-    falls on, the point of the arc at that angle refined by Newton's method on the squared
-    distance (exact for a circle in one step, a helix or spiral in a few)."""
+    """Distance to an arc: the nearest of its end points and, at the turns the point's angle
+    may fall nearest on, the point of the arc at that angle refined by Newton's method on the
+    squared distance (exact for a circle in one step, a helix or spiral in a few).
+
+    The turns looked at: the first two and the last two (all alike on a circle but where the
+    ends clip them), and those the point's height along the normal (a helix) or its radius (a
+    spiral) puts within the distance found of it: a few per point near the arc, whatever its
+    turns (a pass over every point for each turn made a 1 000-turn arc's check quadratic)."""
     assert seg.center is not None and seg.u is not None and seg.v is not None and seg.normal is not None
     rel = p - seg.center
-    angle = np.mod(np.arctan2(rel @ seg.v, rel @ seg.u), 2 * math.pi)
+    along_u, along_v = rel @ seg.u, rel @ seg.v
+    angle = np.mod(np.arctan2(along_v, along_u), 2 * math.pi)
     best = np.minimum(np.linalg.norm(p - seg.start, axis=1), np.linalg.norm(p - seg.end, axis=1))
     k = (seg.radius_end - seg.radius) / seg.sweep
     h = seg.rise / seg.sweep
-    for turn in range(math.ceil(seg.sweep / (2 * math.pi)) + 1):
-        phi = angle + 2 * math.pi * turn
-        inside = phi <= seg.sweep
-        if not inside.any():
-            continue
-        phi = phi[inside]
-        q = p[inside]
-        for _ in range(SPIRAL_NEWTON_STEPS):
-            c, s = np.cos(phi), np.sin(phi)
-            r = seg.radius + k * phi
-            point = (
-                seg.center + r[:, None] * (c[:, None] * seg.u + s[:, None] * seg.v) + (h * phi)[:, None] * seg.normal
+    last = math.ceil(seg.sweep / (2 * math.pi))
+    rows = [np.repeat(np.arange(len(p)), 4)]
+    turns = [np.tile(np.array([0, 1, last - 1, last]), len(p))]
+    estimates = []  # (the turn the point's height or radius puts it on, the turns per metre off it)
+    if h != 0.0:
+        estimates.append((np.rint(((rel @ seg.normal) / h - angle) / (2 * math.pi)), 1.0 / (2 * math.pi * h)))
+    if k != 0.0:
+        radius = np.hypot(along_u, along_v)
+        estimates.append((np.rint(((radius - seg.radius) / k - angle) / (2 * math.pi)), 1.0 / (2 * math.pi * abs(k))))
+    estimates = [(np.clip(turn, 0, last), per_m) for turn, per_m in estimates]
+    for turn, _per_m in estimates:
+        rows.append(np.repeat(np.arange(len(p)), 3))
+        turns.append((turn[:, None] + np.array([-1, 0, 1])).ravel())
+    _nearest_on_turns(seg, p, np.concatenate(rows), np.concatenate(turns), angle, best, last)
+    for turn, per_m in estimates:
+        # the turns whose height (radius) is within the distance found of the point's
+        reach = np.minimum(np.ceil(best * per_m + 0.5), last + 1).astype(int)  # the estimate rounds by half a turn
+        far = np.nonzero(reach > 1)[0]
+        if far.size:
+            counts = 2 * reach[far] + 1
+            row = np.repeat(far, counts)
+            step = (
+                np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts) - np.repeat(reach[far], counts)
             )
-            d1 = k * (c[:, None] * seg.u + s[:, None] * seg.v) + r[:, None] * (-s[:, None] * seg.u + c[:, None] * seg.v)
-            d1 += h * seg.normal
-            d2 = 2 * k * (-s[:, None] * seg.u + c[:, None] * seg.v) - r[:, None] * (
-                c[:, None] * seg.u + s[:, None] * seg.v
-            )
-            diff = point - q
-            grad = np.einsum("ij,ij->i", diff, d1)
-            curv = np.einsum("ij,ij->i", d1, d1) + np.einsum("ij,ij->i", diff, d2)
-            phi = np.clip(phi - grad / np.where(curv > 0, curv, 1.0), 0.0, seg.sweep)
+            _nearest_on_turns(seg, p, row, turn[row] + step, angle, best, last)
+    return best
+
+
+def _nearest_on_turns(seg, p, rows, turns, angle, best, last) -> None:
+    """Lower ``best`` (per point of ``p``) to the distance of the arc's point that Newton's
+    method finds from each point's ``angle`` on each of its ``turns`` (rows: the point of each)."""
+    k = (seg.radius_end - seg.radius) / seg.sweep
+    h = seg.rise / seg.sweep
+    keep = (turns >= 0) & (turns <= last)
+    span = last + 1
+    key = np.sort(rows[keep].astype(np.int64) * span + turns[keep].astype(np.int64))  # by point, then turn
+    key = key[np.concatenate([[True], key[1:] != key[:-1]])]
+    rows = key // span
+    phi = angle[rows] + 2 * math.pi * (key % span)
+    inside = phi <= seg.sweep
+    rows, phi = rows[inside], phi[inside]
+    q = p[rows]
+    for _ in range(SPIRAL_NEWTON_STEPS):
         c, s = np.cos(phi), np.sin(phi)
         r = seg.radius + k * phi
         point = seg.center + r[:, None] * (c[:, None] * seg.u + s[:, None] * seg.v) + (h * phi)[:, None] * seg.normal
-        best[inside] = np.minimum(best[inside], np.linalg.norm(point - q, axis=1))
-    return best
+        d1 = k * (c[:, None] * seg.u + s[:, None] * seg.v) + r[:, None] * (-s[:, None] * seg.u + c[:, None] * seg.v)
+        d1 += h * seg.normal
+        d2 = 2 * k * (-s[:, None] * seg.u + c[:, None] * seg.v) - r[:, None] * (c[:, None] * seg.u + s[:, None] * seg.v)
+        diff = point - q
+        grad = np.einsum("ij,ij->i", diff, d1)
+        curv = np.einsum("ij,ij->i", d1, d1) + np.einsum("ij,ij->i", diff, d2)
+        phi = np.clip(phi - grad / np.where(curv > 0, curv, 1.0), 0.0, seg.sweep)
+    c, s = np.cos(phi), np.sin(phi)
+    r = seg.radius + k * phi
+    point = seg.center + r[:, None] * (c[:, None] * seg.u + s[:, None] * seg.v) + (h * phi)[:, None] * seg.normal
+    if rows.size:
+        starts = np.flatnonzero(np.concatenate([[True], rows[1:] != rows[:-1]]))
+        nearest = np.minimum.reduceat(np.linalg.norm(point - q, axis=1), starts)
+        best[rows[starts]] = np.minimum(best[rows[starts]], nearest)
 
 
 def _unit(axis: int) -> np.ndarray:
