@@ -73,10 +73,10 @@ PIECE_POINTS = 4_000
 #: Samples a program's reference may have (10 hours at 1 ms; ours: a run streams it, but its
 #: length is counted first, and a program longer than this is refused).
 MAX_PROGRAM_SAMPLES = 36_000_000
-#: Longest stretch (s) the look-ahead may plan and sample at once (it cuts one at a cruise within
-#: :data:`WINDOW_TIME_S`); a stretch that repairs slow past it is refused before it is sampled
-#: (its samples would not fit in memory).
-MAX_STRETCH_S = 3600.0
+#: Longest stretch (s) the look-ahead may sample at once: a program's longest (it cuts one at a
+#: cruise within :data:`WINDOW_TIME_S` where it can); a stretch that takes longer (repairs that
+#: slowed a place to rest) is refused before it is sampled.
+MAX_STRETCH_S = MAX_PROGRAM_SAMPLES * SAMPLE_PERIOD_S
 #: Most grid points the look-ahead window may grow to; a path with no cruise over that length
 #: (more than 50 m of continuous motion without one) comes to a stop there, reported.
 MAX_WINDOW_POINTS = 1_000_000
@@ -678,7 +678,7 @@ def _bounded(grid: _Grid, v: np.ndarray) -> None:
         raise PlanningError(
             f"line {line}: the planned speed falls to {float(mean[k]):.3g} m/s here (its feed, or its limits lowered "
             f"where the sampled reference was over one): a stretch of more than {MAX_STRETCH_S:.0f} s of motion "
-            "between two cruises, more than the planner samples at once"
+            "between two cruises, longer than a program may run"
         )
 
 
