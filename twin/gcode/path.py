@@ -359,6 +359,12 @@ def move_segment(move: Move, start_m: np.ndarray, tolerance_m: float) -> Segment
     )
 
 
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.cross`` of two 3-vectors, the same operations without its axis handling (a tenth of
+    the time: a blend at every corner)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
 def turn_angle(a: Segment, b: Segment) -> float:
     """The angle (rad) between ``a``'s end tangent and ``b``'s start tangent."""
     return math.acos(max(-1.0, min(1.0, float(a.tangent(True) @ b.tangent(False)))))
@@ -386,7 +392,7 @@ def blend(a: Segment, b: Segment, tolerance_m: float) -> tuple[Segment, Segment,
     center = corner + bisector * radius / math.cos(turn / 2)
     u = (p0 - center) / radius
     v = ta
-    normal = np.cross(u, v)
+    normal = _cross(u, v)
     arc = Segment(b.line, "arc", a.rapid, min(a.feed_m_per_s, b.feed_m_per_s), p0, p1, radius * turn)
     arc.center, arc.u, arc.v, arc.normal, arc.radius, arc.sweep = center, u, v, normal, radius, turn
     arc.radius_end, arc.blend, arc.mode, arc.tolerance_m = radius, True, "G64", a.tolerance_m
