@@ -306,3 +306,30 @@ def test_bench_programs_read_as_written():
     variants = slot_variants(program.read_text().splitlines())
     assert [text for text in variants["slot_through_cut"] if text.startswith("G1")] == ["G1 Z-22 F600", "G1 X120 F1200"]
     assert sum(text == "G1 X120 F1200" for text in variants["slot_two_passes"]) == 2
+
+
+@pytest.mark.slow
+def test_bench_times_the_part_beside_its_run():
+    from twin.bench import part_figures
+
+    figures = part_figures(1, 300)
+    assert sorted(figures["cases"]) == sorted(
+        [
+            "slot_four_passes",
+            "slot_two_passes",
+            "slot_through_cut",
+            "slot_100mm_cutter_0.05s",
+            "pocket_ball_finish",
+            "test_piece",
+        ]
+    )
+    for case in figures["cases"].values():
+        assert case["part_over_run"] == pytest.approx(case["part_s"] / case["run_s"])
+        assert 0 < case["part_peak_mb"] < 1000
+    # the two-pass slot: 2 levels of walls (Z -1 and -3) over both of the slot's sides
+    assert figures["cases"]["slot_two_passes"]["wall_points"] == 2 * 2 * 1999
+    assert figures["cases"]["slot_100mm_cutter_0.05s"]["ticks"] == 100
+    finish = figures["finish"]
+    assert finish["lines"] == 300
+    assert finish["samples"] > 1000
+    assert 0 < finish["part_peak_mb"] < 1000

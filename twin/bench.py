@@ -71,7 +71,7 @@ from twin.sim.runner import simulate
 #: Gains of case (b): P position loop (1/s), PI velocity loop (V s/m, V/m), observer (Hz, order).
 CASCADE = {"kp_pos": 200.0, "kp_vel": 7.0, "ki_vel": 400.0}
 OBSERVER = {"cutoff_hz": 20.0, "order": 2}
-#: Alternating repeats of the virtual part's cases at most (each runs a whole program).
+#: Alternating repeats of the virtual part's cases by default (each runs a whole program).
 PART_REPEATS = 3
 #: Bundled scenario of the start-up measurement.
 STARTUP_SCENARIO = "choi1999_cutting_circle"
@@ -432,6 +432,7 @@ def run_bench(
     gcode_lines: int = 1_000_000,
     gcode_moves: int = 10_000,
     finish_lines: int = 17_000,
+    part_repeats: int = PART_REPEATS,
 ) -> dict:
     """Measure every case and the start-up; figures as in the module docstring.
 
@@ -448,7 +449,7 @@ def run_bench(
         "cases": {},
         "startup": startup(repeats),
         "gcode": gcode_figures(gcode_lines, repeats, gcode_moves),
-        "part": part_figures(min(repeats, PART_REPEATS), finish_lines),
+        "part": part_figures(part_repeats, finish_lines) if part_repeats else None,
     }
     for name, (bm, run) in _cases().items():
         dt = bm.model.opt.timestep

@@ -88,6 +88,8 @@ CHUNK_MM = 0.2
 RAMP_PIECES = 64
 #: Pieces of a section's sample pair whose radius changes (a divisor of :data:`RAMP_PIECES`).
 SECTION_RAMP_PIECES = 4
+#: Sample pairs whose hulls a section makes at once (their points: about 30 MB).
+HULL_PAIRS = 2_000
 #: A section's hull of two discs of different radius (a ramp's sample pair) lies within this of
 #: the discs (mm): it only places the wall points, which are then moved onto the exact sweep.
 HULL_TOLERANCE_MM = 1e-3
@@ -180,8 +182,9 @@ def section(stock: shapely.Geometry, xy_mm, tip_mm, radius_mm, corner_mm, z_mm: 
         )
     swept = [_swept(shapes, radius) for radius, shapes in by_radius.items()]
     pairs = np.flatnonzero(changing)
-    if len(pairs):
-        discs = _ramp_discs(xy_mm, np.asarray(tip_mm), np.asarray(radius_mm), np.asarray(corner_mm), pairs, z_mm)
+    tool = (np.asarray(tip_mm), np.asarray(radius_mm), np.asarray(corner_mm))
+    for start in range(0, len(pairs), HULL_PAIRS):  # in blocks: memory stays bounded
+        discs = _ramp_discs(xy_mm, *tool, pairs[start : start + HULL_PAIRS], z_mm)
         swept.append(shapely.union_all(_disc_hulls(*discs)))
     return shapely.difference(stock, shapely.union_all(swept)) if swept else stock
 
