@@ -217,15 +217,32 @@ def _ramp_discs(xy_mm, tip_mm, radius_mm, corner_mm, pairs: np.ndarray, z_mm: fl
 
 def _disc_hulls(a_xy: np.ndarray, a_r: np.ndarray, b_xy: np.ndarray, b_r: np.ndarray) -> np.ndarray:
     """The convex hull of each pair of discs (centres (m, 2), radii (m,), mm; a radius 0 is a
-    point): polygons inside the discs within :data:`HULL_TOLERANCE_MM`."""
-    top = float(max(a_r.max(), b_r.max()))
-    n = 4 * max(1, math.ceil((math.pi / 2) / (2 * math.acos(1 - min(HULL_TOLERANCE_MM / top, 1.0)))))
-    turn = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
-    ring = np.column_stack([np.cos(turn), np.sin(turn)])
-    pts = np.concatenate(
-        [a_xy[:, None, :] + a_r[:, None, None] * ring, b_xy[:, None, :] + b_r[:, None, None] * ring], axis=1
+    point): polygons inside it within :data:`HULL_TOLERANCE_MM`, drawn directly: the arc of disc a
+    facing away from b between the outer tangents' points, then b's facing away from a (the
+    tangents touch at angles ``+-acos((r_a - r_b) / h)`` from the direction a to b)."""
+    # a disc holding the other stands for both
+    h = np.hypot(*(b_xy - a_xy).T)
+    a_holds, b_holds = h <= a_r - b_r, h <= b_r - a_r
+    a_xy, a_r = np.where(b_holds[:, None], b_xy, a_xy), np.where(b_holds, b_r, a_r)
+    b_xy, b_r = np.where(a_holds[:, None], a_xy, b_xy), np.where(a_holds, a_r, b_r)
+    away = b_xy - a_xy
+    h = np.hypot(*away.T)
+    heading = np.arctan2(away[:, 1], away[:, 0])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        touch = np.where(h > 0.0, np.arccos(np.clip((a_r - b_r) / h, -1.0, 1.0)), 0.5 * np.pi)
+    top = float(max(a_r.max(), b_r.max(), HULL_TOLERANCE_MM))
+    k = 2 + math.ceil(2 * np.pi / (2 * math.acos(1 - min(HULL_TOLERANCE_MM / top, 1.0))))  # points an arc
+    t = np.linspace(0.0, 1.0, k)
+    on_a = (heading + touch)[:, None] + t * (2 * np.pi - 2 * touch)[:, None]
+    on_b = (heading - touch)[:, None] + t * (2 * touch)[:, None]
+    ring = np.concatenate(
+        [
+            a_xy[:, None, :] + a_r[:, None, None] * np.stack([np.cos(on_a), np.sin(on_a)], -1),
+            b_xy[:, None, :] + b_r[:, None, None] * np.stack([np.cos(on_b), np.sin(on_b)], -1),
+        ],
+        axis=1,
     )
-    return shapely.convex_hull(shapely.multipoints(pts.reshape(-1, 2), indices=np.repeat(np.arange(len(a_r)), 2 * n)))
+    return shapely.make_valid(shapely.polygons(ring))
 
 
 def points_along(lines: shapely.Geometry, step_mm: float) -> np.ndarray:
