@@ -223,6 +223,22 @@ def test_a_helical_entry_engages_one_pitch_within_1_percent():
     assert np.array(ratios) == pytest.approx(1.0, abs=0.015)
 
 
+def test_a_helix_into_the_top_engages_as_deep_as_its_tip_is_now():
+    """The first turn of the same helix goes down into the block's flat top: the material ahead
+    does not slope, so the deepest edge (facing out of the helix, into material no turn cut yet)
+    engages from the top to the tip now, within 1 % (reading the depth from the tip ahead, as a
+    steady turn's read does, gave the depth the tool will have there: 7 % deep at the end of the
+    pocket's first turn).  The two reads ahead tell the two apart."""
+    stock = StockSpec(corners_mm=((13.5, -6.5), (26.5, 6.5)), top_mm=0, bottom_mm=-20, resolution_mm=0.01)
+    turns = [f"G3 X22.5 Y0 I-2.5 J0 Z{-z} F300" for z in range(1, 4)]
+    planned, table = _run(["G0 X22.5 Y0", "G1 Z0 F300", *turns, "G0 Z5"], stock=stock)
+    on = np.flatnonzero(planned.line == 3 + 2)  # the first turn, clear of its end (where the
+    on = on[: -len(on) // 20]  # read ahead meets the turn's own start, cut shallower)
+    deep = on[planned.position[on, 2] < -0.2e-3]  # in the material by over 0.2 mm
+    assert len(deep) > 50
+    np.testing.assert_allclose(table[deep, 6], -planned.position[deep, 2] * 1e3, rtol=0.01)
+
+
 def test_a_slot_engages_its_half_circle_up_to_the_stop():
     """A full slot's engaged arc stays within 1 degree of 180 up to the last sample before the
     tool stops in the material: the read ahead goes straight on past the stop (the material is

@@ -423,8 +423,9 @@ def _extent_at(phi, pose, tool, grid):  # pragma: no cover - compiled
     """The engaged axial extent (m) of the edge at angle ``phi`` and the material above the flute
     length there (m): the material at the edge's place a little further along the path (where
     that place lies :data:`TEST_MARGIN_CELLS` outside the tool's surface now, straight on past
-    a stop), between the tool's tip there (a helix or ramp goes on down to it), the stock's
-    bottom and the flute length; the material above the flutes from the tip now, at the stop
+    a stop; where the tool moves in Z, carried back to the edge now along the material's slope
+    from a second read twice as far), between the tool's tip now, the stock's bottom and the
+    flute length; the material above the flutes from the tip now, at the stop
     rather than past it.  The cylinder
     takes one reading; a corner (ball or bull nose) :data:`CORNER_DISCS` discs, each change
     between two discs found by bisection.  ``pose`` is a :class:`Pose`, ``tool`` an :class:`Edge`,
@@ -436,11 +437,21 @@ def _extent_at(phi, pose, tool, grid):  # pragma: no cover - compiled
     sp, cp = math.sin(phi), math.cos(phi)
     # the corner's discs are nearer the axis: at the cylinder's distance ahead they are as far
     # outside the tool now, or further
-    fx, fy, cz, ux, uy, beyond = _along(path, k, _ahead(r, sp, margin))
+    distance = _ahead(r, sp, margin)
+    fx, fy, cz, ux, uy, beyond = _along(path, k, distance)
     ahead = (fx, fy, ux, uy)
     nx_, ny_ = sp * ux - cp * uy, sp * uy + cp * ux  # the edge's direction at phi there
     h = _height_at(grid, fx + r * nx_, fy + r * ny_)
-    total = max(min(h, top, cz + flute) - max(cz + rc, bottom), 0.0)
+    if cz != tip and h > -np.inf:
+        # the tool moves in Z (a helix, a ramp): the material read ahead is where the edge will
+        # be; back at the edge now it is as far again the other way as a second read, twice as
+        # far, says it slopes (a helix's last turn: as the tip; flat stock: not at all), by no
+        # more than the tip's own change over the distance
+        gx, gy, _, gux, guy, _ = _along(path, k, 2.0 * distance)
+        further = _height_at(grid, gx + r * (sp * gux - cp * guy), gy + r * (sp * guy + cp * gux))
+        change = abs(tip - cz)
+        h += min(max(h - further, -change), change)
+    total = max(min(h, top, tip + flute) - max(tip + rc, bottom), 0.0)
     # the material above the flutes is the shank's, which is where it is now: from the tip now
     # (a slot's end blending into a plunge reads a lower tip ahead), and none past a stop: what
     # the read past it stands for is the sliver in front of the edge, thinner than a cell as the
