@@ -28,8 +28,8 @@ sweep on a 20 mm ramp in one segment, 0.01 µm on a sampled one: a brute force i
   linear in the samples.
 
 Along the nominal section's machined boundary (not the stock's own outline), every
-:data:`WALL_STEP_MM` (each point then moved onto the exact side of the nominal capsule it lies
-on, the same probe against the plan), that signed distance is the wall error: positive where material is left,
+:data:`WALL_STEP_MM` (each point then moved onto the plan's exact sweep by the same probes,
+:func:`_onto_sweep`), that signed distance is the wall error: positive where material is left,
 negative where the tool overcut, clipped at :data:`WALL_WINDOW_MM` (no actual capsule within a
 millimetre: at least that much material left).  Each wall point is credited to the program line
 of the actual sample whose capsule is nearest it: the pass that formed that wall.
@@ -87,13 +87,11 @@ CHUNK_MM = 0.2
 #: Pieces of a segment along which the tool's radius at a level changes (a ramp, a plunge
 #: reaching the level), each swept as the hull of its end discs.
 RAMP_PIECES = 64
-#: Pieces of a section's sample pair whose radius changes (a divisor of :data:`RAMP_PIECES`).
+#: Even pieces of a section's sample pair whose radius changes (chords of the tool's concave
+#: profile: inside the probes' :data:`RAMP_PIECES`).
 SECTION_RAMP_PIECES = 4
 #: Sample pairs whose hulls a section makes at once (their points: about 30 MB).
 HULL_PAIRS = 2_000
-#: A section's hull of two discs of different radius (a ramp's sample pair) lies within this of
-#: the discs (mm): it only places the wall points, which are then moved onto the exact sweep.
-HULL_TOLERANCE_MM = 1e-3
 #: Passes of a section's wall points onto the exact sweep at most, and the move (mm) under which
 #: a point has arrived.
 PROJECTIONS = 8
@@ -205,8 +203,7 @@ def _ramp_discs(xy_mm, tip_mm, radius_mm, corner_mm, pairs: np.ndarray, z_mm: fl
     tips = tip_mm[k] + t * (tip_mm[k + 1] - tip_mm[k])  # (pairs, pieces + 1)
     centres = xy_mm[pairs][:, None, :] + t[None, :, None] * (xy_mm[pairs + 1] - xy_mm[pairs])[:, None, :]
     radii = swept_radius_mm(tips, radius_mm[k], corner_mm[k], z_mm)
-    a_xy, a_r, b_xy, b_r = centres[:, :-1], radii[:, :-1].copy(), centres[:, 1:], radii[:, 1:].copy()
-    a_xy, b_xy = a_xy.copy(), b_xy.copy()
+    a_xy, a_r, b_xy, b_r = (part.copy() for part in (centres[:, :-1], radii[:, :-1], centres[:, 1:], radii[:, 1:]))
     enter, leave = (a_r <= 0.0) & (b_r > 0.0), (a_r > 0.0) & (b_r <= 0.0)
     with np.errstate(invalid="ignore", divide="ignore"):
         cross = (z_mm - tips[:, :-1]) / (tips[:, 1:] - tips[:, :-1])
@@ -220,7 +217,7 @@ def _ramp_discs(xy_mm, tip_mm, radius_mm, corner_mm, pairs: np.ndarray, z_mm: fl
 
 def _disc_hulls(a_xy: np.ndarray, a_r: np.ndarray, b_xy: np.ndarray, b_r: np.ndarray) -> np.ndarray:
     """The convex hull of each pair of discs (centres (m, 2), radii (m,), mm; a radius 0 is a
-    point): polygons inside it within :data:`HULL_TOLERANCE_MM`, drawn directly: the arc of disc a
+    point): polygons inside it within :data:`CIRCLE_TOLERANCE_MM`, drawn directly: the arc of disc a
     facing away from b between the outer tangents' points, then b's facing away from a (the
     tangents touch at angles ``+-acos((r_a - r_b) / h)`` from the direction a to b)."""
     # a disc holding the other stands for both
@@ -233,8 +230,7 @@ def _disc_hulls(a_xy: np.ndarray, a_r: np.ndarray, b_xy: np.ndarray, b_r: np.nda
     heading = np.arctan2(away[:, 1], away[:, 0])
     with np.errstate(invalid="ignore", divide="ignore"):
         touch = np.where(h > 0.0, np.arccos(np.clip((a_r - b_r) / h, -1.0, 1.0)), 0.5 * np.pi)
-    top = float(max(a_r.max(), b_r.max(), HULL_TOLERANCE_MM))
-    k = 2 + math.ceil(2 * np.pi / (2 * math.acos(1 - min(HULL_TOLERANCE_MM / top, 1.0))))  # points an arc
+    k = 2 + 4 * quad_segs(float(max(a_r.max(), b_r.max())))  # points an arc: a whole circle's at most
     t = np.linspace(0.0, 1.0, k)
     on_a = (heading + touch)[:, None] + t * (2 * np.pi - 2 * touch)[:, None]
     on_b = (heading - touch)[:, None] + t * (2 * touch)[:, None]
