@@ -112,28 +112,41 @@ def _circle_hits(centre: np.ndarray, radius_mm: float, origin: np.ndarray, direc
     return np.array([]) if disc < 0.0 else -b + np.array([-1.0, 1.0]) * math.sqrt(disc)
 
 
-def _gap_end(part: MachinedPart, z_mm: float, middle: np.ndarray, end: np.ndarray) -> np.ndarray | None:
-    """Where the line from ``middle`` (in the cut) towards ``end`` first meets material (mm): the
-    stock's outline or the side of the capsule nearest the first probe in material; None when the
-    line reaches ``end`` without."""
-    length = float(np.linalg.norm(end - middle))
-    direction = (end - middle) / length
-    at = np.arange(0.0, length + PROBE_STEP_MM, PROBE_STEP_MM).clip(max=length)
-    pts = middle + at[:, None] * direction
+def _gap_ends(part: MachinedPart, z_mm: float, middle: np.ndarray, ends: tuple) -> list | None:
+    """Where the line from ``middle`` towards each of ``ends`` first meets material (mm): the
+    stock's outline or the side of the capsule nearest the first probe in material; that end
+    itself where the line reaches it without; None when ``middle`` is in material.  Both rays
+    are probed at once (one stream of the actual path)."""
+    rays = []
+    for end in ends:
+        length = float(np.linalg.norm(end - middle))
+        direction = (end - middle) / length
+        at = np.arange(0.0, length + PROBE_STEP_MM, PROBE_STEP_MM).clip(max=length)
+        rays.append((direction, middle + at[:, None] * direction))
+    pts = np.concatenate([ray for _, ray in rays])
     found = part.probe(pts, z_mm)
     in_stock = shapely.contains_xy(part.stock, pts[:, 0], pts[:, 1])
-    material = np.flatnonzero(in_stock & (found.distance > 0.0))
-    if len(material) == 0:
+    material = in_stock & (found.distance > 0.0)
+    if material[0]:  # each ray starts at the middle
         return None
-    k = int(material[0])
-    if k > 0 and not in_stock[k - 1]:  # the stock's own outline
-        crossing = shapely.intersection(shapely.LineString([pts[k - 1], pts[k]]), part.stock.boundary)
-        return shapely.get_coordinates(crossing)[0]
-    if k == 0 or not np.isfinite(found.axis[k, 0]):
-        return pts[k]
-    back = _circle_hits(found.axis[k], float(found.reach[k]), pts[k], -direction)
-    back = back[back >= -1e-9]
-    return pts[k] - direction * float(back.min()) if len(back) else pts[k]
+    out, first = [], 0
+    for (direction, ray), end in zip(rays, ends):
+        span = slice(first, first + len(ray))
+        first += len(ray)
+        hits = np.flatnonzero(material[span])
+        if len(hits) == 0:
+            out.append(end)
+            continue
+        k = int(hits[0])
+        if not in_stock[span][k - 1]:  # the stock's own outline
+            crossing = shapely.intersection(shapely.LineString([ray[k - 1], ray[k]]), part.stock.boundary)
+            out.append(shapely.get_coordinates(crossing)[0])
+            continue
+        axis, reach = found.axis[span][k], float(found.reach[span][k])
+        back = _circle_hits(axis, reach, ray[k], -direction) if np.isfinite(axis[0]) else np.array([])
+        back = back[back >= -1e-9]
+        out.append(ray[k] - direction * float(back.min()) if len(back) else ray[k])
+    return out
 
 
 def measure(feature, part: MachinedPart) -> dict:
@@ -185,12 +198,9 @@ def measure(feature, part: MachinedPart) -> dict:
     else:
         a, b = np.asarray(feature.from_mm), np.asarray(feature.to_mm)
         middle = 0.5 * (a + b)
-        inside = part.probe(middle[None, :], feature.z_mm)
-        in_stock = shapely.contains_xy(part.stock, middle[0], middle[1])
-        if np.allclose(a, b) or (in_stock and inside.distance[0] > 0.0):
+        gap = None if np.allclose(a, b) else _gap_ends(part, feature.z_mm, middle, (a, b))
+        if gap is None:
             return not_found(feature, "the line's middle is in material: no gap across it")
-        ends = [_gap_end(part, feature.z_mm, middle, end) for end in (a, b)]
-        gap = [end if end is not None else whole for end, whole in zip(ends, (a, b))]
         width = float(np.linalg.norm(gap[1] - gap[0]))
         deviation = (width - feature.width_mm) * 1e3
         row |= {
