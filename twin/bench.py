@@ -340,8 +340,8 @@ def finish_figures(lines: int) -> dict:
     from twin.gcode.planner import PlannerSettings, plan
     from twin.gcode.reader import read_program
     from twin.process.machining import StockSpec, ToolSpec, program_milling
-    from twin.process.part import Sweep, machined_part
-    from twin.process.part_map import part_map
+    from twin.process.part import Sweep
+    from twin.process.part_map import virtual_part
 
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "finish.ngc"
@@ -360,20 +360,12 @@ def finish_figures(lines: int) -> dict:
         plan_peak = tracemalloc.get_traced_memory()[1] / 1e6
         tracemalloc.reset_peak()
         held = tracemalloc.get_traced_memory()[0] / 1e6
-        nominal = Sweep(
-            planned.position[:, :2] * 1e3,
-            planned.position[:, 2] * 1e3,
-            cut.radius_m * 1e3,
-            cut.corner_m * 1e3,
-            planned.line,
-        )
+        nominal = Sweep.planned(planned, cut)
         # a stand-in for a run's actual path: the plan with seeded 1 µm noise in XY
         noise = np.random.default_rng(0).normal(0.0, 1e-3, nominal.xy_mm.shape)
         actual = Sweep(nominal.xy_mm + noise, nominal.tip_mm, nominal.radius_mm, nominal.corner_mm, nominal.line)
         t0 = time.perf_counter()
-        part = machined_part(stock.polygon(), nominal, actual, stock.top_mm, stock.bottom_mm)
-        part.maps = part_map(stock, nominal, actual)
-        part.floor_error_um = part.maps.floor_error()
+        part = virtual_part(stock, nominal, actual)
         part_s = time.perf_counter() - t0
         part_peak = tracemalloc.get_traced_memory()[1] / 1e6 - held
         tracemalloc.stop()

@@ -294,6 +294,14 @@ class Sweep:
     corner_mm: np.ndarray
     line: np.ndarray
 
+    @classmethod
+    def planned(cls, plan, cut) -> Sweep:
+        """The planned path of a program through its stock: a
+        :class:`twin.gcode.planner.Plan`'s tips with the tool of each sample of its
+        :class:`twin.process.machining.ProgramCut`."""
+        xyz = plan.position * 1e3
+        return cls(xyz[:, :2], xyz[:, 2], cut.radius_m * 1e3, cut.corner_m * 1e3, plan.line)
+
     def section(self, stock: shapely.Geometry, z_mm: float) -> shapely.Geometry:
         """The material this sweep leaves of ``stock`` at ``z_mm`` (:func:`section`): for a
         smooth path (the plan); an actual path is probed (:func:`nearest_cuts`)."""

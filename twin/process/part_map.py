@@ -27,7 +27,7 @@ from typing import NamedTuple
 import numpy as np
 
 from twin.process.machining import MAP_MARGIN_MM, HeightMap, StockSpec, cut_path
-from twin.process.part import Sweep
+from twin.process.part import MachinedPart, Sweep, machined_part
 
 #: Cells the mesh takes at most (every k-th cell each way beyond it): about a million
 #: triangles, a 50 MB binary STL.
@@ -204,3 +204,12 @@ def part_map(stock: StockSpec, nominal: Sweep, actual: Sweep) -> PartMap:
     with ThreadPoolExecutor(max_workers=2) as pool:
         maps = list(pool.map(lambda sweep: cut_height_map(stock, sweep, margin_mm), (nominal, actual)))
     return PartMap(stock, *maps)
+
+
+def virtual_part(stock: StockSpec, nominal: Sweep, actual: Sweep) -> MachinedPart:
+    """The part ``actual`` cut against the one ``nominal`` cuts: the walls
+    (:func:`~twin.process.part.machined_part`) with both height maps and their floor error."""
+    part = machined_part(stock.polygon(), nominal, actual, stock.top_mm, stock.bottom_mm)
+    part.maps = part_map(stock, nominal, actual)
+    part.floor_error_um = part.maps.floor_error()
+    return part

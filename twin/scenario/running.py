@@ -7,8 +7,8 @@ import numpy as np
 
 from twin.process.inspection import measure, not_found
 from twin.process.machining import StockSpec
-from twin.process.part import MachinedPart, Sweep, machined_part
-from twin.process.part_map import part_map
+from twin.process.part import MachinedPart, Sweep
+from twin.process.part_map import virtual_part
 from twin.scenario.assembly import assemble
 from twin.scenario.schema import Scenario
 from twin.sim.runner import MAX_PHYSICS_STEPS, RunResult
@@ -46,10 +46,8 @@ def _machined_part(result: RunResult, lines: np.ndarray, reference, stock: Stock
     the nominal part of the program (the ``reference`` cutting the stock) as far as the run went
     (a run stopped before the program's end, by its duration or a divergence, is compared with
     what the program had cut by then, not with material it never reached)."""
-    plan, cut = reference.plan, reference.cut
-    full = Sweep(
-        plan.position[:, :2] * 1e3, plan.position[:, 2] * 1e3, cut.radius_m * 1e3, cut.corner_m * 1e3, plan.line
-    )
+    plan = reference.plan
+    full = Sweep.planned(plan, reference.cut)
     k = np.clip(np.rint(result.t_s / plan.period_s).astype(int), 0, len(full.line) - 1)
     reached = slice(0, int(k[-1]) + 1 if k.size else 0)
     nominal = Sweep(
@@ -62,7 +60,4 @@ def _machined_part(result: RunResult, lines: np.ndarray, reference, stock: Stock
         nominal.corner_mm[k],
         lines,
     )
-    part = machined_part(stock.polygon(), nominal, actual, stock.top_mm, stock.bottom_mm)
-    part.maps = part_map(stock, nominal, actual)
-    part.floor_error_um = part.maps.floor_error()
-    return part
+    return virtual_part(stock, nominal, actual)
