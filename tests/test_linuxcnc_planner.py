@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent / "fixtures" / "linuxcnc_tp"))
-import compare  # noqa: E402
-from cases import CASES  # noqa: E402
+import compare
+from cases import CASES
 
 
 @pytest.mark.parametrize("name", sorted(CASES))
@@ -37,5 +37,5 @@ def test_tangent_circles_at_the_normal_acceleration_share():
     # 0.036 % here) and the samples are chords: 147.115 mm/s, within 0.02 % of sqrt(sqrt(3)/2 a R)
     assert np.abs(on_circles / expected - 1.0).max() < 2e-4
     theirs = np.linalg.norm(np.diff(compare.oracle("tangent_circles"), axis=0), axis=1) / 1e-3
-    assert np.abs(on_circles - theirs[1500:5000]).max() < 1e-3
+    assert np.abs(on_circles - theirs[1500:5000]).max() < 2e-3  # the sampler prints 1 nm: 1.4e-3 mm/s
     assert (len(positions) - 1) * 1e-3 == pytest.approx(5.369, abs=1e-9)
