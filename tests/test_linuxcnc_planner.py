@@ -39,3 +39,59 @@ def test_tangent_circles_at_the_normal_acceleration_share():
     theirs = np.linalg.norm(np.diff(compare.oracle("tangent_circles"), axis=0), axis=1) / 1e-3
     assert np.abs(on_circles - theirs[1500:5000]).max() < 2e-3  # the sampler prints 1 nm: 1.4e-3 mm/s
     assert (len(positions) - 1) * 1e-3 == pytest.approx(5.369, abs=1e-9)
+
+
+def _write(tmp_path, name):
+    path = tmp_path / f"{name}.ngc"
+    path.write_text(CASES[name].program)
+    return path
+
+
+def test_mode_dispatch_gives_the_planner_plan_with_linuxcnc_positions(tmp_path):
+    """``[planner] mode = "linuxcnc"`` through :func:`twin.gcode.planner.plan`: the same samples
+    (m), at rest at both ends, LinuxCNC's jerk reported over the limits, not hidden."""
+    from twin.gcode.planner import Limits, PlannerSettings, plan
+    from twin.gcode.reader import read_program
+
+    case = CASES["g61_square"]
+    limits = Limits(
+        tuple(v * 1e-3 for v, _a in case.limits), tuple(a * 1e-3 for _v, a in case.limits), (50.0, 50.0, 50.0)
+    )
+    held = plan(read_program(_write(tmp_path, "g61_square")), limits, PlannerSettings(mode="linuxcnc"))
+    theirs = compare.oracle("g61_square") * 1e-3
+    start = int(np.argmax(np.any(held.position != held.position[0], axis=1))) - 1
+    ours = held.position[start : start + len(theirs)]
+    assert np.abs(ours - theirs).max() < 1e-9  # 1 nm
+    assert np.abs(held.velocity[[0, -1]]).max() == 0.0
+    assert held.filter_s == 0.0
+    jerk = {(v.axis, v.quantity): v.ratio for v in held.violations}
+    # the jerk of the samples (the steps of their central-difference acceleration), far over
+    # the 50 m/s^3 given: LinuxCNC has none, and the report says so instead of lowering it
+    acceleration = np.diff(held.position[:, 0], 2) / 1e-6
+    expected = np.abs(np.diff(acceleration)).max() / 1e-3 / 50.0
+    assert jerk[("x", "jerk")] == pytest.approx(expected, rel=1e-6)
+    assert jerk[("x", "jerk")] > 10.0
+    assert ("x", "velocity") not in jerk
+
+
+def test_machine_file_planner_mode_and_the_scenario_over_it(tmp_path):
+    from twin.gcode.planner import PlannerSettings
+    from twin.machines import build
+    from twin.references.gcode import with_machine_mode
+
+    text = (Path(__file__).resolve().parents[1] / "examples/machines/compact_xy.toml").read_text()
+    machine_file = tmp_path / "lcnc_xy.toml"
+    machine_file.write_text(text.replace("[machine]\n", '[machine]\nplanner_mode = "linuxcnc"\n', 1))
+    built = build(str(machine_file))
+    assert built.planner_mode == "linuxcnc"
+    assert with_machine_mode(PlannerSettings(), built).mode == "linuxcnc"
+    assert with_machine_mode(PlannerSettings(mode="jerk_limited"), built).mode == "jerk_limited"
+
+
+def test_feed_override_refused_in_linuxcnc_mode(tmp_path):
+    from twin.gcode.planner import Limits, PlannerSettings, PlanningError, plan
+    from twin.gcode.reader import read_program
+
+    limits = Limits((0.1, 0.1, 0.1), (1.0, 1.0, 1.0), (50.0, 50.0, 50.0))
+    with pytest.raises(PlanningError, match="feed_override"):
+        plan(read_program(_write(tmp_path, "g61_square")), limits, PlannerSettings(mode="linuxcnc", feed_override=0.5))

@@ -26,6 +26,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -33,10 +34,17 @@ from twin.gcode.linuxcnc_geometry import Vec
 from twin.gcode.linuxcnc_tp import EXACT, PARABOLIC, STOP, Config, Planner
 from twin.gcode.reader import PLANES, Move
 
+#: The servo period (s): the jerk-limited planner's sample period, LinuxCNC's 1 ms.
+SAMPLE_PERIOD_S = 1e-3
+#: A sampled value counts as over its limit beyond this ratio (as the jerk-limited planner).
+LIMIT_SLACK = 1.0 + 1e-6
 #: Servo periods between the end of the motion before a queue sync and the first motion after
 #: it, by what the task waited for (LinuxCNC 2.9's milltask, measured on the real planner; a
 #: dwell adds its own time).
 SYNC_CYCLES = {"dwell": 2, "spindle": 4, "other": 2}
+#: Segments in the motion queue at which the task waits before it sends more (``tcqFull``: the
+#: queue of 2000 less its margin of 220).
+QUEUE_FULL = 2000 - 220
 #: The smallest displacement of an axis LinuxCNC counts (``CART_FUZZ``, mm).
 TINY_MM = 1e-8
 
@@ -347,7 +355,7 @@ def _run(config: Config, start, items: Iterable[object], block: int):
                     pending = next(source, None)
                 else:
                     wait -= 1
-        elif pending is not None:
+        elif pending is not None and len(planner.queue) < QUEUE_FULL:
             if isinstance(pending, _Motion):
                 if pending.kind == "line":
                     planner.add_line(pending.end, pending.traverse, pending.line_number, pending.vel,
@@ -396,3 +404,104 @@ def motion_samples(moves: Iterable[Move], limits: AxisLimits, period_s: float = 
     if moving.size == 0:
         return p[:1]
     return p[moving[0] - 1 : moving[-1] + 1]
+
+
+class _NoFilter(NamedTuple):
+    """What :func:`twin.gcode.planner.hold_or_count` reads of a planner's context: no smoothing
+    filter (s)."""
+
+    filter_s: float
+
+
+class LinuxcncStream:
+    """The LinuxCNC mode behind :func:`twin.gcode.planner.plan_stream` and
+    :func:`~twin.gcode.planner.hold_or_count`: the same :class:`~twin.gcode.planner.Chunk` s
+    (machine m, m/s, m/s^2 by central differences, as the jerk-limited planner gives them) and
+    :class:`~twin.gcode.planner.ProgramFacts`, with each axis's velocity, acceleration and jerk
+    over the machine's limits recorded as violations (LinuxCNC has no jerk limit: its jerk is
+    reported, not lowered).
+    """
+
+    def __init__(self, moves, limits, settings, keep_programmed: bool):
+        from twin.gcode.planner import PlanningError, ProgramFacts
+
+        if settings.feed_override != 1.0:
+            raise PlanningError(
+                f"planner.feed_override = {settings.feed_override}: the LinuxCNC mode runs at 100 % (the override's "
+                "effect on LinuxCNC's blends is not modelled)"
+            )
+        self.limits, self.settings = limits, settings
+        self.facts = ProgramFacts(limits)
+        self.programmed: list | None = [] if keep_programmed else None
+        self.moves = moves
+        self.ctx = _NoFilter(0.0)
+        self.tolerance: dict[int, float] = {}
+
+    def _recorded(self, moves) -> Iterator[Move]:
+        """The moves, their facts and programmed segments recorded as they pass; G64 P replaced by
+        ``[planner] tolerance_mm`` where it is set."""
+        from twin.gcode.path import move_segment
+
+        position = None
+        for move in moves:
+            if position is None:
+                position = (np.asarray(move.start_mm) + np.asarray(move.offset_mm)) * 1e-3
+            tolerance_m = self.settings.tolerance_m(move)
+            seg = move_segment(move, position, tolerance_m)
+            self.facts.record(move, seg)
+            self.tolerance[move.line] = tolerance_m if move.path_mode == "G64" else 0.0
+            if seg is not None:
+                position = seg.end
+                if self.programmed is not None:
+                    self.programmed.append(seg)
+            if self.settings.tolerance_mm is not None and move.path_mode == "G64":
+                move = move._replace(tolerance_mm=self.settings.tolerance_mm)
+            yield move
+
+    def chunks(self):
+        """The reference in :class:`~twin.gcode.planner.Chunk` s, at rest one sample before and
+        two after the motion."""
+        from twin.gcode.planner import Chunk, Violation, _excess
+
+        limits = AxisLimits(
+            tuple(v * 1e3 for v in self.limits.velocity_m_per_s),
+            tuple(a * 1e3 for a in self.limits.acceleration_m_per_s2),
+        )
+        dt = SAMPLE_PERIOD_S
+        first = 0
+        held: np.ndarray | None = None  # the last two positions (m), for the differences
+        held_line = np.zeros(2, dtype=int)
+        previous_acceleration = np.zeros(3)
+        worst: dict[tuple[str, str], tuple[float, int]] = {}
+        blocks = sampled(self._recorded(self.moves), limits, dt)
+        ending = False
+        while True:
+            block = next(blocks, None)
+            if block is None:
+                if held is None or ending:
+                    break
+                ending = True
+                position, line = np.repeat(held[-1:], 2, axis=0), np.repeat(held_line[-1:], 2)
+            else:
+                position, line = block[0] * 1e-3, block[1]
+            if held is None:
+                held, held_line = np.repeat(position[:1], 2, axis=0), np.repeat(line[:1], 2)
+            p = np.concatenate([held, position])
+            lines = np.concatenate([held_line, line])
+            velocity = (p[2:] - p[:-2]) / (2 * dt)
+            acceleration = (p[2:] - 2 * p[1:-1] + p[:-2]) / (dt * dt)
+            sample_lines = lines[1:-1]
+            ratios = _excess(velocity, acceleration, previous_acceleration, self.limits)
+            for quantity, r in zip(("velocity", "acceleration", "jerk"), ratios):
+                for axis in range(3):
+                    k = int(np.argmax(r[:, axis]))
+                    key = ("xyz"[axis], quantity)
+                    if r[k, axis] > worst.get(key, (LIMIT_SLACK, 0))[0]:
+                        worst[key] = (float(r[k, axis]), int(sample_lines[k]))
+            previous_acceleration = acceleration[-1]
+            tolerance = np.array([self.tolerance.get(int(n), 0.0) for n in sample_lines])
+            yield Chunk(first, p[1:-1], velocity, acceleration, sample_lines, tolerance)
+            first += len(velocity)
+            held, held_line = p[-2:], lines[-2:]
+        for (axis, quantity), (ratio, line_number) in sorted(worst.items()):
+            self.facts.violations.append(Violation(line_number, axis, quantity, ratio))

@@ -42,7 +42,7 @@ import copy
 import math
 from collections.abc import Generator, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
-from typing import NamedTuple
+from typing import Literal, NamedTuple
 
 import numba
 import numpy as np
@@ -139,6 +139,11 @@ class PlannerSettings(StrictSpec):
     ``velocity_m_per_s = { x = 0.2 }`` and the like override them.
     """
 
+    mode: Literal["jerk_limited", "linuxcnc"] = Field(
+        "jerk_limited",
+        description="jerk_limited: the twin's planner; linuxcnc: LinuxCNC 2.9's trajectory planner as it behaves "
+        "(per-axis velocity and acceleration limits, no jerk limit; twin.gcode.linuxcnc_planner)",
+    )
     tolerance_mm: float | None = Field(
         None,
         gt=0.0,
@@ -1042,6 +1047,15 @@ def _grid_points(seg: Segment) -> int:
     return max(4, math.ceil(seg.length / GRID_M) + 1)
 
 
+def _stream(moves, limits: Limits, settings: PlannerSettings, keep_programmed: bool, most_s=math.inf, limit=""):
+    """The planner of ``settings.mode`` over a stream of moves."""
+    if settings.mode == "linuxcnc":
+        from twin.gcode.linuxcnc_planner import LinuxcncStream  # it builds on this module
+
+        return LinuxcncStream(moves, limits, settings, keep_programmed)
+    return _Stream(moves, limits, settings, keep_programmed, most_s, limit)
+
+
 def plan_stream(moves: Iterable[Move], limits: Limits, settings: PlannerSettings | None = None):
     """The planned reference of a program as it is read, in :class:`Chunk` s, and the facts
     gathered on the way (complete once the chunks are exhausted): memory stays bounded for any
@@ -1052,7 +1066,7 @@ def plan_stream(moves: Iterable[Move], limits: Limits, settings: PlannerSettings
     chunks : iterator of Chunk
     facts : ProgramFacts
     """
-    stream = _Stream(moves, limits, settings or PlannerSettings(), keep_programmed=False)
+    stream = _stream(moves, limits, settings or PlannerSettings(), keep_programmed=False)
     return stream.chunks(), stream.facts
 
 
@@ -1110,7 +1124,7 @@ def hold_or_count(
     most_s = math.inf if limit is None else count_to * SAMPLE_PERIOD_S
     if limit is not None and isinstance(moves, Sequence):
         refuse_long(moves, limits, settings, most_s, limit)
-    stream = _Stream(moves, limits, settings, keep_programmed=True, most_s=most_s, limit=limit or "")
+    stream = _stream(moves, limits, settings, keep_programmed=True, most_s=most_s, limit=limit or "")
     parts: list[Chunk] | None = []
     total = 0
     for chunk in stream.chunks():

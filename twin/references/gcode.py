@@ -326,6 +326,7 @@ def build(spec: GcodeRef, ctx: ReferenceContext) -> GcodeReference | StreamedGco
     if unknown:
         raise TwinInputError("reference.type", spec.type, f"the machine's axes {ctx.axis_names} are not x, y, z")
     settings = ctx.planner if isinstance(ctx.planner, PlannerSettings) else PlannerSettings.model_validate(ctx.planner)
+    settings = with_machine_mode(settings, ctx.machine)
     path = input_file(spec.file, "reference.file")
     reader_settings = spec.reader_settings(ctx.tools)
     limits = settings.limits(ctx.machine.motion_limits)
@@ -385,6 +386,14 @@ def planning_errors(field: str, file) -> Iterator[None]:
         raise TwinInputError(field, str(file), str(exc)) from None
 
 
+def with_machine_mode(settings: PlannerSettings, machine) -> PlannerSettings:
+    """The planner's settings with the machine file's ``planner_mode`` where the scenario (or
+    ``--set planner.mode``) gives none."""
+    if "mode" in settings.model_fields_set or machine.planner_mode is None:
+        return settings
+    return settings.model_copy(update={"mode": machine.planner_mode})
+
+
 def planned_for(file, moves: list, machine: str, planner: PlannerSettings) -> dict:
     """The ``planned`` table of ``twin gcode --machine``: the ``moves`` of ``file`` planned for
     ``machine`` (:func:`twin.gcode.report.planned_summary`).
@@ -394,7 +403,9 @@ def planned_for(file, moves: list, machine: str, planner: PlannerSettings) -> di
     TwinInputError
         An unknown machine, or a program the planner refuses (named as ``file``).
     """
-    limits = planner.limits(build_machine(machine).motion_limits)
+    built = build_machine(machine)
+    planner = with_machine_mode(planner, built)
+    limits = planner.limits(built.motion_limits)
     with planning_errors("file", file):
         return planned_summary(plan(moves, limits, planner), limits)
 
