@@ -42,7 +42,7 @@ import copy
 import math
 from collections.abc import Generator, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
-from typing import NamedTuple
+from typing import Literal, NamedTuple
 
 import numba
 import numpy as np
@@ -150,6 +150,9 @@ class PlannerSettings(StrictSpec):
     velocity_m_per_s: dict[str, float] = Field(default_factory=dict, description="axis velocity limits, m/s")
     acceleration_m_per_s2: dict[str, float] = Field(default_factory=dict, description="axis acceleration limits, m/s^2")
     jerk_m_per_s3: dict[str, float] = Field(default_factory=dict, description="axis jerk limits, m/s^3")
+    travel: Literal["refuse", "warn"] = Field(
+        "refuse", description="a move outside the machine's travel: refuse the program, or warn of each line"
+    )
 
     @field_validator("velocity_m_per_s", "acceleration_m_per_s2", "jerk_m_per_s3")
     @classmethod
