@@ -308,3 +308,38 @@ def test_twin_run_reports_travel_and_drive_warnings(tmp_path):
     done = twin("run", scenario)
     assert done.returncode == 2 and done.stdout == ""
     assert "line 4: X 301.000 mm (machine coordinates) is outside the travel -300.000..300.000 mm" in done.stderr
+
+
+def _rapid_scenario(tmp_path: Path) -> Path:
+    """The test piece's loops (Choi 1999's PID with feedforward, 10 V drives, its Coulomb
+    friction) on a 52 mm rapid along X."""
+    (tmp_path / "rapid.ngc").write_text("G21 G90\nG0 X0 Y0\nG0 X52\nG4 P0.1\nM2\n")
+    scenario = tmp_path / "rapid.toml"
+    scenario.write_text(
+        'name = "rapid52"\nmachine = "linear_motor_xy"\noverrides = { F_coul_x = 2.94, F_coul_y = 1.90 }\n'
+        'timestep_s = 1e-4\ncontrol_period_s = 5e-4\n[controllers.x]\ntype = "pid"\n'
+        "params = { kp = 2.0e4, ki = 2.0e5, kd = 150.0, tf_s = 5e-4 }\nvelocity_ff = 1.97\nacceleration_ff = 0.533\n"
+        '[controllers.y]\ntype = "pid"\nparams = { kp = 7.0e3, ki = 7.0e4, kd = 50.0, tf_s = 5e-4 }\n'
+        'velocity_ff = 0.367\nacceleration_ff = 0.173\n[reference]\ntype = "gcode"\nfile = "rapid.ngc"\n'
+        "[drive]\nsaturation_V = 10.0\n"
+    )
+    return scenario
+
+
+def test_the_drive_check_agrees_with_the_closed_loop(tmp_path):
+    """At the machine's limits the check warns (1138 N of 982 N) and the closed loop saturates
+    its drive and overshoots by millimetres; within the accelerations the machine's README
+    gives ((982 N - b v_max - F_c) / m: 15.0 and 55.5 m/s^2) it is silent and the loop stays
+    within its drive and tracks within 20 um."""
+    import twin as api
+
+    scenario = _rapid_scenario(tmp_path)
+    at_limits = api.run(scenario)
+    (row,) = at_limits.summary["plan_warnings"]
+    assert row["force_N"] == pytest.approx(1138.3, abs=0.05)  # 52.3 a + 193.5 v + 2.94 at the worst sample
+    assert np.abs(at_limits.result.u_V[:, 0]).max() > 10.0
+    assert at_limits.result.table_position_m()[:, 0].max() > 0.052 + 1e-3
+    lowered = api.run(scenario, **{"planner.acceleration_m_per_s2": {"x": 15.0, "y": 55.5}})
+    assert "plan_warnings" not in lowered.summary
+    assert np.abs(lowered.result.u_V[:, 0]).max() < 10.0
+    assert lowered.summary["max_tracking_error_um"]["x"] < 20.0
