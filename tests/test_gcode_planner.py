@@ -196,7 +196,7 @@ def test_twin_gcode_prints_moves_and_the_plan(tmp_path):
         (["{bad}"], "bad.ngc:3 = 'G41 X1 Y1': cutter radius compensation (G41) is not supported"),
         (["{good}", "--machine", "mill"], "machine = 'mill': unknown machine"),
         (["{good}", "--machine", "googol_xy", "--set", "planner.tolerance_mm=-1"], "planner.tolerance_mm = -1"),
-        (["{good}", "--set", "spindle=3"], "--set spindle = 3: give planner.KEY or reference.KEY"),
+        (["{good}", "--set", "spindle=3"], "--set spindle = 3: give planner.KEY, reference.KEY or drive.KEY"),
         (["{good}", "--set", "planner.jerk_m_per_s3={{ w = 3.0 }}"], "'w' is not an axis"),
         (["{missing}"], "file = "),
     ],

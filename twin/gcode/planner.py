@@ -168,6 +168,9 @@ class PlannerSettings(StrictSpec):
     velocity_m_per_s: dict[str, float] = Field(default_factory=dict, description="axis velocity limits, m/s")
     acceleration_m_per_s2: dict[str, float] = Field(default_factory=dict, description="axis acceleration limits, m/s^2")
     jerk_m_per_s3: dict[str, float] = Field(default_factory=dict, description="axis jerk limits, m/s^3")
+    travel: Literal["refuse", "warn"] = Field(
+        "refuse", description="a move outside the machine's travel: refuse the program, or warn of each line"
+    )
 
     @field_validator("velocity_m_per_s", "acceleration_m_per_s2", "jerk_m_per_s3")
     @classmethod

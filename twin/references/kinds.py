@@ -37,6 +37,8 @@ class ReferenceContext:
         The T numbers of the scenario's ``[[tools]]`` (None: no list, any T word).
     stock : bool
         Whether the scenario cuts a stock (a program's plan is then held whole).
+    saturation_V : float or None
+        The drive's saturation (V; None: none), what a program's drive check compares with.
     """
 
     axis_names: list[str]
@@ -44,6 +46,7 @@ class ReferenceContext:
     planner: Any = field(default_factory=dict)
     tools: frozenset[int] | None = None
     stock: bool = False
+    saturation_V: float | None = None
 
 
 def register(name: str, spec: type[KindSpec], build: Callable) -> Kind:

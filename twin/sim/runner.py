@@ -85,6 +85,11 @@ class ProgramTrace:
         (:func:`twin.process.misuse.machining_warnings`), the first ones.
     machining_warnings_total : int
         How many there are in all.
+    plan_warnings : list of dict
+        Moves outside the travel (under ``travel = "warn"``) and what the drives cannot deliver,
+        by line (:func:`twin.gcode.checks.plan_warnings`).
+    plan_warnings_total : int
+        How many there are in all.
     """
 
     lines: np.ndarray
@@ -96,6 +101,8 @@ class ProgramTrace:
     outlines: dict[str, list[np.ndarray]]
     machining_warnings: list[dict]
     machining_warnings_total: int
+    plan_warnings: list[dict]
+    plan_warnings_total: int
 
 
 @dataclass
@@ -442,6 +449,8 @@ class _ProgramSeries:
             outlines=self.reference.outlines,
             machining_warnings=self.reference.warnings,
             machining_warnings_total=self.reference.warnings_total,
+            plan_warnings=self.reference.plan_warnings[0],
+            plan_warnings_total=self.reference.plan_warnings[1],
         )
 
 
