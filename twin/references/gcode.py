@@ -293,6 +293,10 @@ class GcodeRef(ReferenceSpecBase):
     tool_lengths_mm: dict[int, Millimetres] = Field(
         default_factory=dict, description="tool length (G43) by tool number, mm"
     )
+    tool_diameters_mm: dict[int, Millimetres] = Field(
+        default_factory=dict,
+        description="tool diameter by tool number, mm: cutter radius compensation (G41/G42 D); negative: other side",
+    )
     g28_home_mm: tuple[Millimetres, Millimetres, Millimetres] = Field(
         (0.0, 0.0, 0.0), description="G28's home, machine mm"
     )
@@ -308,6 +312,7 @@ class GcodeRef(ReferenceSpecBase):
             tool_lengths_mm=dict(self.tool_lengths_mm),
             g28_home_mm=self.g28_home_mm,
             tools=tools,
+            tool_diameters_mm=dict(self.tool_diameters_mm),
         )
 
 
@@ -401,7 +406,7 @@ def planned_for(file, moves: list, machine: str, planner: PlannerSettings) -> di
 
 def program_settings(file: str, settings: dict):
     """The reader's table and the planner's settings for ``twin gcode FILE``: ``settings`` are
-    dotted paths below ``reference.`` (work_offsets_mm, tool_lengths_mm, g28_home_mm) and
+    dotted paths below ``reference.`` (work_offsets_mm, tool_lengths_mm, tool_diameters_mm, g28_home_mm) and
     ``planner.`` (:class:`~twin.gcode.planner.PlannerSettings`).
 
     Raises
