@@ -332,6 +332,10 @@ class GcodeRef(ReferenceSpecBase):
     tool_lengths_mm: dict[int, Millimetres] = Field(
         default_factory=dict, description="tool length (G43) by tool number, mm"
     )
+    tool_diameters_mm: dict[int, Millimetres] = Field(
+        default_factory=dict,
+        description="tool diameter by tool number, mm: cutter radius compensation (G41/G42 D); negative: other side",
+    )
     g28_home_mm: tuple[Millimetres, Millimetres, Millimetres] = Field(
         (0.0, 0.0, 0.0), description="G28's home, machine mm"
     )
@@ -347,6 +351,7 @@ class GcodeRef(ReferenceSpecBase):
             tool_lengths_mm=dict(self.tool_lengths_mm),
             g28_home_mm=self.g28_home_mm,
             tools=tools,
+            tool_diameters_mm=dict(self.tool_diameters_mm),
         )
 
 
@@ -487,8 +492,8 @@ class ProgramDrive(StrictSpec):
 def program_settings(file: str, settings: dict):
     """The reader's table, the planner's settings and the drive's saturation (V or None) for
     ``twin gcode FILE``: ``settings`` are dotted paths below ``reference.`` (work_offsets_mm,
-    tool_lengths_mm, g28_home_mm), ``planner.`` (:class:`~twin.gcode.planner.PlannerSettings`)
-    and ``drive.`` (:class:`ProgramDrive`).
+    tool_lengths_mm, tool_diameters_mm, g28_home_mm), ``planner.``
+    (:class:`~twin.gcode.planner.PlannerSettings`) and ``drive.`` (:class:`ProgramDrive`).
 
     Raises
     ------
