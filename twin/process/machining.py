@@ -43,6 +43,7 @@ from twin.process.cutting import (
     CoefficientsSpec,
     chip_state,
     helix_lag_rad_per_mm,
+    history_rows,
 )
 from twin.process.materials import MATERIALS, CuttingCoefficients
 from twin.spec import MAX_MM, Millimetres, StrictSpec
@@ -809,7 +810,7 @@ class ProgramMilling:
         flutes = np.array([t.n_flutes for t in self.tools])[self.tool_index]
         turning = self.spindle_rpm >= MIN_SPINDLE_RPM
         lag = np.max(2.0 * math.pi / (omega[turning] * flutes[turning]) / dt) if turning.any() else 1.0
-        n_hist = int(lag) + 2
+        n_hist = history_rows(lag)
         columns = {name: self.table[:, COLUMNS.index(name)] for name in COLUMNS}
         columns.update(omega=omega, angle=angle, tool=self.tool_index)
         rows = np.column_stack([columns[name] for name in PM_COLUMNS]).astype(float)
