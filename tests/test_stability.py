@@ -110,11 +110,11 @@ def reference_spectral_radius(arc, spindle_rpm: float, depth_m: float, steps: in
         return v, (-2 * ZETA * OMEGA_N * v - OMEGA_N**2 * x - depth_m * h_of(t) / MASS * (x - x_delayed))
 
     n = 2 * (steps + 1)
-    # history[l] = (x, v) at t_i - tau + l dt, l = 0..steps, each a row of n columns (basis)
+    # history[p] = (x, v) at t_i - tau + p dt, p = 0..steps, each a row of n columns (basis)
     hist_x = np.zeros((steps + 1, n))
     hist_v = np.zeros((steps + 1, n))
-    for l in range(steps + 1):
-        hist_x[l, 2 * l], hist_v[l, 2 * l + 1] = 1.0, 1.0
+    for point in range(steps + 1):
+        hist_x[point, 2 * point], hist_v[point, 2 * point + 1] = 1.0, 1.0
     hist_x, hist_v = list(hist_x), list(hist_v)
     for i in range(steps):
         t = i * dt
