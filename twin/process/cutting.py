@@ -57,6 +57,7 @@ from twin.errors import TwinInputError
 from twin.numba_cache import configure as configure_numba_cache
 from twin.process.kinds import DisturbanceSpecBase, register
 from twin.process.materials import ALUMINIUM_7075_T6, MATERIALS, CuttingCoefficients, kienzle
+from twin.process.tool_dynamics import ToolDynamicsSpec
 from twin.spec import StrictSpec
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
@@ -867,6 +868,9 @@ class EndMillingSpec(DisturbanceSpecBase):
     spindle_phase_rad: float | None = Field(None, description="None: drawn from the seed")
     seed: int | None = Field(None, ge=0, description="default: the scenario's seed")
     helix_deg: float = Field(0.0, ge=0.0, lt=MAX_HELIX_DEG, description="helix angle of the flutes, deg (0: straight)")
+    dynamics: ToolDynamicsSpec | None = Field(
+        None, description="the structure at the tool tip: modes in X/Y or a measured FRF (twin.process.tool_dynamics)"
+    )
 
 
 class AverageForceSpec(DisturbanceSpecBase):

@@ -46,6 +46,7 @@ from twin.process.cutting import (
     history_rows,
 )
 from twin.process.materials import MATERIALS, CuttingCoefficients
+from twin.process.tool_dynamics import ToolDynamicsSpec
 from twin.spec import MAX_MM, Millimetres, StrictSpec
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
@@ -242,6 +243,9 @@ class ToolSpec(StrictSpec):
     )
     coefficients: CoefficientsSpec = Field(
         default_factory=CoefficientsSpec, description="the user's own coefficients, over the material's"
+    )
+    dynamics: ToolDynamicsSpec | None = Field(
+        None, description="the structure at the tool tip: modes in X/Y or a measured FRF (twin.process.tool_dynamics)"
     )
 
     def cutting_coefficients(self) -> CuttingCoefficients:
