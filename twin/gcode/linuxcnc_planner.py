@@ -334,18 +334,19 @@ def sampled(moves: Iterable[Move], limits: AxisLimits, period_s: float = 1e-3, b
             break
     if canon.end is None or not head:
         return
-    yield from _run(config, canon.start, [*head, *source], block)
+    first_line = next(item.line_number for item in head if isinstance(item, _Motion))
+    yield from _run(config, canon.start, first_line, [*head, *source], block)
 
 
-def _run(config: Config, start, items: Iterable[object], block: int):
-    """The task, the planner and the interpolator, one servo period at a time."""
+def _run(config: Config, start, line: int, items: Iterable[object], block: int):
+    """The task, the planner and the interpolator, one servo period at a time (``line``: the
+    program line of the samples before the first segment)."""
     planner = Planner(config, start)
     source = iter(items)
     pending = next(source, None)
     wait = -1  # servo periods left of a sync once the motion has ended (-1: none)
     raw: list[tuple[float, float, float]] = []
     lines: list[int] = []
-    line = 0
     x0 = x1 = start  # the planner's last two positions (the cubic interpolator's look-back)
     while pending is not None or not planner.idle() or wait >= 0:
         if wait >= 0:
