@@ -40,8 +40,8 @@ SAMPLE_PERIOD_S = 1e-3
 LIMIT_SLACK = 1.0 + 1e-6
 #: Servo periods between the end of the motion before a queue sync and the first motion after
 #: it, by what the task waited for (LinuxCNC 2.9's milltask, measured on the real planner; a
-#: dwell adds its own time).
-SYNC_CYCLES = {"dwell": 2, "spindle": 4, "other": 2}
+#: dwell adds its own time; "no time": a dwell of 0 s, ``G4 P0``).
+SYNC_CYCLES = {"dwell": 2, "no time": 1, "spindle": 4, "other": 2}
 #: Segments in the motion queue at which the task waits before it sends more (``tcqFull``: the
 #: queue of 2000 less its margin of 220).
 QUEUE_FULL = 2000 - 220
@@ -150,7 +150,8 @@ class _Canon:
                 yield _TermCond(EXACT if move.path_mode == "G61" else STOP, 0.0)
         if move.kind == "dwell":
             yield from self.flush()
-            yield _Sync(SYNC_CYCLES["dwell"] + round(move.dwell_s / self.period_s), move.line)
+            extra = SYNC_CYCLES["dwell"] if move.dwell_s > 0 else SYNC_CYCLES["no time"]
+            yield _Sync(extra + round(move.dwell_s / self.period_s), move.line)
             return
         if move.kind == "rapid":
             yield from self.flush()
