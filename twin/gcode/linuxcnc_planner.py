@@ -40,8 +40,8 @@ SAMPLE_PERIOD_S = 1e-3
 LIMIT_SLACK = 1.0 + 1e-6
 #: Servo periods between the end of the motion before a queue sync and the first motion after
 #: it, by what the task waited for (LinuxCNC 2.9's milltask, measured on the real planner; a
-#: dwell adds its own time).
-SYNC_CYCLES = {"dwell": 2, "spindle": 4, "other": 2}
+#: dwell adds its own time; "no time": a dwell of 0 s, ``G4 P0``).
+SYNC_CYCLES = {"dwell": 2, "no time": 1, "spindle": 4, "other": 2}
 #: Segments in the motion queue at which the task waits before it sends more (``tcqFull``: the
 #: queue of 2000 less its margin of 220).
 QUEUE_FULL = 2000 - 220
@@ -150,7 +150,8 @@ class _Canon:
                 yield _TermCond(EXACT if move.path_mode == "G61" else STOP, 0.0)
         if move.kind == "dwell":
             yield from self.flush()
-            yield _Sync(SYNC_CYCLES["dwell"] + round(move.dwell_s / self.period_s), move.line)
+            extra = SYNC_CYCLES["dwell"] if move.dwell_s > 0 else SYNC_CYCLES["no time"]
+            yield _Sync(extra + round(move.dwell_s / self.period_s), move.line)
             return
         if move.kind == "rapid":
             yield from self.flush()
@@ -334,18 +335,19 @@ def sampled(moves: Iterable[Move], limits: AxisLimits, period_s: float = 1e-3, b
             break
     if canon.end is None or not head:
         return
-    yield from _run(config, canon.start, [*head, *source], block)
+    first_line = next(item.line_number for item in head if isinstance(item, _Motion))
+    yield from _run(config, canon.start, first_line, [*head, *source], block)
 
 
-def _run(config: Config, start, items: Iterable[object], block: int):
-    """The task, the planner and the interpolator, one servo period at a time."""
+def _run(config: Config, start, line: int, items: Iterable[object], block: int):
+    """The task, the planner and the interpolator, one servo period at a time (``line``: the
+    program line of the samples before the first segment)."""
     planner = Planner(config, start)
     source = iter(items)
     pending = next(source, None)
     wait = -1  # servo periods left of a sync once the motion has ended (-1: none)
     raw: list[tuple[float, float, float]] = []
     lines: list[int] = []
-    line = 0
     x0 = x1 = start  # the planner's last two positions (the cubic interpolator's look-back)
     while pending is not None or not planner.idle() or wait >= 0:
         if wait >= 0:

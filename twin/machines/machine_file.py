@@ -220,7 +220,7 @@ def machine_file_text(machine_file: MachineFile, params: dict[str, float], note:
         axis, _, field = key.partition("_")
         setattr(spec.axes[axis], field, value)
     lines = [f"# {line}" for line in note.splitlines()] + ["", "[machine]"]
-    for key, value in spec.machine.model_dump().items():
+    for key, value in spec.machine.model_dump(exclude_none=True).items():
         lines.append(f"{key} = {_toml_value(value)}")
     for a, ax in spec.axes.items():
         lines += ["", f"[axes.{a}]"]
