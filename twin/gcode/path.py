@@ -11,7 +11,7 @@ of the two lines); what the other junctions do is the planner's (:mod:`twin.gcod
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import NamedTuple
 
 import numpy as np
@@ -102,6 +102,9 @@ class Segment:
     blend: bool = False
     mode: str = "G64"
     tolerance_m: float = 0.0
+    #: What the planner works out of the segment once (its speed limit, tangents, axis shares),
+    #: by name; a copy (:func:`dataclasses.replace`, :meth:`split`) starts with none.
+    planned: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def curvature(self) -> float:
@@ -159,7 +162,13 @@ class Segment:
         return Outward(radial, r, 1.0 / np.sqrt(r * r + k * k + h * h))
 
     def tangent(self, at_end: bool) -> np.ndarray:
-        """Unit tangent at the start or the end."""
+        """Unit tangent at the start or the end (worked out once)."""
+        key = "tangent_end" if at_end else "tangent_start"
+        if key not in self.planned:
+            self.planned[key] = self._tangent(at_end)
+        return self.planned[key]
+
+    def _tangent(self, at_end: bool) -> np.ndarray:
         if self.kind == "line":
             d = self.end - self.start
             return d / np.linalg.norm(d)
@@ -182,7 +191,13 @@ class Segment:
 
     def axis_share(self) -> np.ndarray:
         """The largest share of the path speed each axis takes anywhere on the segment, (3,):
-        |tangent_i| for lines, the in-plane radius share plus the rise share for arcs."""
+        |tangent_i| for lines, the in-plane radius share plus the rise share for arcs (worked
+        out once)."""
+        if "axis_share" not in self.planned:
+            self.planned["axis_share"] = self._axis_share()
+        return self.planned["axis_share"]
+
+    def _axis_share(self) -> np.ndarray:
         if self.kind == "line":
             return np.abs(self.tangent(False))
         assert self.u is not None and self.v is not None and self.normal is not None

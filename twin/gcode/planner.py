@@ -481,7 +481,14 @@ def _junction_speed(a: Segment, b: Segment, ctx: _Context) -> float:
 
 
 def _segment_speed_limit(seg: Segment, limits: Limits, override: float, filter_s: float) -> float:
-    """The highest path speed (m/s) on ``seg``."""
+    """The highest path speed (m/s) on ``seg`` (worked out once per segment and limits)."""
+    key = ("speed_limit", limits, override, filter_s)
+    if key not in seg.planned:
+        seg.planned[key] = _speed_limit(seg, limits, override, filter_s)
+    return seg.planned[key]
+
+
+def _speed_limit(seg: Segment, limits: Limits, override: float, filter_s: float) -> float:
     share = seg.axis_share()
     v_axis = min(v / s for v, s in zip(limits.velocity_m_per_s, share) if s > 1e-12)
     v = v_axis if seg.rapid else min(seg.feed_m_per_s * override, v_axis)
@@ -825,9 +832,20 @@ def _sample(grid: _Grid, v: np.ndarray, phase: float, to_end: bool, filter_s: fl
     position = np.empty((n, 3))
     out, radial = np.zeros(n), np.zeros((n, 3))
     bounds = np.searchsorted(seg_t, np.arange(len(segments) + 1))  # seg_t never decreases
+    # the lines' samples at once (most of a CAM program's segments), each arc's on its own
+    on_line = np.array([seg.kind != "arc" for seg in segments])[seg_t]
+    if on_line.any():
+        starts = np.array([seg.start for seg in segments])
+        steps = np.array([seg.end - seg.start for seg in segments])
+        lengths = np.array([seg.length for seg in segments])
+        owner = seg_t[on_line]
+        frac = np.clip((s_t[on_line] - offsets[owner]) / np.maximum(lengths[owner], 1e-300), 0.0, 1.0)
+        position[on_line] = starts[owner] + frac[:, None] * steps[owner]
+        ends = on_line & (s_t - offsets[seg_t] >= lengths[seg_t])
+        position[ends] = np.array([seg.end for seg in segments])[seg_t[ends]]  # the programmed end exactly
     for i in range(len(segments)):
         lo, hi = bounds[i], bounds[i + 1]
-        if hi > lo:
+        if hi > lo and segments[i].kind == "arc":
             s_local = np.clip(s_t[lo:hi] - offsets[i], 0.0, segments[i].length)
             position[lo:hi] = segments[i].points(s_local)
             if _compensated(segments[i], filter_s):
