@@ -425,6 +425,8 @@ def run_bench(
     gcode_moves: int = 10_000,
     finish_lines: int = 17_000,
     part_repeats: int = PART_REPEATS,
+    planning_scale: float = 1.0,
+    planning_file: str | None = None,
 ) -> dict:
     """Measure every case and the start-up; figures as in the module docstring.
 
@@ -433,7 +435,8 @@ def run_bench(
     dict
         ``cases.<name>.{raw_steps_per_s, closed_loop_steps_per_s, ratio, realtime_factor, loop,
         timestep_s}``, ``startup.{scenario, run_process_s, run_in_process_s, overhead_s,
-        help_process_s}``, ``simulated_s``, ``repeats``.
+        help_process_s}``, ``simulated_s``, ``repeats``, ``gcode``, ``part`` and ``planning``
+        (:func:`planning_figures`; None with ``planning_scale`` 0).
     """
     out: dict[str, Any] = {
         "simulated_s": seconds,
@@ -442,6 +445,7 @@ def run_bench(
         "startup": startup(repeats),
         "gcode": gcode_figures(gcode_lines, repeats, gcode_moves),
         "part": part_figures(part_repeats, finish_lines) if part_repeats else None,
+        "planning": planning_figures(planning_scale, planning_file) if planning_scale else None,
     }
     for name, (bm, run) in _cases().items():
         dt = bm.model.opt.timestep

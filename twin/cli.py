@@ -798,7 +798,7 @@ def bench(
         False, "--planning-only", help="Only the planner's speed against the motion it plans"
     ),
     planning_scale: float = typer.Option(
-        1.0, "--planning-scale", help="Factor on the planning programs' lengths (lines, turns)"
+        1.0, "--planning-scale", help="Factor on the planning programs' lengths (lines, turns; 0: leave them out)"
     ),
     planning_file: Path = typer.Option(None, "--planning-file", help="A part program to plan too"),
 ):
@@ -820,26 +820,24 @@ def bench(
         raise TwinInputError("--finish-lines", finish_lines, "must be in 2..1000000")
     if not 0 <= part_repeats <= 100:
         raise TwinInputError("--part-repeats", part_repeats, "must be in 0..100")
-    if not 1e-3 <= planning_scale <= 10.0:
-        raise TwinInputError("--planning-scale", planning_scale, "must be in [0.001, 10]")
+    if not (planning_scale == 0 or 1e-3 <= planning_scale <= 10.0):
+        raise TwinInputError("--planning-scale", planning_scale, "must be 0 (leave planning out) or in [0.001, 10]")
     if planning_file is not None and not planning_file.is_file():
         raise TwinInputError("--planning-file", str(planning_file), "is not a file")
     if sweep:
         _bench_sweep(as_json, samples, memory_samples, repeats)
         return
+    file = str(planning_file) if planning_file else None
     if planning_only:
         from twin.bench import planning_figures
 
-        planning = planning_figures(planning_scale, str(planning_file) if planning_file else None)
+        planning = planning_figures(planning_scale or 1.0, file)
         if as_json:
             _echo_json({"planning": planning}, 2)
         else:
             _print_planning_bench(planning)
         return
-    figures = run_bench(seconds, repeats, gcode_lines, gcode_moves, finish_lines, part_repeats)
-    from twin.bench import planning_figures
-
-    figures["planning"] = planning_figures(planning_scale, str(planning_file) if planning_file else None)
+    figures = run_bench(seconds, repeats, gcode_lines, gcode_moves, finish_lines, part_repeats, planning_scale, file)
     if as_json:
         _echo_json(figures, 2)
         return
@@ -868,7 +866,8 @@ def bench(
     )
     if figures["part"] is not None:
         _print_part_bench(figures["part"])
-    _print_planning_bench(figures["planning"])
+    if figures["planning"] is not None:
+        _print_planning_bench(figures["planning"])
 
 
 def _print_planning_bench(planning: dict) -> None:

@@ -62,8 +62,10 @@ SAMPLE_PERIOD_S = 1e-3
 #: Most samples a reference held whole may have (``plan()``; about 33 minutes at 1 ms). A run
 #: without a stock streams its reference and has no such limit.
 MAX_SAMPLES = 2_000_000
-#: Arc-length grid of the look-ahead (m): finer on short segments (at least 4 points each).
+#: Arc-length grid of the look-ahead (m): finer on short segments (:data:`MIN_SEGMENT_POINTS`).
 GRID_M = 5e-5
+#: Grid points of a segment at least (a short move's peak is capped between them).
+MIN_SEGMENT_POINTS = 16
 #: Grid points the look-ahead plans at once before it looks for a cruise to hand on at.
 WINDOW_POINTS = 40_000
 #: Motion (s) the look-ahead plans at once at most before it looks for a cruise to hand on at
@@ -648,7 +650,7 @@ class _Grid:
         length = np.array([seg.length for seg in segments])
         limit = np.array([_segment_speed_limit(seg, limits, override, filter_s) for seg in segments])
         # each segment's points: at least 4, GRID_M apart at most (numpy's linspace, vectorized)
-        counts = np.maximum(4, np.ceil(length / GRID_M).astype(np.int64) + 1)
+        counts = np.maximum(MIN_SEGMENT_POINTS, np.ceil(length / GRID_M).astype(np.int64) + 1)
         owner = np.repeat(np.arange(n), counts)
         first = np.cumsum(counts) - counts
         local = (np.arange(owner.size) - first[owner]) * (length / (counts - 1))[owner]
@@ -1161,7 +1163,7 @@ class _Stream:
 
 
 def _grid_points(seg: Segment) -> int:
-    return max(4, math.ceil(seg.length / GRID_M) + 1)
+    return max(MIN_SEGMENT_POINTS, math.ceil(seg.length / GRID_M) + 1)
 
 
 def plan_stream(moves: Iterable[Move], limits: Limits, settings: PlannerSettings | None = None):
