@@ -495,7 +495,10 @@ def _speed_limit(seg: Segment, limits: Limits, override: float, filter_s: float)
     v_axis = min(v / s for v, s in zip(limits.velocity_m_per_s, share) if s > 1e-12)
     v = v_axis if seg.rapid else min(seg.feed_m_per_s * override, v_axis)
     if seg.kind == "arc":
-        plane = share > 1e-12
+        # the turning acceleration and its jerk lie in the arc's plane (a helix's rise is at
+        # constant speed): the plane's axes bound them
+        assert seg.u is not None and seg.v is not None
+        plane = np.hypot(seg.u, seg.v) > 1e-12
         a = min(x for x, p in zip(limits.acceleration_m_per_s2, plane) if p)
         j = min(x for x, p in zip(limits.jerk_m_per_s3, plane) if p)
         r = 1.0 / seg.curvature
