@@ -136,7 +136,7 @@ def test_list_and_bench():
     assert "reproductions" in r.stdout
     r = _twin(
         "bench", "--json", "--seconds", "0.05", "--repeats", "3", "--gcode-lines", "3000", "--gcode-moves", "500",
-        "--part-repeats", "0",
+        "--part-repeats", "0", "--planning-scale", "0.01",
     )  # fmt: skip
     figures = json.loads(r.stdout)
     assert figures["part"] is None  # the part's figures run whole programs: a slow test of their own
@@ -167,6 +167,14 @@ def test_list_and_bench():
     assert four_times < 1.5 * once
     assert len(gcode["run_peak_mb"]) == 2
     assert all(mb > 0 for mb in gcode["run_peak_mb"].values())
+    planning = figures["planning"]  # motion over planning CPU time, per program and limits
+    assert sorted(planning) == ["arc_10_turns", "ball_finishing", "cam_like", "zigzag"]
+    for by_limits in planning.values():
+        assert sorted(by_limits) == ["linear_motor_xy", "slow"]
+        for f in by_limits.values():
+            assert f["ratio"] == pytest.approx(f["motion_s"] / f["plan_cpu_s"])
+            assert f["violations"] == 0
+    assert planning["zigzag"]["slow"]["motion_s"] > 200 * 10e-3 / 0.05  # 200 lines of 10 mm at 50 mm/s
     for figures in cases.values():  # a ratio of medians can differ from the median of ratios, not by 3x
         assert figures["loop"] == "compiled"
         assert figures["raw_steps_per_s"] > 0

@@ -154,3 +154,35 @@ def test_a_thousand_turn_arcs_distance_takes_time_linear_in_its_points():
     t0 = time.perf_counter()
     assert seg.distance(p).max() < 2e-6
     assert time.perf_counter() - t0 < 5.0
+
+
+def test_a_thousand_turn_arc_plans_in_seconds_and_planning_outruns_the_motion():
+    """Issue 46: a 1 000-turn arc (628 s of motion) planned (counted, in bounded memory) in
+    seconds; planning at least 100 times faster than the motion at the issue's slow limits on
+    a CAM-like program (CPU time: the machine is shared)."""
+    from twin.bench import SLOW_LIMITS, cam_program
+    from twin.gcode.planner import hold_or_count
+    from twin.machines import build
+
+    machine = PlannerSettings().limits(build("linear_motor_xy").motion_limits)
+    hold_or_count(Reader(["G21 G0 X0", "G1 X1 F100", "G2 X1 Y0 I1 J0"]).moves(), machine, None, 0)  # compiled
+    arc = ["G21 G90 G17 G0 X1 Y0 Z0", "G2 X1 Y0 Z-20 I-1 J0 P1000 F600"]
+    t0 = time.process_time()
+    _held, facts, samples = hold_or_count(Reader(arc).moves(), machine, None, 0)
+    assert time.process_time() - t0 < 10.0
+    assert samples * 1e-3 == pytest.approx(1000 * 2 * 3.141592653589793 * 1e-3 / 0.01, rel=0.01)
+    t0 = time.process_time()
+    _held, facts, samples = hold_or_count(Reader(list(cam_program(300))).moves(), Limits(*SLOW_LIMITS), None, 0)
+    assert samples * 1e-3 / (time.process_time() - t0) >= 100.0
+    assert not facts.violations
+
+
+def test_a_copy_of_a_segment_works_its_limits_out_again():
+    """What the planner keeps of a segment (``planned``) is not carried to its pieces."""
+    from twin.gcode.planner import _programmed, _segment_speed_limit
+
+    seg = list(_programmed(Reader(["G21 G90 G0 X0 Y0", "G1 X10 Y10 F600"]).moves(), PlannerSettings(), None))[-1]
+    assert _segment_speed_limit(seg, LIMITS, 1.0, 0.05) == pytest.approx(0.01)
+    first, second = seg.split(0.004)
+    assert first.planned == {} and second.planned == {}
+    assert first.tangent(True) == pytest.approx(seg.tangent(True))

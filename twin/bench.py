@@ -425,6 +425,8 @@ def run_bench(
     gcode_moves: int = 10_000,
     finish_lines: int = 17_000,
     part_repeats: int = PART_REPEATS,
+    planning_scale: float = 1.0,
+    planning_file: str | None = None,
 ) -> dict:
     """Measure every case and the start-up; figures as in the module docstring.
 
@@ -433,7 +435,8 @@ def run_bench(
     dict
         ``cases.<name>.{raw_steps_per_s, closed_loop_steps_per_s, ratio, realtime_factor, loop,
         timestep_s}``, ``startup.{scenario, run_process_s, run_in_process_s, overhead_s,
-        help_process_s}``, ``simulated_s``, ``repeats``.
+        help_process_s}``, ``simulated_s``, ``repeats``, ``gcode``, ``part`` and ``planning``
+        (:func:`planning_figures`; None with ``planning_scale`` 0).
     """
     out: dict[str, Any] = {
         "simulated_s": seconds,
@@ -442,6 +445,7 @@ def run_bench(
         "startup": startup(repeats),
         "gcode": gcode_figures(gcode_lines, repeats, gcode_moves),
         "part": part_figures(part_repeats, finish_lines) if part_repeats else None,
+        "planning": planning_figures(planning_scale, planning_file) if planning_scale else None,
     }
     for name, (bm, run) in _cases().items():
         dt = bm.model.opt.timestep
@@ -462,4 +466,70 @@ def run_bench(
             "loop": result.info["loop"],
             "timestep_s": dt,
         }
+    return out
+
+
+#: The issue's slow limits (issue 46): 100 mm/s, 1.5 m/s^2, 1500 m/s^3 on X and Y; 50 mm/s,
+#: 1 m/s^2, 1000 m/s^3 on Z.
+SLOW_LIMITS = ((0.1, 0.1, 0.05), (1.5, 1.5, 1.0), (1500.0, 1500.0, 1000.0))
+#: A program file's extra limits: 30.48 mm/s and 508 mm/s^2 per axis (LinuxCNC's, issue 46's
+#: CamBam program), the jerk of ``linear_motor_xy``'s X.
+FILE_LIMITS = (0.03048, 0.508)
+
+
+def zigzag_program(n_lines: int) -> list[str]:
+    """``n_lines`` 10 mm moves along X, 0.1 mm apart in Y, at 3000 mm/min under G64 P0.01."""
+    return ["G21 G90 G17 G64 P0.01", "G0 X0 Y0", "F3000"] + [
+        f"G1 X{10 * (k % 2 == 0)} Y{0.1 * k:.1f}" for k in range(n_lines)
+    ]
+
+
+def planning_figures(scale: float = 1.0, file: str | None = None) -> dict:
+    """The planner's CPU time against the motion it plans (the program counted, not held:
+    memory bounded by the look-ahead window), on ``linear_motor_xy``'s limits and the issue's
+    slow ones, for a CAM-like program (20 000 lines), a ball finishing program (17 000), a
+    1 000-turn helical arc and a 20 000-line zigzag, each times ``scale``; and ``file`` (also at
+    :data:`FILE_LIMITS`).
+
+    Returns
+    -------
+    dict
+        ``<program>.<limits>.{motion_s, plan_cpu_s, ratio, violations}``.
+    """
+    from twin.gcode.planner import Limits, PlannerSettings, hold_or_count
+    from twin.gcode.reader import Reader
+
+    machine = PlannerSettings().limits(build("linear_motor_xy").motion_limits)
+    limit_sets = {"linear_motor_xy": machine, "slow": Limits(*SLOW_LIMITS)}
+    turns = max(1, round(1000 * scale))
+    programs: dict[str, tuple[Any, dict]] = {
+        "cam_like": (lambda: cam_program(max(2, round(20_000 * scale))), limit_sets),
+        "ball_finishing": (lambda: finish_program(max(2, round(17_000 * scale))), limit_sets),
+        f"arc_{turns}_turns": (
+            lambda: ["G21 G90 G17 G0 X1 Y0 Z0", f"G2 X1 Y0 Z-20 I-1 J0 P{turns} F600"],
+            limit_sets,
+        ),
+        "zigzag": (lambda: zigzag_program(max(2, round(20_000 * scale))), limit_sets),
+    }
+    if file is not None:
+        velocity, acceleration = FILE_LIMITS
+        own = Limits((velocity,) * 3, (acceleration,) * 3, (machine.jerk_m_per_s3[0],) * 3)
+        with open(file, encoding="utf-8", errors="replace") as handle:
+            text = handle.read().splitlines()
+        programs[file] = (lambda: text, {**limit_sets, "30.48mm_s_508mm_s2": own})
+    hold_or_count(Reader(["G21 G0 X0", "G1 X1 F100", "G2 X1 Y0 I1 J0"]).moves(), machine, None, 0)  # compile
+    out: dict[str, dict] = {}
+    for name, (lines, limits_by_name) in programs.items():
+        out[name] = {}
+        for limits_name, limits in limits_by_name.items():
+            t0 = time.process_time()
+            _held, facts, samples = hold_or_count(Reader(lines()).moves(), limits, None, 0)
+            cpu = time.process_time() - t0
+            motion = samples * 1e-3
+            out[name][limits_name] = {
+                "motion_s": motion,
+                "plan_cpu_s": cpu,
+                "ratio": motion / cpu if cpu > 0 else math.inf,
+                "violations": len(facts.violations),
+            }
     return out

@@ -854,6 +854,13 @@ def bench(
     part_repeats: int = typer.Option(
         3, "--part-repeats", help="Alternating repeats of the virtual part's cases (0: leave the part out)"
     ),
+    planning_only: bool = typer.Option(
+        False, "--planning-only", help="Only the planner's speed against the motion it plans"
+    ),
+    planning_scale: float = typer.Option(
+        1.0, "--planning-scale", help="Factor on the planning programs' lengths (lines, turns; 0: leave them out)"
+    ),
+    planning_file: Path = typer.Option(None, "--planning-file", help="A part program to plan too"),
 ):
     """Steps per second, bare mj_step vs the closed loop, for four controller kinds and a part
     program, start-up time, the G-code reader's lines/s and the planner's time (twin/bench.py);
@@ -873,10 +880,24 @@ def bench(
         raise TwinInputError("--finish-lines", finish_lines, "must be in 2..1000000")
     if not 0 <= part_repeats <= 100:
         raise TwinInputError("--part-repeats", part_repeats, "must be in 0..100")
+    if not (planning_scale == 0 or 1e-3 <= planning_scale <= 10.0):
+        raise TwinInputError("--planning-scale", planning_scale, "must be 0 (leave planning out) or in [0.001, 10]")
+    if planning_file is not None and not planning_file.is_file():
+        raise TwinInputError("--planning-file", str(planning_file), "is not a file")
     if sweep:
         _bench_sweep(as_json, samples, memory_samples, repeats)
         return
-    figures = run_bench(seconds, repeats, gcode_lines, gcode_moves, finish_lines, part_repeats)
+    file = str(planning_file) if planning_file else None
+    if planning_only:
+        from twin.bench import planning_figures
+
+        planning = planning_figures(planning_scale or 1.0, file)
+        if as_json:
+            _echo_json({"planning": planning}, 2)
+        else:
+            _print_planning_bench(planning)
+        return
+    figures = run_bench(seconds, repeats, gcode_lines, gcode_moves, finish_lines, part_repeats, planning_scale, file)
     if as_json:
         _echo_json(figures, 2)
         return
@@ -905,6 +926,21 @@ def bench(
     )
     if figures["part"] is not None:
         _print_part_bench(figures["part"])
+    if figures["planning"] is not None:
+        _print_planning_bench(figures["planning"])
+
+
+def _print_planning_bench(planning: dict) -> None:
+    """``twin bench``'s planning figures: motion time over the planner's CPU time per program
+    and limits (issue 46: at least 100)."""
+    typer.echo(f"{'planning':<30} {'limits':<20} {'motion s':>10} {'plan CPU s':>11} {'motion/plan':>12}")
+    for name, by_limits in planning.items():
+        for limits, f in by_limits.items():
+            typer.echo(
+                f"{name[-30:]:<30} {limits:<20} {f['motion_s']:>10.1f} {f['plan_cpu_s']:>11.2f} {f['ratio']:>12.0f}"
+                + (f"  ({f['violations']} over a limit)" if f["violations"] else "")
+            )
+    typer.echo("target (issue 46): motion/plan >= 100 at any limits")
 
 
 def _print_part_bench(part: dict) -> None:

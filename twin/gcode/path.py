@@ -11,7 +11,7 @@ of the two lines); what the other junctions do is the planner's (:mod:`twin.gcod
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
@@ -102,6 +102,18 @@ class Segment:
     blend: bool = False
     mode: str = "G64"
     tolerance_m: float = 0.0
+    #: What the planner works out of the segment once (its speed limit, tangents, axis shares),
+    #: by name; a copy (:meth:`copy_with`, :meth:`split`, :func:`dataclasses.replace`) starts with none.
+    planned: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+
+    def copy_with(self, **changes) -> Segment:
+        """A copy with ``changes`` (fields by name), none of :attr:`planned` (what
+        :func:`dataclasses.replace` gives, at a tenth of its cost: a blend at every corner)."""
+        other = object.__new__(Segment)
+        other.__dict__.update(self.__dict__)
+        other.__dict__.update(changes)
+        other.planned = {}
+        return other
 
     @property
     def curvature(self) -> float:
@@ -159,17 +171,23 @@ class Segment:
         return Outward(radial, r, 1.0 / np.sqrt(r * r + k * k + h * h))
 
     def tangent(self, at_end: bool) -> np.ndarray:
-        """Unit tangent at the start or the end."""
+        """Unit tangent at the start or the end (worked out once)."""
+        key = "tangent_end" if at_end else "tangent_start"
+        if key not in self.planned:
+            self.planned[key] = self._tangent(at_end)
+        return self.planned[key]
+
+    def _tangent(self, at_end: bool) -> np.ndarray:
         if self.kind == "line":
             d = self.end - self.start
-            return d / np.linalg.norm(d)
+            return d / math.sqrt(float(d @ d))
         assert self.u is not None and self.v is not None and self.normal is not None
         angle = self.sweep if at_end else 0.0
         r = self.radius_end if at_end else self.radius
         radial = math.cos(angle) * self.u + math.sin(angle) * self.v
         along = -math.sin(angle) * self.u + math.cos(angle) * self.v
         t = r * along + (self.radius_end - self.radius) / self.sweep * radial + self.rise / self.sweep * self.normal
-        return t / np.linalg.norm(t)
+        return t / math.sqrt(float(t @ t))
 
     def acceleration_direction(self, at_end: bool) -> np.ndarray:
         """The curvature vector (1/m) at the start or the end: towards the centre, 0 on lines."""
@@ -182,7 +200,13 @@ class Segment:
 
     def axis_share(self) -> np.ndarray:
         """The largest share of the path speed each axis takes anywhere on the segment, (3,):
-        |tangent_i| for lines, the in-plane radius share plus the rise share for arcs."""
+        |tangent_i| for lines, the in-plane radius share plus the rise share for arcs (worked
+        out once)."""
+        if "axis_share" not in self.planned:
+            self.planned["axis_share"] = self._axis_share()
+        return self.planned["axis_share"]
+
+    def _axis_share(self) -> np.ndarray:
         if self.kind == "line":
             return np.abs(self.tangent(False))
         assert self.u is not None and self.v is not None and self.normal is not None
@@ -193,16 +217,15 @@ class Segment:
         """The segment cut at arc length ``s`` (0 < s < length) into two that make it up."""
         point = self.points(np.array([s]))[0]
         if self.kind == "line":
-            return replace(self, end=point, length=s, mode="G64"), replace(self, start=point, length=self.length - s)
+            return self.copy_with(end=point, length=s, mode="G64"), self.copy_with(start=point, length=self.length - s)
         assert self.u is not None and self.v is not None and self.normal is not None
         angle = float(self._angle_of(np.array([s]))[0])
         frac = angle / self.sweep
         r_mid = self.radius + (self.radius_end - self.radius) * frac
-        first = replace(self, end=point, length=s, sweep=angle, rise=self.rise * frac, radius_end=r_mid, mode="G64")
+        first = self.copy_with(end=point, length=s, sweep=angle, rise=self.rise * frac, radius_end=r_mid, mode="G64")
         u2 = math.cos(angle) * self.u + math.sin(angle) * self.v
         v2 = -math.sin(angle) * self.u + math.cos(angle) * self.v
-        second = replace(
-            self,
+        second = self.copy_with(
             start=point,
             length=self.length - s,
             center=self.center + self.normal * self.rise * frac if self.center is not None else None,
@@ -336,7 +359,8 @@ def move_segment(move: Move, start_m: np.ndarray, tolerance_m: float) -> Segment
             move.line, "dwell", False, 0.0, start_m, start_m, dwell_s=move.dwell_s, mode=mode, tolerance_m=tol
         )
     if move.kind in ("rapid", "feed"):
-        length = float(np.linalg.norm(end - start_m))
+        step = end - start_m
+        length = math.sqrt(float(step @ step))
         if length < MIN_LENGTH_M:
             return None
         return Segment(move.line, "line", move.kind == "rapid", feed, start_m, end, length, mode=mode, tolerance_m=tol)
@@ -418,7 +442,7 @@ def blend(a: Segment, b: Segment, tolerance_m: float) -> tuple[Segment, Segment,
     corner = a.end
     p0, p1 = corner - ta * reach, corner + tb * reach
     bisector = tb - ta
-    bisector /= np.linalg.norm(bisector)
+    bisector /= math.sqrt(float(bisector @ bisector))
     center = corner + bisector * radius / math.cos(turn / 2)
     u = (p0 - center) / radius
     v = ta
@@ -426,6 +450,6 @@ def blend(a: Segment, b: Segment, tolerance_m: float) -> tuple[Segment, Segment,
     arc = Segment(b.line, "arc", a.rapid, min(a.feed_m_per_s, b.feed_m_per_s), p0, p1, radius * turn)
     arc.center, arc.u, arc.v, arc.normal, arc.radius, arc.sweep = center, u, v, normal, radius, turn
     arc.radius_end, arc.blend, arc.mode, arc.tolerance_m = radius, True, "G64", a.tolerance_m
-    short_a = replace(a, end=p0, length=a.length - reach, mode="G64")
-    short_b = replace(b, start=p1, length=b.length - reach)
+    short_a = a.copy_with(end=p0, length=a.length - reach, mode="G64")
+    short_b = b.copy_with(start=p1, length=b.length - reach)
     return short_a, arc, short_b

@@ -62,8 +62,10 @@ SAMPLE_PERIOD_S = 1e-3
 #: Most samples a reference held whole may have (``plan()``; about 33 minutes at 1 ms). A run
 #: without a stock streams its reference and has no such limit.
 MAX_SAMPLES = 2_000_000
-#: Arc-length grid of the look-ahead (m): finer on short segments (at least 4 points each).
+#: Arc-length grid of the look-ahead (m): finer on short segments (:data:`MIN_SEGMENT_POINTS`).
 GRID_M = 5e-5
+#: Grid points of a segment at least (a short move's peak is capped between them).
+MIN_SEGMENT_POINTS = 16
 #: Grid points the look-ahead plans at once before it looks for a cruise to hand on at.
 WINDOW_POINTS = 40_000
 #: Motion (s) the look-ahead plans at once at most before it looks for a cruise to hand on at
@@ -489,12 +491,26 @@ def _junction_speed(a: Segment, b: Segment, ctx: _Context) -> float:
 
 
 def _segment_speed_limit(seg: Segment, limits: Limits, override: float, filter_s: float) -> float:
-    """The highest path speed (m/s) on ``seg``."""
+    """The highest path speed (m/s) on ``seg`` (worked out once per segment and limits)."""
+    known = seg.planned.get("speed_limit")  # (limits, override, filter, speed): the same limits object
+    if known is None or known[0] is not limits or known[1] != override or known[2] != filter_s:
+        known = (limits, override, filter_s, _speed_limit(seg, limits, override, filter_s))
+        seg.planned["speed_limit"] = known
+    return known[3]
+
+
+def _speed_limit(seg: Segment, limits: Limits, override: float, filter_s: float) -> float:
     share = seg.axis_share()
-    v_axis = min(v / s for v, s in zip(limits.velocity_m_per_s, share) if s > 1e-12)
+    v_axis = math.inf
+    for axis in range(3):
+        if share[axis] > 1e-12:
+            v_axis = min(v_axis, limits.velocity_m_per_s[axis] / float(share[axis]))
     v = v_axis if seg.rapid else min(seg.feed_m_per_s * override, v_axis)
     if seg.kind == "arc":
-        plane = share > 1e-12
+        # the turning acceleration and its jerk lie in the arc's plane (a helix's rise is at
+        # constant speed): the plane's axes bound them
+        assert seg.u is not None and seg.v is not None
+        plane = np.hypot(seg.u, seg.v) > 1e-12
         a = min(x for x, p in zip(limits.acceleration_m_per_s2, plane) if p)
         j = min(x for x, p in zip(limits.jerk_m_per_s3, plane) if p)
         r = 1.0 / seg.curvature
@@ -566,19 +582,20 @@ def _shrink_compensation(
     return weight * at.radius * (1.0 / sinc - 1.0), at.direction
 
 
-def _path_acceleration(seg: Segment, limits: Limits) -> float:
-    """The acceleration (m/s^2) every axis allows along ``seg``, centripetal share included:
-    the smallest a_i over the axis's share of the tangent."""
-    share = seg.axis_share()
-    return min(a / s for a, s in zip(limits.acceleration_m_per_s2, share) if s > 1e-12)
+def _path_acceleration(segments: list[Segment], limits: Limits) -> np.ndarray:
+    """The acceleration (m/s^2) every axis allows along each segment, centripetal share
+    included: the smallest a_i over the axis's share of the tangent."""
+    share = np.array([seg.axis_share() for seg in segments])
+    per_axis = np.array(limits.acceleration_m_per_s2) / np.maximum(share, 1e-300)
+    return np.where(share > 1e-12, per_axis, math.inf).min(axis=1)
 
 
-def _arc_damping(seg: Segment, v_limit: float, filter_s: float) -> float:
+def _arc_damping(curvature: np.ndarray, v_limit: np.ndarray, filter_s: float) -> np.ndarray:
     """The share of what the centripetal part leaves that the speed may change by on an arc:
     ``1 / (1 + 3 v T / R)`` (``v`` its speed limit, ``T`` the filter), as the acceleration vector
     turns (``a_t v / R``) and the centripetal part grows (``2 v a_t / R``) while the speed
     changes, and the filter keeps the jerk within ``a / T`` only for what changes by steps."""
-    return 1.0 / (1.0 + 3.0 * v_limit * filter_s * seg.curvature)
+    return 1.0 / (1.0 + 3.0 * v_limit * filter_s * curvature)
 
 
 # --- the look-ahead ---------------------------------------------------------------------------
@@ -648,8 +665,9 @@ class _Grid:
         n = len(segments)
         length = np.array([seg.length for seg in segments])
         limit = np.array([_segment_speed_limit(seg, limits, override, filter_s) for seg in segments])
-        # each segment's points: at least 4, GRID_M apart at most (numpy's linspace, vectorized)
-        counts = np.maximum(4, np.ceil(length / GRID_M).astype(np.int64) + 1)
+        # each segment's points: MIN_SEGMENT_POINTS at least, GRID_M apart at most (numpy's
+        # linspace, vectorized)
+        counts = np.maximum(MIN_SEGMENT_POINTS, np.ceil(length / GRID_M).astype(np.int64) + 1)
         owner = np.repeat(np.arange(n), counts)
         first = np.cumsum(counts) - counts
         local = (np.arange(owner.size) - first[owner]) * (length / (counts - 1))[owner]
@@ -682,9 +700,10 @@ class _Grid:
         self.vmax = vmax
         self.vmax[0] = min(self.vmax[0], v_start)
         self.vmax[-1] = min(self.vmax[-1], v_end)
-        self.a_t = np.array([_path_acceleration(seg, limits) for seg in segments])[owner]
-        self.damping = np.array([_arc_damping(seg, v, filter_s) for seg, v in zip(segments, limit)])[owner]
-        self.curvature = np.array([seg.curvature for seg in segments])[owner]
+        curvature = np.array([seg.curvature for seg in segments])
+        self.a_t = _path_acceleration(segments, limits)[owner]
+        self.damping = _arc_damping(curvature, limit, filter_s)[owner]
+        self.curvature = curvature[owner]
         self.index = owner
 
     def ending_at(self, v_end: float) -> _Grid:
@@ -833,11 +852,39 @@ def _sample(grid: _Grid, v: np.ndarray, phase: float, to_end: bool, filter_s: fl
     position = np.empty((n, 3))
     out, radial = np.zeros(n), np.zeros((n, 3))
     bounds = np.searchsorted(seg_t, np.arange(len(segments) + 1))  # seg_t never decreases
+    # the lines' and the circles' (corner blends among them) samples at once, each spiral's on
+    # its own (most of a CAM program's segments are lines and blends)
+    lengths = np.array([seg.length for seg in segments])
+    frac = np.clip((s_t - offsets[seg_t]) / np.maximum(lengths[seg_t], 1e-300), 0.0, 1.0)
+    at_end = s_t - offsets[seg_t] >= lengths[seg_t]
+    on_line = np.array([seg.kind != "arc" for seg in segments])[seg_t]
+    if on_line.any():
+        starts = np.array([seg.start for seg in segments])
+        steps = np.array([seg.end - seg.start for seg in segments])
+        owner = seg_t[on_line]
+        position[on_line] = starts[owner] + frac[on_line, None] * steps[owner]
+    circular = np.array([seg.kind == "arc" and seg.radius_end == seg.radius for seg in segments])
+    on_circle = circular[seg_t]
+    if on_circle.any():
+        arcs = [seg if circular[i] else segments[int(np.argmax(circular))] for i, seg in enumerate(segments)]
+        owner = seg_t[on_circle]
+        angle = (frac[on_circle] * np.array([seg.sweep for seg in arcs])[owner])[:, None]
+        radius = np.array([seg.radius for seg in arcs])[owner][:, None]
+        rise = (frac[on_circle] * np.array([seg.rise for seg in arcs])[owner])[:, None]
+        position[on_circle] = (
+            np.array([seg.center for seg in arcs])[owner]
+            + radius * (np.cos(angle) * np.array([seg.u for seg in arcs])[owner])
+            + radius * (np.sin(angle) * np.array([seg.v for seg in arcs])[owner])
+            + rise * np.array([seg.normal for seg in arcs])[owner]
+        )
+    ends = (on_line | on_circle) & at_end
+    position[ends] = np.array([seg.end for seg in segments])[seg_t[ends]]  # the programmed end exactly
     for i in range(len(segments)):
         lo, hi = bounds[i], bounds[i + 1]
-        if hi > lo:
+        if hi > lo and segments[i].kind == "arc" and (not circular[i] or _compensated(segments[i], filter_s)):
             s_local = np.clip(s_t[lo:hi] - offsets[i], 0.0, segments[i].length)
-            position[lo:hi] = segments[i].points(s_local)
+            if not circular[i]:
+                position[lo:hi] = segments[i].points(s_local)
             if _compensated(segments[i], filter_s):
                 out[lo:hi], radial[lo:hi] = _shrink_compensation(segments[i], s_local, speed[lo:hi], filter_s)
     if width > 1 and n:
@@ -1151,7 +1198,7 @@ class _Stream:
 
 
 def _grid_points(seg: Segment) -> int:
-    return max(4, math.ceil(seg.length / GRID_M) + 1)
+    return max(MIN_SEGMENT_POINTS, math.ceil(seg.length / GRID_M) + 1)
 
 
 def _stream(moves, limits: Limits, settings: PlannerSettings, keep_programmed: bool, most_s=math.inf, limit=""):
