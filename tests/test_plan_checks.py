@@ -343,3 +343,29 @@ def test_the_drive_check_agrees_with_the_closed_loop(tmp_path):
     assert "plan_warnings" not in lowered.summary
     assert np.abs(lowered.result.u_V[:, 0]).max() < 10.0
     assert lowered.summary["max_tracking_error_um"]["x"] < 20.0
+
+
+def test_a_streamed_program_gets_the_held_ones_drive_warnings(monkeypatch):
+    """A program too long to hold is checked as the run draws its samples: once drawn to the end
+    its warnings are those of the same program held whole."""
+    import twin.gcode.planner as planner
+    from twin.references.gcode import StreamedGcodeReference
+
+    monkeypatch.setattr(planner, "WINDOW_POINTS", 3000)
+    monkeypatch.setattr(planner, "PIECE_POINTS", 500)
+    lines = ["G21 G90 G0 X0 Y0"] + [f"G0 X{40 * (k % 2) + k} Y{30 * (k % 3)}" for k in range(1, 12)]
+    machine = build("linear_motor_xy")
+    drives = {0: rigid_drives(machine)["x"], 1: rigid_drives(machine)["y"]}
+    limits = PlannerSettings().limits(machine.motion_limits)
+    held = plan(Reader(lines).moves(), limits)
+    whole = DriveCheck(drives, 10.0)
+    whole.add(held.position, held.velocity, held.acceleration, held.line, held.texts)
+    _none, facts, samples = planner.hold_or_count(Reader(lines).moves(), limits, PlannerSettings(), 0)
+    streamed_check = DriveCheck(drives, 10.0)
+    streamed = StreamedGcodeReference(
+        lambda: Reader(lines).moves(), limits, PlannerSettings(), facts, samples, (0, 1), len(lines), (streamed_check,)
+    )
+    for k0 in range(0, samples * 2, 700):  # the runner's chunks at a 0.5 ms period
+        streamed.sample(np.arange(k0, k0 + 710) * 5e-4)
+    assert len(whole.warnings.listed()) >= 5
+    assert streamed.plan_warnings == (whole.warnings.listed(), whole.warnings.total)

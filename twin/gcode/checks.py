@@ -64,10 +64,10 @@ def _turning_offsets(seg: Segment, amplitude: float, phase: float) -> list[float
     """An in-plane axis's offsets (m) from the arc's centre where the arc ``seg`` turns along it,
     inside its sweep: the extremes of ``r(t) A cos(t - phase)``, ``r(t) = r0 + k t``."""
     k = (seg.radius_end - seg.radius) / seg.sweep
-    if k == 0.0:  # a circle or a helix: at t = phase + m pi
+    if k == 0.0:  # a circle or a helix: at t = phase + m pi, the top for m even, the bottom odd
         first = math.ceil(-phase / math.pi)
         last = math.floor((seg.sweep - phase) / math.pi)
-        return [seg.radius * amplitude * (1.0 if m % 2 == 0 else -1.0) for m in range(first, last + 1)]
+        return [seg.radius * amplitude * (-1.0) ** m for m in range(first, min(last, first + 1) + 1)]
 
     # a spiral: where the slope k cos(t - phase) - r(t) sin(t - phase) changes sign, bracketed
     # between samples of its turns and bisected
@@ -147,6 +147,9 @@ class TravelCheck:
         PlanningError
             With ``refuse``: the first move outside, its line, the coordinate and the travel.
         """
+        if not self.travel_m:
+            yield from moves  # a machine without travel: nothing to check
+            return
         position = None
         for move in moves:
             if position is None:
