@@ -155,10 +155,15 @@ class TravelCheck:
             if position is None:
                 position = (np.asarray(move.start_mm) + np.asarray(move.offset_mm)) * 1e-3
                 self._check(move, position, position)
-            seg = move_segment(move, position, 0.0)
-            if seg is not None:
-                self._check(move, *segment_extent(seg))
-                position = seg.end
+            if move.kind in ("rapid", "feed"):  # a line: its ends (what move_segment makes of it)
+                end = (np.asarray(move.end_mm) + np.asarray(move.offset_mm)) * 1e-3
+                self._check(move, np.minimum(position, end), np.maximum(position, end))
+                position = end
+            elif move.kind == "arc":
+                seg = move_segment(move, position, 0.0)
+                if seg is not None:
+                    self._check(move, *segment_extent(seg))
+                    position = seg.end
             yield move
 
     def check(self, moves: Iterable[Move]) -> None:
@@ -168,8 +173,8 @@ class TravelCheck:
 
     def _check(self, move: Move, low: np.ndarray, high: np.ndarray) -> None:
         for axis, (first, last) in self.travel_m.items():
-            below, above = first - low[axis], high[axis] - last
-            if max(below, above) <= TRAVEL_SLACK_M:
+            below, above = first - float(low[axis]), float(high[axis]) - last
+            if below <= TRAVEL_SLACK_M and above <= TRAVEL_SLACK_M:
                 continue
             value = low[axis] if below >= above else high[axis]
             name = "xyz"[axis]
