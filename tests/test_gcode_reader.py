@@ -4,6 +4,7 @@ move to rs274's printed precision (4 decimals of its unit) with the spindle, coo
 force; every program in ``refused/`` is refused by both at the same block. What rs274 cannot
 show (limits, memory, LinuxCNC's manual where rs274 2.9 departs from it) is tested after."""
 
+import itertools
 import math
 import sys
 from pathlib import Path
@@ -24,6 +25,7 @@ SETTINGS = Settings(
     work_offsets_mm={1: (0.5 * INCH, 0.25 * INCH, 0.0), 2: (INCH, -INCH, 0.5 * INCH), 3: (-2 * INCH, 0.0, 0.0)},
     tool_lengths_mm={1: 0.2 * INCH},
     g28_home_mm=(0.1 * INCH, 0.2 * INCH, 0.3 * INCH),
+    tool_diameters_mm={1: 0.25 * INCH, 2: 0.5 * INCH, 3: -0.125 * INCH, 4: 0.0625 * INCH},
 )
 PROGRAMS = sorted(p.name for p in FIXTURES.glob("*.ngc"))
 REFUSED = sorted(p.name for p in (FIXTURES / "refused").glob("*.ngc"))
@@ -32,7 +34,11 @@ REFUSED = sorted(p.name for p in (FIXTURES / "refused").glob("*.ngc"))
 def _settings() -> Settings:
     """A fresh copy (G10 L1 may change a program's tool table)."""
     return Settings(
-        dict(SETTINGS.work_offsets_mm), dict(SETTINGS.tool_lengths_mm), SETTINGS.g28_home_mm, SETTINGS.g30_home_mm
+        dict(SETTINGS.work_offsets_mm),
+        dict(SETTINGS.tool_lengths_mm),
+        SETTINGS.g28_home_mm,
+        SETTINGS.g30_home_mm,
+        tool_diameters_mm=dict(SETTINGS.tool_diameters_mm),
     )
 
 
@@ -82,7 +88,7 @@ def _read(text: str, settings: Settings | None = None):
 @pytest.mark.parametrize(
     "program, line, words",
     [
-        ("G21\nG41 X1 Y1 D1", 2, "cutter radius compensation (G41)"),
+        ("G21 F100\nG41 G1 X1 Y1 D5", 2, "Requested tool 5 not found in the tool table (reference.tool_diameters_mm)"),
         ("G93 G1 X1 F2", 1, "inverse-time feed (G93)"),
         ("G5 X1 Y1 I1 J1 P1 Q1", 1, "splines (G5)"),
         ("G38.2 Z-1 F10", 1, "probing"),
@@ -261,14 +267,14 @@ def test_every_word_and_coordinate_is_bounded():
 def test_an_error_in_a_file_deep_in_folders_keeps_its_name_and_line(tmp_path):
     deep = tmp_path / ("a_folder_with_a_long_name_" * 4) / "part.ngc"
     deep.parent.mkdir()
-    deep.write_text("G21\nG0 X1\nG41 X2\n")
+    deep.write_text("G21\nG0 X1\nG93 X2\n")
     with pytest.raises(GcodeError) as err:
         list(read_program(deep))
     field = str(err.value).split(" = ")[0]
     assert field.startswith("...")
     assert field.endswith("_name_/part.ngc:3")
     assert len(field) <= 80
-    assert str(err.value).startswith(f"{field} = 'G41 X2': cutter radius compensation")
+    assert str(err.value).startswith(f"{field} = 'G93 X2': inverse-time feed")
 
 
 def test_a_line_separator_before_percent_is_a_bad_character(tmp_path):
@@ -330,3 +336,51 @@ def test_labels_and_arc_words_refused_as_rs274_refuses(program, line, words):
         _read(program)
     assert err.value.line == line
     assert words in err.value.reason, str(err.value)
+
+
+COMPENSATION_REFUSED = sorted(p for p in REFUSED if p.startswith("comp_"))
+
+
+@pytest.mark.parametrize("program", COMPENSATION_REFUSED)
+def test_compensation_refused_with_linuxcnc_words(program):
+    """Cutter compensation's errors in rs274's own words (its message is the .canon's line
+    before the block)."""
+    path = FIXTURES / "refused" / program
+    message = path.with_suffix(".canon").read_text().rstrip().splitlines()[-3].strip()
+    with pytest.raises(GcodeError) as err:
+        list(read_program(path, _settings()))
+    assert err.value.reason.startswith(message), (message, err.value.reason)
+
+
+@pytest.mark.parametrize("program", ["cutter_comp.ngc", "cutter_comp_xz.ngc"])
+def test_compensated_moves_join_end_to_start(program):
+    """Held moves are released with their ends moved: each starts where the one before ends
+    (machine coordinates), through G40 too, where the reader's current point jumps back to the
+    programmed point while the tool has not moved."""
+    moves = list(read_program(FIXTURES / program, _settings()))
+    for before, after in itertools.pairwise(moves):
+        end = [e + o for e, o in zip(before.end_mm, before.offset_mm)]
+        start = [s + o for s, o in zip(after.start_mm, after.offset_mm)]
+        assert start == pytest.approx(end, abs=1e-9), (before, after)
+
+
+def test_the_compensation_fixtures_exercise_it():
+    """Each kind of corner and move the compensation has appears in a fixture rs274 read."""
+    text = "\n".join((FIXTURES / p).read_text().lower() for p in ("cutter_comp.ngc", "cutter_comp_xz.ngc"))
+    for construct in ("g41 d1", "g42 g1", "g41 d3", "g41.1 d4", "g42.1 d5", "g41.1 d0.1 l2", "g42.1 d0.1 l6"):
+        assert construct in text, construct
+    for construct in ("g18", "g20 (inches under", "g4 p0.5", "m8 (", "g0 y40", "g91 x-10", "r-15", "p2 (", "g40"):
+        assert construct in text, construct
+
+
+def test_tool_diameters_come_from_the_scenario():
+    """A 6 mm tool around a square corner: inside (G41 turning left), the lines meet 3 mm from
+    both edges; outside (G42), an arc of radius 3 about the corner joins them."""
+    from twin.references.gcode import GcodeRef
+
+    spec = GcodeRef(type="gcode", file="part.ngc", tool_diameters_mm={1: 6.0})
+    inside = _read("G21 F600\nG0 X0 Y0\nG41 D1 G1 X20 Y0\nY20\nM2", spec.reader_settings())
+    assert [v for m in inside[1:] for v in m.end_mm[:2]] == pytest.approx([17.0, 3.0, 17.0, 20.0])
+    outside = _read("G21 F600\nG0 X0 Y0\nG42 D1 G1 X20 Y0\nY20\nM2", spec.reader_settings())
+    assert [v for m in outside[1:] for v in m.end_mm[:2]] == pytest.approx([20.0, -3.0, 23.0, 0.0, 23.0, 20.0])
+    assert outside[2].kind == "arc" and outside[2].center_mm == (20.0, 0.0) and outside[2].turns == 1

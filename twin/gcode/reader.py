@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import NamedTuple, NoReturn
 
 from twin.errors import TwinInputError
+from twin.gcode.compensation import COMPENSATED_PLANES, CutterCompensation
 from twin.gcode.cycles import CYCLES, REFUSED_CYCLES, CycleMemory, cycle_calls
 from twin.gcode.flow import Flow, ProgramText
 from twin.gcode.parameters import Parameters
@@ -88,10 +89,6 @@ REFUSED_G = {
     383: "probing (G38.3) is not supported: the twin has no probe",
     384: "probing (G38.4) is not supported: the twin has no probe",
     385: "probing (G38.5) is not supported: the twin has no probe",
-    410: "cutter radius compensation (G41) is not supported: give the tool-centre path",
-    411: "cutter radius compensation (G41.1) is not supported: give the tool-centre path",
-    420: "cutter radius compensation (G42) is not supported: give the tool-centre path",
-    421: "cutter radius compensation (G42.1) is not supported: give the tool-centre path",
     700: "lathe cycles (G70) are not supported",
     710: "lathe cycles (G71) are not supported",
     711: "lathe cycles (G71.1) are not supported",
@@ -215,6 +212,9 @@ class Settings:
         G28's and G30's home positions.
     tools : frozenset of int or None
         The tool numbers a T word may select (None: any).
+    tool_diameters_mm : dict of int to float
+        Tool diameter by tool number (G41 / G42's D word; negative: compensation on the other
+        side, as LinuxCNC takes it).
     """
 
     work_offsets_mm: dict[int, tuple[float, float, float]] = field(default_factory=dict)
@@ -222,6 +222,7 @@ class Settings:
     g28_home_mm: tuple[float, float, float] = (0.0, 0.0, 0.0)
     g30_home_mm: tuple[float, float, float] = (0.0, 0.0, 0.0)
     tools: frozenset[int] | None = None
+    tool_diameters_mm: dict[int, float] = field(default_factory=dict)
 
 
 class _State:
@@ -294,6 +295,7 @@ class Reader:
         self.flow = Flow(self.text_source, self.params)
         self.cycle = CycleMemory()
         self.out: list[Move] = []  # the moves of the block being run
+        self.comp = CutterCompensation(self.out)
         self.saved: list[dict] = []  # M70
         self.autorestore: list[tuple[int, dict]] = []  # M73: (call depth, state)
         self.lines_read, self.text = 0, ""
@@ -370,7 +372,7 @@ class Reader:
             "_selected_pocket": float(s.selected_tool),
             "_motion_mode": float(s.motion if s.motion is not None else 800),
             "_plane": float(s.plane),
-            "_ccomp": 400.0,
+            "_ccomp": {"left": 410.0, "right": 420.0}.get(self.comp.side or "", 400.0),
             "_value": self.flow.return_value,
             "_value_returned": self.flow.value_returned,
             "_line": float(self.lines_read),
@@ -411,6 +413,10 @@ class Reader:
                     self.lines_read, self.text = self.text_source.number, ""
                     self.error(str(exc))
                 if text is None:
+                    if self.comp.queue:  # read as if the program ended with M2
+                        self.comp.flush(self.state.position, _PLANE_OF[self.state.plane])
+                        yield from self.out
+                        self.out.clear()
                     if opened:  # rs274: "File ended with no percent sign" (M2 / M30 would end it)
                         self.error("the file ends without its closing % (it opens with a % line) and without M2 or M30")
                     return
@@ -484,6 +490,8 @@ class Reader:
             _check_words(words, g_modes, m_modes, motion)
         if 0 in g_modes:
             self._check_modal_0(g_modes, words, motion)
+        if m_modes.get(6) == 6 and self.comp.side is not None:
+            raise BlockError("Cannot change tools with cutter radius compensation on")
         if "f" in words:
             if words["f"] < 0:
                 raise BlockError(f"F = {words['f']:g}: a feed cannot be negative")
@@ -501,6 +509,10 @@ class Reader:
         if motion is not None:
             self._motion(motion, words, g_modes)
         stop = m_modes.get(4)
+        if stop is not None and self.comp.side is not None:  # LinuxCNC's convert_stop
+            self.comp.flush(s.position, _PLANE_OF[s.plane])
+            if stop in (2, 30):
+                self.comp.side, self.comp.first = None, True
         if stop in (2, 30):
             s.ended = True
         # M0, M1, M60 (program pause) read as an operator pressing cycle start at once
@@ -509,6 +521,8 @@ class Reader:
         """A line of :data:`~twin.gcode.words.MOTION_LINE` run at once, as :meth:`_execute` would
         run it, and its move; None (nothing done) where a word needs the general path's checks."""
         s = self.state
+        if self.comp.engaged:
+            return None
         plane, code, x, y, z, i, j, k, r, f = plain.group("plane", "g", "x", "y", "z", "i", "j", "k", "r", "f")
         motion = s.motion if code is None else int(code) * 10
         centre = i is not None or j is not None or k is not None or r is not None
@@ -536,7 +550,7 @@ class Reader:
                 end = [px + wx, py + wy, pz + wz]
             else:
                 end = [px if x is None else wx, py if y is None else wy, pz if z is None else wz]
-            move = self._linear_move(motion == 10, end)
+            move: Move | None = self._linear_move(motion == 10, end)
         else:
             words = {}
             for letter, number in (("x", x), ("y", y), ("z", z), ("i", i), ("j", j), ("k", k), ("r", r)):
@@ -675,13 +689,24 @@ class Reader:
             dwell = words["p"]
             if dwell < 0:
                 raise BlockError(f"P = {dwell:g}: a dwell cannot be negative")
-            self.out.append(self._move("dwell", s.position, dwell_s=dwell))
+            dwell_move = self._move("dwell", s.position, dwell_s=dwell)
+            if not self.comp.hold(dwell_move):
+                self.out.append(dwell_move)
         plane = g_modes.get(2)
+        comp_on = self.comp.side is not None
         if plane is not None:
+            if comp_on and plane != s.plane:
+                raise BlockError("Cannot change planes with cutter radius compensation on")
             s.plane = plane
         units = g_modes.get(6)
         if units is not None and (units == 200) != s.inch:
             self._units(units == 200)
+        compensation = g_modes.get(7)
+        if compensation is not None:
+            self._cutter_compensation(compensation, words)
+            comp_on = self.comp.side is not None
+        if comp_on:
+            _refused_under_compensation(g_modes)
         length = g_modes.get(8)
         if length is not None:
             self._tool_length_offset(length, words)
@@ -726,6 +751,31 @@ class Reader:
         if s.tolerance is not None:
             s.tolerance *= factor
         self.cycle.scale(factor)
+        self.comp.units(inch, factor, s.mm_per_unit)
+
+    def _cutter_compensation(self, code: int, words: dict[str, float]) -> None:
+        """G40, G41, G42, G41.1, G42.1 (:mod:`twin.gcode.compensation`)."""
+        s = self.state
+        plane = _PLANE_OF[s.plane]
+        if code == 400:
+            s.position = self.comp.turn_off(s.position, plane)
+        else:
+            self.comp.turn_on(code, words, plane, self._tool_diameter)
+
+    def _tool_diameter(self, tool: int | None) -> float:
+        """The diameter of ``tool`` (None or 0: the tool in the spindle; none: 0), program units."""
+        settings = self.settings
+        if not tool:
+            tool = self.state.tool_in_spindle
+            if not tool:
+                return 0.0
+        elif not (
+            tool in settings.tool_diameters_mm
+            or tool in settings.tool_lengths_mm
+            or (settings.tools is not None and tool in settings.tools)
+        ):
+            raise BlockError(f"Requested tool {tool} not found in the tool table (reference.tool_diameters_mm)")
+        return self._to_program(settings.tool_diameters_mm.get(tool, 0.0))
 
     def _to_program(self, mm: float) -> float:
         return mm / MM_PER_INCH if self.state.inch else mm
@@ -892,8 +942,18 @@ class Reader:
             s.motion = 800
             return
         if motion in (0, 10):
+            comp = self.comp
+            comp.arc_not_allowed = False
             end = self._ends(words, machine=g_modes.get(0) == 530)
-            self._linear("feed" if motion == 10 else "rapid", end)
+            if comp.active:
+                if motion == 10 and s.feed <= 0:
+                    raise BlockError("cannot do G1 with zero feed rate (give F)")
+                if g_modes.get(0) == 530:
+                    raise BlockError("Cannot use g53 with cutter radius comp")
+                kind = "feed" if motion == 10 else "rapid"
+                s.position = comp.straight(kind, end, s.position, _PLANE_OF[s.plane], self._compensated_move)
+            else:
+                self._linear("feed" if motion == 10 else "rapid", end)
         else:
             self._arc(motion, words)
         s.motion = motion
@@ -901,7 +961,8 @@ class Reader:
     def _ends(self, words: dict[str, float], machine: bool) -> list[float]:
         """LinuxCNC's ``find_ends``: the end point (work coordinates, program units)."""
         s = self.state
-        x, y, z = s.position
+        comp = self.comp
+        x, y, z = comp.program if comp.side is not None and not comp.first and not machine else s.position
         if not machine and "@" not in words and "^" not in words:
             if s.incremental:
                 return [x + words.get("x", 0.0), y + words.get("y", 0.0), z + words.get("z", 0.0)]
@@ -938,6 +999,12 @@ class Reader:
         x, y, z = s.position
         x1, y1, z1 = end
         end_mm = (x1 * scale, y1 * scale, z1 * scale)
+        start_mm = (x * scale, y * scale, z * scale)
+        if self.comp.tool_mm is not None:  # just after G40: the tool is not at the current point
+            if kind == "dwell":
+                start_mm = end_mm = self.comp.tool_mm
+            else:
+                start_mm = self.comp.start_mm(start_mm)
         ox, oy, oz = offset_mm = self._offset_mm
         if not (
             abs(end_mm[0] + ox) <= MAX_COORDINATE_MM
@@ -951,7 +1018,7 @@ class Reader:
         return Move(
             line=self.lines_read,
             kind=kind,
-            start_mm=(x * scale, y * scale, z * scale),
+            start_mm=start_mm,
             end_mm=end_mm,
             offset_mm=offset_mm,
             feed_mm_per_min=feed_mm_per_min,
@@ -971,6 +1038,17 @@ class Reader:
     def _linear(self, kind: str, end: list[float]) -> None:
         self.out.append(self._linear_move(kind == "feed", end))
 
+    def _compensated_move(self, kind: str, end: list[float], center: tuple[float, float], turns: int) -> Move:
+        """A move compensation holds (its start and end are set when it is released)."""
+        s = self.state
+        if kind == "rapid":
+            return self._move("rapid", end)
+        scale = s.mm_per_unit
+        if kind == "feed":
+            return self._move("feed", end, s.feed * scale)
+        center_mm = (center[0] * scale, center[1] * scale)
+        return self._move("arc", end, s.feed * scale, _PLANE_OF[s.plane], center_mm, turns)
+
     def _linear_move(self, feeding: bool, end: list[float]) -> Move:
         """G1 (``feeding``) or G0 to ``end`` (program units), made the current point."""
         s = self.state
@@ -981,11 +1059,17 @@ class Reader:
         return move
 
     def _arc(self, motion: int, words: dict[str, float]) -> None:
-        self.out.append(self._arc_move(motion, words))
+        move = self._arc_move(motion, words)
+        if move is not None:
+            self.out.append(move)
 
-    def _arc_move(self, motion: int, words: dict[str, float]) -> Move:
-        """G2 / G3: LinuxCNC's ``convert_arc2`` with ``arc_data_ijk`` / ``arc_data_r``."""
+    def _arc_move(self, motion: int, words: dict[str, float]) -> Move | None:
+        """G2 / G3: LinuxCNC's ``convert_arc2`` with ``arc_data_ijk`` / ``arc_data_r`` (under
+        compensation ``convert_arc_comp1`` / ``comp2``, whose moves go to :attr:`out`: None)."""
         s = self.state
+        comp = self.comp
+        if comp.arc_not_allowed:
+            raise BlockError("The move just after exiting cutter compensation mode must be straight, not an arc")
         if s.feed <= 0:
             raise BlockError(f"cannot do G{motion // 10} with zero feed rate (give F)")
         plane = _PLANE_OF[s.plane]
@@ -999,14 +1083,18 @@ class Reader:
             raise BlockError("P value not an integer with G2 or G3")
         if not 1 <= turns <= MAX_ARC_TURNS:
             raise BlockError(f"P = {p:g}: the turns of an arc are a whole number from 1 to {MAX_ARC_TURNS}")
-        a0, b0 = s.position[first], s.position[second]
         a1, b1 = end[first], end[second]
         clockwise = motion == 20
         tolerance = RADIUS_TOLERANCE[s.inch]
+        spiral = CENTER_ARC_RADIUS_TOLERANCE[s.inch]
         if "r" in words:
             if i_word in words or j_word in words or normal_word in words:
                 raise BlockError("give the arc's centre (I, J, K) or its radius R, not both")
-            center = _arc_center_r(clockwise, a0, b0, a1, b1, words["r"], tolerance)
+            radius = words["r"]
+
+            def center_of(a0: float, b0: float) -> tuple[float, float]:
+                return _arc_center_r(clockwise, a0, b0, a1, b1, radius, tolerance)
+
         else:
             if normal_word in words:
                 raise BlockError(
@@ -1019,8 +1107,20 @@ class Reader:
                     f"{j_word.upper()} or R)"
                 )
             ci, cj = words.get(i_word, 0.0), words.get(j_word, 0.0)
-            center = (a0 + ci, b0 + cj) if s.arc_incremental else (ci, cj)
-            _check_arc_radii(center, a0, b0, a1, b1, tolerance, CENTER_ARC_RADIUS_TOLERANCE[s.inch])
+
+            def center_of(a0: float, b0: float) -> tuple[float, float]:
+                center = (a0 + ci, b0 + cj) if s.arc_incremental else (ci, cj)
+                _check_arc_radii(center, a0, b0, a1, b1, tolerance, spiral)
+                return center
+
+        signed_turns = -turns if clockwise else turns
+        if comp.active and plane in COMPENSATED_PLANES:
+            radius_word = words.get("r")
+            s.position = comp.arc(
+                motion, end, s.position, plane, signed_turns, radius_word, center_of, spiral, self._compensated_move
+            )
+            return None
+        center = center_of(s.position[first], s.position[second])
         scale = s.mm_per_unit
         move = self._move(
             "arc",
@@ -1028,7 +1128,7 @@ class Reader:
             feed_mm_per_min=s.feed * scale,
             plane=plane,
             center_mm=(center[0] * scale, center[1] * scale),
-            turns=-turns if clockwise else turns,
+            turns=signed_turns,
         )
         s.position = end
         return move
@@ -1036,6 +1136,8 @@ class Reader:
     def _cycle(self, motion: int, words: dict[str, float]) -> None:
         """A canned cycle's moves, at exact path (LinuxCNC runs its moves in G61)."""
         s = self.state
+        if self.comp.side is not None:
+            raise BlockError("Cannot use canned cycles with cutter compensation on")
         if s.feed <= 0:
             raise BlockError("cannot feed with zero feed rate (give F before the cycle)")
         calls = cycle_calls(
@@ -1106,8 +1208,8 @@ def _check_words(words: dict[str, float], g_modes: dict[int, int], m_modes: dict
     arc = motion in (20, 30)
     cycle = motion in CYCLES
     orient = m_modes.get(7) == 19  # M19 takes R (angle), Q (timeout) and P (direction)
-    if "d" in words:
-        raise BlockError("D word with no G41, G41.1, G42 or G42.1 to use it (cutter compensation is not supported)")
+    if "d" in words and g_modes.get(7) not in (410, 411, 420, 421):
+        raise BlockError("D word with no G41, G41.1, G42 or G42.1 to use it")
     if "e" in words and m_modes.get(5) not in (66, 67, 68):
         raise BlockError("E word with no G70, G76, M66, M67 or M68 to use it (RS-274 has no exponents)")
     if "h" in words and g_modes.get(8) not in (430, 432):
@@ -1118,8 +1220,8 @@ def _check_words(words: dict[str, float], g_modes: dict[int, int], m_modes: dict
         raise BlockError("J word with no G2, G3 or G10 to use it")
     if "k" in words and not arc:
         raise BlockError("K word with no G2 or G3 to use it")
-    if "l" in words and not (cycle or mode0 == 100 or m_modes.get(5) == 66):
-        raise BlockError("L word with no G10, canned cycle or M66 to use it")
+    if "l" in words and not (cycle or mode0 == 100 or m_modes.get(5) == 66 or g_modes.get(7) in (410, 411, 420, 421)):
+        raise BlockError("L word with no G10, G41, G42, canned cycle or M66 to use it")
     if "p" in words and not (
         orient
         or mode0 in (40, 100)
@@ -1142,6 +1244,26 @@ def _check_words(words: dict[str, float], g_modes: dict[int, int], m_modes: dict
         raise BlockError("R word with no G code that uses it")
     if "$" in words:
         raise BlockError("the spindle-select word ($) is not supported: the machine has one spindle")
+
+
+#: What LinuxCNC refuses while cutter compensation is on, by G code (ten times the number).
+_REFUSED_UNDER_COMPENSATION = {
+    **dict.fromkeys((430, 431, 432, 490), "Cannot change tool offset with cutter radius compensation on"),
+    **dict.fromkeys(_SYSTEMS, "Cannot change coordinate systems with cutter radius compensation on"),
+    **dict.fromkeys((610, 611, 640), "Cannot change control mode with cutter radius compensation on"),
+    **dict.fromkeys((980, 990), "Cannot change retract mode with cutter radius compensation on"),
+    **dict.fromkeys((280, 300), "Cannot use g28 or g30 with cutter radius comp"),
+    **dict.fromkeys((281, 301), "Cannot set reference point with cutter compensation in effect"),
+    **dict.fromkeys((520, 920), "Cannot change axis offsets with cutter radius comp"),
+}
+
+
+def _refused_under_compensation(g_modes: dict[int, int]) -> None:
+    """LinuxCNC's checks of each code that cannot run with cutter compensation on, in its order."""
+    for group in (8, 12, 13, 10, 0):
+        code = g_modes.get(group)
+        if code in _REFUSED_UNDER_COMPENSATION:
+            raise BlockError(_REFUSED_UNDER_COMPENSATION[code])
 
 
 def polar_end(x: float, y: float, radius: float | None, angle: float | None, incremental: bool):

@@ -332,6 +332,10 @@ class GcodeRef(ReferenceSpecBase):
     tool_lengths_mm: dict[int, Millimetres] = Field(
         default_factory=dict, description="tool length (G43) by tool number, mm"
     )
+    tool_diameters_mm: dict[int, Millimetres] = Field(
+        default_factory=dict,
+        description="tool diameter by tool number, mm: cutter radius compensation (G41/G42 D); negative: other side",
+    )
     g28_home_mm: tuple[Millimetres, Millimetres, Millimetres] = Field(
         (0.0, 0.0, 0.0), description="G28's home, machine mm"
     )
@@ -347,6 +351,7 @@ class GcodeRef(ReferenceSpecBase):
             tool_lengths_mm=dict(self.tool_lengths_mm),
             g28_home_mm=self.g28_home_mm,
             tools=tools,
+            tool_diameters_mm=dict(self.tool_diameters_mm),
         )
 
 
@@ -365,6 +370,7 @@ def build(spec: GcodeRef, ctx: ReferenceContext) -> GcodeReference | StreamedGco
     if unknown:
         raise TwinInputError("reference.type", spec.type, f"the machine's axes {ctx.axis_names} are not x, y, z")
     settings = ctx.planner if isinstance(ctx.planner, PlannerSettings) else PlannerSettings.model_validate(ctx.planner)
+    settings = with_machine_mode(settings, ctx.machine)
     path = input_file(spec.file, "reference.file")
     reader_settings = spec.reader_settings(ctx.tools)
     limits = settings.limits(ctx.machine.motion_limits)
@@ -428,6 +434,14 @@ def planning_errors(field: str, file) -> Iterator[None]:
         raise TwinInputError(field, str(file), str(exc)) from None
 
 
+def with_machine_mode(settings: PlannerSettings, machine) -> PlannerSettings:
+    """The planner's settings with the machine file's ``planner_mode`` where the scenario (or
+    ``--set planner.mode``) gives none."""
+    if "mode" in settings.model_fields_set or machine.planner_mode is None:
+        return settings
+    return settings.model_copy(update={"mode": machine.planner_mode})
+
+
 def program_checks(
     machine: BuiltMachine, settings: PlannerSettings, saturation_V: float | None
 ) -> tuple[TravelCheck, DriveCheck | None]:
@@ -452,6 +466,7 @@ def planned_for(file, moves: list, machine: str, planner: PlannerSettings, satur
         the travel under ``travel = "refuse"`` among them.
     """
     built = build_machine(machine)
+    planner = with_machine_mode(planner, built)
     limits = planner.limits(built.motion_limits)
     travel, drive = program_checks(built, planner, saturation_V)
     with planning_errors("file", file):
@@ -477,8 +492,8 @@ class ProgramDrive(StrictSpec):
 def program_settings(file: str, settings: dict):
     """The reader's table, the planner's settings and the drive's saturation (V or None) for
     ``twin gcode FILE``: ``settings`` are dotted paths below ``reference.`` (work_offsets_mm,
-    tool_lengths_mm, g28_home_mm), ``planner.`` (:class:`~twin.gcode.planner.PlannerSettings`)
-    and ``drive.`` (:class:`ProgramDrive`).
+    tool_lengths_mm, tool_diameters_mm, g28_home_mm), ``planner.``
+    (:class:`~twin.gcode.planner.PlannerSettings`) and ``drive.`` (:class:`ProgramDrive`).
 
     Raises
     ------
