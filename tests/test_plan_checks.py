@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import tomllib
 from pathlib import Path
 
@@ -126,6 +127,47 @@ def test_a_move_outside_the_travel_is_refused_with_its_line_in_machine_coordinat
     with pytest.raises(PlanningError) as refused:
         TravelCheck(LINEAR_TRAVEL, refuse=True).check(_moves(program, settings))
     assert str(refused.value).startswith(f"line {line}: {value} mm (machine coordinates) is outside the travel")
+
+
+TRAVEL_FIXTURES = ROOT / "tests" / "fixtures" / "gcode" / "travel"
+
+
+def _linuxcnc_travel() -> dict:
+    """LinuxCNC 2.9's task and motion controller on the programs of ``fixtures/gcode/travel``
+    with X soft limits of -300..300 mm (``regenerate.py`` there)."""
+    return json.loads((TRAVEL_FIXTURES / "linuxcnc.json").read_text())
+
+
+@pytest.mark.parametrize("program", ["line.ngc", "g92.ngc", "g52.ngc"])
+def test_a_line_outside_the_travel_is_refused_where_linuxcnc_refuses_it(program):
+    """LinuxCNC refuses a straight move whose end is beyond a soft limit ("Linear move on line 4
+    would exceed X's negative limit", the G92 and G52 offsets in machine coordinates); the twin
+    refuses the same line."""
+    messages = _linuxcnc_travel()["programs"][program]["messages"]
+    line = int(re.match(r"Linear move on line (\d+) would exceed X's negative limit", messages[0]).group(1))
+    with pytest.raises(PlanningError, match=rf"^line {line}: X -3[0-9.]+ mm \(machine coordinates\) is outside"):
+        TravelCheck(LINEAR_TRAVEL, refuse=True).check(_moves((TRAVEL_FIXTURES / program).read_text()))
+
+
+def test_an_arc_through_a_soft_limit_linuxcnc_runs_the_twin_refuses():
+    """A circle whose ends are inside: LinuxCNC checks a move's end only and runs it, its
+    commanded X reaching 330 mm past the 300 mm limit; the twin's exact extent is where LinuxCNC's
+    commanded positions went (within 1 um), and it refuses the line. A program inside (a G54
+    offset, a full circle to 10 mm of the limit) both run, to the same extent."""
+    programs = _linuxcnc_travel()["programs"]
+    arc = _moves((TRAVEL_FIXTURES / "arc.ngc").read_text())
+    assert programs["arc.ngc"]["messages"] == []
+    assert max(segment_extent(seg)[1][0] for seg in _segments(arc)) * 1e3 == pytest.approx(
+        programs["arc.ngc"]["max_x_mm"], abs=1e-3
+    )
+    with pytest.raises(PlanningError, match=r"^line 3: X 330\.000 mm"):
+        TravelCheck(LINEAR_TRAVEL, refuse=True).check(arc)
+    inside = _moves((TRAVEL_FIXTURES / "inside.ngc").read_text())
+    assert programs["inside.ngc"]["messages"] == []
+    TravelCheck(LINEAR_TRAVEL, refuse=True).check(inside)
+    extents = [segment_extent(seg) for seg in _segments(inside)]
+    assert min(e[0][0] for e in extents) * 1e3 == pytest.approx(programs["inside.ngc"]["min_x_mm"], abs=1e-3)
+    assert max(e[1][0] for e in extents) * 1e3 == pytest.approx(programs["inside.ngc"]["max_x_mm"], abs=1e-3)
 
 
 def test_the_tool_length_offset_counts_on_z():
@@ -343,3 +385,29 @@ def test_the_drive_check_agrees_with_the_closed_loop(tmp_path):
     assert "plan_warnings" not in lowered.summary
     assert np.abs(lowered.result.u_V[:, 0]).max() < 10.0
     assert lowered.summary["max_tracking_error_um"]["x"] < 20.0
+
+
+def test_a_streamed_program_gets_the_held_ones_drive_warnings(monkeypatch):
+    """A program too long to hold is checked as the run draws its samples: once drawn to the end
+    its warnings are those of the same program held whole."""
+    import twin.gcode.planner as planner
+    from twin.references.gcode import StreamedGcodeReference
+
+    monkeypatch.setattr(planner, "WINDOW_POINTS", 3000)
+    monkeypatch.setattr(planner, "PIECE_POINTS", 500)
+    lines = ["G21 G90 G0 X0 Y0"] + [f"G0 X{40 * (k % 2) + k} Y{30 * (k % 3)}" for k in range(1, 12)]
+    machine = build("linear_motor_xy")
+    drives = {0: rigid_drives(machine)["x"], 1: rigid_drives(machine)["y"]}
+    limits = PlannerSettings().limits(machine.motion_limits)
+    held = plan(Reader(lines).moves(), limits)
+    whole = DriveCheck(drives, 10.0)
+    whole.add(held.position, held.velocity, held.acceleration, held.line, held.texts)
+    _none, facts, samples = planner.hold_or_count(Reader(lines).moves(), limits, PlannerSettings(), 0)
+    streamed_check = DriveCheck(drives, 10.0)
+    streamed = StreamedGcodeReference(
+        lambda: Reader(lines).moves(), limits, PlannerSettings(), facts, samples, (0, 1), len(lines), (streamed_check,)
+    )
+    for k0 in range(0, samples * 2, 700):  # the runner's chunks at a 0.5 ms period
+        streamed.sample(np.arange(k0, k0 + 710) * 5e-4)
+    assert len(whole.warnings.listed()) >= 5
+    assert streamed.plan_warnings == (whole.warnings.listed(), whole.warnings.total)

@@ -64,10 +64,10 @@ def _turning_offsets(seg: Segment, amplitude: float, phase: float) -> list[float
     """An in-plane axis's offsets (m) from the arc's centre where the arc ``seg`` turns along it,
     inside its sweep: the extremes of ``r(t) A cos(t - phase)``, ``r(t) = r0 + k t``."""
     k = (seg.radius_end - seg.radius) / seg.sweep
-    if k == 0.0:  # a circle or a helix: at t = phase + m pi
+    if k == 0.0:  # a circle or a helix: at t = phase + m pi, the top for m even, the bottom odd
         first = math.ceil(-phase / math.pi)
         last = math.floor((seg.sweep - phase) / math.pi)
-        return [seg.radius * amplitude * (1.0 if m % 2 == 0 else -1.0) for m in range(first, last + 1)]
+        return [seg.radius * amplitude * (-1.0) ** m for m in range(first, min(last, first + 1) + 1)]
 
     # a spiral: where the slope k cos(t - phase) - r(t) sin(t - phase) changes sign, bracketed
     # between samples of its turns and bisected
@@ -147,15 +147,23 @@ class TravelCheck:
         PlanningError
             With ``refuse``: the first move outside, its line, the coordinate and the travel.
         """
+        if not self.travel_m:
+            yield from moves  # a machine without travel: nothing to check
+            return
         position = None
         for move in moves:
             if position is None:
                 position = (np.asarray(move.start_mm) + np.asarray(move.offset_mm)) * 1e-3
                 self._check(move, position, position)
-            seg = move_segment(move, position, 0.0)
-            if seg is not None:
-                self._check(move, *segment_extent(seg))
-                position = seg.end
+            if move.kind in ("rapid", "feed"):  # a line: its ends (what move_segment makes of it)
+                end = (np.asarray(move.end_mm) + np.asarray(move.offset_mm)) * 1e-3
+                self._check(move, np.minimum(position, end), np.maximum(position, end))
+                position = end
+            elif move.kind == "arc":
+                seg = move_segment(move, position, 0.0)
+                if seg is not None:
+                    self._check(move, *segment_extent(seg))
+                    position = seg.end
             yield move
 
     def check(self, moves: Iterable[Move]) -> None:
@@ -165,8 +173,8 @@ class TravelCheck:
 
     def _check(self, move: Move, low: np.ndarray, high: np.ndarray) -> None:
         for axis, (first, last) in self.travel_m.items():
-            below, above = first - low[axis], high[axis] - last
-            if max(below, above) <= TRAVEL_SLACK_M:
+            below, above = first - float(low[axis]), float(high[axis]) - last
+            if below <= TRAVEL_SLACK_M and above <= TRAVEL_SLACK_M:
                 continue
             value = low[axis] if below >= above else high[axis]
             name = "xyz"[axis]
