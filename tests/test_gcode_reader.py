@@ -382,6 +382,9 @@ def test_tool_diameters_come_from_the_scenario():
     outside = _read("G21 F600\nG0 X0 Y0\nG42 D1 G1 X20 Y0\nY20\nM2", spec.reader_settings())
     assert [v for m in outside[1:] for v in m.end_mm[:2]] == pytest.approx([20.0, -3.0, 23.0, 0.0, 23.0, 20.0])
     assert outside[2].kind == "arc" and outside[2].center_mm == (20.0, 0.0) and outside[2].turns == 1
+    # the scenario's [[tools]] give diameters too; the reference's table wins over them
+    merged = spec.reader_settings(frozenset({1, 2}), {1: 10.0, 2: 8.0}).tool_diameters_mm
+    assert merged == {1: 6.0, 2: 8.0}
 
 
 def test_a_program_without_an_end_is_read_to_its_last_line():

@@ -35,6 +35,8 @@ class ReferenceContext:
         dict of its fields).
     tools : frozenset of int or None
         The T numbers of the scenario's ``[[tools]]`` (None: no list, any T word).
+    tool_diameters_mm : dict of int to float
+        The diameters of the scenario's ``[[tools]]`` by T number (mm; cutter compensation's).
     stock : bool
         Whether the scenario cuts a stock (a program's plan is then held whole).
     """
@@ -44,6 +46,7 @@ class ReferenceContext:
     planner: Any = field(default_factory=dict)
     tools: frozenset[int] | None = None
     stock: bool = False
+    tool_diameters_mm: dict[int, float] = field(default_factory=dict)
 
 
 def register(name: str, spec: type[KindSpec], build: Callable) -> Kind:
