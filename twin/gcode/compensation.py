@@ -130,11 +130,9 @@ class CutterCompensation:
         else:
             tool = None
             if "d" in words:
-                tool = round(words["d"])
+                tool = int(words["d"] + 0.5)  # LinuxCNC's is_near_int: a negative D is no whole number
                 if abs(words["d"] - tool) >= 0.0001:
                     raise BlockError(f"G{code // 10} requires D word to be a whole number")
-                if tool < 0:
-                    raise BlockError("Negative d word tool radius index used")
             radius = diameter_of(tool) / 2
             orientation = 0
         if radius < 0:
