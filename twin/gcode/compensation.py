@@ -95,6 +95,9 @@ class CutterCompensation:
         self.last_mm = (0.0, 0.0, 0.0)  # where the last released move ends (mm)
         self.mm_per_unit = 1.0
         self.inch = False
+        #: An F word was read while moves were held: LinuxCNC sends its number on when they are
+        #: released, in the units then in force (a G20/G21 between keeps the number, not the speed).
+        self.feed_held = False
 
     @property
     def engaged(self) -> bool:
@@ -501,6 +504,7 @@ class CutterCompensation:
     def _dequeue(self, plane: str) -> None:
         """The held moves released, in order, each from where the one before ends (mm)."""
         self.endpoint_valid = False
+        self.feed_held = False
         if not self.queue:
             return
         s = self.mm_per_unit

@@ -496,6 +496,8 @@ class Reader:
             if words["f"] < 0:
                 raise BlockError(f"F = {words['f']:g}: a feed cannot be negative")
             s.feed = words["f"]
+            if self.comp.queue:  # LinuxCNC holds the feed change behind the held moves
+                self.comp.feed_held = True
         if "s" in words:
             if words["s"] < 0:
                 raise BlockError(f"negative spindle speed used: S{words['s']:g}")
@@ -747,7 +749,8 @@ class Reader:
         s.origin = [v * factor for v in s.origin]
         s.axis_offset = [v * factor for v in s.axis_offset]
         s.tool_offset *= factor
-        s.feed *= factor
+        if not self.comp.feed_held:  # a held feed change takes the units it is released in
+            s.feed *= factor
         if s.tolerance is not None:
             s.tolerance *= factor
         self.cycle.scale(factor)
