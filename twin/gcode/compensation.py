@@ -96,8 +96,10 @@ class CutterCompensation:
         self.mm_per_unit = 1.0
         self.inch = False
         #: An F word was read while moves were held: LinuxCNC sends its number on when they are
-        #: released, in the units then in force (a G20/G21 between keeps the number, not the speed).
+        #: released, in the units then in force (a G20/G21 between keeps the number, not the speed),
+        #: for the held moves from ``feed_held_at`` on.
         self.feed_held = False
+        self.feed_held_at = 0
 
     @property
     def engaged(self) -> bool:
@@ -169,9 +171,18 @@ class CutterCompensation:
         self.queue.append(_Queued(move, []))
         return True
 
+    def hold_feed(self) -> None:
+        """An F word read while moves are held (sent on when they are released)."""
+        if not self.feed_held:
+            self.feed_held, self.feed_held_at = True, len(self.queue)
+
     def units(self, inch: bool, factor: float, mm_per_unit: float) -> None:
         """G20 / G21 with compensation on (LinuxCNC's ``qc_scale``): held moves, the programmed
-        point and the radius in the new units."""
+        point and the radius in the new units; the held moves after a held F word at its number
+        in the new units."""
+        if self.feed_held:
+            for q in self.queue[self.feed_held_at :]:
+                q.move = q.move._replace(feed_mm_per_min=q.move.feed_mm_per_min * mm_per_unit / self.mm_per_unit)
         self.inch, self.mm_per_unit = inch, mm_per_unit
         self.radius *= factor
         self.program = [v * factor for v in self.program]

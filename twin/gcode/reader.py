@@ -497,7 +497,7 @@ class Reader:
                 raise BlockError(f"F = {words['f']:g}: a feed cannot be negative")
             s.feed = words["f"]
             if self.comp.queue:  # LinuxCNC holds the feed change behind the held moves
-                self.comp.feed_held = True
+                self.comp.hold_feed()
         if "s" in words:
             if words["s"] < 0:
                 raise BlockError(f"negative spindle speed used: S{words['s']:g}")
