@@ -397,3 +397,15 @@ def test_a_program_without_an_end_is_read_to_its_last_line():
     theirs = canonical_moves("\n".join(canon))
     assert len(theirs) == 9
     assert first_difference(list(read_program(path, _settings())), theirs) is None
+
+
+def test_compensation_holds_a_bounded_number_of_moves(monkeypatch):
+    """Moves along Z are held until a move in the plane: a loop of them is refused at the limit."""
+    from twin.gcode import compensation
+
+    monkeypatch.setattr(compensation, "MAX_HELD", 50)
+    program = "G21 F600\nG0 X0 Y0\nG41 D1 G1 X20 Y0\no1 repeat [100]\nG1 Z-1\nG1 Z0\no1 endrepeat\nM2"
+    with pytest.raises(GcodeError) as err:
+        _read(program, _settings())
+    assert err.value.line == 6 and "more than 50 moves and dwells held" in err.value.reason
+    assert len(_read(program.replace("[100]", "[20]"), _settings())) == 2 + 40

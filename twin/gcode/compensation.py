@@ -35,6 +35,9 @@ TOLERANCE_EQUAL = 1e-6
 ARC_SWEEP_SLACK = {True: 0.001, False: 0.0254}
 #: Largest difference of a moved arc end's radius from its start's (program units; LinuxCNC's).
 ARC_END_RADIUS_SLACK = 0.01
+#: Most calls held at once (ours: moves along the normal axis and dwells are held until the next
+#: move in the plane; LinuxCNC holds any number).
+MAX_HELD = 10_000
 
 #: A move the reader makes from its modal state: (kind, end [x, y, z], centre, turns) to a Move.
 MoveMaker = Callable[[str, list[float], tuple[float, float], int], Any]
@@ -168,6 +171,7 @@ class CutterCompensation:
         """A dwell: held behind the held moves (True), or made at once where none is held."""
         if not self.queue:
             return False
+        self._check_held()
         self.queue.append(_Queued(move, []))
         return True
 
@@ -477,9 +481,16 @@ class CutterCompensation:
         self.endpoint, self.endpoint_valid = (a, b), True
 
     def _enqueue(self, kind, end, make, plane, direction=(0.0, 0.0), center=(0.0, 0.0), turn=0, sweep=0.0) -> None:
+        self._check_held()
         xyz = _from_plane(end, plane)
         move = make(kind, xyz, center, turn)
         self.queue.append(_Queued(move, list(end), direction, center, turn, sweep))
+
+    def _check_held(self) -> None:
+        if len(self.queue) >= MAX_HELD:
+            raise BlockError(
+                f"more than {MAX_HELD} moves and dwells held by cutter compensation (none moves in its plane)"
+            )
 
     def _move_endpoint_and_flush(self, a: float, b: float, plane: str) -> None:
         """Every held move's end moved to (a, b), each checked not to turn back, and released."""
