@@ -26,6 +26,11 @@ FEED_M_PER_S = 0.02  # 0.1 mm per tooth at 6000 rpm, 2 flutes
 SETTLED_S = 0.2  # mean forces taken after this; 0.4 s = 80 whole tooth periods
 
 
+def _feed(n_flutes, c_mm):
+    """Every flute's chip vector when the tool feeds ``c_mm`` per tooth without vibration."""
+    return np.full(n_flutes, c_mm), np.zeros(n_flutes)
+
+
 def _slot_scenario(axial_mm=2.0, radial_mm=D_MM, mode="up", duration_s=0.6, **extra):
     """X feed at constant speed on linear_motor_xy, stiff PIDs with feedforward, cutter engaged."""
     cut = dict(
@@ -90,7 +95,7 @@ def test_step_average_carries_the_exact_impulse_over_a_revolution():
     n = 97  # a step that does not divide the revolution, with wrap-around past 2 pi
     step = 2 * math.pi / n
     forces = np.array(
-        [step_tool_forces_N(K.as_array(), 3, 2.0, 0.1, st, ex, 0.3 + i * step, step, 0.0) for i in range(n)]
+        [step_tool_forces_N(K.as_array(), 3, 2.0, *_feed(3, 0.1), st, ex, 0.3 + i * step, step, 0.0) for i in range(n)]
     )
     np.testing.assert_allclose(forces.mean(axis=0), mean_tool_forces_N(K, 3, 2.0, 0.1, st, ex), rtol=1e-12)
 
@@ -123,7 +128,7 @@ def _helical_step_force_by_quadrature(a, c, st, ex, n_flutes, angle, step, lag, 
 )
 def test_helical_step_force_equals_brute_force_discs(ae, mode, n_flutes, angle, step, lag):
     st, ex = immersion_angles(ae, D_MM, mode)
-    exact = step_tool_forces_N(K.as_array(), n_flutes, 4.0, 0.1, st, ex, angle, step, lag)
+    exact = step_tool_forces_N(K.as_array(), n_flutes, 4.0, *_feed(n_flutes, 0.1), st, ex, angle, step, lag)
     brute = _helical_step_force_by_quadrature(4.0, 0.1, st, ex, n_flutes, angle, step, lag)
     scale = np.abs(mean_tool_forces_N(K, n_flutes, 4.0, 0.1, 0.0, math.pi)).max()
     np.testing.assert_allclose(exact, brute, atol=2e-3 * scale)
@@ -136,7 +141,9 @@ def test_helix_of_one_pitch_in_a_slot_gives_the_constant_mean_force():
         mean = mean_tool_forces_N(K, n_flutes, 3.0, 0.1, 0.0, math.pi)
         for angle in np.linspace(0.0, 2 * math.pi, 11):
             for lag in (2 * math.pi / n_flutes, 2 * math.pi + 2 * math.pi / n_flutes):
-                force = step_tool_forces_N(K.as_array(), n_flutes, 3.0, 0.1, 0.0, math.pi, angle, 0.01, lag)
+                force = step_tool_forces_N(
+                    K.as_array(), n_flutes, 3.0, *_feed(n_flutes, 0.1), 0.0, math.pi, angle, 0.01, lag
+                )
                 np.testing.assert_allclose(force, mean, rtol=1e-9)
 
 
@@ -145,8 +152,10 @@ def test_helix_keeps_the_mean_and_cuts_the_peak():
     n = 360
     step = 2 * math.pi / n
     angles = 0.1 + step * np.arange(n)
-    straight = np.array([step_tool_forces_N(K.as_array(), 2, 3.0, 0.1, st, ex, x, step, 0.0) for x in angles])
-    helical = np.array([step_tool_forces_N(K.as_array(), 2, 3.0, 0.1, st, ex, x, step, 0.6) for x in angles])
+    straight = np.array(
+        [step_tool_forces_N(K.as_array(), 2, 3.0, *_feed(2, 0.1), st, ex, x, step, 0.0) for x in angles]
+    )
+    helical = np.array([step_tool_forces_N(K.as_array(), 2, 3.0, *_feed(2, 0.1), st, ex, x, step, 0.6) for x in angles])
     np.testing.assert_allclose(helical.mean(axis=0), mean_tool_forces_N(K, 2, 3.0, 0.1, st, ex), rtol=1e-9)
     assert np.abs(helical).max(axis=0)[1] < 0.8 * np.abs(straight).max(axis=0)[1]
 

@@ -91,7 +91,7 @@ def test_the_kienzle_force_at_a_chip_thickness_is_kc1_h_to_the_1_minus_mc_times_
     # flute 0 sweeps the whole arc within the step: the step's force is the arc's integral / step
     step = 4 * half
     fx, fy, fz = step_tool_forces_N(
-        kienzle_coefficients(k.as_array(), c, st, ex), 1, a, c, st, ex, st - half, step, 0.0
+        kienzle_coefficients(k.as_array(), c, st, ex), 1, a, np.array([c]), np.zeros(1), st, ex, st - half, step, 0.0
     )
     arc = (ex - st) / step
     assert fy / arc == pytest.approx(by_hand, rel=1e-6)  # F_y = F_t at 90 deg
@@ -117,8 +117,8 @@ def test_the_linear_entries_pass_through_unchanged():
             assert kienzle_coefficients(k, 0.1, 0.0, math.pi) is k, name
     # and the aluminium default's force is the linear model's, exactly
     k = MATERIALS["aluminium_7075_t6"].coefficients
-    full = step_tool_forces_N(k.as_array(), 3, 2.0, 0.1, 0.0, math.pi, 0.3, 0.01, 0.0)
-    six = step_tool_forces_N(k.as_array()[:6], 3, 2.0, 0.1, 0.0, math.pi, 0.3, 0.01, 0.0)
+    full = step_tool_forces_N(k.as_array(), 3, 2.0, np.full(3, 0.1), np.zeros(3), 0.0, math.pi, 0.3, 0.01, 0.0)
+    six = step_tool_forces_N(k.as_array()[:6], 3, 2.0, np.full(3, 0.1), np.zeros(3), 0.0, math.pi, 0.3, 0.01, 0.0)
     assert full == six
 
 

@@ -227,8 +227,9 @@ def program(file: str | Path, machine: str | None = None, **settings: Any) -> Pr
     """A part program as ``twin gcode FILE`` reads it, and with a ``machine`` plans it (cycle time,
     feed-only time, limits and largest values per axis, path deviation).
 
-    Settings are keyword arguments with dotted paths below ``planner`` and ``reference``
-    (``planner__tolerance_mm=0.02`` or ``**{"planner.feed_override": 0.8}``).
+    Settings are keyword arguments with dotted paths below ``planner``, ``reference`` and
+    ``drive`` (``planner__tolerance_mm=0.02``, ``**{"planner.feed_override": 0.8}``,
+    ``drive__saturation_V=10``: the drives are checked against it).
 
     Raises
     ------
@@ -239,10 +240,10 @@ def program(file: str | Path, machine: str | None = None, **settings: Any) -> Pr
     from twin.gcode.reader import read_program
     from twin.references.gcode import planned_for, program_settings
 
-    reference, planner = program_settings(str(file), _paths(settings))
+    reference, planner, saturation_V = program_settings(str(file), _paths(settings))
     input_file(file, "file")
     moves = list(read_program(file, reference.reader_settings()))  # a bad line: GcodeError, a TwinInputError
-    planned = None if machine is None else planned_for(file, moves, machine, planner)
+    planned = None if machine is None else planned_for(file, moves, machine, planner, saturation_V)
     return Program(str(file), moves, planned)
 
 

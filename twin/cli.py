@@ -105,6 +105,29 @@ def _print_warnings(summary: dict) -> None:
         typer.echo(f"    ... {total - SHOWN_WARNINGS} more (--json lists {len(rows)})")
 
 
+def _print_plan_warnings(rows: list[dict], total: int, indent: str = "  ") -> None:
+    """A program's warnings against the machine (travel, drives), a line each."""
+    if not rows:
+        return
+    typer.echo(f"{indent}warnings against the machine ({total}):")
+    for row in rows[:SHOWN_WARNINGS]:
+        typer.echo(f"{indent}  line {row['line']:>6}  {row['message']}  {row['text']}")
+    if total > SHOWN_WARNINGS:
+        typer.echo(f"{indent}  ... {total - SHOWN_WARNINGS} more (--json lists {len(rows)})")
+
+
+def _fail_on_plan_warnings(rows: list[dict], total: int) -> None:
+    """Under ``--strict``: the first warning against the machine as the error line, exit 4."""
+    if rows:
+        first = rows[0]
+        typer.echo(
+            f"error: {total} warning(s) against the machine under --strict; the first: line {first['line']}: "
+            f"{first['message']}",
+            err=True,
+        )
+        raise typer.Exit(exits.CHECK_FAILED)
+
+
 def _print_part(summary: dict) -> None:
     """The virtual part's wall error and each inspected feature, a line each."""
     part = summary.get("part")
@@ -164,7 +187,8 @@ def _run(
 ) -> None:
     """Run a scenario and report it; a run that diverges or is interrupted still reports,
     records and plots what it computed before the error line.  With ``strict``, machining
-    warnings end it with exit code 4 (after the report)."""
+    warnings and warnings against the machine (travel, drives) end it with exit code 4 (after
+    the report)."""
     from twin import api
     from twin.scenario import load_scenario
     from twin.settings import parse_settings
@@ -194,6 +218,8 @@ def _run(
             err=True,
         )
         raise typer.Exit(exits.CHECK_FAILED)
+    if strict and program is not None:
+        _fail_on_plan_warnings(program.plan_warnings, program.plan_warnings_total)
 
 
 #: Lines of a program the text summary names, worst first.
@@ -214,11 +240,23 @@ def _report(
             {
                 k: v
                 for k, v in summary.items()
-                if k not in ("scenario", "machine", "lines", "machining_warnings", "part", "inspection")
+                if k
+                not in (
+                    "scenario",
+                    "machine",
+                    "lines",
+                    "machining_warnings",
+                    "part",
+                    "inspection",
+                    "plan_warnings",
+                    "plan_warnings_total",
+                )
             },
         )
         _print_worst_lines(summary.get("lines", []))
         _print_warnings(summary)
+        rows = summary.get("plan_warnings", [])
+        _print_plan_warnings(rows, summary.get("plan_warnings_total", len(rows)))
         _print_part(summary)
     if lines is not None:
         done.lines_to_parquet(lines)
@@ -254,7 +292,10 @@ def run(
     ),
     lines: Path = typer.Option(None, "--lines", help="A G-code run: write its per-line table to this .parquet"),
     strict: bool = typer.Option(
-        False, "--strict", help="Exit with code 4 if the program crashes or misuses the tool (machining warnings)"
+        False,
+        "--strict",
+        help="Exit with code 4 if the program crashes or misuses the tool (machining warnings), leaves the "
+        "machine's travel or asks more than its drives deliver",
     ),
     part: Path = typer.Option(
         None,
@@ -441,7 +482,12 @@ def gcode(
     machine: str = typer.Option(None, "--machine", help="Plan the program for this machine (twin list)"),
     as_json: bool = typer.Option(False, "--json", help="Print the moves (and the plan) as JSON"),
     settings: list[str] = typer.Option(
-        None, "--set", help="planner.KEY=VALUE or reference.KEY=VALUE, e.g. planner.tolerance_mm=0.02"
+        None,
+        "--set",
+        help="planner.KEY=VALUE, reference.KEY=VALUE or drive.saturation_V=VALUE, e.g. planner.tolerance_mm=0.02",
+    ),
+    strict: bool = typer.Option(
+        False, "--strict", help="With --machine: exit with code 4 if the program leaves the travel or the drives' force"
     ),
 ):
     """Read a part program as LinuxCNC reads it and print its moves; with --machine, plan it
@@ -452,18 +498,29 @@ def gcode(
     from twin.gcode.listing import list_program
     from twin.gcode.reader import Settings
 
-    reader_settings, planner = Settings(), None
+    reader_settings, planner, saturation_V = Settings(), None, None
     if settings or machine is not None:  # the settings' schema (pydantic) only where it is used
         from twin.references.gcode import planned_for, program_settings
         from twin.settings import parse_settings
 
-        reference, planner = program_settings(str(file), parse_settings(settings or []))
+        reference, planner, saturation_V = program_settings(str(file), parse_settings(settings or []))
         reader_settings = reference.reader_settings()
-    plan = None if machine is None else (lambda moves: planned_for(file, moves, machine, planner))
+    plan = None if machine is None else (lambda moves: planned_for(file, moves, machine, planner, saturation_V))
     planned = list_program(file, reader_settings, as_json, plan)
-    if planned is not None and not as_json:
+    if planned is None:
+        return
+    rows = planned["warnings"]
+    total = planned.get("warnings_total", len(rows))
+    if not as_json:
         typer.echo(f"planned for {machine}:")
-        _print_summary("", {k: v for k, v in planned.items() if k not in ("limits", "max", "violations", "notes")})
+        _print_summary(
+            "",
+            {
+                k: v
+                for k, v in planned.items()
+                if k not in ("limits", "max", "violations", "notes", "warnings", "warnings_total")
+            },
+        )
         for over in planned["violations"]:
             typer.echo(f"  over a limit: line {over['line']}, {over['axis']} {over['quantity']} x{over['ratio']:.4f}")
         for note in planned["notes"]:
@@ -475,6 +532,9 @@ def gcode(
                 f"a {top['acceleration_m_per_s2']:.4g}/{lim['acceleration_m_per_s2']:.4g} m/s^2, "
                 f"j {top['jerk_m_per_s3']:.4g}/{lim['jerk_m_per_s3']:.4g} m/s^3 (largest/limit)"
             )
+        _print_plan_warnings(rows, total)
+    if strict:
+        _fail_on_plan_warnings(rows, total)
 
 
 @app.command()

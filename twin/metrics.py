@@ -309,6 +309,10 @@ def tracking_summary(result) -> dict:
             out["machining_warnings"] = program.machining_warnings
             if program.machining_warnings_total > len(program.machining_warnings):
                 out["machining_warnings_total"] = program.machining_warnings_total
+        if program.plan_warnings:  # outside the travel, beyond the drives
+            out["plan_warnings"] = program.plan_warnings
+            if program.plan_warnings_total > len(program.plan_warnings):
+                out["plan_warnings_total"] = program.plan_warnings_total
         if result.part is not None:
             out["part"] = result.part.summary()
             out["inspection"] = result.inspection

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import NamedTuple
 
 import numpy as np
 
@@ -23,6 +24,24 @@ MIN_LENGTH_M = 1e-9
 TANGENT_TOLERANCE_RAD = 1e-6
 #: Newton steps that put a spiral's angle at an arc length (each squares the error).
 SPIRAL_NEWTON_STEPS = 4
+
+
+class Outward(NamedTuple):
+    """Where an arc's points lie about its axis.
+
+    Attributes
+    ----------
+    direction : ndarray (n, 3)
+        The in-plane unit vector from the axis out to each point.
+    radius : ndarray (n,)
+        The radius there (m).
+    turn_per_m : ndarray (n,)
+        The angle turned per metre of path there (rad/m).
+    """
+
+    direction: np.ndarray
+    radius: np.ndarray
+    turn_per_m: np.ndarray
 
 
 @dataclass
@@ -127,6 +146,17 @@ class Segment:
         if s.size and s[-1] >= self.length:
             out[s >= self.length] = self.end  # the programmed end exactly
         return out
+
+    def outward(self, s: np.ndarray) -> Outward:
+        """Arcs: at arc lengths ``s`` (m), the direction out from the axis, the radius and the
+        angle turned per metre of path (:class:`Outward`)."""
+        assert self.u is not None and self.v is not None
+        angle = self._angle_of(np.asarray(s, float))
+        k = (self.radius_end - self.radius) / self.sweep
+        h = self.rise / self.sweep
+        r = self.radius + k * angle
+        radial = np.cos(angle)[:, None] * self.u + np.sin(angle)[:, None] * self.v
+        return Outward(radial, r, 1.0 / np.sqrt(r * r + k * k + h * h))
 
     def tangent(self, at_end: bool) -> np.ndarray:
         """Unit tangent at the start or the end."""

@@ -14,9 +14,11 @@ How (our design; the docs page ``gcode.md`` says why):
    at the speed whose acceleration step the filter ramps within the jerk limit.
 3. Speed limits along the path: the programmed feed times the override (rapids: the axis
    limits), each axis's velocity limit over its share of the tangent, and on arcs the
-   centripetal acceleration ``v <= sqrt(a R)``, the jerk of the turning acceleration ``v <= (j
-   R^2)^(1/3)`` and the contour shrink of the filter (``v^2 T^2 / (24 R)`` within half the
-   tolerance).
+   centripetal acceleration ``v <= sqrt(a R)`` and the jerk of the turning acceleration ``v <=
+   0.97 (j R^2)^(1/3)``; on corner blends the contour shrink of the filter (``v^2 T^2 / (24 R)``
+   within half the tolerance). On programmed arcs the shrink is compensated instead (the raw
+   samples put out by it, :func:`_shrink_compensation`), the speed held where an arc meets what
+   does not continue it so that the compensation is nothing there, and ``v <= 2 R / T``.
 4. Look-ahead: backward and forward passes over an arc-length grid with the tangential
    acceleration the axes have left beside the centripetal one (the time-optimal
    acceleration-limited speed profile), over a window of the path: the part of the window whose
@@ -42,7 +44,7 @@ import copy
 import math
 from collections.abc import Generator, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
-from typing import NamedTuple
+from typing import Literal, NamedTuple
 
 import numba
 import numpy as np
@@ -85,6 +87,17 @@ MAX_WINDOW_POINTS = 1_000_000
 DEFAULT_TOLERANCE_MM = 0.01
 #: Share of each axis's acceleration and sampled jerk a kink's velocity step may take (ours).
 KINK_SHARE = 0.5
+#: Share of the tolerance the moving-average filter's shrink of an arc may take uncompensated:
+#: at an arc's ends (where its speed is held to it) and where its compensation starts (ours).
+SHRINK_HELD_SHARE = 0.4
+#: Share of the tolerance from which an arc's shrink is compensated whole (ours).
+SHRINK_FULL_SHARE = 0.6
+#: Most angle (rad) an arc may turn within the filter's length (``v <= 2 R / T``): the
+#: compensation ``r (1 / sinc - 1)`` stays under a fifth of the radius (ours).
+MAX_FILTER_TURN_RAD = 2.0
+#: Share of the jerk limit an arc's turning acceleration may take, ``(j R^2)^(1/3)``: the speed
+#: changes on the arc add their own (ours).
+JERK_SHARE = 0.97
 #: Tries at planning a window again slower where its sampled reference exceeds a limit.
 MAX_REPAIRS = 8
 #: A sampled value counts as over its limit beyond this ratio (floating-point noise of the
@@ -139,6 +152,11 @@ class PlannerSettings(StrictSpec):
     ``velocity_m_per_s = { x = 0.2 }`` and the like override them.
     """
 
+    mode: Literal["jerk_limited", "linuxcnc"] = Field(
+        "jerk_limited",
+        description="jerk_limited: the twin's planner; linuxcnc: LinuxCNC 2.9's trajectory planner as it behaves "
+        "(per-axis velocity and acceleration limits, no jerk limit; twin.gcode.linuxcnc_planner)",
+    )
     tolerance_mm: float | None = Field(
         None,
         gt=0.0,
@@ -150,6 +168,9 @@ class PlannerSettings(StrictSpec):
     velocity_m_per_s: dict[str, float] = Field(default_factory=dict, description="axis velocity limits, m/s")
     acceleration_m_per_s2: dict[str, float] = Field(default_factory=dict, description="axis acceleration limits, m/s^2")
     jerk_m_per_s3: dict[str, float] = Field(default_factory=dict, description="axis jerk limits, m/s^3")
+    travel: Literal["refuse", "warn"] = Field(
+        "refuse", description="a move outside the machine's travel: refuse the program, or warn of each line"
+    )
 
     @field_validator("velocity_m_per_s", "acceleration_m_per_s2", "jerk_m_per_s3")
     @classmethod
@@ -457,6 +478,13 @@ def _junction_speed(a: Segment, b: Segment, ctx: _Context) -> float:
     for i in range(3):
         if jump[i] > 1e-12:
             speed = min(speed, math.sqrt(limits.jerk_m_per_s3[i] * window / jump[i]))
+    # an arc's compensation of the filter's shrink is weighed out before its end, unless the
+    # next arc goes on with the same
+    if not _continues(a, b, filter_s):
+        if _compensated(a, filter_s):
+            speed = min(speed, _arc_end_speed(a, True, filter_s))
+        if _compensated(b, filter_s):
+            speed = min(speed, _arc_end_speed(b, False, filter_s))
     return speed
 
 
@@ -470,15 +498,72 @@ def _segment_speed_limit(seg: Segment, limits: Limits, override: float, filter_s
         a = min(x for x, p in zip(limits.acceleration_m_per_s2, plane) if p)
         j = min(x for x, p in zip(limits.jerk_m_per_s3, plane) if p)
         r = 1.0 / seg.curvature
-        v = min(v, math.sqrt(a * r), (j * r * r) ** (1.0 / 3.0))
-        if filter_s > 0:
-            # the filter shrinks an arc by v^2 T^2 / (24 R): within half the tolerance
+        v = min(v, math.sqrt(a * r), JERK_SHARE * (j * r * r) ** (1.0 / 3.0))
+        if filter_s > 0 and not seg.blend:
+            # the filter's shrink is compensated (:func:`_shrink_compensation`) up to a turn of
+            # MAX_FILTER_TURN_RAD within the filter's length
+            r_least = min(seg.radius, seg.radius_end)
+            q = math.hypot(r_least, (seg.radius_end - seg.radius) / seg.sweep, seg.rise / seg.sweep)
+            v = min(v, MAX_FILTER_TURN_RAD * q / filter_s)
+        elif filter_s > 0:
+            # a blend: the filter shrinks it by v^2 T^2 / (24 R): within half the tolerance; and a
+            # blend shorter than the filter's window the filter cuts as a sharp corner, by
+            # (v T / 8) sin(turn) (Tajima and Sencer 2016): within 90 % of the other half
             v = min(v, math.sqrt(24.0 * r * 0.5 * seg.tolerance_m) / filter_s)
-            if seg.blend:
-                # a blend shorter than the filter's window: the filter cuts the corner as a sharp
-                # one, by (v T / 8) sin(turn) (Tajima and Sencer 2016): within 90 % of the other half
-                v = min(v, 0.9 * 4.0 * seg.tolerance_m / (filter_s * math.sin(min(seg.sweep, math.pi / 2))))
+            v = min(v, 0.9 * 4.0 * seg.tolerance_m / (filter_s * math.sin(min(seg.sweep, math.pi / 2))))
     return v
+
+
+def _compensated(seg: Segment, filter_s: float) -> bool:
+    """Whether the filter's shrink of ``seg`` is compensated: a programmed arc (not a corner
+    blend), with a filter."""
+    return seg.kind == "arc" and not seg.blend and filter_s > 0
+
+
+def _arc_end_speed(seg: Segment, at_end: bool, filter_s: float) -> float:
+    """The speed (m/s) a compensated arc is held at where it meets what does not continue it:
+    its shrink there, uncompensated, ``r (w T)^2 / 24`` (above ``r (1 - sinc(w T / 2))``) within
+    :data:`SHRINK_HELD_SHARE` of the tolerance (``w``: the angle turned per second)."""
+    there = seg.outward(np.array([seg.length if at_end else 0.0]))
+    turn_rate = math.sqrt(24.0 * SHRINK_HELD_SHARE * seg.tolerance_m / float(there.radius[0])) / filter_s
+    return turn_rate / float(there.turn_per_m[0])
+
+
+def _continues(a: Segment, b: Segment, filter_s: float) -> bool:
+    """Whether compensated arc ``b`` goes on from compensated arc ``a`` as the same curve (the
+    same radius, turn rate, outward direction and tolerance at the junction: the shrink's
+    compensation the same on both sides)."""
+    if not (_compensated(a, filter_s) and _compensated(b, filter_s)) or a.tolerance_m != b.tolerance_m:
+        return False
+    end, start = a.outward(np.array([a.length])), b.outward(np.array([0.0]))
+    return (
+        float(end.direction[0] @ start.direction[0]) > 1.0 - 1e-12
+        and abs(float(end.radius[0] - start.radius[0])) <= 1e-9 * float(end.radius[0])
+        and abs(float(end.turn_per_m[0] - start.turn_per_m[0])) <= 1e-9 * float(end.turn_per_m[0])
+    )
+
+
+def _shrink_compensation(
+    seg: Segment, s: np.ndarray, speed: np.ndarray, filter_s: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """How far (m) out from the arc the raw samples at arc lengths ``s`` (m) and path speeds
+    ``speed`` (m/s) are put so that the moving average of length ``T`` lands on the arc, and
+    the direction, (n,) and (n, 3).
+
+    An arc turning at ``w`` rad/s comes out of the filter at radius ``r sinc(w T / 2)``: a raw
+    arc of radius ``r / sinc`` comes out at ``r``. The compensation is weighed in from nothing,
+    where the shrink is :data:`SHRINK_HELD_SHARE` of the tolerance, to whole at
+    :data:`SHRINK_FULL_SHARE` (smoothstep): the path stays within the held share, and an arc's
+    end, where the speed is held below that (:func:`_arc_end_speed`), gets none.
+    """
+    at = seg.outward(s)
+    half_turn = np.maximum(0.5 * speed * at.turn_per_m * filter_s, 1e-12)
+    sinc = np.sin(half_turn) / half_turn
+    shrink = at.radius * (1.0 - sinc)
+    held, full = SHRINK_HELD_SHARE * seg.tolerance_m, SHRINK_FULL_SHARE * seg.tolerance_m
+    x = np.clip((shrink - held) / (full - held), 0.0, 1.0)
+    weight = x * x * (3.0 - 2.0 * x)
+    return weight * at.radius * (1.0 / sinc - 1.0), at.direction
 
 
 def _path_acceleration(seg: Segment, limits: Limits) -> float:
@@ -699,7 +784,8 @@ def _sample_arc_length(t, t_grid, s_grid, v_grid):
     tau = np.clip(t - t_grid[k], 0.0, t_grid[k + 1] - t_grid[k])
     v0, v1 = v_grid[k], v_grid[k + 1]
     acc = np.where(ds > 0, (v1 * v1 - v0 * v0) / (2.0 * np.where(ds > 0, ds, 1.0)), 0.0)
-    return s_grid[k] + np.minimum(v0 * tau + 0.5 * acc * tau * tau, ds), k
+    speed = np.maximum(v0 + acc * tau, 0.0)
+    return s_grid[k] + np.minimum(v0 * tau + 0.5 * acc * tau * tau, ds), speed, k
 
 
 @dataclass
@@ -711,10 +797,21 @@ class _Raw:
     tolerance: np.ndarray
 
 
-def _sample(grid: _Grid, v: np.ndarray, phase: float, to_end: bool) -> tuple[_Raw, float]:
+def _window_mean(x: np.ndarray, width: int) -> np.ndarray:
+    """The mean of ``x`` over ``width`` samples about each, centred as the filter centres its
+    window; beyond the ends ``x`` holds its end values (a stretch ends at rest or within a
+    cruise of twice the filter's length, where it holds)."""
+    centre = (width - 1) // 2
+    padded = np.concatenate([np.full(width - 1 - centre, x[0]), x, np.full(centre, x[-1])])
+    summed = np.concatenate([[0.0], np.cumsum(padded)])
+    return (summed[width:] - summed[:-width]) / width
+
+
+def _sample(grid: _Grid, v: np.ndarray, phase: float, to_end: bool, filter_s: float) -> tuple[_Raw, float]:
     """Positions every :data:`SAMPLE_PERIOD_S` along the planned stretch from time ``phase``
-    after its start; the phase of the next stretch. ``to_end``: a stretch that ends at rest
-    gets a sample at its end (the last one clipped to it)."""
+    after its start (on arcs put out by the filter's shrink, :func:`_shrink_compensation`); the
+    phase of the next stretch. ``to_end``: a stretch that ends at rest gets a sample at its end
+    (the last one clipped to it)."""
     dt = SAMPLE_PERIOD_S
     t_grid = _time_of(grid.s, v)
     total = float(t_grid[-1])
@@ -723,16 +820,31 @@ def _sample(grid: _Grid, v: np.ndarray, phase: float, to_end: bool) -> tuple[_Ra
     else:
         n = max(0, math.ceil((total - phase) / dt - 1e-9))
     t = phase + np.arange(n) * dt
-    s_t, k = _sample_arc_length(np.minimum(t, total), t_grid, grid.s, v)
+    s_t, speed, k = _sample_arc_length(np.minimum(t, total), t_grid, grid.s, v)
+    width = round(filter_s / SAMPLE_PERIOD_S)
+    if width > 1 and n:
+        # the speed over the filter's window about each sample (what the filter's shrink depends
+        # on): a compensation that follows it has no velocity step where the profile's
+        # acceleration steps, which the filter would turn into a jerk
+        speed = _window_mean(speed, width)
     seg_t = grid.index[k]
     segments = grid.segments
     offsets = np.concatenate([[0.0], np.cumsum([seg.length for seg in segments])])
     position = np.empty((n, 3))
+    out, radial = np.zeros(n), np.zeros((n, 3))
     bounds = np.searchsorted(seg_t, np.arange(len(segments) + 1))  # seg_t never decreases
     for i in range(len(segments)):
         lo, hi = bounds[i], bounds[i + 1]
         if hi > lo:
-            position[lo:hi] = segments[i].points(np.clip(s_t[lo:hi] - offsets[i], 0.0, segments[i].length))
+            s_local = np.clip(s_t[lo:hi] - offsets[i], 0.0, segments[i].length)
+            position[lo:hi] = segments[i].points(s_local)
+            if _compensated(segments[i], filter_s):
+                out[lo:hi], radial[lo:hi] = _shrink_compensation(segments[i], s_local, speed[lo:hi], filter_s)
+    if width > 1 and n:
+        # the filter averages the compensation too: where it changes, by what its window mean
+        # differs from it (one step of Van Cittert's deconvolution)
+        out = 2.0 * out - _window_mean(out, width)
+    position += out[:, None] * radial
     lines = np.array([seg.line for seg in segments])[seg_t]
     tolerance = np.array([seg.tolerance_m for seg in segments])[seg_t]
     next_phase = 0.0 if to_end else phase + n * dt - total
@@ -905,7 +1017,7 @@ class _Stream:
         for attempt in range(MAX_REPAIRS + 1):
             v = grid.speeds(ctx.filter_s, ctx.budget)
             _bounded(grid, v)
-            raw, next_phase = _sample(grid, v, phase, to_end)
+            raw, next_phase = _sample(grid, v, phase, to_end, ctx.filter_s)
             if settle:
                 raw = _Raw(
                     np.concatenate([raw.position, np.repeat(raw.position[-1:], settle, axis=0)]),
@@ -1042,6 +1154,15 @@ def _grid_points(seg: Segment) -> int:
     return max(4, math.ceil(seg.length / GRID_M) + 1)
 
 
+def _stream(moves, limits: Limits, settings: PlannerSettings, keep_programmed: bool, most_s=math.inf, limit=""):
+    """The planner of ``settings.mode`` over a stream of moves."""
+    if settings.mode == "linuxcnc":
+        from twin.gcode.linuxcnc_planner import LinuxcncStream  # it builds on this module
+
+        return LinuxcncStream(moves, limits, settings, keep_programmed)
+    return _Stream(moves, limits, settings, keep_programmed, most_s, limit)
+
+
 def plan_stream(moves: Iterable[Move], limits: Limits, settings: PlannerSettings | None = None):
     """The planned reference of a program as it is read, in :class:`Chunk` s, and the facts
     gathered on the way (complete once the chunks are exhausted): memory stays bounded for any
@@ -1052,7 +1173,7 @@ def plan_stream(moves: Iterable[Move], limits: Limits, settings: PlannerSettings
     chunks : iterator of Chunk
     facts : ProgramFacts
     """
-    stream = _Stream(moves, limits, settings or PlannerSettings(), keep_programmed=False)
+    stream = _stream(moves, limits, settings or PlannerSettings(), keep_programmed=False)
     return stream.chunks(), stream.facts
 
 
@@ -1110,7 +1231,7 @@ def hold_or_count(
     most_s = math.inf if limit is None else count_to * SAMPLE_PERIOD_S
     if limit is not None and isinstance(moves, Sequence):
         refuse_long(moves, limits, settings, most_s, limit)
-    stream = _Stream(moves, limits, settings, keep_programmed=True, most_s=most_s, limit=limit or "")
+    stream = _stream(moves, limits, settings, keep_programmed=True, most_s=most_s, limit=limit or "")
     parts: list[Chunk] | None = []
     total = 0
     for chunk in stream.chunks():

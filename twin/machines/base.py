@@ -163,6 +163,9 @@ class BuiltMachine:
         the table's (a compliant drive train); empty otherwise.
     motor_travel_m_per_rad : dict of str to float
         Table travel per motor radian (m/rad) of each axis with a motor joint (lead / gear ratio).
+    planner_mode : str or None
+        The machine file's ``planner_mode``: how a program is planned unless a scenario's
+        ``[planner] mode`` says (None: the planner's default).
     """
 
     name: str
@@ -180,6 +183,7 @@ class BuiltMachine:
     feedback: str = "table"
     motor_plant: tuple[SisoTf, ...] = ()
     motor_travel_m_per_rad: dict[str, float] = field(default_factory=dict)
+    planner_mode: str | None = None
 
     def plant_lti(self):
         """:attr:`plant` as a ``control.TransferFunction`` (imports python-control)."""
@@ -286,6 +290,9 @@ class Machine:
     motion_limits: dict[str, MotionLimits] = {}
     #: What a scenario's loops close on unless it says (:attr:`BuiltMachine.feedback`).
     feedback: str = "table"
+    #: How a program is planned for it unless a scenario's ``[planner] mode`` says (None: the
+    #: planner's default).
+    planner_mode: str | None = None
 
     def resolve(self, overrides: dict[str, float] | None = None) -> dict[str, float]:
         """Merge overrides into the nominal values, validating names and values.
@@ -421,6 +428,7 @@ class Machine:
             feedback=self.feedback,
             motor_plant=self.motor_plant(params, model),
             motor_travel_m_per_rad=self.motor_travel(params),
+            planner_mode=self.planner_mode,
         )
 
 

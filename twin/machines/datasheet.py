@@ -77,6 +77,7 @@ class DatasheetMachine(Machine):
         self.summary = m.summary or f"machine file {path.name}"
         self.xml = ""
         self.feedback = "dual"
+        self.planner_mode = m.planner_mode
         self.axes = tuple(
             Axis(
                 a,

@@ -136,6 +136,9 @@ class MachineSpec(StrictSpec):
     workpiece_mass_kg: PositiveFloat
     delay_s: NonNegativeFloat = Field(0.0, le=1.0)
     timestep_s: float = Field(1e-4, ge=1e-7, le=1e-2)
+    planner_mode: Literal["jerk_limited", "linuxcnc"] | None = Field(
+        None, description="how a program is planned for this machine unless a scenario's [planner] mode says"
+    )
 
 
 class MachineFile(StrictSpec):

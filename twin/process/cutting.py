@@ -57,12 +57,13 @@ from twin.errors import TwinInputError
 from twin.numba_cache import configure as configure_numba_cache
 from twin.process.kinds import DisturbanceSpecBase, register
 from twin.process.materials import ALUMINIUM_7075_T6, MATERIALS, CuttingCoefficients, kienzle
+from twin.process.tool_dynamics import ToolDynamicsSpec
 from twin.spec import StrictSpec
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
 
-#: Feed per tooth (m) below which the feed direction is held at its last value.
-MIN_FEED_M = 1e-9
+#: Planned feed speed (m/s) below which the feed direction is held at its last value.
+MIN_FEED_M_PER_S = 1e-6
 #: Helix angles at and above this (deg) are refused: end mills go to about 45 to 55 deg.
 MAX_HELIX_DEG = 60.0
 
@@ -113,21 +114,27 @@ def kienzle_coefficients(k, feed_per_tooth_mm, phi_st, phi_ex):  # pragma: no co
 
 
 @njit(cache=True)
-def flute_force_integral(k, axial_depth_mm, feed_per_tooth_mm, phi):  # pragma: no cover - compiled
+def flute_force_integral(k, axial_depth_mm, du, dw, phi):  # pragma: no cover - compiled
     """Primitive ``Q(phi)`` of one engaged flute's force on the tool over its angle (N rad).
 
-    ``k`` is :meth:`CuttingCoefficients.as_array`.  With ``h = c sin(phi)``,
-    ``F_x = -F_t cos(phi) - F_r sin(phi)``, ``F_y = F_t sin(phi) - F_r cos(phi)`` and ``F_z = F_a``:
-    ``Q_x = a c/4 [K_tc cos 2phi - K_rc (2phi - sin 2phi)] + a [-K_te sin phi + K_re cos phi]``,
-    ``Q_y = a c/4 [K_tc (2phi - sin 2phi) + K_rc cos 2phi] - a [K_te cos phi + K_re sin phi]``,
-    ``Q_z = a [-K_ac c cos phi + K_ae phi]``.
+    ``k`` is :meth:`CuttingCoefficients.as_array`; the chip is ``h = du sin(phi) + dw cos(phi)``
+    (mm): the projection of the chip vector ``(du, dw)`` (feed frame, mm) on the edge's outward
+    normal ``n(phi) = (sin phi, cos phi)`` (``du = c``, ``dw = 0``: the feed per tooth ``c``
+    alone).  With ``F_t = a (K_tc h + K_te)``, ``F_r = a (K_rc h + K_re)``,
+    ``F_x = -F_t cos(phi) - F_r sin(phi)``, ``F_y = F_t sin(phi) - F_r cos(phi)``,
+    ``F_z = a (K_ac h + K_ae)`` and ``S2 = phi/2 - sin(2phi)/4``, ``C2 = phi/2 + sin(2phi)/4``,
+    ``SC = sin(phi)^2/2`` (the primitives of sin^2, cos^2, sin cos):
+    ``Q_x = -a [K_tc (du SC + dw C2) + K_rc (du S2 + dw SC) + K_te sin phi - K_re cos phi]``,
+    ``Q_y = a [K_tc (du S2 + dw SC) - K_rc (du SC + dw C2) - K_te cos phi - K_re sin phi]``,
+    ``Q_z = a [K_ac (dw sin phi - du cos phi) + K_ae phi]``.
     """
-    a, c = axial_depth_mm, feed_per_tooth_mm
-    s2, c2 = math.sin(2.0 * phi), math.cos(2.0 * phi)
     s1, c1 = math.sin(phi), math.cos(phi)
-    qx = a * c / 4.0 * (k[0] * c2 - k[1] * (2.0 * phi - s2)) + a * (-k[3] * s1 + k[4] * c1)
-    qy = a * c / 4.0 * (k[0] * (2.0 * phi - s2) + k[1] * c2) - a * (k[3] * c1 + k[4] * s1)
-    qz = a * (-k[2] * c * c1 + k[5] * phi)
+    s2 = math.sin(2.0 * phi)
+    ss, cc, sc = phi / 2.0 - s2 / 4.0, phi / 2.0 + s2 / 4.0, s1 * s1 / 2.0
+    a = axial_depth_mm
+    qx = -a * (k[0] * (du * sc + dw * cc) + k[1] * (du * ss + dw * sc) + k[3] * s1 - k[4] * c1)
+    qy = a * (k[0] * (du * ss + dw * sc) - k[1] * (du * sc + dw * cc) - k[3] * c1 - k[4] * s1)
+    qz = a * (k[2] * (dw * s1 - du * c1) + k[5] * phi)
     return qx, qy, qz
 
 
@@ -140,103 +147,126 @@ def mean_tool_forces_N(
     a Kienzle material's coefficients at the arc's mean chip thickness (:func:`kienzle_coefficients`).
     """
     ka = kienzle_coefficients(k.as_array(), feed_per_tooth_mm, phi_st, phi_ex)
-    hi = flute_force_integral(ka, axial_depth_mm, feed_per_tooth_mm, phi_ex)
-    lo = flute_force_integral(ka, axial_depth_mm, feed_per_tooth_mm, phi_st)
+    hi = flute_force_integral(ka, axial_depth_mm, feed_per_tooth_mm, 0.0, phi_ex)
+    lo = flute_force_integral(ka, axial_depth_mm, feed_per_tooth_mm, 0.0, phi_st)
     return n_flutes / (2.0 * math.pi) * (np.array(hi) - np.array(lo))
 
 
 @njit(cache=True)
-def flute_force_double_integral(k, feed_per_tooth_mm, phi):  # pragma: no cover - compiled
+def flute_force_double_integral(k, du, dw, phi):  # pragma: no cover - compiled
     """Primitive ``R(phi)`` of :func:`flute_force_integral` at unit axial depth (N rad^2/mm).
 
-    ``R_x = c/4 [K_tc sin(2phi)/2 - K_rc (phi^2 + cos(2phi)/2)] + K_te cos phi + K_re sin phi``,
-    ``R_y = c/4 [K_tc (phi^2 + cos(2phi)/2) + K_rc sin(2phi)/2] - K_te sin phi + K_re cos phi``,
-    ``R_z = -K_ac c sin phi + K_ae phi^2/2``.
+    With the primitives of ``S2``, ``C2``, ``SC``: ``phi^2/4 + cos(2phi)/8``,
+    ``phi^2/4 - cos(2phi)/8``, ``phi/4 - sin(2phi)/8``:
+    ``R_x = -[K_tc (du SC' + dw C2') + K_rc (du S2' + dw SC') - K_te cos phi - K_re sin phi]``,
+    ``R_y = K_tc (du S2' + dw SC') - K_rc (du SC' + dw C2') - K_te sin phi + K_re cos phi``,
+    ``R_z = -K_ac (du sin phi + dw cos phi) + K_ae phi^2/2`` (primes: those primitives).
     """
-    c = feed_per_tooth_mm
-    s2, c2 = math.sin(2.0 * phi), math.cos(2.0 * phi)
     s1, c1 = math.sin(phi), math.cos(phi)
-    rx = c / 4.0 * (k[0] * s2 / 2.0 - k[1] * (phi * phi + c2 / 2.0)) + k[3] * c1 + k[4] * s1
-    ry = c / 4.0 * (k[0] * (phi * phi + c2 / 2.0) + k[1] * s2 / 2.0) - k[3] * s1 + k[4] * c1
-    rz = -k[2] * c * s1 + k[5] * phi * phi / 2.0
+    s2, c2 = math.sin(2.0 * phi), math.cos(2.0 * phi)
+    p2 = phi * phi / 4.0
+    ss, cc, sc = p2 + c2 / 8.0, p2 - c2 / 8.0, phi / 4.0 - s2 / 8.0
+    rx = -(k[0] * (du * sc + dw * cc) + k[1] * (du * ss + dw * sc) - k[3] * c1 - k[4] * s1)
+    ry = k[0] * (du * ss + dw * sc) - k[1] * (du * sc + dw * cc) - k[3] * s1 + k[4] * c1
+    rz = -k[2] * (du * s1 + dw * c1) + k[5] * phi * phi / 2.0
     return rx, ry, rz
 
 
 @njit(cache=True)
-def _clipped_double_integral(k, c, phi_st, phi_ex, u):  # pragma: no cover - compiled
+def _clipped_double_integral(k, du, dw, phi_st, phi_ex, u):  # pragma: no cover - compiled
     """``G(u)``: the integral up to ``u`` of ``Q(clip(psi, phi_st, phi_ex))`` at unit depth,
     zero at ``phi_st`` (N rad^2/mm): ``Q(phi_st) (u - phi_st)`` below the arc, ``R(u) - R(phi_st)``
     on it, ``R(phi_ex) - R(phi_st) + Q(phi_ex) (u - phi_ex)`` above it."""
     if u <= phi_st:
-        q = flute_force_integral(k, 1.0, c, phi_st)
+        q = flute_force_integral(k, 1.0, du, dw, phi_st)
         d = u - phi_st
         return q[0] * d, q[1] * d, q[2] * d
-    r0 = flute_force_double_integral(k, c, phi_st)
+    r0 = flute_force_double_integral(k, du, dw, phi_st)
     if u < phi_ex:
-        r = flute_force_double_integral(k, c, u)
+        r = flute_force_double_integral(k, du, dw, u)
         return r[0] - r0[0], r[1] - r0[1], r[2] - r0[2]
-    r = flute_force_double_integral(k, c, phi_ex)
-    q = flute_force_integral(k, 1.0, c, phi_ex)
+    r = flute_force_double_integral(k, du, dw, phi_ex)
+    q = flute_force_integral(k, 1.0, du, dw, phi_ex)
     d = u - phi_ex
     return r[0] - r0[0] + q[0] * d, r[1] - r0[1] + q[1] * d, r[2] - r0[2] + q[2] * d
 
 
 @njit(cache=True)
+def chip_arc(phi_st, phi_ex, du, dw):  # pragma: no cover - compiled
+    """The part ``(lo, hi)`` (rad) of the engaged arc ``[phi_st, phi_ex]`` (within ``[0, pi]``)
+    where the chip ``h = du sin(phi) + dw cos(phi)`` is positive: a tooth out of the cut takes
+    no chip.  ``h = |d| sin(phi + beta)``, ``beta = atan2(dw, du)``, is positive on the half
+    turn after ``b = -beta`` (mod 2 pi), which meets ``[0, pi]`` in one piece: ``[b, pi]`` if
+    ``b <= pi``, else ``[0, b - pi]``.  ``hi <= lo``: no chip."""
+    if du == 0.0 and dw == 0.0:
+        return phi_st, phi_st
+    b = (-math.atan2(dw, du)) % (2.0 * math.pi)
+    if b <= math.pi:
+        return max(phi_st, b), phi_ex
+    return phi_st, min(phi_ex, b - math.pi)
+
+
+@njit(cache=True)
 def step_tool_forces_N(
-    k, n_flutes, axial_depth_mm, feed_per_tooth_mm, phi_st, phi_ex, spindle_angle_rad, step_angle_rad, lag_rad
+    k, n_flutes, axial_depth_mm, chip_u, chip_w, phi_st, phi_ex, spindle_angle_rad, step_angle_rad, lag_rad
 ):  # pragma: no cover - compiled
     """Force on the tool, feed frame (N), averaged over one physics step, summed over the flutes.
 
     ``k`` is :meth:`CuttingCoefficients.as_array`.  Flute 0's tip turns from
     ``spindle_angle_rad`` through ``step_angle_rad`` (> 0) during the step; flute j trails it by
-    ``2 pi j/N``.  A helical flute's edge at height ``z`` above the bottom of the cut lags its
-    tip by ``lag_rad z/a`` (``lag_rad = 2 a tan(helix)/D``; 0: straight flutes).  The average is
-    exact, so the force the twin applies carries the same impulse as the continuous model,
-    whatever the timestep: straight flutes integrate :func:`flute_force_integral` over the
-    engaged part of the step; helical ones integrate the flute's force
-    ``a/lag [Q(clip(phi)) - Q(clip(phi - lag))]`` (at unit depth; the integral over the
-    discs ``dz`` turned into one over their angles) once more, over the step
-    (:func:`_clipped_double_integral`), the edge's whole turns (``lag`` over 2 pi) taken at once.
+    ``2 pi j/N`` and cuts the chip ``h = chip_u[j] sin(phi) + chip_w[j] cos(phi)`` (mm; its
+    chip vector in the feed frame, :func:`chip_arc`: only where h > 0; ``chip_u = c``,
+    ``chip_w = 0``: the feed per tooth alone).  A helical flute's edge at height ``z`` above the
+    bottom of the cut lags its tip by ``lag_rad z/a`` (``lag_rad = 2 a tan(helix)/D``; 0:
+    straight flutes).  The average is exact for the step's chip vectors, so the force the twin
+    applies carries the same impulse as the continuous model, whatever the timestep: straight
+    flutes integrate :func:`flute_force_integral` over the engaged part of the step; helical
+    ones integrate the flute's force ``a/lag [Q(clip(phi)) - Q(clip(phi - lag))]`` (at unit
+    depth; the integral over the discs ``dz`` turned into one over their angles) once more, over
+    the step (:func:`_clipped_double_integral`), the edge's whole turns (``lag`` over 2 pi)
+    taken at once.
     """
     fx = fy = fz = 0.0
     two_pi = 2.0 * math.pi
     pitch = two_pi / n_flutes
-    if lag_rad * n_flutes < 1e-6:  # straight flutes (within 1 urad of lag per flute pitch)
-        for j in range(n_flutes):
-            start = (spindle_angle_rad - j * pitch) % two_pi
-            for shift in (0.0, -two_pi):  # the step may wrap past 2 pi into the next revolution
-                lo = max(start + shift, phi_st)
-                hi = min(start + shift + step_angle_rad, phi_ex)
-                if hi > lo:
-                    qh = flute_force_integral(k, axial_depth_mm, feed_per_tooth_mm, hi)
-                    ql = flute_force_integral(k, axial_depth_mm, feed_per_tooth_mm, lo)
-                    fx += qh[0] - ql[0]
-                    fy += qh[1] - ql[1]
-                    fz += qh[2] - ql[2]
-        return fx / step_angle_rad, fy / step_angle_rad, fz / step_angle_rad
-    per_rad = axial_depth_mm / lag_rad  # depth per radian of lag (mm/rad)
+    straight = lag_rad * n_flutes < 1e-6  # within 1 urad of lag per flute pitch
+    per_rad = axial_depth_mm / lag_rad if not straight else 0.0  # depth per radian of lag (mm/rad)
     turns = math.floor(lag_rad / two_pi)
     rest = lag_rad - turns * two_pi
-    if turns > 0:  # each whole turn of the edge sweeps every angle once: the arc's whole force
-        qh = flute_force_integral(k, 1.0, feed_per_tooth_mm, phi_ex)
-        ql = flute_force_integral(k, 1.0, feed_per_tooth_mm, phi_st)
-        whole = n_flutes * turns * per_rad
-        fx, fy, fz = whole * (qh[0] - ql[0]), whole * (qh[1] - ql[1]), whole * (qh[2] - ql[2])
-    if rest <= 0.0:
-        return fx, fy, fz
-    c = feed_per_tooth_mm
     scale = per_rad / step_angle_rad
     for j in range(n_flutes):
+        du, dw = chip_u[j], chip_w[j]
+        st, ex = chip_arc(phi_st, phi_ex, du, dw)
+        if ex <= st:
+            continue
         start = (spindle_angle_rad - j * pitch) % two_pi
+        if straight:
+            for shift in (0.0, -two_pi):  # the step may wrap past 2 pi into the next revolution
+                lo = max(start + shift, st)
+                hi = min(start + shift + step_angle_rad, ex)
+                if hi > lo:
+                    qh = flute_force_integral(k, axial_depth_mm, du, dw, hi)
+                    ql = flute_force_integral(k, axial_depth_mm, du, dw, lo)
+                    fx += (qh[0] - ql[0]) / step_angle_rad
+                    fy += (qh[1] - ql[1]) / step_angle_rad
+                    fz += (qh[2] - ql[2]) / step_angle_rad
+            continue
+        if turns > 0:  # each whole turn of the edge sweeps every angle once: the arc's whole force
+            qh = flute_force_integral(k, 1.0, du, dw, ex)
+            ql = flute_force_integral(k, 1.0, du, dw, st)
+            whole = turns * per_rad
+            fx, fy, fz = fx + whole * (qh[0] - ql[0]), fy + whole * (qh[1] - ql[1]), fz + whole * (qh[2] - ql[2])
+        if rest <= 0.0:
+            continue
         # the arc's copies one revolution apart that the swept angles [start - rest, start + step] meet
         for m in range(
-            math.floor((start - rest - phi_ex) / two_pi), math.floor((start + step_angle_rad - phi_st) / two_pi) + 1
+            math.floor((start - rest - ex) / two_pi), math.floor((start + step_angle_rad - st) / two_pi) + 1
         ):
             u = start - m * two_pi
-            g1 = _clipped_double_integral(k, c, phi_st, phi_ex, u + step_angle_rad)
-            g0 = _clipped_double_integral(k, c, phi_st, phi_ex, u)
-            h1 = _clipped_double_integral(k, c, phi_st, phi_ex, u + step_angle_rad - rest)
-            h0 = _clipped_double_integral(k, c, phi_st, phi_ex, u - rest)
+            g1 = _clipped_double_integral(k, du, dw, st, ex, u + step_angle_rad)
+            g0 = _clipped_double_integral(k, du, dw, st, ex, u)
+            h1 = _clipped_double_integral(k, du, dw, st, ex, u + step_angle_rad - rest)
+            h0 = _clipped_double_integral(k, du, dw, st, ex, u - rest)
             fx += scale * (g1[0] - g0[0] - h1[0] + h0[0])
             fy += scale * (g1[1] - g0[1] - h1[1] + h0[1])
             fz += scale * (g1[2] - g0[2] - h1[2] + h0[2])
@@ -336,18 +366,18 @@ class EndMilling:
     def kernel_arrays(self, machine) -> tuple[int, np.ndarray, np.ndarray]:
         """``(END_MILLING, params, state)`` for :func:`workpiece_forces`.
 
-        The feed per tooth and its direction are the workpiece's displacement over the last
-        tooth period, ``c = |r(t - T) - r(t)|`` (linear interpolation between physics steps;
-        the pose at t = 0 before that): the chip the previous flute left.  Vibration of the
-        table at the tooth frequency and its harmonics cancels out of it, as in the
-        regenerative chip-thickness model with a rigid tool.  The state holds the step count,
-        the feed direction (held through stops) and a ring buffer of workpiece positions (m).
+        The chip is regenerative (:func:`_chips`): where the tool is relative to the workpiece
+        at the middle of the step less where it was when the last tooth to cut at the same angle
+        passed (one tooth period back, or more where teeth left the cut), projected on the
+        edge's normal, and none where that is negative.  The feed frame is the reference's
+        (the planned feed direction, held through stops); the planned feed per tooth sets a
+        Kienzle material's coefficients.  The state holds the step count, the feed direction,
+        the last vibration and a ring buffer of the tool's positions (m).
         """
         phi_st, phi_ex = immersion_angles(self.radial_depth_mm, self.diameter_mm, self.mode)
         dt = machine.model.opt.timestep
         lag_steps = 1.0 / self.tooth_frequency_hz / dt
-        lag_lo = int(lag_steps)
-        n_hist = lag_lo + 2
+        n_hist = history_rows(lag_steps)
         lo, hi = _window(self.start_s, self.stop_s, dt)
         params = pack_slots(
             END_MILLING_SLOTS,
@@ -361,8 +391,7 @@ class EndMilling:
                 "omega": 2.0 * math.pi * self.spindle_rpm / 60.0,
                 "phase0": _spindle_phase(self.spindle_phase_rad, self.seed),
                 "dt": dt,
-                "lag_lo": lag_lo,
-                "lag_frac": lag_steps - lag_lo,
+                "lag_steps": lag_steps,
                 "lo": lo,
                 "hi": hi,
                 "n_hist": n_hist,
@@ -454,8 +483,7 @@ END_MILLING_SLOTS = (
     "omega",
     "phase0",
     "dt",
-    "lag_lo",
-    "lag_frac",
+    "lag_steps",
     "lo",
     "hi",
     "n_hist",
@@ -486,11 +514,21 @@ PM_DEPTH2, PM_OMEGA = PM_COLUMNS.index("depth2_mm"), PM_COLUMNS.index("omega")
 PM_ANGLE, PM_TOOL = PM_COLUMNS.index("angle"), PM_COLUMNS.index("tool")
 #: Columns from one engaged arc's to the next's (phi_st1 to phi_st2).
 PM_ARC_STRIDE = PM_COLUMNS.index("phi_st2") - PM_PHI_ST1
-#: A milling kernel's state: the step count and the feed direction held through stops, then the
-#: ring buffer of the workpiece's XY positions (:func:`_record_position`).
-CHIP_STATE = ("steps", "feed_x", "feed_y")
-CHIP_STEPS, CHIP_FEED_X, CHIP_FEED_Y = (CHIP_STATE.index(name) for name in CHIP_STATE)
+#: A milling kernel's state: the step count, the feed direction held through stops and the last
+#: once-per-tooth difference of the vibration (feed frame, mm; :func:`_probe`), then the ring
+#: buffer of the tool's XY position relative to the workpiece (:func:`_record_position`).
+CHIP_STATE = ("steps", "feed_x", "feed_y", "vib_u", "vib_w")
+CHIP_STEPS, CHIP_FEED_X, CHIP_FEED_Y, CHIP_VIB_U, CHIP_VIB_W = (CHIP_STATE.index(name) for name in CHIP_STATE)
 CHIP_HISTORY = len(CHIP_STATE)
+#: Earlier tooth passes a chip is measured against (multiple regeneration): the surface at a
+#: tooth's angle is the one the last of them to cut there left.
+REGENERATIONS = 3
+#: What the milling kernels add up over each physics step that cuts, for the chatter indicator
+#: (:mod:`twin.process.chatter`): the steps, the squares of the once-per-tooth difference of
+#: the vibration along and across the feed (mm^2), its sign changes along and across, and the
+#: square of the planned feed per tooth (mm^2).
+PROBE = ("cut_steps", "vib_u2", "vib_w2", "crossings_u", "crossings_w", "feed2")
+PROBE_STEPS, PROBE_U2, PROBE_W2, PROBE_CROSS_U, PROBE_CROSS_W, PROBE_FEED2 = (PROBE.index(name) for name in PROBE)
 #: Columns of :func:`workpiece_forces`'s ``fops``: each model's kind and where its parameters and
 #: state lie in ``fpar`` and ``fstate``.
 FORCE_OP_COLUMNS = ("kind", "par_start", "par_len", "state_start", "state_len")
@@ -499,9 +537,15 @@ FORCE_KIND, FORCE_PAR_START, FORCE_PAR_LEN, FORCE_STATE_START, FORCE_STATE_LEN =
 )
 
 
+def history_rows(tooth_period_steps: float) -> int:
+    """Rows of a milling kernel's position ring buffer: :data:`REGENERATIONS` tooth periods
+    (physics steps) and two to interpolate in."""
+    return int(REGENERATIONS * tooth_period_steps) + 2
+
+
 def chip_state(n_hist: int, feed_direction: tuple[float, float]) -> np.ndarray:
     """A milling kernel's initial state (:data:`CHIP_STATE`, then a ring buffer of ``n_hist``
-    XY positions), with the feed direction held until the workpiece first moves (a unit vector,
+    XY positions), with the feed direction held until the reference first moves (a unit vector,
     or zero: no force until then)."""
     state = np.zeros(CHIP_HISTORY + 2 * n_hist)
     state[CHIP_FEED_X], state[CHIP_FEED_Y] = feed_direction
@@ -519,13 +563,7 @@ EM_K, EM_N_FLUTES, EM_DEPTH, EM_LAG, EM_PHI_ST, EM_PHI_EX = (
     _EM["phi_st"],
     _EM["phi_ex"],
 )
-EM_OMEGA, EM_PHASE0, EM_DT, EM_LAG_LO, EM_LAG_FRAC = (
-    _EM["omega"],
-    _EM["phase0"],
-    _EM["dt"],
-    _EM["lag_lo"],
-    _EM["lag_frac"],
-)
+EM_OMEGA, EM_PHASE0, EM_DT, EM_LAG_STEPS = _EM["omega"], _EM["phase0"], _EM["dt"], _EM["lag_steps"]
 EM_LO, EM_HI, EM_N_HIST, EM_JACOBIAN = _EM["lo"], _EM["hi"], _EM["n_hist"], len(END_MILLING_SLOTS)
 EM_K_END = _EM["mc"] + 1
 AF_K_IL, AF_K_C, AF_R, AF_OMEGA = _AF["k_il"], _AF["k_c"], _AF["harmonic_fraction"], _AF["omega"]
@@ -541,17 +579,18 @@ def pack_slots(slots: tuple[str, ...], values: dict[str, float], jacobian: np.nd
 
 
 @njit(cache=True)
-def _record_position(jac, qpos, state, n):  # pragma: no cover - compiled
-    """Step count (``state``'s :data:`CHIP_STEPS`) on by one and the workpiece's XY position
-    (``jac @ qpos``, m) into the ring buffer of ``n`` rows after :data:`CHIP_STATE` (filled with
-    it at the first step); returns the step index and the buffer."""
+def _record_position(jac, qpos, qvel, dt, state, n):  # pragma: no cover - compiled
+    """Step count (``state``'s :data:`CHIP_STEPS`) on by one and the tool's XY position
+    relative to the workpiece at the middle of the step, ``-jac @ (qpos + qvel dt/2)`` (m; the
+    spindle stands still in the world), into the ring buffer of ``n`` rows after
+    :data:`CHIP_STATE` (filled with it at the first step); returns the step index and the buffer."""
     hist = state[CHIP_HISTORY:].reshape((n, 2))
     i = int(state[CHIP_STEPS])
     state[CHIP_STEPS] = i + 1
     for r in range(2):
         acc = 0.0
         for j in range(jac.shape[1]):
-            acc += jac[r, j] * qpos[j]
+            acc -= jac[r, j] * (qpos[j] + 0.5 * dt * qvel[j])
         hist[i % n, r] = acc
     if i == 0:
         for m in range(1, n):
@@ -560,17 +599,67 @@ def _record_position(jac, qpos, state, n):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _chip(hist, i, n, lag_lo, frac, state):  # pragma: no cover - compiled
-    """The feed per tooth (m): the workpiece's displacement since one tooth period ago (between
-    steps ``i - lag_lo - 1`` and ``i - lag_lo``), and the feed direction, held in ``state``
+def _feed_frame(feed_velocity, state):  # pragma: no cover - compiled
+    """The planned feed: the tool's speed relative to the workpiece (m/s, the reference's:
+    ``-feed_velocity``, the workpiece's planned velocity) and its direction, held in ``state``
     (:data:`CHIP_FEED_X`, :data:`CHIP_FEED_Y`) through stops."""
-    p0, p1 = max(i - lag_lo, 0) % n, max(i - lag_lo - 1, 0) % n
-    dx = (1.0 - frac) * hist[p0, 0] + frac * hist[p1, 0] - hist[i % n, 0]
-    dy = (1.0 - frac) * hist[p0, 1] + frac * hist[p1, 1] - hist[i % n, 1]
-    c_m = math.hypot(dx, dy)
-    if c_m > MIN_FEED_M:
-        state[CHIP_FEED_X], state[CHIP_FEED_Y] = dx / c_m, dy / c_m
-    return c_m, state[CHIP_FEED_X], state[CHIP_FEED_Y]
+    vx, vy = -feed_velocity[0], -feed_velocity[1]
+    speed = math.hypot(vx, vy)
+    if speed > MIN_FEED_M_PER_S:
+        state[CHIP_FEED_X], state[CHIP_FEED_Y] = vx / speed, vy / speed
+    return speed, state[CHIP_FEED_X], state[CHIP_FEED_Y]
+
+
+@njit(cache=True)
+def _past(hist, i, n, lag):  # pragma: no cover - compiled
+    """The buffer's position ``lag`` (> 0, fractional) steps before step ``i`` (linear
+    interpolation; the first recorded position before it)."""
+    lo = int(lag)
+    frac = lag - lo
+    p0, p1 = max(i - lo, 0) % n, max(i - lo - 1, 0) % n
+    return (1.0 - frac) * hist[p0, 0] + frac * hist[p1, 0], (1.0 - frac) * hist[p0, 1] + frac * hist[p1, 1]
+
+
+@njit(cache=True)
+def _chips(hist, i, n, lag_steps, ux, uy, angle, n_flutes, chip_u, chip_w):  # pragma: no cover - compiled
+    """Each flute's chip vector (feed frame, mm) into ``chip_u``, ``chip_w``: where the tool is
+    now less where it was when the last earlier tooth to cut at this flute's angle ``angle - 2 pi
+    j/N`` (rad) passed it, ``m`` tooth periods (``lag_steps`` physics steps each) ago, ``m``
+    from 1 to :data:`REGENERATIONS` the one that leaves the thinnest chip there (multiple
+    regeneration: a tooth that left the cut left the surface before it).  Its projection on the
+    edge's normal is the chip thickness (:func:`step_tool_forces_N`).  Returns the tool's motion
+    over the last tooth period, feed frame (mm)."""
+    px, py = hist[i % n, 0], hist[i % n, 1]
+    pitch = 2.0 * math.pi / n_flutes
+    for j in range(n_flutes):
+        s, c = math.sin(angle - j * pitch), math.cos(angle - j * pitch)
+        best = math.inf
+        for m in range(1, REGENERATIONS + 1):
+            qx, qy = _past(hist, i, n, m * lag_steps)
+            dx, dy = (px - qx) * 1e3, (py - qy) * 1e3
+            du, dw = dx * ux + dy * uy, dy * ux - dx * uy  # along the feed and along z x feed
+            h = du * s + dw * c
+            if h < best:
+                best, chip_u[j], chip_w[j] = h, du, dw
+    qx, qy = _past(hist, i, n, lag_steps)
+    dx, dy = (px - qx) * 1e3, (py - qy) * 1e3
+    return dx * ux + dy * uy, dy * ux - dx * uy
+
+
+@njit(cache=True)
+def _probe(state, du, dw, feed_mm, probe):  # pragma: no cover - compiled
+    """Add one cutting step to ``probe`` (:data:`PROBE`): the once-per-tooth difference of the
+    vibration, ``(du - feed_mm, dw)`` (mm: the chip vector one tooth period back less the planned
+    feed per tooth), its squares and sign changes since the last cutting step (kept in
+    ``state``)."""
+    vu, vw = du - feed_mm, dw
+    probe[PROBE_STEPS] += 1.0
+    probe[PROBE_U2] += vu * vu
+    probe[PROBE_W2] += vw * vw
+    probe[PROBE_CROSS_U] += 1.0 if vu * state[CHIP_VIB_U] < 0.0 else 0.0
+    probe[PROBE_CROSS_W] += 1.0 if vw * state[CHIP_VIB_W] < 0.0 else 0.0
+    probe[PROBE_FEED2] += feed_mm * feed_mm
+    state[CHIP_VIB_U], state[CHIP_VIB_W] = vu, vw
 
 
 @njit(cache=True)
@@ -582,52 +671,64 @@ def _on_workpiece(fx, fy, fz, ux, uy, out):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _end_milling(par, state, qpos, t, out):  # pragma: no cover - compiled
-    """Add one step's mechanistic milling force on the workpiece (world frame, N) to ``out``."""
+def _end_milling(par, state, qpos, qvel, feed_velocity, t, out, probe):  # pragma: no cover - compiled
+    """Add one step's mechanistic milling force on the workpiece (world frame, N) to ``out``
+    and the step's vibration to ``probe``."""
     k = par[EM_K:EM_K_END]
     n_flutes, a, lag, phi_st, phi_ex = int(par[EM_N_FLUTES]), par[EM_DEPTH], par[EM_LAG], par[EM_PHI_ST], par[EM_PHI_EX]
-    omega, phase0, dt = par[EM_OMEGA], par[EM_PHASE0], par[EM_DT]
-    lag_lo, frac, lo, hi, n = int(par[EM_LAG_LO]), par[EM_LAG_FRAC], par[EM_LO], par[EM_HI], int(par[EM_N_HIST])
-    i, hist = _record_position(par[EM_JACOBIAN:].reshape((2, -1)), qpos, state, n)
+    omega, phase0, dt, lag_steps = par[EM_OMEGA], par[EM_PHASE0], par[EM_DT], par[EM_LAG_STEPS]
+    lo, hi, n = par[EM_LO], par[EM_HI], int(par[EM_N_HIST])
+    i, hist = _record_position(par[EM_JACOBIAN:].reshape((2, -1)), qpos, qvel, dt, state, n)
+    speed, ux, uy = _feed_frame(feed_velocity, state)
     if not (lo <= t < hi):
         return
-    c_m, ux, uy = _chip(hist, i, n, lag_lo, frac, state)
-    k = kienzle_coefficients(k, c_m * 1e3, phi_st, phi_ex)
-    fx, fy, fz = step_tool_forces_N(k, n_flutes, a, c_m * 1e3, phi_st, phi_ex, phase0 + omega * t, omega * dt, lag)
+    feed_mm = speed * lag_steps * dt * 1e3
+    angle = phase0 + omega * t
+    chip_u, chip_w = np.empty(n_flutes), np.empty(n_flutes)
+    du, dw = _chips(hist, i, n, lag_steps, ux, uy, angle + 0.5 * omega * dt - 0.5 * lag, n_flutes, chip_u, chip_w)
+    _probe(state, du, dw, feed_mm, probe)
+    k = kienzle_coefficients(k, feed_mm, phi_st, phi_ex)
+    fx, fy, fz = step_tool_forces_N(k, n_flutes, a, chip_u, chip_w, phi_st, phi_ex, angle, omega * dt, lag)
     _on_workpiece(fx, fy, fz, ux, uy, out)
 
 
 @njit(cache=True)
-def _program_milling(par, state, qpos, t, out):  # pragma: no cover - compiled
+def _program_milling(par, state, qpos, qvel, feed_velocity, t, out, probe):  # pragma: no cover - compiled
     """Add one step's milling force of a part program on the workpiece (world frame, N) to
-    ``out``: the engagement, spindle and tool by time from the table, the chip from the
-    workpiece's displacement over the last tooth period (as :func:`_end_milling`)."""
+    ``out`` and its vibration to ``probe``: the engagement, spindle and tool by time from the
+    table, the chip regenerated from the tool's motion relative to the workpiece (as
+    :func:`_end_milling`)."""
     n_tools, period, n_table = int(par[PM_N_TOOLS]), par[PM_PERIOD], int(par[PM_N_TABLE])
     dt, n, n_jac = par[PM_DT], int(par[PM_N_HIST]), int(par[PM_N_JAC])
     jac = par[PM_JACOBIAN : PM_JACOBIAN + n_jac].reshape((2, -1))
     tools_end = PM_JACOBIAN + n_jac + PM_TOOL_WIDTH * n_tools
     tools = par[PM_JACOBIAN + n_jac : tools_end].reshape((n_tools, PM_TOOL_WIDTH))
     table = par[tools_end:].reshape((n_table, PM_WIDTH))
-    i, hist = _record_position(jac, qpos, state, n)
+    i, hist = _record_position(jac, qpos, qvel, dt, state, n)
+    speed, ux, uy = _feed_frame(feed_velocity, state)
     row = min(max(int(t / period), 0), n_table - 1)
     omega = table[row, PM_OMEGA]
-    if (table[row, PM_DEPTH1] <= 0.0 and table[row, PM_DEPTH2] <= 0.0) or omega <= 0.0:
+    if (table[row, PM_DEPTH1] <= 0.0 and table[row, PM_DEPTH2] <= 0.0) or omega <= 0.0 or ux == uy == 0.0:
         return
     tool = int(table[row, PM_TOOL])
     k = tools[tool, PM_TOOL_K_FIRST:PM_TOOL_K_END]
     n_flutes, lag_per_mm = int(tools[tool, PM_TOOL_FLUTES]), tools[tool, PM_TOOL_LAG]
     lag_steps = 2.0 * math.pi / (omega * n_flutes) / dt
-    lag_lo = int(lag_steps)
-    c_m, ux, uy = _chip(hist, i, n, lag_lo, lag_steps - lag_lo, state)
+    feed_mm = speed * lag_steps * dt * 1e3
     angle = table[row, PM_ANGLE] + omega * (t - row * period)
+    chip_u, chip_w = np.empty(n_flutes), np.empty(n_flutes)
+    depth = max(table[row, PM_DEPTH1], table[row, PM_DEPTH2])
+    mid = angle + 0.5 * omega * dt - 0.5 * depth * lag_per_mm
+    du, dw = _chips(hist, i, n, lag_steps, ux, uy, mid, n_flutes, chip_u, chip_w)
+    _probe(state, du, dw, feed_mm, probe)
     fx = fy = fz = 0.0
     for arc in range(2):
         first = PM_ARC_STRIDE * arc
         st, ex = table[row, PM_PHI_ST1 + first], table[row, PM_PHI_EX1 + first]
         a = table[row, PM_DEPTH1 + first]
         if ex > st and a > 0.0:
-            ka = kienzle_coefficients(k, c_m * 1e3, st, ex)
-            gx, gy, gz = step_tool_forces_N(ka, n_flutes, a, c_m * 1e3, st, ex, angle, omega * dt, a * lag_per_mm)
+            ka = kienzle_coefficients(k, feed_mm, st, ex)
+            gx, gy, gz = step_tool_forces_N(ka, n_flutes, a, chip_u, chip_w, st, ex, angle, omega * dt, a * lag_per_mm)
             fx, fy, fz = fx + gx, fy + gy, fz + gz
     _on_workpiece(fx, fy, fz, ux, uy, out)
 
@@ -650,18 +751,20 @@ def _average_force(par, qvel, t, out):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def workpiece_forces(fops, fpar, fstate, qpos, qvel, t, xfrc, body, f_sum):  # pragma: no cover - compiled
+def workpiece_forces(fops, fpar, fstate, qpos, qvel, feed_velocity, t, xfrc, body, f_sum, probe):  # pragma: no cover
     """Write the summed force of every model on the workpiece for the physics step starting at
-    time ``t`` (s) into ``xfrc[body, :3]`` (N, world frame) and add it to ``f_sum`` (3,).
-    ``fops`` rows: :data:`FORCE_OP_COLUMNS`."""
+    time ``t`` (s) into ``xfrc[body, :3]`` (N, world frame) and add it to ``f_sum`` (3,);
+    ``feed_velocity`` (2,) is the workpiece's planned XY velocity (m/s, the reference's), which
+    sets the feed frame; the milling models add the step's vibration to ``probe``
+    (:data:`PROBE`).  ``fops`` rows: :data:`FORCE_OP_COLUMNS`."""
     out = np.zeros(3)
     for m in range(fops.shape[0]):
         kind, p0, pn = fops[m, FORCE_KIND], fops[m, FORCE_PAR_START], fops[m, FORCE_PAR_LEN]
         s0, sn = fops[m, FORCE_STATE_START], fops[m, FORCE_STATE_LEN]
         if kind == END_MILLING:
-            _end_milling(fpar[p0 : p0 + pn], fstate[s0 : s0 + sn], qpos, t, out)
+            _end_milling(fpar[p0 : p0 + pn], fstate[s0 : s0 + sn], qpos, qvel, feed_velocity, t, out, probe)
         elif kind == PROGRAM_MILLING:
-            _program_milling(fpar[p0 : p0 + pn], fstate[s0 : s0 + sn], qpos, t, out)
+            _program_milling(fpar[p0 : p0 + pn], fstate[s0 : s0 + sn], qpos, qvel, feed_velocity, t, out, probe)
         else:
             _average_force(fpar[p0 : p0 + pn], qvel, t, out)
     for i in range(3):
@@ -695,11 +798,15 @@ class ForceModels:
     def __len__(self) -> int:
         return len(self.fops)
 
-    def force_N(self, qpos, qvel, t: float) -> np.ndarray:
-        """:func:`workpiece_forces` of these models for one step starting at ``t`` (s): the
-        force on the workpiece (N, world frame), shape (3,)."""
+    def force_N(self, qpos, qvel, t: float, feed_velocity=(0.0, 0.0)) -> np.ndarray:
+        """:func:`workpiece_forces` of these models for one step starting at ``t`` (s), the
+        workpiece planned to move at ``feed_velocity`` (m/s): the force on the workpiece (N,
+        world frame), shape (3,)."""
         xfrc, total = np.zeros((1, 6)), np.zeros(3)
-        workpiece_forces(self.fops, self.fpar, self.fstate, qpos, qvel, t, xfrc, 0, total)
+        velocity = np.asarray(feed_velocity, float)
+        workpiece_forces(
+            self.fops, self.fpar, self.fstate, qpos, qvel, velocity, t, xfrc, 0, total, np.zeros(len(PROBE))
+        )
         return total
 
 
@@ -761,6 +868,9 @@ class EndMillingSpec(DisturbanceSpecBase):
     spindle_phase_rad: float | None = Field(None, description="None: drawn from the seed")
     seed: int | None = Field(None, ge=0, description="default: the scenario's seed")
     helix_deg: float = Field(0.0, ge=0.0, lt=MAX_HELIX_DEG, description="helix angle of the flutes, deg (0: straight)")
+    dynamics: ToolDynamicsSpec | None = Field(
+        None, description="the structure at the tool tip: modes in X/Y or a measured FRF (twin.process.tool_dynamics)"
+    )
 
 
 class AverageForceSpec(DisturbanceSpecBase):

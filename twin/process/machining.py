@@ -43,8 +43,10 @@ from twin.process.cutting import (
     CoefficientsSpec,
     chip_state,
     helix_lag_rad_per_mm,
+    history_rows,
 )
 from twin.process.materials import MATERIALS, CuttingCoefficients
+from twin.process.tool_dynamics import ToolDynamicsSpec
 from twin.spec import MAX_MM, Millimetres, StrictSpec
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
@@ -241,6 +243,9 @@ class ToolSpec(StrictSpec):
     )
     coefficients: CoefficientsSpec = Field(
         default_factory=CoefficientsSpec, description="the user's own coefficients, over the material's"
+    )
+    dynamics: ToolDynamicsSpec | None = Field(
+        None, description="the structure at the tool tip: modes in X/Y or a measured FRF (twin.process.tool_dynamics)"
     )
 
     def cutting_coefficients(self) -> CuttingCoefficients:
@@ -809,7 +814,7 @@ class ProgramMilling:
         flutes = np.array([t.n_flutes for t in self.tools])[self.tool_index]
         turning = self.spindle_rpm >= MIN_SPINDLE_RPM
         lag = np.max(2.0 * math.pi / (omega[turning] * flutes[turning]) / dt) if turning.any() else 1.0
-        n_hist = int(lag) + 2
+        n_hist = history_rows(lag)
         columns = {name: self.table[:, COLUMNS.index(name)] for name in COLUMNS}
         columns.update(omega=omega, angle=angle, tool=self.tool_index)
         rows = np.column_stack([columns[name] for name in PM_COLUMNS]).astype(float)

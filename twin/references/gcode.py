@@ -14,9 +14,10 @@ from functools import cached_property
 from typing import ClassVar, Literal
 
 import numpy as np
-from pydantic import Field
+from pydantic import Field, PositiveFloat
 
 from twin.errors import TwinInputError, input_file
+from twin.gcode.checks import DriveCheck, TravelCheck, plan_warnings
 from twin.gcode.planner import (
     MAX_PROGRAM_SAMPLES,
     MAX_SAMPLES,
@@ -32,11 +33,13 @@ from twin.gcode.planner import (
 )
 from twin.gcode.reader import Reader, Settings
 from twin.gcode.report import planned_summary
+from twin.machines import BuiltMachine
 from twin.machines import build as build_machine
+from twin.machines.rigid_drive import rigid_drives, table_travel_m
 from twin.process.machining import COLUMNS, ProgramCut, engaged_degrees
 from twin.references.kinds import ReferenceContext, ReferenceSpecBase, register, two_axes
 from twin.settings import set_fields
-from twin.spec import Millimetres, validation_error
+from twin.spec import Millimetres, StrictSpec, validation_error
 
 #: The work coordinate systems a program may select.
 WORK_SYSTEMS = ("G54", "G55", "G56", "G57", "G58", "G59")
@@ -139,17 +142,26 @@ class GcodeReference(_Samples):
     cut : twin.process.machining.ProgramCut or None
         With a stock: the program through it (engagement at each sample, the stock as the program
         leaves it, machining warnings).
+    checks : tuple of TravelCheck, DriveCheck or None
+        The checks of the program against the machine (:mod:`twin.gcode.checks`), done.
     """
 
-    def __init__(self, planned: Plan, axes: tuple[int, ...], n_lines: int, cut: ProgramCut | None = None):
-        self.plan, self.axes, self.n_lines, self.cut = planned, axes, n_lines, cut
+    def __init__(
+        self,
+        planned: Plan,
+        axes: tuple[int, ...],
+        n_lines: int,
+        cut: ProgramCut | None = None,
+        checks: tuple[TravelCheck | DriveCheck | None, ...] = (),
+    ):
+        self.plan, self.axes, self.n_lines, self.cut, self.checks = planned, axes, n_lines, cut, checks
         self.n_axes = len(axes)
         self.period_s = planned.period_s
         self.n_samples = len(planned.position)
 
     def cutting(self, cut: ProgramCut) -> GcodeReference:
         """The same program cutting a stock (``cut``, :func:`twin.process.machining.program_milling`)."""
-        return GcodeReference(self.plan, self.axes, self.n_lines, cut)
+        return GcodeReference(self.plan, self.axes, self.n_lines, cut, self.checks)
 
     @property
     def warnings(self) -> list[dict]:
@@ -160,6 +172,12 @@ class GcodeReference(_Samples):
     def warnings_total(self) -> int:
         """Every warning, listed or not."""
         return 0 if self.cut is None else self.cut.warnings_total
+
+    @property
+    def plan_warnings(self) -> tuple[list[dict], int]:
+        """Moves outside the travel (under ``travel = "warn"``) and what the drives cannot
+        deliver, by line (:func:`twin.gcode.checks.plan_warnings`), and how many in all."""
+        return plan_warnings(*self.checks)
 
     def _window(self, t):
         return 0, self.plan.position, self.plan.velocity, self.plan.acceleration, self.plan.line
@@ -213,10 +231,23 @@ class StreamedGcodeReference(_Samples):
         Which of x, y, z the machine's axes follow.
     n_lines : int
         The program's lines read, to its end.
+    checks : tuple of TravelCheck, DriveCheck or None
+        The checks of the program against the machine: the drive's is fed the samples as they
+        are planned (its warnings are complete once the run has reached the program's end).
     """
 
-    def __init__(self, moves, limits, settings, facts, n_samples: int, axes: tuple[int, ...], n_lines: int):
-        self.axes, self.n_axes, self.n_lines = axes, len(axes), n_lines
+    def __init__(
+        self,
+        moves,
+        limits,
+        settings,
+        facts,
+        n_samples: int,
+        axes: tuple[int, ...],
+        n_lines: int,
+        checks: tuple[TravelCheck | DriveCheck | None, ...] = (),
+    ):
+        self.axes, self.n_axes, self.n_lines, self.checks = axes, len(axes), n_lines, checks
         self.period_s = SAMPLE_PERIOD_S
         self.n_samples = n_samples
         self.facts = facts
@@ -236,6 +267,9 @@ class StreamedGcodeReference(_Samples):
         end = self.first + len(p)
         while end < hi:
             chunk = next(self.chunks)
+            for check in self.checks:
+                if isinstance(check, DriveCheck):
+                    check.add(chunk.position, chunk.velocity, chunk.acceleration, chunk.line, self.facts.texts)
             parts.append((chunk.position, chunk.velocity, chunk.acceleration, chunk.line))
             end += len(chunk.position)
         if len(parts) > 1 or drop:
@@ -270,6 +304,11 @@ class StreamedGcodeReference(_Samples):
     @property
     def warnings_total(self) -> int:
         return 0
+
+    @property
+    def plan_warnings(self) -> tuple[list[dict], int]:
+        """As :attr:`GcodeReference.plan_warnings`, of the samples planned so far."""
+        return plan_warnings(*self.checks)
 
     @property
     def texts(self) -> dict[int, str]:
@@ -334,17 +373,19 @@ def build(spec: GcodeRef, ctx: ReferenceContext) -> GcodeReference | StreamedGco
     if unknown:
         raise TwinInputError("reference.type", spec.type, f"the machine's axes {ctx.axis_names} are not x, y, z")
     settings = ctx.planner if isinstance(ctx.planner, PlannerSettings) else PlannerSettings.model_validate(ctx.planner)
+    settings = with_machine_mode(settings, ctx.machine)
     path = input_file(spec.file, "reference.file")
     reader_settings = spec.reader_settings(ctx.tools, ctx.tool_diameters_mm)
     limits = settings.limits(ctx.machine.motion_limits)
     axes = tuple("xyz".index(a) for a in ctx.axis_names)
     reader = Reader(None, reader_settings, str(path), path=path)
     most, limit = (MAX_SAMPLES, STOCK_LIMIT) if ctx.stock else (MAX_PROGRAM_SAMPLES, PROGRAM_LIMIT)
+    travel, drive = program_checks(ctx.machine, settings, ctx.saturation_V)
     with planning_errors("reference.file", spec.file):
-        # a lower bound of its time from the moves alone first: a program too long is refused
-        # before any of it is planned
+        # a lower bound of its time from the moves alone first (and the travel): a program too
+        # long, or outside the travel, is refused before any of it is planned
         refuse_long(
-            Reader(None, reader_settings, str(path), path=path).moves(),
+            travel.passing(Reader(None, reader_settings, str(path), path=path).moves()),
             limits,
             settings,
             most * SAMPLE_PERIOD_S,
@@ -354,7 +395,9 @@ def build(spec: GcodeRef, ctx: ReferenceContext) -> GcodeReference | StreamedGco
             reader.moves(), limits, settings, MAX_SAMPLES if ctx.stock else HELD_SAMPLES
         )
     if held is not None:
-        return GcodeReference(held, axes, reader.lines_read)
+        if drive is not None:
+            drive.add(held.position, held.velocity, held.acceleration, held.line, held.texts)
+        return GcodeReference(held, axes, reader.lines_read, checks=(travel, drive))
     if samples > MAX_PROGRAM_SAMPLES:
         raise TwinInputError(
             "reference.file",
@@ -376,6 +419,7 @@ def build(spec: GcodeRef, ctx: ReferenceContext) -> GcodeReference | StreamedGco
         samples,
         axes,
         reader.lines_read,
+        (travel, drive),
     )
 
 
@@ -393,24 +437,66 @@ def planning_errors(field: str, file) -> Iterator[None]:
         raise TwinInputError(field, str(file), str(exc)) from None
 
 
-def planned_for(file, moves: list, machine: str, planner: PlannerSettings) -> dict:
+def with_machine_mode(settings: PlannerSettings, machine) -> PlannerSettings:
+    """The planner's settings with the machine file's ``planner_mode`` where the scenario (or
+    ``--set planner.mode``) gives none."""
+    if "mode" in settings.model_fields_set or machine.planner_mode is None:
+        return settings
+    return settings.model_copy(update={"mode": machine.planner_mode})
+
+
+def program_checks(
+    machine: BuiltMachine, settings: PlannerSettings, saturation_V: float | None
+) -> tuple[TravelCheck, DriveCheck | None]:
+    """The checks of a program against ``machine`` (:mod:`twin.gcode.checks`): its axes' travel
+    (none where its model's slides have no range: the papers' machines), and its drives where
+    the drive saturates (``saturation_V``, V; None: no drive check)."""
+    travel = TravelCheck({"xyz".index(a): r for a, r in table_travel_m(machine).items()}, settings.travel == "refuse")
+    if saturation_V is None:
+        return travel, None
+    return travel, DriveCheck({"xyz".index(a): d for a, d in rigid_drives(machine).items()}, saturation_V)
+
+
+def planned_for(file, moves: list, machine: str, planner: PlannerSettings, saturation_V: float | None = None) -> dict:
     """The ``planned`` table of ``twin gcode --machine``: the ``moves`` of ``file`` planned for
-    ``machine`` (:func:`twin.gcode.report.planned_summary`).
+    ``machine`` (:func:`twin.gcode.report.planned_summary`), checked against its travel and, with
+    ``saturation_V`` (V), its drives: ``warnings`` (and ``warnings_total`` where more than listed).
 
     Raises
     ------
     TwinInputError
-        An unknown machine, or a program the planner refuses (named as ``file``).
+        An unknown machine, or a program the planner refuses (named as ``file``), a move outside
+        the travel under ``travel = "refuse"`` among them.
     """
-    limits = planner.limits(build_machine(machine).motion_limits)
+    built = build_machine(machine)
+    planner = with_machine_mode(planner, built)
+    limits = planner.limits(built.motion_limits)
+    travel, drive = program_checks(built, planner, saturation_V)
     with planning_errors("file", file):
-        return planned_summary(plan(moves, limits, planner), limits)
+        travel.check(moves)
+        planned = plan(moves, limits, planner)
+    if drive is not None:
+        drive.add(planned.position, planned.velocity, planned.acceleration, planned.line, planned.texts)
+    summary = planned_summary(planned, limits)
+    rows, total = plan_warnings(travel, drive)
+    summary["warnings"] = rows
+    if total > len(rows):
+        summary["warnings_total"] = total
+    return summary
+
+
+class ProgramDrive(StrictSpec):
+    """``twin gcode --set drive.saturation_V=V``: the drive a program is checked against (a
+    scenario's ``[drive]`` table gives it to a run)."""
+
+    saturation_V: PositiveFloat | None = Field(None, description="the drive's saturation, V (None: no drive check)")
 
 
 def program_settings(file: str, settings: dict):
-    """The reader's table and the planner's settings for ``twin gcode FILE``: ``settings`` are
-    dotted paths below ``reference.`` (work_offsets_mm, tool_lengths_mm, tool_diameters_mm, g28_home_mm) and
-    ``planner.`` (:class:`~twin.gcode.planner.PlannerSettings`).
+    """The reader's table, the planner's settings and the drive's saturation (V or None) for
+    ``twin gcode FILE``: ``settings`` are dotted paths below ``reference.`` (work_offsets_mm,
+    tool_lengths_mm, tool_diameters_mm, g28_home_mm), ``planner.``
+    (:class:`~twin.gcode.planner.PlannerSettings`) and ``drive.`` (:class:`ProgramDrive`).
 
     Raises
     ------
@@ -419,17 +505,17 @@ def program_settings(file: str, settings: dict):
     """
     from pydantic import ValidationError
 
+    tables: dict[str, type[StrictSpec]] = {"reference": GcodeRef, "planner": PlannerSettings, "drive": ProgramDrive}
     for path in settings:
-        if not str(path).startswith(("reference.", "planner.")):
-            raise TwinInputError(f"--set {path}", settings[path], "give planner.KEY or reference.KEY")
-    data = set_fields({"reference": {"type": "gcode", "file": file}, "planner": {}}, settings, "--set ")
-    for key, model in (("reference", GcodeRef), ("planner", PlannerSettings)):
+        if str(path).split(".")[0] not in tables or "." not in str(path):
+            raise TwinInputError(f"--set {path}", settings[path], "give planner.KEY, reference.KEY or drive.KEY")
+    data = set_fields({"reference": {"type": "gcode", "file": file}, "planner": {}, "drive": {}}, settings, "--set ")
+    parsed = {}
+    for key, model in tables.items():
         try:
-            parsed = model.model_validate(data[key])
+            parsed[key] = model.model_validate(data[key])
         except ValidationError as exc:
             raise validation_error(exc, f"{key}.") from None
-        if key == "reference":
-            reference = parsed
-        else:
-            planner = parsed
-    return reference, planner
+    drive = parsed["drive"]
+    assert isinstance(drive, ProgramDrive)
+    return parsed["reference"], parsed["planner"], drive.saturation_V

@@ -35,10 +35,12 @@ class ReferenceContext:
         dict of its fields).
     tools : frozenset of int or None
         The T numbers of the scenario's ``[[tools]]`` (None: no list, any T word).
-    tool_diameters_mm : dict of int to float
-        The diameters of the scenario's ``[[tools]]`` by T number (mm; cutter compensation's).
     stock : bool
         Whether the scenario cuts a stock (a program's plan is then held whole).
+    saturation_V : float or None
+        The drive's saturation (V; None: none), what a program's drive check compares with.
+    tool_diameters_mm : dict of int to float
+        The diameters of the scenario's ``[[tools]]`` by T number (mm; cutter compensation's).
     """
 
     axis_names: list[str]
@@ -46,6 +48,7 @@ class ReferenceContext:
     planner: Any = field(default_factory=dict)
     tools: frozenset[int] | None = None
     stock: bool = False
+    saturation_V: float | None = None
     tool_diameters_mm: dict[int, float] = field(default_factory=dict)
 
 

@@ -38,8 +38,9 @@ def read_scenario_data(source: str | Path) -> dict:
 
 
 def _relative_to(data: dict, folder: Path) -> dict:
-    """``data`` with its file fields (a machine file, the reference's ``relative_paths``) made
-    relative to the scenario file's ``folder`` where they are relative paths."""
+    """``data`` with its file fields (a machine file, the reference's ``relative_paths``, a tool's
+    ``dynamics.frf_file``) made relative to the scenario file's ``folder`` where they are
+    relative paths."""
     machine = data.get("machine")
     if isinstance(machine, str) and is_machine_file(machine) and not Path(machine).is_absolute():
         data["machine"] = str(folder / machine)
@@ -49,7 +50,19 @@ def _relative_to(data: dict, folder: Path) -> dict:
             value = reference.get(key)
             if isinstance(value, str) and not Path(value).is_absolute():
                 reference[key] = str(folder / value)
+    tools = [data.get("tool"), *_dicts(data.get("tools")), *_dicts(data.get("disturbances"))]
+    for tool in tools:
+        dynamics = tool.get("dynamics") if isinstance(tool, dict) else None
+        if isinstance(dynamics, dict):
+            frf_file = dynamics.get("frf_file")
+            if isinstance(frf_file, str) and not Path(frf_file).is_absolute():
+                dynamics["frf_file"] = str(folder / frf_file)
     return data
+
+
+def _dicts(value) -> list:
+    """``value`` if it is a list (of tables), else no tables."""
+    return value if isinstance(value, list) else []
 
 
 def load_scenario(source: str | Path, settings: dict[str, Any] | None = None, label: str = "") -> Scenario:

@@ -115,7 +115,10 @@ class ProgramArrays(NamedTuple):
 
 class ForceState(NamedTuple):
     """The force models on the workpiece: their ops, parameters and states, the workpiece body,
-    the physics step (s), the simulation clock (s, in place) and the tick's summed force (N)."""
+    the physics step (s), the simulation clock (s, in place), the tick's summed force (N), the
+    workpiece's XY velocity per axis velocity (2, n_axes: the reference's velocity to the planned
+    feed), the planned feed velocity (2, m/s, in place) and the tick's vibration probe
+    (:data:`twin.process.cutting.PROBE`)."""
 
     fops: np.ndarray
     fpar: np.ndarray
@@ -124,6 +127,9 @@ class ForceState(NamedTuple):
     timestep_s: float
     clock: np.ndarray
     f_sum: np.ndarray
+    feed_jacobian: np.ndarray
+    feed_velocity: np.ndarray
+    probe: np.ndarray
 
 
 class Chunk(NamedTuple):
@@ -137,7 +143,7 @@ class Chunk(NamedTuple):
 
 class Recording(NamedTuple):
     """What is recorded: tick k in row ``k // every`` when ``k % every == 0`` (``every = 0``
-    records nothing)."""
+    records nothing); the vibration probe is summed over every tick into its row."""
 
     every: int
     qpos: np.ndarray
@@ -148,6 +154,7 @@ class Recording(NamedTuple):
     u: np.ndarray
     ua: np.ndarray
     workpiece_force: np.ndarray
+    probe: np.ndarray
 
 
 class Accumulators(NamedTuple):
@@ -184,10 +191,28 @@ def start_tick(k, row, mj, sensor, chunk, rec, acc):  # pragma: no cover - compi
 
 
 @njit(cache=True, inline="always")
-def end_tick(k, drive, f_sum, bus, rec, acc):  # pragma: no cover - compiled
+def start_forces(row, chunk, force):  # pragma: no cover - compiled
+    """Zero the tick's force sum and vibration probe; the planned feed velocity from the
+    reference's velocity at the tick (``force.feed_velocity``)."""
+    force.f_sum[:] = 0.0
+    force.probe[:] = 0.0
+    jac, ref = force.feed_jacobian, chunk.ref
+    for r in range(2):
+        v = 0.0
+        for a in range(jac.shape[1]):
+            v += jac[r, a] * ref[row, a, 1]
+        force.feed_velocity[r] = v
+
+
+@njit(cache=True, inline="always")
+def end_tick(k, drive, force, bus, rec, acc):  # pragma: no cover - compiled
     """Record tick k's measurement, inputs and mean workpiece force (``f_sum`` over the tick's
-    physics steps); update the force maxima."""
-    u, ua, substeps = drive.u, drive.ua, drive.substeps
+    physics steps), add its vibration probe to its row; update the force maxima."""
+    u, ua, substeps, f_sum = drive.u, drive.ua, drive.substeps, force.f_sum
+    if rec.every > 0:
+        r = k // rec.every
+        for i in range(force.probe.shape[0]):
+            rec.probe[r, i] += force.probe[i]
     for a in range(u.shape[0]):
         acc.force_max[a] = max(acc.force_max[a], abs(f_sum[a] / substeps))
     if rec.every > 0 and k % rec.every == 0:
@@ -218,16 +243,19 @@ def compiled_ticks(
         run_blocks(0, n_blocks, ops, io, par, state, scratch, bus)
         if not drive_command(k, row, bus, drive, chunk.u_dist):
             return BAD_CONTROL, k, 0
-        f_sum[:] = 0.0
+        start_forces(row, chunk, force)
         for s in range(drive.substeps):
             actuator_input(k, s, drive, ctrl)
             if fops.shape[0]:
-                workpiece_forces(fops, fpar, fstate, qpos, qvel, clock[0], xfrc, force.workpiece_body, f_sum)
+                workpiece_forces(
+                    fops, fpar, fstate, qpos, qvel, force.feed_velocity, clock[0], xfrc, force.workpiece_body, f_sum,
+                    force.probe,
+                )  # fmt: skip
             mj_step(m_addr, d_addr)
             clock[0] += force.timestep_s
             if not accelerations_ok(qacc):
                 return BAD_QACC, k, s
-        end_tick(k, drive, f_sum, bus, rec, acc)
+        end_tick(k, drive, force, bus, rec, acc)
     return OK, k1, 0
 
 
@@ -245,13 +273,16 @@ def python_ticks(k0, k1, model, data, program, mj, sensor, drive, force, chunk, 
         program.run()
         if not drive_command(k, row, bus, drive, chunk.u_dist):
             return BAD_CONTROL, k, 0
-        f_sum[:] = 0.0
+        start_forces(row, chunk, force)
         for s in range(drive.substeps):
             actuator_input(k, s, drive, ctrl)
             if fops.shape[0]:
-                workpiece_forces(fops, fpar, fstate, qpos, qvel, data.time, xfrc, force.workpiece_body, f_sum)
+                workpiece_forces(
+                    fops, fpar, fstate, qpos, qvel, force.feed_velocity, data.time, xfrc, force.workpiece_body, f_sum,
+                    force.probe,
+                )  # fmt: skip
             mujoco.mj_step(model, data)
             if not accelerations_ok(qacc):
                 return BAD_QACC, k, s
-        end_tick(k, drive, f_sum, bus, rec, acc)
+        end_tick(k, drive, force, bus, rec, acc)
     return OK, k1, 0

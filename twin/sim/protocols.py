@@ -31,7 +31,8 @@ class ProgramReference(Reference, Protocol):
     any time ``t`` (s): the program line, the programmed feed (mm/min), the tool's engagement
     with a stock (engaged angle in deg and axial depth in mm; empty without one) and the planned
     axes the machine has not (m); and, for the whole program, its lines read, cycle time (s),
-    line texts, and with a stock its outlines (mm) and machining warnings."""
+    line texts, its warnings against the machine (travel, drives), and with a stock its outlines
+    (mm) and machining warnings."""
 
     n_lines: int
 
@@ -49,6 +50,9 @@ class ProgramReference(Reference, Protocol):
 
     @property
     def warnings_total(self) -> int: ...
+
+    @property
+    def plan_warnings(self) -> tuple[list[dict], int]: ...
 
     def line_at(self, t: float) -> int: ...
 

@@ -30,7 +30,7 @@ from tqdm import tqdm
 from controllers.blocks import Controller, Program, SignalError, preview_ticks_needed, standard_signals
 from twin.errors import RunInterrupted, SimulationDiverged, TwinInputError
 from twin.machines import BuiltMachine
-from twin.process.cutting import ForceModels
+from twin.process.cutting import PROBE, ForceModels
 from twin.sim import loop, mujoco_c
 from twin.sim.drive import MAX_VALUE, Drive, Encoder, substeps_per_tick
 from twin.sim.protocols import Disturbance, ForceModel, InputDisturbance, ProgramReference, Reference
@@ -85,6 +85,11 @@ class ProgramTrace:
         (:func:`twin.process.misuse.machining_warnings`), the first ones.
     machining_warnings_total : int
         How many there are in all.
+    plan_warnings : list of dict
+        Moves outside the travel (under ``travel = "warn"``) and what the drives cannot deliver,
+        by line (:func:`twin.gcode.checks.plan_warnings`).
+    plan_warnings_total : int
+        How many there are in all.
     """
 
     lines: np.ndarray
@@ -96,6 +101,8 @@ class ProgramTrace:
     outlines: dict[str, list[np.ndarray]]
     machining_warnings: list[dict]
     machining_warnings_total: int
+    plan_warnings: list[dict]
+    plan_warnings_total: int
 
 
 @dataclass
@@ -121,6 +128,9 @@ class RunResult:
         Actuator force/torque (N or N m) at the last physics step before each tick.
     workpiece_force_N : ndarray, shape (n, 3)
         External force on the workpiece (world frame, N), mean over the tick's physics steps.
+    vibration_probe : ndarray, shape (n, len(PROBE))
+        The milling kernels' vibration probe (:data:`twin.process.cutting.PROBE`) summed over
+        the physics steps from each recorded tick to the next (:mod:`twin.process.chatter`).
     control_period_s : float
     error_max_m, error_rms_m : ndarray, shape (n_axes,)
         Max |ref - table position| and its RMS over every tick, recorded or not (m).
@@ -147,6 +157,7 @@ class RunResult:
     qvel: np.ndarray
     actuator_force: np.ndarray
     workpiece_force_N: np.ndarray
+    vibration_probe: np.ndarray
     control_period_s: float
     error_max_m: np.ndarray
     error_rms_m: np.ndarray
@@ -341,6 +352,7 @@ def _allocate(machine: BuiltMachine, plan: RunPlan) -> LoopArrays:
         u=np.empty((rows, n_axes)),
         ua=np.empty((rows, n_axes)),
         workpiece_force=np.empty((rows, 3)),
+        probe=np.zeros((rows, len(PROBE))),
     )
     mj = loop.MjViews(
         qpos=data.qpos,
@@ -400,6 +412,9 @@ def _allocate(machine: BuiltMachine, plan: RunPlan) -> LoopArrays:
         timestep_s=plan.timestep_s,
         clock=np.array([data.time]),
         f_sum=np.zeros(3),
+        feed_jacobian=np.ascontiguousarray(machine.workpiece_jacobian()[:, machine.table_qpos_indices()]),
+        feed_velocity=np.zeros(2),
+        probe=np.zeros(len(PROBE)),
     )
     accumulators = loop.Accumulators(error=np.zeros((n_axes, 2)), force_max=np.zeros(n_axes))
     return LoopArrays(data, mj, sensor, drive, force, recording, accumulators)
@@ -442,6 +457,8 @@ class _ProgramSeries:
             outlines=self.reference.outlines,
             machining_warnings=self.reference.warnings,
             machining_warnings_total=self.reference.warnings_total,
+            plan_warnings=self.reference.plan_warnings[0],
+            plan_warnings_total=self.reference.plan_warnings[1],
         )
 
 
@@ -467,6 +484,7 @@ def _result(
         qvel=rec.qvel[:rows],
         actuator_force=rec.actuator_force[:rows],
         workpiece_force_N=rec.workpiece_force[:rows],
+        vibration_probe=rec.probe[:rows],
         control_period_s=plan.control_period_s,
         error_max_m=acc.error[:, 0].copy(),
         error_rms_m=np.sqrt(acc.error[:, 1] / max(accumulated, 1)),
