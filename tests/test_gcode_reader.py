@@ -409,3 +409,14 @@ def test_compensation_holds_a_bounded_number_of_moves(monkeypatch):
         _read(program, _settings())
     assert err.value.line == 6 and "more than 50 moves and dwells held" in err.value.reason
     assert len(_read(program.replace("[100]", "[20]"), _settings())) == 2 + 40
+
+
+def test_the_end_of_a_file_releases_the_moves_compensation_holds():
+    """No M2: the held move is released at the end of the file, as M2 would release it (rs274
+    prints the moves before it, then "File ended with no percent sign or program end")."""
+    moves = _read("G21 F600\nG0 X0 Y0\nG41 D1 G1 X20 Y0\nY20", _settings())
+    radius = 0.125 * INCH
+    assert [m.kind for m in moves] == ["rapid", "feed", "feed"]
+    assert moves[1].end_mm[:2] == pytest.approx((20 - radius, radius))
+    assert moves[2].end_mm[:2] == pytest.approx((20 - radius, 20.0))
+    assert moves[2].start_mm == moves[1].end_mm
