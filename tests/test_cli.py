@@ -488,13 +488,13 @@ def test_launcher_lists_a_program_with_the_reader_alone(tmp_path):
     assert r.returncode == 0
     assert r.stdout.splitlines()[3].split()[:2] == ["4", "arc"]
 
-    program.write_text("G21\nG0 X1\nG1 X2 F100\nG41 X3\n")
+    program.write_text("G21\nG0 X1\nG1 X2 F100\nG41 D3 X3\n")
     r = subprocess.run(
         [*LAUNCHER, "gcode", "part.ngc", "--json"], capture_output=True, text=True, timeout=60, cwd=tmp_path
     )
     assert (r.returncode, r.stdout) == (2, "")
     assert r.stderr.splitlines() == [
-        "error: part.ngc:4 = 'G41 X3': cutter radius compensation (G41) is not supported: give the tool-centre path"
+        "error: part.ngc:4 = 'G41 D3 X3': Requested tool 3 not found in the tool table (reference.tool_diameters_mm)"
     ]
 
     program.write_text("G21 G0 X0\n" + "G1 X1 F100\nX0\n" * 20_000)

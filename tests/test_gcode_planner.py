@@ -193,7 +193,12 @@ def test_twin_gcode_prints_moves_and_the_plan(tmp_path):
 @pytest.mark.parametrize(
     "args, words",
     [
-        (["{bad}"], "bad.ngc:3 = 'G33 X1 K1': spindle-synchronized motion (G33) is not supported"),
+        (["{bad}"], "bad.ngc:3 = 'G41 D7 X1 Y1': Requested tool 7 not found in the tool table"),
+        (
+            ["{bad}", "--set", "reference.tool_diameters_mm={{ 7 = 4.0 }}"],
+            "bad.ngc:3 = 'G41 D7 X1 Y1': Length of cutter compensation entry move is not greater than the tool radius",
+        ),
+        (["{bad_g33}"], "bad_g33.ngc:3 = 'G33 X1 K1': spindle-synchronized motion (G33) is not supported"),
         (["{good}", "--machine", "mill"], "machine = 'mill': unknown machine"),
         (["{good}", "--machine", "googol_xy", "--set", "planner.tolerance_mm=-1"], "planner.tolerance_mm = -1"),
         (["{good}", "--set", "spindle=3"], "--set spindle = 3: give planner.KEY, reference.KEY or drive.KEY"),
@@ -203,10 +208,12 @@ def test_twin_gcode_prints_moves_and_the_plan(tmp_path):
 )
 def test_twin_gcode_bad_input_is_one_line_and_exit_2(tmp_path, args, words):
     bad = tmp_path / "bad.ngc"
-    bad.write_text("G21\nG0 X0 Y0\nG33 X1 K1\nG1 X2 F100\n")
+    bad.write_text("G21\nG0 X0 Y0\nG41 D7 X1 Y1\nG1 X2 F100\n")
+    bad_g33 = tmp_path / "bad_g33.ngc"
+    bad_g33.write_text("G21\nG0 X0 Y0\nG33 X1 K1\nG1 X2 F100\n")
     good = tmp_path / "good.ngc"
     good.write_text("G21 G0 X0 Y0\nG1 X1 F100\n")
-    argv = [a.format(bad=bad, good=good, missing=tmp_path / "none.ngc") for a in args]
+    argv = [a.format(bad=bad, bad_g33=bad_g33, good=good, missing=tmp_path / "none.ngc") for a in args]
     out = CliRunner().invoke(app, ["gcode", *argv])
     assert out.exit_code == 2, out.output
     lines = out.output.strip().splitlines()

@@ -320,18 +320,16 @@ def test_a_negative_dwell_in_a_cycle_is_refused():
         ("G21 F100\nG17 G2 X1 I0.5 K1", 2, "K = 1: K word given for an arc in the XY plane"),
         ("G21 F100\nG18 G2 X1 I0.5 J-2", 2, "J = -2: J word given for an arc in the ZX plane"),
         ("G21\no1 while [0]\no1 endwhile\no1 if [1]\no1 endif", 4, "already defined on line 2 (o1 while)"),
-        ("G21\no7 if [1]\no7 endif\no7 else", 4, ""),
+        ("G21\no7 if [1]\no7 endif\no7 else", 4, "the file ends inside o7 (started on line 4), looking for its endif"),
         ("G21\no1 if [0]\no1 endrepeat\no1 endif", 3, "o1 is an if, not a loop"),
         ("G21\no100 sub\no1 endif\no100 endsub\no1 if [1]\no1 endif\no100 call", 3, "without its if"),
     ],
 )
 def test_labels_and_arc_words_refused_as_rs274_refuses(program, line, words):
-    """Each refused by rs274 at the same line (the 4th not: rs274 takes ``o7 else`` after its
-    endif as a branch to skip and reads on to the end of the file for an ``o7 endif``: "File
-    ended with no percent sign or program end"; the twin runs the else as a branch: 0 moves)."""
-    if not words:
-        assert _read(program) == []
-        return
+    """Each refused by rs274 at the same line (the 4th at the end of the file: rs274 takes ``o7
+    else`` after its endif as a branch to skip and reads on to the end of the file for an ``o7
+    endif``: "File ended with no percent sign or program end", rc=1; ``if_branches.ngc`` has
+    such branches closed)."""
     with pytest.raises(GcodeError) as err:
         _read(program)
     assert err.value.line == line
@@ -384,3 +382,41 @@ def test_tool_diameters_come_from_the_scenario():
     outside = _read("G21 F600\nG0 X0 Y0\nG42 D1 G1 X20 Y0\nY20\nM2", spec.reader_settings())
     assert [v for m in outside[1:] for v in m.end_mm[:2]] == pytest.approx([20.0, -3.0, 23.0, 0.0, 23.0, 20.0])
     assert outside[2].kind == "arc" and outside[2].center_mm == (20.0, 0.0) and outside[2].turns == 1
+    # the scenario's [[tools]] give diameters too; the reference's table wins over them
+    merged = spec.reader_settings(frozenset({1, 2}), {1: 10.0, 2: 8.0}).tool_diameters_mm
+    assert merged == {1: 6.0, 2: 8.0}
+
+
+def test_a_program_without_an_end_is_read_to_its_last_line():
+    """rs274 gives every move of a program with neither % nor M2 / M30, then exits 1 "File
+    ended with no percent sign or program end" (``unended/no_program_end.canon``): the twin
+    reads the same moves and takes the end of the file as the program's end."""
+    path = FIXTURES / "unended" / "no_program_end.ngc"
+    canon = path.with_suffix(".canon").read_text().rstrip().splitlines()
+    assert canon[-1] == "rc=1" and canon[-3] == "File ended with no percent sign or program end"
+    theirs = canonical_moves("\n".join(canon))
+    assert len(theirs) == 9
+    assert first_difference(list(read_program(path, _settings())), theirs) is None
+
+
+def test_compensation_holds_a_bounded_number_of_moves(monkeypatch):
+    """Moves along Z are held until a move in the plane: a loop of them is refused at the limit."""
+    from twin.gcode import compensation
+
+    monkeypatch.setattr(compensation, "MAX_HELD", 50)
+    program = "G21 F600\nG0 X0 Y0\nG41 D1 G1 X20 Y0\no1 repeat [100]\nG1 Z-1\nG1 Z0\no1 endrepeat\nM2"
+    with pytest.raises(GcodeError) as err:
+        _read(program, _settings())
+    assert err.value.line == 6 and "more than 50 moves and dwells held" in err.value.reason
+    assert len(_read(program.replace("[100]", "[20]"), _settings())) == 2 + 40
+
+
+def test_the_end_of_a_file_releases_the_moves_compensation_holds():
+    """No M2: the held move is released at the end of the file, as M2 would release it (rs274
+    prints the moves before it, then "File ended with no percent sign or program end")."""
+    moves = _read("G21 F600\nG0 X0 Y0\nG41 D1 G1 X20 Y0\nY20", _settings())
+    radius = 0.125 * INCH
+    assert [m.kind for m in moves] == ["rapid", "feed", "feed"]
+    assert moves[1].end_mm[:2] == pytest.approx((20 - radius, radius))
+    assert moves[2].end_mm[:2] == pytest.approx((20 - radius, 20.0))
+    assert moves[2].start_mm == moves[1].end_mm

@@ -176,3 +176,17 @@ def test_the_part_is_recorded_and_plotted(tmp_path):
     assert height_mm(8.0, 20.0) == pytest.approx(-1.0)  # the slot
     assert height_mm(-3.0, 20.0) == pytest.approx(-2.0)  # the contour's band
     assert height_mm(-4.5, -4.5) == pytest.approx(0.0)  # the block's corner, out of the tool's reach
+
+
+def test_cutter_compensation_takes_the_diameters_of_tools(tmp_path):
+    """G41 D1 with ``[[tools]]`` number 1 of 6 mm: an entry move of 2 mm is shorter than the
+    3 mm radius, which LinuxCNC refuses (with no diameter the move would be read as written)."""
+    program = tmp_path / "entry.ngc"
+    program.write_text("G21 F600\nT1 M6\nG0 X0 Y0 Z5\nG41 D1 G1 X2 Y0\nG40 G0 X0\nM2\n")
+    data = read_scenario_data("gcode_test_piece")
+    data["tools"] = [{"number": 1, "diameter_mm": 6.0, "n_flutes": 2}]
+    data["reference"]["file"] = str(program)
+    with pytest.raises(TwinInputError) as err:
+        assemble(scenario_from_dict(data))
+    assert err.value.field.endswith("entry.ngc:4"), str(err.value)
+    assert "entry move is not greater than the tool radius" in str(err.value)

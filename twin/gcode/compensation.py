@@ -35,6 +35,9 @@ TOLERANCE_EQUAL = 1e-6
 ARC_SWEEP_SLACK = {True: 0.001, False: 0.0254}
 #: Largest difference of a moved arc end's radius from its start's (program units; LinuxCNC's).
 ARC_END_RADIUS_SLACK = 0.01
+#: Most calls held at once (ours: moves along the normal axis and dwells are held until the next
+#: move in the plane; LinuxCNC holds any number).
+MAX_HELD = 10_000
 
 #: A move the reader makes from its modal state: (kind, end [x, y, z], centre, turns) to a Move.
 MoveMaker = Callable[[str, list[float], tuple[float, float], int], Any]
@@ -95,6 +98,11 @@ class CutterCompensation:
         self.last_mm = (0.0, 0.0, 0.0)  # where the last released move ends (mm)
         self.mm_per_unit = 1.0
         self.inch = False
+        #: An F word was read while moves were held: LinuxCNC sends its number on when they are
+        #: released, in the units then in force (a G20/G21 between keeps the number, not the speed),
+        #: for the held moves from ``feed_held_at`` on.
+        self.feed_held = False
+        self.feed_held_at = 0
 
     @property
     def engaged(self) -> bool:
@@ -130,11 +138,9 @@ class CutterCompensation:
         else:
             tool = None
             if "d" in words:
-                tool = round(words["d"])
+                tool = int(words["d"] + 0.5)  # LinuxCNC's is_near_int: a negative D is no whole number
                 if abs(words["d"] - tool) >= 0.0001:
                     raise BlockError(f"G{code // 10} requires D word to be a whole number")
-                if tool < 0:
-                    raise BlockError("Negative d word tool radius index used")
             radius = diameter_of(tool) / 2
             orientation = 0
         if radius < 0:
@@ -165,12 +171,22 @@ class CutterCompensation:
         """A dwell: held behind the held moves (True), or made at once where none is held."""
         if not self.queue:
             return False
+        self._check_held()
         self.queue.append(_Queued(move, []))
         return True
 
+    def hold_feed(self) -> None:
+        """An F word read while moves are held (sent on when they are released)."""
+        if not self.feed_held:
+            self.feed_held, self.feed_held_at = True, len(self.queue)
+
     def units(self, inch: bool, factor: float, mm_per_unit: float) -> None:
         """G20 / G21 with compensation on (LinuxCNC's ``qc_scale``): held moves, the programmed
-        point and the radius in the new units."""
+        point and the radius in the new units; the held moves after a held F word at its number
+        in the new units."""
+        if self.feed_held:
+            for q in self.queue[self.feed_held_at :]:
+                q.move = q.move._replace(feed_mm_per_min=q.move.feed_mm_per_min * mm_per_unit / self.mm_per_unit)
         self.inch, self.mm_per_unit = inch, mm_per_unit
         self.radius *= factor
         self.program = [v * factor for v in self.program]
@@ -465,9 +481,16 @@ class CutterCompensation:
         self.endpoint, self.endpoint_valid = (a, b), True
 
     def _enqueue(self, kind, end, make, plane, direction=(0.0, 0.0), center=(0.0, 0.0), turn=0, sweep=0.0) -> None:
+        self._check_held()
         xyz = _from_plane(end, plane)
         move = make(kind, xyz, center, turn)
         self.queue.append(_Queued(move, list(end), direction, center, turn, sweep))
+
+    def _check_held(self) -> None:
+        if len(self.queue) >= MAX_HELD:
+            raise BlockError(
+                f"more than {MAX_HELD} moves and dwells held by cutter compensation (none moves in its plane)"
+            )
 
     def _move_endpoint_and_flush(self, a: float, b: float, plane: str) -> None:
         """Every held move's end moved to (a, b), each checked not to turn back, and released."""
@@ -503,6 +526,7 @@ class CutterCompensation:
     def _dequeue(self, plane: str) -> None:
         """The held moves released, in order, each from where the one before ends (mm)."""
         self.endpoint_valid = False
+        self.feed_held = False
         if not self.queue:
             return
         s = self.mm_per_unit

@@ -440,6 +440,7 @@ class Flow:
         if o.values[0] != 0.0:
             self.frames[-1].ifs.add(o.label)
         else:
+            self.frames[-1].ifs.discard(o.label)
             self._skip_to(o.label, ("elseif", "else", "endif"), "run")
 
     def _elseif(self, o: OLine) -> None:
@@ -461,5 +462,7 @@ class Flow:
             ifs.add(o.label)
 
     def _endif(self, o: OLine) -> None:
+        """The if is done: an else or elseif of its label after it is a branch not taken (rs274
+        skips it to the next endif of the label, its ``executed_if`` set by every endif)."""
         self._of_if(o)
-        self.frames[-1].ifs.discard(o.label)
+        self.frames[-1].ifs.add(o.label)

@@ -496,6 +496,8 @@ class Reader:
             if words["f"] < 0:
                 raise BlockError(f"F = {words['f']:g}: a feed cannot be negative")
             s.feed = words["f"]
+            if self.comp.queue:  # LinuxCNC holds the feed change behind the held moves
+                self.comp.hold_feed()
         if "s" in words:
             if words["s"] < 0:
                 raise BlockError(f"negative spindle speed used: S{words['s']:g}")
@@ -629,6 +631,8 @@ class Reader:
         """LinuxCNC's ``convert_m`` (what a mill's twin keeps of it)."""
         s = self.state
         io = m_modes.get(5)
+        if self.comp.side is not None:
+            _m_refused_under_compensation(m_modes, words)
         if io in (62, 63, 64, 65) and "p" not in words:
             raise BlockError(f"M{io} needs a P word (the output number)")
         if io in (67, 68) and ("e" not in words or "q" not in words):
@@ -747,7 +751,8 @@ class Reader:
         s.origin = [v * factor for v in s.origin]
         s.axis_offset = [v * factor for v in s.axis_offset]
         s.tool_offset *= factor
-        s.feed *= factor
+        if not self.comp.feed_held:  # a held feed change takes the units it is released in
+            s.feed *= factor
         if s.tolerance is not None:
             s.tolerance *= factor
         self.cycle.scale(factor)
@@ -901,6 +906,8 @@ class Reader:
             if words.get("r", 0.0) != 0.0:
                 raise BlockError("G10 L2 R: a rotated coordinate system is not supported")
             system = number or s.system
+            if system == s.system and self.comp.side is not None:
+                raise BlockError("Cannot change the active coordinate system with cutter radius compensation on")
             base = 5201 + 20 * system
             offset = self._machine_offset()
             for i, k in enumerate(_AXES):
@@ -1256,6 +1263,31 @@ _REFUSED_UNDER_COMPENSATION = {
     **dict.fromkeys((281, 301), "Cannot set reference point with cutter compensation in effect"),
     **dict.fromkeys((520, 920), "Cannot change axis offsets with cutter radius comp"),
 }
+
+
+#: The I/O M codes LinuxCNC refuses while cutter compensation is on, with its words.
+_IO_REFUSED_UNDER_COMPENSATION = {
+    62: "set motion output",
+    63: "set motion digital output",
+    64: "set auxiliary digital output",
+    65: "set auxiliary digital output",
+    67: "set motion analog output",
+    68: "set auxiliary analog output",
+}
+
+
+def _m_refused_under_compensation(m_modes: dict[int, int], words: dict[str, float]) -> None:
+    """LinuxCNC's checks of the I/O and override M codes with cutter compensation on."""
+    io = m_modes.get(5)
+    if io == 66:
+        what = "digital" if "p" in words else "analog"
+        raise BlockError(f"Cannot wait for {what} input with cutter radius compensation on")
+    if io in _IO_REFUSED_UNDER_COMPENSATION:
+        raise BlockError(f"Cannot {_IO_REFUSED_UNDER_COMPENSATION[io]} with cutter radius compensation on")
+    switch = m_modes.get(9)
+    if switch is not None:
+        enable = switch == 48 or (switch != 49 and words.get("p", -1.0) != 0)
+        raise BlockError(f"Cannot {'enable' if enable else 'disable'} overrides with cutter radius compensation on")
 
 
 def _refused_under_compensation(g_modes: dict[int, int]) -> None:

@@ -343,15 +343,18 @@ class GcodeRef(ReferenceSpecBase):
     #: Fields that hold a path relative to the scenario file.
     relative_paths: ClassVar[tuple[str, ...]] = ("file",)
 
-    def reader_settings(self, tools: frozenset[int] | None = None) -> Settings:
-        """The settings the reader takes from this table, and the tool numbers a T word may
-        select (None: any)."""
+    def reader_settings(
+        self, tools: frozenset[int] | None = None, diameters_mm: dict[int, float] | None = None
+    ) -> Settings:
+        """The settings the reader takes from this table, the tool numbers a T word may select
+        (None: any) and the diameters of the scenario's ``[[tools]]`` (this table's
+        ``tool_diameters_mm`` over them)."""
         return Settings(
             work_offsets_mm={WORK_SYSTEMS.index(k) + 1: v for k, v in self.work_offsets_mm.items()},
             tool_lengths_mm=dict(self.tool_lengths_mm),
             g28_home_mm=self.g28_home_mm,
             tools=tools,
-            tool_diameters_mm=dict(self.tool_diameters_mm),
+            tool_diameters_mm={**(diameters_mm or {}), **self.tool_diameters_mm},
         )
 
 
@@ -372,7 +375,7 @@ def build(spec: GcodeRef, ctx: ReferenceContext) -> GcodeReference | StreamedGco
     settings = ctx.planner if isinstance(ctx.planner, PlannerSettings) else PlannerSettings.model_validate(ctx.planner)
     settings = with_machine_mode(settings, ctx.machine)
     path = input_file(spec.file, "reference.file")
-    reader_settings = spec.reader_settings(ctx.tools)
+    reader_settings = spec.reader_settings(ctx.tools, ctx.tool_diameters_mm)
     limits = settings.limits(ctx.machine.motion_limits)
     axes = tuple("xyz".index(a) for a in ctx.axis_names)
     reader = Reader(None, reader_settings, str(path), path=path)

@@ -39,6 +39,8 @@ class ReferenceContext:
         Whether the scenario cuts a stock (a program's plan is then held whole).
     saturation_V : float or None
         The drive's saturation (V; None: none), what a program's drive check compares with.
+    tool_diameters_mm : dict of int to float
+        The diameters of the scenario's ``[[tools]]`` by T number (mm; cutter compensation's).
     """
 
     axis_names: list[str]
@@ -47,6 +49,7 @@ class ReferenceContext:
     tools: frozenset[int] | None = None
     stock: bool = False
     saturation_V: float | None = None
+    tool_diameters_mm: dict[int, float] = field(default_factory=dict)
 
 
 def register(name: str, spec: type[KindSpec], build: Callable) -> Kind:

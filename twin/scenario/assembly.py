@@ -166,9 +166,18 @@ def assemble(scn: Scenario) -> RunInputs:
     elif scn.controller is not None:
         ctrls = [_controller(scn.controller, "controller", base)]
     numbers = frozenset(t.number for t in scn.tools if t.number is not None) if scn.tools else None
+    diameters = {t.number: t.diameter_mm for t in scn.tools if t.number is not None}
     reference = REFERENCES[scn.reference.type].build(
         scn.reference,
-        ReferenceContext(names, machine, scn.planner, numbers, scn.stock is not None, scn.drive.saturation_V),
+        ReferenceContext(
+            names,
+            machine,
+            scn.planner,
+            numbers,
+            scn.stock is not None,
+            saturation_V=scn.drive.saturation_V,
+            tool_diameters_mm=diameters,
+        ),
     )
     duration_s = scn.duration_s if scn.duration_s is not None else getattr(reference, "duration_s", None)
     if duration_s is None:
