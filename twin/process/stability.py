@@ -49,6 +49,8 @@ MAX_FREQUENCIES = 200_000
 #: Relative step of the zero-order frequency grid per damping ratio (a tenth of a mode's half
 #: power band width).
 FREQUENCY_STEP_PER_ZETA = 0.1
+#: Speeds times chatter frequencies the zero-order solution holds at once.
+ZOA_CELLS = 2_000_000
 #: Grid points per spindle speed and depth at most in one batch of the semi-discretization.
 SD_BATCH = 4000
 #: Bisection steps refining the semi-discretization's first unstable depth.
@@ -218,37 +220,79 @@ def zoa_critical_depths(cut: Cut, dynamics: ToolDynamicsSpec, spindle_rpm, extra
     g = dynamics.receptance(freq)
     if extra_receptance is not None:
         g = g + extra_receptance(freq)
-    lam = np.linalg.eigvals(cut.mean_matrix() @ g)  # (n_freq, 2)
+    depth, freq_at = zoa_boundaries(cut.mean_matrix()[None], freq, g, periods[None])
+    return Lobes("zoa", speeds, depth[0], freq_at[0])
+
+
+def zoa_boundaries(
+    mean_h: np.ndarray, frequency_hz: np.ndarray, receptance: np.ndarray, periods_s: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The zero-order critical depth (m, nan: none) and chatter frequency (Hz) of several cuts,
+    each at its own tooth periods.
+
+    Parameters
+    ----------
+    mean_h : ndarray (c, 2, 2)
+        Each cut's mean force matrix ``H0`` (N/m^2, X/Y).
+    frequency_hz, receptance : ndarray (f,), (f, 2, 2)
+        The chatter frequencies searched (:func:`frequency_grid_hz`) and the relative
+        receptance there (m/N).
+    periods_s : ndarray (c, p)
+        Tooth periods (s) per cut.
+    """
+    lam = eigenvalues_2x2(mean_h[:, None] @ receptance[None])  # (c, f, 2)
     with np.errstate(divide="ignore", invalid="ignore"):
         nu = 1.0 / lam
         valid = nu.real > 0
+    # only the frequencies where some cut can chatter (and their neighbours) are searched
+    chatters: np.ndarray = np.asarray(valid.any(axis=(0, 2)))
+    near = chatters.copy()
+    near[:-1] |= chatters[1:]
+    near[1:] |= chatters[:-1]
+    frequency_hz, nu, valid = frequency_hz[near], nu[:, near], valid[:, near]
+    if frequency_hz.size < 2:
+        return np.full(periods_s.shape, np.nan), np.full(periods_s.shape, np.nan)
+    with np.errstate(divide="ignore", invalid="ignore"):
         depth = np.where(valid, np.abs(nu) ** 2 / (2.0 * nu.real), np.nan)
         theta = np.pi - 2.0 * np.angle(nu)  # w T less its whole turns, in (0, 2 pi)
-    omega = 2 * np.pi * freq
-    best = np.full(len(speeds), np.inf)
-    best_hz = np.full(len(speeds), np.nan)
-    for branch in range(lam.shape[1]):
-        a_b, th_b, ok = depth[:, branch], theta[:, branch], valid[:, branch]
-        seg = ok[:-1] & ok[1:]
-        for chunk in range(0, len(speeds), 64):
-            per = periods[chunk : chunk + 64, None]
-            turns = (omega[None, :] * per - th_b[None, :]) / (2 * np.pi)  # (s, f)
-            lo, hi = turns[:, :-1], turns[:, 1:]
-            k = np.ceil(np.minimum(lo, hi))
-            crosses = seg[None, :] & (k <= np.maximum(lo, hi)) & (k >= 0)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                frac = np.where(crosses, (k - lo) / (hi - lo), 0.0)
-            a_cross = np.where(crosses, a_b[:-1] + frac * (a_b[1:] - a_b[:-1]), np.inf)
-            where = np.argmin(a_cross, axis=1)
-            rows = np.arange(len(where))
-            a_min = a_cross[rows, where]
-            f_min = freq[where] + frac[rows, where] * (freq[where + 1] - freq[where])
-            sl = slice(chunk, chunk + 64)
-            better = a_min < best[sl]
-            best[sl] = np.where(better, a_min, best[sl])
-            best_hz[sl] = np.where(better, f_min, best_hz[sl])
+    omega = 2 * np.pi * frequency_hz
+    n_cuts, n_periods = periods_s.shape
+    best = np.full((n_cuts, n_periods), np.inf)
+    best_hz = np.full((n_cuts, n_periods), np.nan)
+    per_chunk = max(1, min(n_periods, ZOA_CELLS // len(frequency_hz)))  # memory stays bounded
+    cuts_chunk = max(1, ZOA_CELLS // (per_chunk * len(frequency_hz)))
+    for c0 in range(0, n_cuts, cuts_chunk):
+        cs = slice(c0, c0 + cuts_chunk)
+        for p0 in range(0, n_periods, per_chunk):
+            ps = slice(p0, p0 + per_chunk)
+            for branch in range(nu.shape[2]):
+                a_b, th_b = depth[cs, None, :, branch], theta[cs, None, :, branch]  # (c, 1, f)
+                seg = valid[cs, None, :-1, branch] & valid[cs, None, 1:, branch]
+                turns = (omega * periods_s[cs, ps, None] - th_b) / (2 * np.pi)  # (c, p, f)
+                lo, hi = turns[..., :-1], turns[..., 1:]
+                k = np.ceil(np.minimum(lo, hi))
+                crosses = seg & (k <= np.maximum(lo, hi)) & (k >= 0)
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    frac = np.where(crosses, (k - lo) / (hi - lo), 0.0)
+                    a_cross = np.where(crosses, a_b[..., :-1] + frac * (a_b[..., 1:] - a_b[..., :-1]), np.inf)
+                where = np.argmin(a_cross, axis=2)[..., None]
+                a_min = np.take_along_axis(a_cross, where, 2)[..., 0]
+                f_at = np.take_along_axis(frac, where, 2)[..., 0]
+                w = where[..., 0]
+                f_min = frequency_hz[w] + f_at * (frequency_hz[w + 1] - frequency_hz[w])
+                better = a_min < best[cs, ps]
+                best[cs, ps] = np.where(better, a_min, best[cs, ps])
+                best_hz[cs, ps] = np.where(better, f_min, best_hz[cs, ps])
     best[~np.isfinite(best)] = np.nan
-    return Lobes("zoa", speeds, best, best_hz)
+    return best, best_hz
+
+
+def eigenvalues_2x2(m: np.ndarray) -> np.ndarray:
+    """Both eigenvalues of each 2 x 2 matrix of ``m`` (..., 2, 2): ``tr/2 +- sqrt(tr^2/4 - det)``."""
+    half = 0.5 * (m[..., 0, 0] + m[..., 1, 1])
+    det = m[..., 0, 0] * m[..., 1, 1] - m[..., 0, 1] * m[..., 1, 0]
+    root = np.sqrt(half * half - det + 0j)
+    return np.stack([half + root, half - root], axis=-1)
 
 
 def _speeds(spindle_rpm) -> np.ndarray:
