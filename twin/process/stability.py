@@ -55,6 +55,16 @@ ZOA_CELLS = 2_000_000
 SD_BATCH = 4000
 #: Bisection steps refining the semi-discretization's first unstable depth.
 SD_BISECTIONS = 8
+#: Secant steps of the semi-discretization's finer boundary.
+SD_SECANTS = 4
+#: How near 1 the finer boundary's spectral radius must come.
+SD_RADIUS_TOLERANCE = 2e-4
+#: Steps per period of the highest mode at least (the semi-discretization's resolution).
+SD_STEPS_PER_CYCLE = 3.0
+#: Steps in the cut per tooth period at most (the finer boundary takes :data:`SD_FINER` times as many).
+SD_MAX_STEPS = 40
+#: The finer boundary's steps over the coarser's (Richardson's ratio).
+SD_FINER = 1.5
 #: Depths the semi-discretization scans at a time, upwards.
 SD_SCAN = 10
 #: Speeds of one lobe computation at most.
@@ -430,12 +440,16 @@ def sd_critical_depths(
 ) -> Lobes:
     """Critical depth (m) and chatter frequency (Hz) at each speed by semi-discretization.
 
-    The spectral radius with ``steps`` steps in the cut per tooth period on ``n_depths`` depths
-    up to ``depth_max_m``; the first unstable one refined by :data:`SD_BISECTIONS` bisections
-    (nan: stable up to ``depth_max_m``); the same with twice the steps near it, and the two
-    extrapolated to infinitely many steps (Richardson: the method's error falls as the step
-    squared, so ``a = a_2m + (a_2m - a_m) / 3``; where the finer boundary is not within 20 % of
-    the coarser one, the finer one's is kept as it is).
+    At each speed the tooth period in ``m`` steps in the cut: ``steps``, or more where a step
+    would be longer than :data:`SD_STEPS_PER_CYCLE` of the highest mode's period (the delayed
+    position is interpolated linearly between steps, so a step must be short against a
+    vibration).  Speeds that would need over :data:`SD_MAX_STEPS` are not computed (nan).
+    The spectral radius on ``n_depths`` depths up to ``depth_max_m``; the first unstable one
+    refined by :data:`SD_BISECTIONS` bisections (nan: stable up to ``depth_max_m``); then the
+    boundary with ``r = ``:data:`SD_FINER` times the steps near it (secant steps from it), and
+    the two extrapolated to infinitely many steps (Richardson: the method's error falls as the
+    step squared, so ``a = a_f + (a_f - a_m) / (r^2 - 1)``; where the finer boundary is not
+    found within 20 % of the coarser one, the coarser one is kept).
 
     The chatter frequency is the critical multiplier's ``(arg mu + 2 pi k) / (2 pi T)`` (or
     its negative) nearest the most flexible mode's natural frequency.
@@ -449,30 +463,66 @@ def sd_critical_depths(
         raise TwinInputError("depth_max_mm", depth_max_m * 1e3, "must be positive")
     if not 2 <= n_depths <= 10_000:
         raise TwinInputError("n_depths", n_depths, "2 to 10000")
-    if not 4 <= steps <= 200:
-        raise TwinInputError("steps", steps, "4 to 200 in the cut per tooth period")
+    if not 4 <= steps <= SD_MAX_STEPS:
+        raise TwinInputError("steps", steps, f"4 to {SD_MAX_STEPS} in the cut per tooth period")
     speeds = _speeds(spindle_rpm)
     model = ModalModel.of(dynamics)
-    coarse, fine = cut.step_matrices(steps), cut.step_matrices(2 * steps)
     periods = cut.tooth_period_s(speeds)
     depths = np.linspace(depth_max_m / n_depths, depth_max_m, n_depths)
-    first = _first_unstable(model, coarse, periods, depths)
-    idx = np.flatnonzero(first >= 0)
+    highest_hz = max(m.frequency_hz for m in dynamics.modes)
+    needed = np.maximum(steps, np.ceil(SD_STEPS_PER_CYCLE * highest_hz * periods)).astype(int)
     critical = np.full(len(speeds), np.nan)
     chatter = np.full(len(speeds), np.nan)
+    for m in np.unique(needed[needed <= SD_MAX_STEPS]):
+        group = np.flatnonzero(needed == m)
+        critical[group], chatter[group] = _sd_boundary(model, cut, int(m), periods[group], depths)
+    return Lobes("sd", speeds, critical, chatter)
+
+
+def sd_slowest_rpm(cut: Cut, dynamics: ToolDynamicsSpec) -> float:
+    """The lowest spindle speed (rpm) :func:`sd_critical_depths` computes for ``dynamics``."""
+    highest_hz = max(m.frequency_hz for m in dynamics.modes)
+    return 60.0 * SD_STEPS_PER_CYCLE * highest_hz / (cut.n_flutes * SD_MAX_STEPS)
+
+
+def _sd_boundary(model: ModalModel, cut: Cut, m: int, periods: np.ndarray, depths: np.ndarray):
+    """Critical depths (m) and chatter frequencies (Hz) at ``periods`` with ``m`` steps (see
+    :func:`sd_critical_depths`)."""
+    critical = np.full(len(periods), np.nan)
+    chatter = np.full(len(periods), np.nan)
+    m_fine = math.ceil(SD_FINER * m)
+    coarse, fine = cut.step_matrices(m), cut.step_matrices(m_fine)
+    first = _first_unstable(model, coarse, periods, depths)
+    idx = np.flatnonzero(first >= 0)
     if idx.size == 0:
-        return Lobes("sd", speeds, critical, chatter)
+        return critical, chatter
     first = first[idx]
     lo = np.where(first > 0, depths[np.maximum(first - 1, 0)], 0.0)
-    a_m = _bisect(model, coarse, periods[idx], lo, depths[first])[0]
-    lo2, hi2 = 0.8 * a_m, 1.25 * a_m
-    bracketed = (sd_spectral_radius(model, fine, periods[idx], lo2)[0] <= 1.0) & (
-        sd_spectral_radius(model, fine, periods[idx], hi2)[0] > 1.0
-    )
-    a_2m, mu = _bisect(model, fine, periods[idx], lo2, hi2)
-    critical[idx] = np.where(bracketed, a_2m + (a_2m - a_m) / 3.0, a_m)
+    a_m, mu_m = _bisect(model, coarse, periods[idx], lo, depths[first])
+    a_2m, mu_2m = _secant(model, fine, periods[idx], a_m)
+    found = np.isfinite(a_2m)
+    critical[idx] = np.where(found, a_2m + (a_2m - a_m) / ((m_fine / m) ** 2 - 1.0), a_m)
+    mu = np.where(found, mu_2m, mu_m)
     chatter[idx] = _nearest_alias_hz(np.angle(mu), periods[idx], model.dominant_hz)
-    return Lobes("sd", speeds, critical, chatter)
+    return critical, chatter
+
+
+def _secant(model: ModalModel, steps, periods: np.ndarray, start: np.ndarray):
+    """Where the spectral radius crosses 1 near ``start`` (m) at each period, by
+    :data:`SD_SECANTS` secant steps from ``start`` and 0.95 of it, and the multiplier there;
+    nan where it does not settle within 20 % of ``start``."""
+    x0, x1 = start, 0.95 * start
+    f0 = sd_spectral_radius(model, steps, periods, x0)[0] - 1.0
+    f1 = sd_spectral_radius(model, steps, periods, x1)[0] - 1.0
+    mu = np.zeros(len(periods), complex)
+    for _ in range(SD_SECANTS):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x2 = np.where(f1 != f0, x1 - f1 * (x1 - x0) / (f1 - f0), x1)
+        x2 = np.clip(np.where(np.isfinite(x2), x2, start), 0.8 * start, 1.25 * start)
+        radius, mu = sd_spectral_radius(model, steps, periods, x2)
+        x0, f0, x1, f1 = x1, f1, x2, radius - 1.0
+    settled = np.abs(f1) < SD_RADIUS_TOLERANCE
+    return np.where(settled, x1, np.nan), mu
 
 
 def _first_unstable(model: ModalModel, steps, periods: np.ndarray, depths: np.ndarray) -> np.ndarray:
