@@ -105,6 +105,22 @@ def _print_warnings(summary: dict) -> None:
         typer.echo(f"    ... {total - SHOWN_WARNINGS} more (--json lists {len(rows)})")
 
 
+def _print_chatter_check(rows: list[dict]) -> None:
+    """The program's cutting lines over their critical depth (the tool's lobes), worst first."""
+    checked = [row for row in rows if "stability" in row]
+    if not checked:
+        return
+    over = sorted(
+        (row for row in checked if (row["stability"]["margin"] or float("inf")) < 1),
+        key=lambda row: row["stability"]["margin"],
+    )
+    typer.echo(
+        f"  chatter check (zero-order lobes): {len(checked)} cutting line(s), {len(over)} over their critical depth"
+    )
+    for row in over[:WORST_LINES]:
+        typer.echo(f"    {row['stability']['text']}")
+
+
 def _print_part(summary: dict) -> None:
     """The virtual part's wall error and each inspected feature, a line each."""
     part = summary.get("part")
@@ -218,6 +234,7 @@ def _report(
             },
         )
         _print_worst_lines(summary.get("lines", []))
+        _print_chatter_check(summary.get("lines", []))
         _print_warnings(summary)
         _print_part(summary)
     if lines is not None:
@@ -629,12 +646,7 @@ def lobes(
                 else (f"lowest critical depth {low['critical_depth_mm']:.3f} mm at {low['spindle_rpm']:.0f} rpm")
             )
             typer.echo(f"  {name}: {where} over {span}, {summary['seconds'][name]:.2f} s")
-        lines = summary.get("lines", [])
-        unstable = [r for r in lines if (r["stability"]["margin"] or float("inf")) < 1]
-        if lines:
-            typer.echo(f"  program: {len(lines)} cutting line(s) checked, {len(unstable)} over their critical depth")
-            for r in sorted(unstable, key=lambda r: r["stability"]["margin"])[:WORST_LINES]:
-                typer.echo(f"    {r['stability']['text']}")
+        _print_chatter_check(summary.get("lines", []))
     if plots is not None:
         plots.mkdir(parents=True, exist_ok=True)
         path = found.write_png(plots / f"lobes_{Path(scenario).stem}.png")
