@@ -63,3 +63,12 @@ def test_bad_input_is_one_line_and_exit_2(args, field):
     assert out.returncode == 2, out.stdout + out.stderr
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"error: {field}"), out.stderr
+
+
+def test_a_runs_lines_carry_their_chatter_check():
+    """twin run's per-line table: the first pass (line 14, a 2 mm slot) carries the same check
+    as twin lobes gives it."""
+    rows = {r["line"]: r for r in api.run("gcode_slot_passes", duration_s=1.0).summary["lines"]}
+    checked = api.lobes("gcode_slot_passes", method="zoa", rpm=(2500.0, 20000.0, 20)).summary["lines"]
+    assert rows[14]["stability"] == next(r["stability"] for r in checked if r["line"] == 14)
+    assert 13 not in rows or "stability" not in rows[13]  # the plunge takes no side chip
