@@ -209,7 +209,7 @@ def frequency_grid_hz(dynamics: ToolDynamicsSpec, longest_period_s: float) -> np
     return np.geomspace(low, high, count)
 
 
-def zoa_critical_depths(cut: Cut, dynamics: ToolDynamicsSpec, spindle_rpm, extra_receptance=None) -> Lobes:
+def zoa_critical_depths(cut: Cut, dynamics: ToolDynamicsSpec, spindle_rpm) -> Lobes:
     """Critical depth (m) and chatter frequency (Hz) at each speed by the zero-order
     approximation (module docstring).
 
@@ -220,17 +220,11 @@ def zoa_critical_depths(cut: Cut, dynamics: ToolDynamicsSpec, spindle_rpm, extra
         The tool's structure (X/Y).
     spindle_rpm : array_like
         Speeds (rev/min, positive).
-    extra_receptance : callable, optional
-        ``f(frequency_hz) -> (n, 2, 2)`` receptance (m/N, X/Y) added to the tool's: the
-        workpiece's side (the feed drive).
     """
     speeds = _speeds(spindle_rpm)
     periods = cut.tooth_period_s(speeds)
     freq = frequency_grid_hz(dynamics, float(periods.max()))
-    g = dynamics.receptance(freq)
-    if extra_receptance is not None:
-        g = g + extra_receptance(freq)
-    depth, freq_at = zoa_boundaries(cut.mean_matrix()[None], freq, g, periods[None])
+    depth, freq_at = zoa_boundaries(cut.mean_matrix()[None], freq, dynamics.receptance(freq), periods[None])
     return Lobes("zoa", speeds, depth[0], freq_at[0])
 
 
