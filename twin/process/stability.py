@@ -204,7 +204,10 @@ def frequency_grid_hz(dynamics: ToolDynamicsSpec, longest_period_s: float) -> np
     count = math.ceil(math.log(high / low) / math.log1p(ratio)) + 1
     if count > MAX_FREQUENCIES:
         raise TwinInputError(
-            "spindle_rpm", f"T = {longest_period_s:g} s", f"needs {count} chatter frequencies, over {MAX_FREQUENCIES}"
+            "spindle_rpm",
+            f"{60.0 / longest_period_s:g} teeth/min",
+            f"the tool's dynamics at this speed need {count} chatter frequencies, over {MAX_FREQUENCIES}: a higher "
+            "lowest speed",
         )
     return np.geomspace(low, high, count)
 
@@ -244,8 +247,8 @@ def zoa_boundaries(
     periods_s : ndarray (c, p)
         Tooth periods (s) per cut.
     """
-    lam = eigenvalues_2x2(mean_h[:, None] @ receptance[None])  # (c, f, 2)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(all="ignore"):  # a singular or huge receptance: no boundary there, not a warning
+        lam = eigenvalues_2x2(mean_h[:, None] @ receptance[None])  # (c, f, 2)
         nu = 1.0 / lam
         valid = nu.real > 0
     # only the frequencies where some cut can chatter (and their neighbours) are searched
@@ -256,7 +259,7 @@ def zoa_boundaries(
     frequency_hz, nu, valid = frequency_hz[near], nu[:, near], valid[:, near]
     if frequency_hz.size < 2:
         return np.full(periods_s.shape, np.nan), np.full(periods_s.shape, np.nan)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(all="ignore"):
         depth = np.where(valid, np.abs(nu) ** 2 / (2.0 * nu.real), np.nan)
         theta = np.pi - 2.0 * np.angle(nu)  # w T less its whole turns, in (0, 2 pi)
     omega = 2 * np.pi * frequency_hz
@@ -276,7 +279,7 @@ def zoa_boundaries(
                 lo, hi = turns[..., :-1], turns[..., 1:]
                 k = np.ceil(np.minimum(lo, hi))
                 crosses = seg & (k <= np.maximum(lo, hi)) & (k >= 0)
-                with np.errstate(divide="ignore", invalid="ignore"):
+                with np.errstate(all="ignore"):
                     frac = np.where(crosses, (k - lo) / (hi - lo), 0.0)
                     a_cross = np.where(crosses, a_b[..., :-1] + frac * (a_b[..., 1:] - a_b[..., :-1]), np.inf)
                 where = np.argmin(a_cross, axis=2)[..., None]
