@@ -94,3 +94,14 @@ def test_a_measured_frf_gives_the_modes_lobes(tmp_path):
     assert [r["critical_depth_mm"] for r in got] == pytest.approx([r["critical_depth_mm"] for r in expected], rel=5e-3)
     refused = twin("lobes", tmp_path / "s.toml", "--method", "sd")
     assert refused.returncode == 2 and "frf_file" in refused.stderr and "sd needs modes" in refused.stderr
+
+
+def test_the_lines_parquet_has_the_check_as_columns(tmp_path):
+    import pandas as pd
+
+    run = api.run("gcode_slot_passes", duration_s=1.0)
+    frame = pd.read_parquet(run.lines_to_parquet(tmp_path / "lines.parquet")).set_index("line")
+    row = next(r for r in run.summary["lines"] if r["line"] == 14)["stability"]
+    assert frame.loc[14, "stability_critical_depth_mm"] == row["critical_depth_mm"]
+    assert frame.loc[14, "stability_stable_rpm_high"] == row["stable_rpm"][1]
+    assert pd.isna(frame.loc[11, "stability_margin"])  # a rapid
