@@ -70,7 +70,9 @@ class Run:
 
     def lines_to_parquet(self, path: str | Path) -> Path:
         """Write the per-line table of a G-code run (``summary["lines"]``, the per-axis
-        tracking errors as columns ``max_tracking_error_um_<axis>``) to a Parquet file.
+        tracking errors as columns ``max_tracking_error_um_<axis>``, a cutting line's chatter
+        check as ``stability_<key>`` with ``stability_stable_rpm_low`` and ``_high``) to a
+        Parquet file.
 
         Raises
         ------
@@ -86,8 +88,15 @@ class Run:
         flat = []
         for row in rows:
             per_axis = {f"max_tracking_error_um_{a}": v for a, v in row["max_tracking_error_um"].items()}
-            flat.append({**{k: v for k, v in row.items() if k != "max_tracking_error_um"}, **per_axis})
-        pq.write_table(pa.Table.from_pylist(flat), Path(path))
+            check = dict(row.get("stability", {}))
+            low, high = check.pop("stable_rpm", None) or (None, None)
+            stability = {f"stability_{k}": v for k, v in check.items()}
+            if "stability" in row:
+                stability.update(stability_stable_rpm_low=low, stability_stable_rpm_high=high)
+            plain = {k: v for k, v in row.items() if k not in ("max_tracking_error_um", "stability")}
+            flat.append({**plain, **per_axis, **stability})
+        columns = list(dict.fromkeys(key for row in flat for key in row))  # every row's, in order
+        pq.write_table(pa.Table.from_pylist([{c: row.get(c) for c in columns} for row in flat]), Path(path))
         return Path(path)
 
     def to_pandas(self) -> pd.DataFrame:
@@ -251,6 +260,40 @@ class Frf:
 
         record(self.run, Path(path))
         return Path(path)
+
+
+@dataclass
+class StabilityLobes:
+    """The stability lobes of a scenario's tool and its program's lines on them (``twin lobes``).
+
+    Attributes
+    ----------
+    scenario : str
+    summary : dict
+        What ``twin lobes --json`` prints: ``lobes`` per method (a list of ``spindle_rpm``,
+        ``critical_depth_mm``, ``chatter_hz``), their ``lowest``, the ``seconds`` each took, the
+        cut, and with a program ``lines`` with each line's ``stability``.
+    """
+
+    scenario: str
+    summary: dict
+
+    def to_pandas(self) -> pd.DataFrame:
+        """The lobes by spindle speed (rpm): ``<method>_critical_depth_mm`` and
+        ``<method>_chatter_hz`` for each method computed."""
+        import pandas as pd
+
+        frames = []
+        for method, rows in self.summary["lobes"].items():
+            frame = pd.DataFrame(rows).set_index("spindle_rpm")
+            frames.append(frame.add_prefix(f"{method}_"))
+        return pd.concat(frames, axis=1)
+
+    def write_png(self, path: str | Path) -> Path:
+        """The lobes, the program's lines on them and the chatter frequency beneath (PNG)."""
+        from twin.commissioning.lobes import write_lobes_png
+
+        return write_lobes_png(self.summary, path)
 
 
 @dataclass

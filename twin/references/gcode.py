@@ -37,6 +37,7 @@ from twin.machines import BuiltMachine
 from twin.machines import build as build_machine
 from twin.machines.rigid_drive import rigid_drives, table_travel_m
 from twin.process.machining import COLUMNS, ProgramCut, engaged_degrees
+from twin.process.program_stability import ProgramSamples, default_rpm_range, line_stability
 from twin.references.kinds import ReferenceContext, ReferenceSpecBase, register, two_axes
 from twin.settings import set_fields
 from twin.spec import Millimetres, StrictSpec, validation_error
@@ -179,6 +180,30 @@ class GcodeReference(_Samples):
         deliver, by line (:func:`twin.gcode.checks.plan_warnings`), and how many in all."""
         return plan_warnings(*self.checks)
 
+    def program_samples(self) -> ProgramSamples | None:
+        """With a stock: the engagement, speed, tool, line and XY velocity at each sample."""
+        if self.cut is None:
+            return None
+        milling = self.cut.milling
+        return ProgramSamples(
+            self.cut.table,
+            milling.spindle_rpm,
+            milling.tool_index,
+            milling.tools,
+            self.plan.line,
+            self.plan.velocity[:, :2],
+        )
+
+    @cached_property
+    def line_stability(self) -> dict[int, dict]:
+        """With a stock and tools with ``dynamics``: each cutting line's chatter check
+        (:func:`twin.process.program_stability.line_stability`, stable speeds searched over
+        :func:`~twin.process.program_stability.default_rpm_range`); else empty."""
+        samples = self.program_samples()
+        if samples is None:
+            return {}
+        return line_stability(samples, default_rpm_range(samples.spindle_rpm))
+
     def _window(self, t):
         return 0, self.plan.position, self.plan.velocity, self.plan.acceleration, self.plan.line
 
@@ -300,6 +325,11 @@ class StreamedGcodeReference(_Samples):
     def warnings(self) -> list[dict]:
         """No stock: no machining warnings."""
         return []
+
+    @property
+    def line_stability(self) -> dict[int, dict]:
+        """No stock: no engagement to check."""
+        return {}
 
     @property
     def warnings_total(self) -> int:

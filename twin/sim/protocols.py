@@ -32,7 +32,7 @@ class ProgramReference(Reference, Protocol):
     with a stock (engaged angle in deg and axial depth in mm; empty without one) and the planned
     axes the machine has not (m); and, for the whole program, its lines read, cycle time (s),
     line texts, its warnings against the machine (travel, drives), and with a stock its outlines
-    (mm) and machining warnings."""
+    (mm), machining warnings and each line's chatter check."""
 
     n_lines: int
 
@@ -53,6 +53,9 @@ class ProgramReference(Reference, Protocol):
 
     @property
     def plan_warnings(self) -> tuple[list[dict], int]: ...
+
+    @property
+    def line_stability(self) -> dict[int, dict]: ...
 
     def line_at(self, t: float) -> int: ...
 

@@ -90,6 +90,9 @@ class ProgramTrace:
         by line (:func:`twin.gcode.checks.plan_warnings`).
     plan_warnings_total : int
         How many there are in all.
+    line_stability : dict of int to dict
+        With a stock and a tool with ``dynamics``: each cutting line's chatter check
+        (:func:`twin.process.program_stability.line_stability`).
     """
 
     lines: np.ndarray
@@ -103,6 +106,7 @@ class ProgramTrace:
     machining_warnings_total: int
     plan_warnings: list[dict]
     plan_warnings_total: int
+    line_stability: dict[int, dict] = field(default_factory=dict)
 
 
 @dataclass
@@ -459,6 +463,7 @@ class _ProgramSeries:
             machining_warnings_total=self.reference.warnings_total,
             plan_warnings=self.reference.plan_warnings[0],
             plan_warnings_total=self.reference.plan_warnings[1],
+            line_stability=self.reference.line_stability,
         )
 
 
