@@ -176,3 +176,54 @@ def test_the_twins_boundary_by_bisection_is_the_semi_discretizations(rpm):
         mid = 0.5 * (lo + hi)
         lo, hi = (lo, mid) if _chatters(_benchmark(mid, rpm)[1]) else (mid, hi)
     assert 0.5 * (lo + hi) == pytest.approx(critical_mm, rel=0.02)
+
+
+def _slot(depth_mm, *extra):
+    """``twin run slot_linear_motor`` at 10 000 rpm and 0.03 mm per tooth, ``depth_mm`` deep, 1 s."""
+    from cli_process import twin
+
+    return twin(
+        "run", "slot_linear_motor", "--set", f"disturbances.0.axial_depth_mm={depth_mm}",
+        "--set", "disturbances.0.spindle_rpm=10000", "--set", "reference.feed_mm_per_min=600",
+        "--set", "duration_s=1.0", *extra,
+    )  # fmt: skip
+
+
+def test_a_run_that_chatters_says_so_and_strict_exits_4():
+    """The table's own regeneration: a 10 mm full slot is stable, a 16 mm one chatters with the
+    vibration bounded (the teeth leave the cut) and the force of that depth: under 5 times the
+    closed-form mean, not the 1e8 N of the chip that followed the vibration."""
+    import json
+
+    from twin.process.cutting import mean_tool_forces_N
+
+    stable = json.loads(_slot(10, "--json").stdout)
+    assert stable["chatter"]["indicator"] < 0.05 and stable["chatter_warnings"] == []
+    done = _slot(16, "--json")
+    summary = json.loads(done.stdout)
+    assert done.returncode == 0
+    assert summary["chatter"]["chatter"] and summary["chatter"]["indicator"] > CHATTER_THRESHOLD
+    assert summary["chatter"]["chatter_hz"] > 0
+    (warning,) = summary["chatter_warnings"]
+    assert warning["line"] is None and warning["message"].startswith("chatter at")
+    mean = np.abs(mean_tool_forces_N(K, 2, 16.0, 0.03, 0.0, math.pi)[:2]).max()
+    assert max(summary["max_cutting_force_N"].values()) < 5 * mean
+    strict = _slot(16, "--strict")
+    assert strict.returncode == 4
+    assert "chatter warnings (1):" in strict.stdout
+    assert strict.stderr.strip().splitlines()[-1].startswith("error: 1 chatter warning(s) under --strict")
+
+
+def test_a_program_line_that_chatters_is_named():
+    """The bundled 16 mm slot: line 13 (the slot) chatters mildly through the table at about
+    half the tooth frequency (10 000 rpm, 2 flutes: 167 Hz), its mean force the closed form's."""
+    import json
+
+    from cli_process import twin
+
+    summary = json.loads(twin("run", "gcode_deep_slot", "--set", "duration_s=4.0", "--json").stdout)
+    rows = {row["line"]: row for row in summary["lines"]}
+    assert rows[13]["chatter"]["chatter"]
+    assert rows[13]["chatter"]["chatter_hz"] == pytest.approx(10000 / 60, rel=0.1)
+    assert "chatter" not in rows[11]  # the rapid: no cut
+    assert [w["line"] for w in summary["chatter_warnings"]] == [13]

@@ -105,6 +105,28 @@ def _print_warnings(summary: dict) -> None:
         typer.echo(f"    ... {total - SHOWN_WARNINGS} more (--json lists {len(rows)})")
 
 
+def _print_chatter(summary: dict) -> None:
+    """The run's chatter indicator and frequency, then the chatter warnings, a line each: by
+    program line, or the run's."""
+    whole = summary.get("chatter")
+    if whole is None:
+        return
+    verdict = "chatters" if whole["chatter"] else "stable"
+    hz = "" if whole["chatter_hz"] is None else f" at {whole['chatter_hz']:.1f} Hz"
+    typer.echo(
+        f"  {'chatter':<28} indicator {whole['indicator']:.3f} ({verdict}; over {whole['threshold']} chatters){hz}"
+    )
+    rows = summary.get("chatter_warnings", [])
+    if not rows:
+        return
+    typer.echo(f"  chatter warnings ({len(rows)}):")
+    for row in rows[:SHOWN_WARNINGS]:
+        where = "   run" if row["line"] is None else f"line {row['line']:>6}"
+        typer.echo(f"    {where}  {row['message']}  {row['text']}")
+    if len(rows) > SHOWN_WARNINGS:
+        typer.echo(f"    ... {len(rows) - SHOWN_WARNINGS} more (--json lists them all)")
+
+
 def _print_part(summary: dict) -> None:
     """The virtual part's wall error and each inspected feature, a line each."""
     part = summary.get("part")
@@ -194,6 +216,14 @@ def _run(
             err=True,
         )
         raise typer.Exit(exits.CHECK_FAILED)
+    chatter = done.summary.get("chatter_warnings", [])
+    if strict and chatter:
+        first = chatter[0]
+        where = "the run" if first["line"] is None else f"line {first['line']}"
+        typer.echo(
+            f"error: {len(chatter)} chatter warning(s) under --strict; the first: {where}: {first['message']}", err=True
+        )
+        raise typer.Exit(exits.CHECK_FAILED)
 
 
 #: Lines of a program the text summary names, worst first.
@@ -214,11 +244,22 @@ def _report(
             {
                 k: v
                 for k, v in summary.items()
-                if k not in ("scenario", "machine", "lines", "machining_warnings", "part", "inspection")
+                if k
+                not in (
+                    "scenario",
+                    "machine",
+                    "lines",
+                    "machining_warnings",
+                    "part",
+                    "inspection",
+                    "chatter",
+                    "chatter_warnings",
+                )
             },
         )
         _print_worst_lines(summary.get("lines", []))
         _print_warnings(summary)
+        _print_chatter(summary)
         _print_part(summary)
     if lines is not None:
         done.lines_to_parquet(lines)
@@ -254,7 +295,9 @@ def run(
     ),
     lines: Path = typer.Option(None, "--lines", help="A G-code run: write its per-line table to this .parquet"),
     strict: bool = typer.Option(
-        False, "--strict", help="Exit with code 4 if the program crashes or misuses the tool (machining warnings)"
+        False,
+        "--strict",
+        help="Exit with code 4 if the program crashes or misuses the tool (machining warnings) or the cut chatters",
     ),
     part: Path = typer.Option(
         None,

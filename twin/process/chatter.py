@@ -46,7 +46,8 @@ class ChatterReading:
         Median over the windows of RMS(once-per-tooth vibration difference) / RMS(planned feed
         per tooth).
     chatter_hz : float or None
-        The vibration's frequency in the windows that chatter (Hz); None where none does.
+        The vibration's frequency in the windows that chatter (Hz); None where the stretch does
+        not chatter.
     windows : int
         Windows read (those the tool cut for at least :data:`MIN_CUT_SHARE` of).
     """
@@ -129,6 +130,20 @@ def chatter_reading(
     if not len(sums):
         return None
     ratio = ratios(sums)
+    indicator = float(np.median(ratio))
     chattering = ratio > CHATTER_THRESHOLD
-    hz = frequency_hz(sums[chattering], timestep_s) if chattering.any() else None
-    return ChatterReading(float(np.median(ratio)), hz, len(sums))
+    hz = frequency_hz(sums[chattering], timestep_s) if indicator > CHATTER_THRESHOLD else None
+    return ChatterReading(indicator, hz, len(sums))
+
+
+def rolling_indicator(probe: np.ndarray, row_period_s: float) -> np.ndarray:
+    """At each probe row, the indicator over the :data:`WINDOW_S` up to it (trailing window):
+    RMS of the once-per-tooth vibration difference over that of the planned feed per tooth; 0
+    where the tool did not cut in the window, shape (rows,)."""
+    rows = max(1, round(WINDOW_S / row_period_s))
+    sums = np.cumsum(probe, axis=0)
+    past = np.vstack([np.zeros((rows, probe.shape[1])), sums[:-rows]]) if len(sums) > rows else np.zeros_like(sums)
+    window = sums - past[: len(sums)]
+    feed = window[:, PROBE_FEED2]
+    vibration = window[:, PROBE_U2] + window[:, PROBE_W2]
+    return np.sqrt(np.divide(vibration, feed, out=np.zeros_like(feed), where=feed > 0.0))
