@@ -111,11 +111,9 @@ def _print_chatter(summary: dict) -> None:
     whole = summary.get("chatter")
     if whole is None:
         return
-    verdict = "chatters" if whole["chatter"] else "stable"
+    verdict = f"over {whole['threshold']}: chatters" if whole["chatter"] else f"under {whole['threshold']}: stable"
     hz = "" if whole["chatter_hz"] is None else f" at {whole['chatter_hz']:.1f} Hz"
-    typer.echo(
-        f"  {'chatter':<28} indicator {whole['indicator']:.3f} ({verdict}; over {whole['threshold']} chatters){hz}"
-    )
+    typer.echo(f"  {'chatter':<28} indicator {whole['indicator']:.3f} {verdict}{hz}")
     rows = summary.get("chatter_warnings", [])
     if not rows:
         return
