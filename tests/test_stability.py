@@ -71,7 +71,7 @@ def test_orthogonal_cutting_minimum_width_is_the_closed_form():
     rpm = np.linspace(20000, 60000, 400)
     zoa = zoa_critical_depths(OrthogonalCut(k_f), BENCHMARK, rpm)
     assert np.nanmin(zoa.critical_depth_m) == pytest.approx(closed, rel=5e-3)
-    sd = sd_critical_depths(OrthogonalCut(k_f), BENCHMARK, rpm[::4], 5 * closed, n_depths=20, steps=10)
+    sd = sd_critical_depths(OrthogonalCut(k_f), BENCHMARK, rpm[::4], 5 * closed, n_depths=20)
     assert np.nanmin(sd.critical_depth_m) == pytest.approx(closed, rel=2e-2)
     # above the lowest, never below it
     assert np.nanmin(sd.critical_depth_m) >= closed * 0.99

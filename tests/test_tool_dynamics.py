@@ -108,3 +108,11 @@ def test_modes_or_a_file_not_both_nor_neither(tmp_path):
         ToolDynamicsSpec.model_validate({})
     with pytest.raises(ValueError, match="one of the two"):
         ToolDynamicsSpec.model_validate({"modes": [MODE_X], "frf_file": str(tmp_path / "x.csv")})
+
+
+def test_isotropy():
+    """X and Y alike (any order of the modes) is isotropic; one mode less is not."""
+    y = {**MODE_X, "direction": "y"}
+    other = {**MODE_X, "frequency_hz": 1500.0}
+    assert ToolDynamicsSpec.model_validate({"modes": [MODE_X, other, {**other, "direction": "y"}, y]}).is_isotropic()
+    assert not ToolDynamicsSpec.model_validate({"modes": [MODE_X, other, y]}).is_isotropic()

@@ -9,9 +9,10 @@ command line start fast::
 
 ``twin.load``, ``twin.run``, ``twin.sweep``, ``twin.fidelity``, ``twin.reproduce``,
 ``twin.program`` (a part program read and planned, as ``twin gcode``), ``twin.frf``,
-``twin.calibrate`` and ``twin.tune`` (a machine's FRF, calibration and tuning), and what they
-return (:mod:`twin.results`): ``twin.Run``, ``twin.Sweep``, ``twin.Program``, ``twin.Frf``,
-``twin.Calibration``, ``twin.Tuning`` and ``twin.Fidelity``; errors are :class:`twin.errors.TwinInputError` and
+``twin.calibrate`` and ``twin.tune`` (a machine's FRF, calibration and tuning), ``twin.lobes``
+(a tool's stability lobes), and what they return (:mod:`twin.results`): ``twin.Run``,
+``twin.Sweep``, ``twin.Program``, ``twin.Frf``, ``twin.Calibration``, ``twin.Tuning``,
+``twin.StabilityLobes`` and ``twin.Fidelity``; errors are :class:`twin.errors.TwinInputError` and
 :class:`twin.errors.SimulationDiverged`.
 """
 
@@ -23,12 +24,14 @@ __all__ = [
     "Frf",
     "Program",
     "Run",
+    "StabilityLobes",
     "Sweep",
     "Tuning",
     "calibrate",
     "fidelity",
     "frf",
     "load",
+    "lobes",
     "program",
     "reproduce",
     "run",

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 from twin.errors import TwinInputError
 from twin.reproductions import DEFAULT_SAMPLES, DEFAULT_SEED, DEFAULT_TWIN_SAMPLES
-from twin.results import Calibration, Fidelity, Frf, Program, Run, Sweep, Tuning
+from twin.results import Calibration, Fidelity, Frf, Program, Run, StabilityLobes, Sweep, Tuning
 
 if TYPE_CHECKING:  # the heavy modules load on first use, not with `import twin`
     from twin.scenario import Scenario
@@ -268,6 +268,37 @@ def frf(machine: str, overrides: dict[str, float] | None = None, **settings: Any
     summary = measure(machine, chosen, overrides)
     run = summary.pop("run")
     return Frf(machine, chosen, summary, run, nut_stiffness(machine, chosen.axis, overrides))
+
+
+def lobes(
+    scenario,
+    *,
+    method: str = "both",
+    rpm: tuple[float, float, int] | None = None,
+    depth_max_mm: float | None = None,
+    immersion: float | None = None,
+    mode: str | None = None,
+    tool_number: int | None = None,
+    feed_per_tooth_mm: float = 0.1,
+    **settings: Any,
+) -> StabilityLobes:
+    """The stability lobes of a scenario's tool (a name, a path or a :func:`load`-ed scenario,
+    with ``settings``), as ``twin lobes``: ``method`` "zoa", "sd" or "both"; ``rpm`` (low,
+    high, count); the cut's ``immersion`` (``a_e/D``) and ``mode`` ("up"/"down"); see
+    :class:`twin.commissioning.lobes.LobesSettings`.  With a stock and a program, each cutting
+    line's chatter check in ``summary["lines"]``.
+
+    Raises
+    ------
+    TwinInputError
+        A bad setting, no tool with ``dynamics``, semi-discretization of a measured FRF.
+    """
+    from twin.commissioning.lobes import LobesSettings
+    from twin.commissioning.lobes import lobes as compute
+
+    scn = load_from_model(scenario, settings) if not isinstance(scenario, str | Path) else load(scenario, **settings)
+    chosen = LobesSettings(method, rpm, depth_max_mm, immersion, mode, tool_number, feed_per_tooth_mm)
+    return StabilityLobes(scn.name, compute(scn, chosen))
 
 
 def calibrate(

@@ -1,4 +1,4 @@
-"""Command line: ``twin run | demo | gcode | fidelity | frf | calibrate | tune | mjcf | reproduce | sweep``,
+"""Command line: ``twin run | demo | gcode | fidelity | frf | lobes | calibrate | tune | mjcf | reproduce | sweep``,
 ``twin list | bench``.
 
 Bad input (unknown machine, controller or field, invalid values, malformed TOML) prints one
@@ -123,6 +123,22 @@ def _print_chatter(summary: dict) -> None:
         typer.echo(f"    {where}  {row['message']}  {row['text']}")
     if len(rows) > SHOWN_WARNINGS:
         typer.echo(f"    ... {len(rows) - SHOWN_WARNINGS} more (--json lists them all)")
+
+
+def _print_chatter_check(rows: list[dict]) -> None:
+    """The program's cutting lines over their critical depth (the tool's lobes), worst first."""
+    checked = [row for row in rows if "stability" in row]
+    if not checked:
+        return
+    over = sorted(
+        (row for row in checked if (row["stability"]["margin"] or float("inf")) < 1),
+        key=lambda row: row["stability"]["margin"],
+    )
+    typer.echo(
+        f"  chatter check (zero-order lobes): {len(checked)} cutting line(s), {len(over)} over their critical depth"
+    )
+    for row in over[:WORST_LINES]:
+        typer.echo(f"    {row['stability']['text']}")
 
 
 def _print_part(summary: dict) -> None:
@@ -256,6 +272,7 @@ def _report(
             },
         )
         _print_worst_lines(summary.get("lines", []))
+        _print_chatter_check(summary.get("lines", []))
         _print_warnings(summary)
         _print_chatter(summary)
         _print_part(summary)
@@ -597,6 +614,84 @@ def frf(
     if rrd is not None:
         measured.record(rrd)
         typer.echo(f"recording written to {rrd} (view with: rerun {rrd})", err=as_json)
+
+
+def _parse_rpm(text: str | None) -> tuple[float, float, int] | None:
+    """``--rpm MIN:MAX:N`` as (low, high, count).
+
+    Raises
+    ------
+    TwinInputError
+        Not three fields, or not numbers.
+    """
+    if text is None:
+        return None
+    parts = text.split(":")
+    try:
+        if len(parts) != 3:
+            raise ValueError
+        return float(parts[0]), float(parts[1]), int(parts[2])
+    except ValueError:
+        raise TwinInputError("--rpm", text, "give MIN:MAX:N, e.g. 5000:25000:200") from None
+
+
+@app.command()
+@_guard
+def lobes(
+    scenario: str = typer.Argument(..., help="Scenario TOML file, or a bundled scenario name"),
+    method: str = typer.Option("both", "--method", help="zoa | sd | both"),
+    rpm: str = typer.Option(None, "--rpm", help="Spindle speeds MIN:MAX:N (default: from the scenario's)"),
+    depth_max: float = typer.Option(None, "--depth-max", help="Deepest depth the semi-discretization scans, mm"),
+    immersion: float = typer.Option(None, "--immersion", help="Radial immersion a_e/D in (0, 1] (default: a slot)"),
+    down: bool = typer.Option(None, "--down/--up", help="Down (climb) or up (conventional) milling"),
+    tool: int = typer.Option(None, "--tool", help="The [[tools]] entry of this T number"),
+    feed_per_tooth: float = typer.Option(0.1, "--feed-per-tooth", help="Chip of a Kienzle material, mm"),
+    sets: list[str] = typer.Option(None, "--set", help="Change a field: PATH=VALUE"),
+    as_json: bool = typer.Option(False, "--json", help="Print the lobes as JSON"),
+    plots: Path = typer.Option(None, "--plots", help="Write the lobes (PNG) to this folder"),
+):
+    """Stability lobes of the scenario's tool (its [tool.dynamics]): the critical axial depth
+    against spindle speed by the zero-order solution and semi-discretization, and with a stock
+    and a program every cutting line checked against them."""
+    from twin import api
+    from twin.settings import parse_settings
+
+    _check_folder(plots)
+    mode = None if down is None else ("down" if down else "up")
+    found = api.lobes(
+        scenario,
+        method=method,
+        rpm=_parse_rpm(rpm),
+        depth_max_mm=depth_max,
+        immersion=immersion,
+        mode=mode,
+        tool_number=tool,
+        feed_per_tooth_mm=feed_per_tooth,
+        **parse_settings(sets or []),
+    )
+    summary = found.summary
+    if as_json:
+        _echo_json(summary, 1)
+    else:
+        typer.echo(
+            f"{summary['scenario']}: {summary['tool']}, {summary['n_flutes']} flutes, D {summary['diameter_mm']:g} mm, "
+            f"{summary['material']} (K_t {summary['K_t_N_per_mm2']:g} N/mm^2, K_r {summary['K_r']:.3g}), "
+            f"a_e/D {summary['immersion']:g} {summary['mode']} milling, {summary['dynamics']}"
+        )
+        for name, low in summary["lowest"].items():
+            rows = summary["lobes"][name]
+            span = f"{rows[0]['spindle_rpm']:g}-{rows[-1]['spindle_rpm']:g} rpm ({len(rows)} speeds)"
+            where = (
+                "no boundary"
+                if low is None
+                else (f"lowest critical depth {low['critical_depth_mm']:.3f} mm at {low['spindle_rpm']:.0f} rpm")
+            )
+            typer.echo(f"  {name}: {where} over {span}, {summary['seconds'][name]:.2f} s")
+        _print_chatter_check(summary.get("lines", []))
+    if plots is not None:
+        plots.mkdir(parents=True, exist_ok=True)
+        path = found.write_png(plots / f"lobes_{Path(scenario).stem}.png")
+        typer.echo(f"plot written to {path}", err=as_json)
 
 
 @app.command()

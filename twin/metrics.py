@@ -361,8 +361,9 @@ def _chatter_message(reading: ChatterReading) -> str:
 def line_table(result, contour_m: np.ndarray | None) -> list[dict]:
     """Per G-code line, over the recorded ticks the reference is on it: its text, time span,
     max and RMS contour error (um), max tracking error per axis (um), the largest cutting
-    force (N, the XY magnitude) and, with a stock, the mean engaged angle (deg) and the largest
-    axial depth (mm), in program order.
+    force (N, the XY magnitude) and, with a stock, the mean engaged angle (deg), the largest
+    axial depth (mm) and, for a tool with ``dynamics``, the chatter check (``stability``), in
+    program order.
 
     Parameters
     ----------
@@ -408,5 +409,7 @@ def line_table(result, contour_m: np.ndarray | None) -> list[dict]:
             row["axial_depth_mm"] = round(float(depth[i]), 4)
         if line in wall_error:
             row["max_wall_error_um"] = wall_error[line]
+        if line in program.line_stability:
+            row["stability"] = program.line_stability[line]
         rows.append(row)
     return rows

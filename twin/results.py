@@ -254,6 +254,40 @@ class Frf:
 
 
 @dataclass
+class StabilityLobes:
+    """The stability lobes of a scenario's tool and its program's lines on them (``twin lobes``).
+
+    Attributes
+    ----------
+    scenario : str
+    summary : dict
+        What ``twin lobes --json`` prints: ``lobes`` per method (a list of ``spindle_rpm``,
+        ``critical_depth_mm``, ``chatter_hz``), their ``lowest``, the ``seconds`` each took, the
+        cut, and with a program ``lines`` with each line's ``stability``.
+    """
+
+    scenario: str
+    summary: dict
+
+    def to_pandas(self) -> pd.DataFrame:
+        """The lobes by spindle speed (rpm): ``<method>_critical_depth_mm`` and
+        ``<method>_chatter_hz`` for each method computed."""
+        import pandas as pd
+
+        frames = []
+        for method, rows in self.summary["lobes"].items():
+            frame = pd.DataFrame(rows).set_index("spindle_rpm")
+            frames.append(frame.add_prefix(f"{method}_"))
+        return pd.concat(frames, axis=1)
+
+    def write_png(self, path: str | Path) -> Path:
+        """The lobes, the program's lines on them and the chatter frequency beneath (PNG)."""
+        from twin.commissioning.lobes import write_lobes_png
+
+        return write_lobes_png(self.summary, path)
+
+
+@dataclass
 class Calibration:
     """Machine parameters fitted to a measured trace or FRF (``twin calibrate``).
 

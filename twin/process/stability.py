@@ -49,10 +49,22 @@ MAX_FREQUENCIES = 200_000
 #: Relative step of the zero-order frequency grid per damping ratio (a tenth of a mode's half
 #: power band width).
 FREQUENCY_STEP_PER_ZETA = 0.1
+#: Speeds times chatter frequencies the zero-order solution holds at once.
+ZOA_CELLS = 2_000_000
 #: Grid points per spindle speed and depth at most in one batch of the semi-discretization.
 SD_BATCH = 4000
 #: Bisection steps refining the semi-discretization's first unstable depth.
 SD_BISECTIONS = 8
+#: Secant steps of the semi-discretization's finer boundary.
+SD_SECANTS = 4
+#: How near 1 the finer boundary's spectral radius must come.
+SD_RADIUS_TOLERANCE = 2e-4
+#: Steps per period of the highest mode at least (the semi-discretization's resolution).
+SD_STEPS_PER_CYCLE = 3.0
+#: Steps in the cut per tooth period at most (the finer boundary takes :data:`SD_FINER` times as many).
+SD_MAX_STEPS = 40
+#: The finer boundary's steps over the coarser's (Richardson's ratio).
+SD_FINER = 1.5
 #: Depths the semi-discretization scans at a time, upwards.
 SD_SCAN = 10
 #: Speeds of one lobe computation at most.
@@ -218,37 +230,79 @@ def zoa_critical_depths(cut: Cut, dynamics: ToolDynamicsSpec, spindle_rpm, extra
     g = dynamics.receptance(freq)
     if extra_receptance is not None:
         g = g + extra_receptance(freq)
-    lam = np.linalg.eigvals(cut.mean_matrix() @ g)  # (n_freq, 2)
+    depth, freq_at = zoa_boundaries(cut.mean_matrix()[None], freq, g, periods[None])
+    return Lobes("zoa", speeds, depth[0], freq_at[0])
+
+
+def zoa_boundaries(
+    mean_h: np.ndarray, frequency_hz: np.ndarray, receptance: np.ndarray, periods_s: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The zero-order critical depth (m, nan: none) and chatter frequency (Hz) of several cuts,
+    each at its own tooth periods.
+
+    Parameters
+    ----------
+    mean_h : ndarray (c, 2, 2)
+        Each cut's mean force matrix ``H0`` (N/m^2, X/Y).
+    frequency_hz, receptance : ndarray (f,), (f, 2, 2)
+        The chatter frequencies searched (:func:`frequency_grid_hz`) and the relative
+        receptance there (m/N).
+    periods_s : ndarray (c, p)
+        Tooth periods (s) per cut.
+    """
+    lam = eigenvalues_2x2(mean_h[:, None] @ receptance[None])  # (c, f, 2)
     with np.errstate(divide="ignore", invalid="ignore"):
         nu = 1.0 / lam
         valid = nu.real > 0
+    # only the frequencies where some cut can chatter (and their neighbours) are searched
+    chatters: np.ndarray = np.asarray(valid.any(axis=(0, 2)))
+    near = chatters.copy()
+    near[:-1] |= chatters[1:]
+    near[1:] |= chatters[:-1]
+    frequency_hz, nu, valid = frequency_hz[near], nu[:, near], valid[:, near]
+    if frequency_hz.size < 2:
+        return np.full(periods_s.shape, np.nan), np.full(periods_s.shape, np.nan)
+    with np.errstate(divide="ignore", invalid="ignore"):
         depth = np.where(valid, np.abs(nu) ** 2 / (2.0 * nu.real), np.nan)
         theta = np.pi - 2.0 * np.angle(nu)  # w T less its whole turns, in (0, 2 pi)
-    omega = 2 * np.pi * freq
-    best = np.full(len(speeds), np.inf)
-    best_hz = np.full(len(speeds), np.nan)
-    for branch in range(lam.shape[1]):
-        a_b, th_b, ok = depth[:, branch], theta[:, branch], valid[:, branch]
-        seg = ok[:-1] & ok[1:]
-        for chunk in range(0, len(speeds), 64):
-            per = periods[chunk : chunk + 64, None]
-            turns = (omega[None, :] * per - th_b[None, :]) / (2 * np.pi)  # (s, f)
-            lo, hi = turns[:, :-1], turns[:, 1:]
-            k = np.ceil(np.minimum(lo, hi))
-            crosses = seg[None, :] & (k <= np.maximum(lo, hi)) & (k >= 0)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                frac = np.where(crosses, (k - lo) / (hi - lo), 0.0)
-            a_cross = np.where(crosses, a_b[:-1] + frac * (a_b[1:] - a_b[:-1]), np.inf)
-            where = np.argmin(a_cross, axis=1)
-            rows = np.arange(len(where))
-            a_min = a_cross[rows, where]
-            f_min = freq[where] + frac[rows, where] * (freq[where + 1] - freq[where])
-            sl = slice(chunk, chunk + 64)
-            better = a_min < best[sl]
-            best[sl] = np.where(better, a_min, best[sl])
-            best_hz[sl] = np.where(better, f_min, best_hz[sl])
+    omega = 2 * np.pi * frequency_hz
+    n_cuts, n_periods = periods_s.shape
+    best = np.full((n_cuts, n_periods), np.inf)
+    best_hz = np.full((n_cuts, n_periods), np.nan)
+    per_chunk = max(1, min(n_periods, ZOA_CELLS // len(frequency_hz)))  # memory stays bounded
+    cuts_chunk = max(1, ZOA_CELLS // (per_chunk * len(frequency_hz)))
+    for c0 in range(0, n_cuts, cuts_chunk):
+        cs = slice(c0, c0 + cuts_chunk)
+        for p0 in range(0, n_periods, per_chunk):
+            ps = slice(p0, p0 + per_chunk)
+            for branch in range(nu.shape[2]):
+                a_b, th_b = depth[cs, None, :, branch], theta[cs, None, :, branch]  # (c, 1, f)
+                seg = valid[cs, None, :-1, branch] & valid[cs, None, 1:, branch]
+                turns = (omega * periods_s[cs, ps, None] - th_b) / (2 * np.pi)  # (c, p, f)
+                lo, hi = turns[..., :-1], turns[..., 1:]
+                k = np.ceil(np.minimum(lo, hi))
+                crosses = seg & (k <= np.maximum(lo, hi)) & (k >= 0)
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    frac = np.where(crosses, (k - lo) / (hi - lo), 0.0)
+                    a_cross = np.where(crosses, a_b[..., :-1] + frac * (a_b[..., 1:] - a_b[..., :-1]), np.inf)
+                where = np.argmin(a_cross, axis=2)[..., None]
+                a_min = np.take_along_axis(a_cross, where, 2)[..., 0]
+                f_at = np.take_along_axis(frac, where, 2)[..., 0]
+                w = where[..., 0]
+                f_min = frequency_hz[w] + f_at * (frequency_hz[w + 1] - frequency_hz[w])
+                better = a_min < best[cs, ps]
+                best[cs, ps] = np.where(better, a_min, best[cs, ps])
+                best_hz[cs, ps] = np.where(better, f_min, best_hz[cs, ps])
     best[~np.isfinite(best)] = np.nan
-    return Lobes("zoa", speeds, best, best_hz)
+    return best, best_hz
+
+
+def eigenvalues_2x2(m: np.ndarray) -> np.ndarray:
+    """Both eigenvalues of each 2 x 2 matrix of ``m`` (..., 2, 2): ``tr/2 +- sqrt(tr^2/4 - det)``."""
+    half = 0.5 * (m[..., 0, 0] + m[..., 1, 1])
+    det = m[..., 0, 0] * m[..., 1, 1] - m[..., 0, 1] * m[..., 1, 0]
+    root = np.sqrt(half * half - det + 0j)
+    return np.stack([half + root, half - root], axis=-1)
 
 
 def _speeds(spindle_rpm) -> np.ndarray:
@@ -386,12 +440,16 @@ def sd_critical_depths(
 ) -> Lobes:
     """Critical depth (m) and chatter frequency (Hz) at each speed by semi-discretization.
 
-    The spectral radius with ``steps`` steps in the cut per tooth period on ``n_depths`` depths
-    up to ``depth_max_m``; the first unstable one refined by :data:`SD_BISECTIONS` bisections
-    (nan: stable up to ``depth_max_m``); the same with twice the steps near it, and the two
-    extrapolated to infinitely many steps (Richardson: the method's error falls as the step
-    squared, so ``a = a_2m + (a_2m - a_m) / 3``; where the finer boundary is not within 20 % of
-    the coarser one, the finer one's is kept as it is).
+    At each speed the tooth period in ``m`` steps in the cut: ``steps``, or more where a step
+    would be longer than :data:`SD_STEPS_PER_CYCLE` of the highest mode's period (the delayed
+    position is interpolated linearly between steps, so a step must be short against a
+    vibration).  Speeds that would need over :data:`SD_MAX_STEPS` are not computed (nan).
+    The spectral radius on ``n_depths`` depths up to ``depth_max_m``; the first unstable one
+    refined by :data:`SD_BISECTIONS` bisections (nan: stable up to ``depth_max_m``); then the
+    boundary with ``r = ``:data:`SD_FINER` times the steps near it (secant steps from it), and
+    the two extrapolated to infinitely many steps (Richardson: the method's error falls as the
+    step squared, so ``a = a_f + (a_f - a_m) / (r^2 - 1)``; where the finer boundary is not
+    found within 20 % of the coarser one, the coarser one is kept).
 
     The chatter frequency is the critical multiplier's ``(arg mu + 2 pi k) / (2 pi T)`` (or
     its negative) nearest the most flexible mode's natural frequency.
@@ -405,30 +463,66 @@ def sd_critical_depths(
         raise TwinInputError("depth_max_mm", depth_max_m * 1e3, "must be positive")
     if not 2 <= n_depths <= 10_000:
         raise TwinInputError("n_depths", n_depths, "2 to 10000")
-    if not 4 <= steps <= 200:
-        raise TwinInputError("steps", steps, "4 to 200 in the cut per tooth period")
+    if not 4 <= steps <= SD_MAX_STEPS:
+        raise TwinInputError("steps", steps, f"4 to {SD_MAX_STEPS} in the cut per tooth period")
     speeds = _speeds(spindle_rpm)
     model = ModalModel.of(dynamics)
-    coarse, fine = cut.step_matrices(steps), cut.step_matrices(2 * steps)
     periods = cut.tooth_period_s(speeds)
     depths = np.linspace(depth_max_m / n_depths, depth_max_m, n_depths)
-    first = _first_unstable(model, coarse, periods, depths)
-    idx = np.flatnonzero(first >= 0)
+    highest_hz = max(m.frequency_hz for m in dynamics.modes)
+    needed = np.maximum(steps, np.ceil(SD_STEPS_PER_CYCLE * highest_hz * periods)).astype(int)
     critical = np.full(len(speeds), np.nan)
     chatter = np.full(len(speeds), np.nan)
+    for m in np.unique(needed[needed <= SD_MAX_STEPS]):
+        group = np.flatnonzero(needed == m)
+        critical[group], chatter[group] = _sd_boundary(model, cut, int(m), periods[group], depths)
+    return Lobes("sd", speeds, critical, chatter)
+
+
+def sd_slowest_rpm(cut: Cut, dynamics: ToolDynamicsSpec) -> float:
+    """The lowest spindle speed (rpm) :func:`sd_critical_depths` computes for ``dynamics``."""
+    highest_hz = max(m.frequency_hz for m in dynamics.modes)
+    return 60.0 * SD_STEPS_PER_CYCLE * highest_hz / (cut.n_flutes * SD_MAX_STEPS)
+
+
+def _sd_boundary(model: ModalModel, cut: Cut, m: int, periods: np.ndarray, depths: np.ndarray):
+    """Critical depths (m) and chatter frequencies (Hz) at ``periods`` with ``m`` steps (see
+    :func:`sd_critical_depths`)."""
+    critical = np.full(len(periods), np.nan)
+    chatter = np.full(len(periods), np.nan)
+    m_fine = math.ceil(SD_FINER * m)
+    coarse, fine = cut.step_matrices(m), cut.step_matrices(m_fine)
+    first = _first_unstable(model, coarse, periods, depths)
+    idx = np.flatnonzero(first >= 0)
     if idx.size == 0:
-        return Lobes("sd", speeds, critical, chatter)
+        return critical, chatter
     first = first[idx]
     lo = np.where(first > 0, depths[np.maximum(first - 1, 0)], 0.0)
-    a_m = _bisect(model, coarse, periods[idx], lo, depths[first])[0]
-    lo2, hi2 = 0.8 * a_m, 1.25 * a_m
-    bracketed = (sd_spectral_radius(model, fine, periods[idx], lo2)[0] <= 1.0) & (
-        sd_spectral_radius(model, fine, periods[idx], hi2)[0] > 1.0
-    )
-    a_2m, mu = _bisect(model, fine, periods[idx], lo2, hi2)
-    critical[idx] = np.where(bracketed, a_2m + (a_2m - a_m) / 3.0, a_m)
+    a_m, mu_m = _bisect(model, coarse, periods[idx], lo, depths[first])
+    a_2m, mu_2m = _secant(model, fine, periods[idx], a_m)
+    found = np.isfinite(a_2m)
+    critical[idx] = np.where(found, a_2m + (a_2m - a_m) / ((m_fine / m) ** 2 - 1.0), a_m)
+    mu = np.where(found, mu_2m, mu_m)
     chatter[idx] = _nearest_alias_hz(np.angle(mu), periods[idx], model.dominant_hz)
-    return Lobes("sd", speeds, critical, chatter)
+    return critical, chatter
+
+
+def _secant(model: ModalModel, steps, periods: np.ndarray, start: np.ndarray):
+    """Where the spectral radius crosses 1 near ``start`` (m) at each period, by
+    :data:`SD_SECANTS` secant steps from ``start`` and 0.95 of it, and the multiplier there;
+    nan where it does not settle within 20 % of ``start``."""
+    x0, x1 = start, 0.95 * start
+    f0 = sd_spectral_radius(model, steps, periods, x0)[0] - 1.0
+    f1 = sd_spectral_radius(model, steps, periods, x1)[0] - 1.0
+    mu = np.zeros(len(periods), complex)
+    for _ in range(SD_SECANTS):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x2 = np.where(f1 != f0, x1 - f1 * (x1 - x0) / (f1 - f0), x1)
+        x2 = np.clip(np.where(np.isfinite(x2), x2, start), 0.8 * start, 1.25 * start)
+        radius, mu = sd_spectral_radius(model, steps, periods, x2)
+        x0, f0, x1, f1 = x1, f1, x2, radius - 1.0
+    settled = np.abs(f1) < SD_RADIUS_TOLERANCE
+    return np.where(settled, x1, np.nan), mu
 
 
 def _first_unstable(model: ModalModel, steps, periods: np.ndarray, depths: np.ndarray) -> np.ndarray:

@@ -193,6 +193,18 @@ class ToolDynamicsSpec(StrictSpec):
         """The modes along ``direction`` ("x" or "y")."""
         return [m for m in self.modes if m.direction == direction]
 
+    def is_isotropic(self) -> bool:
+        """Whether the receptance is the same along every direction of the XY plane (X and Y
+        alike, no cross terms): then it is the same in any feed frame."""
+        if self._measured is not None:
+            g = self._measured.receptance
+            return bool(np.array_equal(g[:, 0, 0], g[:, 1, 1]) and not np.any(g[:, 0, 1]) and not np.any(g[:, 1, 0]))
+
+        def along(direction):
+            return sorted((m.frequency_hz, m.damping_ratio, m.stiffness) for m in self.modes_along(direction))
+
+        return along("x") == along("y")
+
     def frequency_range_hz(self) -> tuple[float, float]:
         """Where the receptance is known (Hz): the measured table's span, or for modes from
         zero to four times the highest natural frequency."""

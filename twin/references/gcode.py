@@ -34,6 +34,7 @@ from twin.gcode.reader import Reader, Settings
 from twin.gcode.report import planned_summary
 from twin.machines import build as build_machine
 from twin.process.machining import COLUMNS, ProgramCut, engaged_degrees
+from twin.process.program_stability import ProgramSamples, default_rpm_range, line_stability
 from twin.references.kinds import ReferenceContext, ReferenceSpecBase, register, two_axes
 from twin.settings import set_fields
 from twin.spec import Millimetres, validation_error
@@ -161,6 +162,30 @@ class GcodeReference(_Samples):
         """Every warning, listed or not."""
         return 0 if self.cut is None else self.cut.warnings_total
 
+    def program_samples(self) -> ProgramSamples | None:
+        """With a stock: the engagement, speed, tool, line and XY velocity at each sample."""
+        if self.cut is None:
+            return None
+        milling = self.cut.milling
+        return ProgramSamples(
+            self.cut.table,
+            milling.spindle_rpm,
+            milling.tool_index,
+            milling.tools,
+            self.plan.line,
+            self.plan.velocity[:, :2],
+        )
+
+    @cached_property
+    def line_stability(self) -> dict[int, dict]:
+        """With a stock and tools with ``dynamics``: each cutting line's chatter check
+        (:func:`twin.process.program_stability.line_stability`, stable speeds searched over
+        :func:`~twin.process.program_stability.default_rpm_range`); else empty."""
+        samples = self.program_samples()
+        if samples is None:
+            return {}
+        return line_stability(samples, default_rpm_range(samples.spindle_rpm))
+
     def _window(self, t):
         return 0, self.plan.position, self.plan.velocity, self.plan.acceleration, self.plan.line
 
@@ -266,6 +291,11 @@ class StreamedGcodeReference(_Samples):
     def warnings(self) -> list[dict]:
         """No stock: no machining warnings."""
         return []
+
+    @property
+    def line_stability(self) -> dict[int, dict]:
+        """No stock: no engagement to check."""
+        return {}
 
     @property
     def warnings_total(self) -> int:

@@ -31,7 +31,7 @@ class ProgramReference(Reference, Protocol):
     any time ``t`` (s): the program line, the programmed feed (mm/min), the tool's engagement
     with a stock (engaged angle in deg and axial depth in mm; empty without one) and the planned
     axes the machine has not (m); and, for the whole program, its lines read, cycle time (s),
-    line texts, and with a stock its outlines (mm) and machining warnings."""
+    line texts, and with a stock its outlines (mm), machining warnings and each line's chatter check."""
 
     n_lines: int
 
@@ -49,6 +49,9 @@ class ProgramReference(Reference, Protocol):
 
     @property
     def warnings_total(self) -> int: ...
+
+    @property
+    def line_stability(self) -> dict[int, dict]: ...
 
     def line_at(self, t: float) -> int: ...
 

@@ -85,6 +85,9 @@ class ProgramTrace:
         (:func:`twin.process.misuse.machining_warnings`), the first ones.
     machining_warnings_total : int
         How many there are in all.
+    line_stability : dict of int to dict
+        With a stock and a tool with ``dynamics``: each cutting line's chatter check
+        (:func:`twin.process.program_stability.line_stability`).
     """
 
     lines: np.ndarray
@@ -96,6 +99,7 @@ class ProgramTrace:
     outlines: dict[str, list[np.ndarray]]
     machining_warnings: list[dict]
     machining_warnings_total: int
+    line_stability: dict[int, dict] = field(default_factory=dict)
 
 
 @dataclass
@@ -450,6 +454,7 @@ class _ProgramSeries:
             outlines=self.reference.outlines,
             machining_warnings=self.reference.warnings,
             machining_warnings_total=self.reference.warnings_total,
+            line_stability=self.reference.line_stability,
         )
 
 
