@@ -245,3 +245,14 @@ def test_issue_47s_deep_slot_runs_to_its_end_with_the_closed_form_force():
     assert np.abs(result.workpiece_force_N[:, :2]).max() < 3 * np.abs(closed).max()
     summary = tracking_summary(result)
     assert CHATTER_THRESHOLD < summary["chatter"]["indicator"] < 1.0
+
+
+def test_chatter_far_over_the_lobe_stays_bounded():
+    """Nine times the critical depth: the chatter stays bounded (multiple regeneration over 12
+    passes: the teeth meet the surface older passes left), the table on its path within
+    1 mm (0.22 mm), the force under 20 times the depth's mean (0.8 kN at 57 N)."""
+    result, sums = _benchmark(3.0, 10000.0, duration_s=0.4)
+    mean = 2 / (2 * math.pi) * 600.0 * 3.0 * FEED_PER_TOOTH_MM * 2
+    assert np.abs(result.workpiece_force_N).max() < 20 * mean
+    assert np.abs(result.error_m()).max() < 1e-3
+    assert ratios(sums).min() > CHATTER_THRESHOLD

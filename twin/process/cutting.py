@@ -534,8 +534,14 @@ CHIP_STATE = ("steps", "feed_x", "feed_y", "vib_u", "vib_w")
 CHIP_STEPS, CHIP_FEED_X, CHIP_FEED_Y, CHIP_VIB_U, CHIP_VIB_W = (CHIP_STATE.index(name) for name in CHIP_STATE)
 CHIP_HISTORY = len(CHIP_STATE)
 #: Earlier tooth passes a chip is measured against (multiple regeneration): the surface at a
-#: tooth's angle is the one the last of them to cut there left.
-REGENERATIONS = 3
+#: tooth's angle is the one the last of them to cut there left.  Three passes let a strong
+#: chatter recut material that older passes had removed, and grow without bound (the
+#: Insperger-Stepan benchmark at five times its critical depth); twelve keep it bounded there
+#: and at nine times.
+REGENERATIONS = 12
+#: Rows of a milling kernel's position history at most (32 MB): a spindle so slow that
+#: :data:`REGENERATIONS` tooth periods do not fit keeps as many as do (one at least).
+MAX_HISTORY_ROWS = 2_000_000
 #: What the milling kernels add up over each physics step that cuts, for the chatter indicator
 #: (:mod:`twin.process.chatter`): the steps, the squares of the once-per-tooth difference of
 #: the vibration along and across the feed (mm^2), its sign changes along and across, and the
@@ -565,8 +571,9 @@ FORCE_KIND, FORCE_PAR_START, FORCE_PAR_LEN, FORCE_STATE_START, FORCE_STATE_LEN =
 
 def history_rows(tooth_period_steps: float) -> int:
     """Rows of a milling kernel's position ring buffer: :data:`REGENERATIONS` tooth periods
-    (physics steps) and two to interpolate in."""
-    return int(REGENERATIONS * tooth_period_steps) + 2
+    (physics steps) within :data:`MAX_HISTORY_ROWS` (one period at least), and two to
+    interpolate in."""
+    return min(int(REGENERATIONS * tooth_period_steps), max(MAX_HISTORY_ROWS, int(tooth_period_steps))) + 2
 
 
 def mode_rows(dynamics, timestep_s: float) -> np.ndarray:
@@ -722,16 +729,18 @@ def _chips(hist, i, n, lag_steps, ux, uy, angle, n_flutes, chip_u, chip_w):  # p
     """Each flute's chip vector (feed frame, mm) into ``chip_u``, ``chip_w``: where the tool is
     now less where it was when the last earlier tooth to cut at this flute's angle ``angle - 2 pi
     j/N`` (rad) passed it, ``m`` tooth periods (``lag_steps`` physics steps each) ago, ``m``
-    from 1 to :data:`REGENERATIONS` the one that leaves the thinnest chip there (multiple
+    from 1 to :data:`REGENERATIONS` (those the buffer of ``n`` rows holds) the one that leaves
+    the thinnest chip there (multiple
     regeneration: a tooth that left the cut left the surface before it).  Its projection on the
     edge's normal is the chip thickness (:func:`step_tool_forces_N`).  Returns the tool's motion
     over the last tooth period, feed frame (mm)."""
     px, py = hist[i % n, 0], hist[i % n, 1]
     pitch = 2.0 * math.pi / n_flutes
+    passes = max(1, min(REGENERATIONS, int((n - 2) / lag_steps)))  # those the buffer holds
     for j in range(n_flutes):
         s, c = math.sin(angle - j * pitch), math.cos(angle - j * pitch)
         best = math.inf
-        for m in range(1, REGENERATIONS + 1):
+        for m in range(1, passes + 1):
             qx, qy = _past(hist, i, n, m * lag_steps)
             dx, dy = (px - qx) * 1e3, (py - qy) * 1e3
             du, dw = dx * ux + dy * uy, dy * ux - dx * uy  # along the feed and along z x feed
