@@ -28,7 +28,10 @@ def test_bundled_scenario_runs_compiled_and_equals_the_python_loop(name):
         assert np.array_equal(getattr(fast, key), getattr(slow, key)), key
     summary = tracking_summary(fast)
     assert all(math.isfinite(v) for v in summary["max_tracking_error_um"].values())
-    if any(d.type in ("end_milling", "average_force") for d in load_scenario(name).disturbances):
+    # a milling force where the table moves (the chip is the tool's motion relative to the part:
+    # gcode_choi1999_circle only plunges along Z in its first 0.2 s)
+    milling = any(d.type in ("end_milling", "average_force") for d in load_scenario(name).disturbances)
+    if milling and np.abs(fast.ref[:, :, 1]).max() > 1e-3:
         assert max(summary["max_cutting_force_N"].values()) > 1.0
 
 

@@ -128,6 +128,26 @@ def _fail_on_plan_warnings(rows: list[dict], total: int) -> None:
         raise typer.Exit(exits.CHECK_FAILED)
 
 
+def _print_chatter(summary: dict) -> None:
+    """The run's chatter indicator and frequency, then the chatter warnings, a line each: by
+    program line, or the run's."""
+    whole = summary.get("chatter")
+    if whole is None:
+        return
+    verdict = f"over {whole['threshold']}: chatters" if whole["chatter"] else f"under {whole['threshold']}: stable"
+    hz = "" if whole["chatter_hz"] is None else f" at {whole['chatter_hz']:.1f} Hz"
+    typer.echo(f"  {'chatter':<28} indicator {whole['indicator']:.3f} {verdict}{hz}")
+    rows = summary.get("chatter_warnings", [])
+    if not rows:
+        return
+    typer.echo(f"  chatter warnings ({len(rows)}):")
+    for row in rows[:SHOWN_WARNINGS]:
+        where = "   run" if row["line"] is None else f"line {row['line']:>6}"
+        typer.echo(f"    {where}  {row['message']}  {row['text']}")
+    if len(rows) > SHOWN_WARNINGS:
+        typer.echo(f"    ... {len(rows) - SHOWN_WARNINGS} more (--json lists them all)")
+
+
 def _print_chatter_check(rows: list[dict]) -> None:
     """The program's cutting lines over their critical depth (the tool's lobes), worst first."""
     checked = [row for row in rows if "stability" in row]
@@ -236,6 +256,14 @@ def _run(
         raise typer.Exit(exits.CHECK_FAILED)
     if strict and program is not None:
         _fail_on_plan_warnings(program.plan_warnings, program.plan_warnings_total)
+    chatter = done.summary.get("chatter_warnings", [])
+    if strict and chatter:
+        first = chatter[0]
+        where = "the run" if first["line"] is None else f"line {first['line']}"
+        typer.echo(
+            f"error: {len(chatter)} chatter warning(s) under --strict; the first: {where}: {first['message']}", err=True
+        )
+        raise typer.Exit(exits.CHECK_FAILED)
 
 
 #: Lines of a program the text summary names, worst first.
@@ -266,6 +294,8 @@ def _report(
                     "inspection",
                     "plan_warnings",
                     "plan_warnings_total",
+                    "chatter",
+                    "chatter_warnings",
                 )
             },
         )
@@ -274,6 +304,7 @@ def _report(
         _print_warnings(summary)
         rows = summary.get("plan_warnings", [])
         _print_plan_warnings(rows, summary.get("plan_warnings_total", len(rows)))
+        _print_chatter(summary)
         _print_part(summary)
     if lines is not None:
         done.lines_to_parquet(lines)
@@ -312,7 +343,7 @@ def run(
         False,
         "--strict",
         help="Exit with code 4 if the program crashes or misuses the tool (machining warnings), leaves the "
-        "machine's travel or asks more than its drives deliver",
+        "machine's travel, asks more than its drives deliver or the cut chatters",
     ),
     part: Path = typer.Option(
         None,

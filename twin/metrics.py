@@ -14,6 +14,7 @@ import numpy as np
 from numba import njit
 
 from twin.numba_cache import configure as configure_numba_cache
+from twin.process.chatter import CHATTER_THRESHOLD, ChatterReading, chatter_reading
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
 
@@ -317,7 +318,48 @@ def tracking_summary(result) -> dict:
             out["part"] = result.part.summary()
             out["inspection"] = result.inspection
         out["lines"] = line_table(result, ce)
+    out.update(chatter_summary(result, out.get("lines", [])))
     return out
+
+
+def _chatter_of(result, rows: slice) -> ChatterReading | None:
+    """The chatter reading (:func:`twin.process.chatter.chatter_reading`) of the recorded rows
+    ``rows`` of a run; None where the tool did not cut for a window's worth."""
+    every = max(result.info.get("record_every", 1), 1)
+    dt = result.machine.model.opt.timestep
+    steps = round(result.control_period_s / dt) * every
+    return chatter_reading(result.vibration_probe[rows], steps, result.control_period_s * every, dt)
+
+
+def chatter_summary(result, lines: list[dict]) -> dict:
+    """A milling run's chatter (:mod:`twin.process.chatter`): ``chatter`` (the whole run's
+    indicator, frequency and verdict) and ``chatter_warnings`` (each program line that chatters,
+    or the run), and each line's own reading into its row of ``lines`` (in place); nothing for a
+    run that does not mill for a window's worth."""
+    whole = _chatter_of(result, slice(None))
+    if whole is None:
+        return {}
+    warnings = []
+    program = result.program
+    if lines and program is not None:
+        starts = np.flatnonzero(np.concatenate([[True], program.lines[1:] != program.lines[:-1]]))
+        ends = np.concatenate([starts[1:], [program.lines.size]])
+        for row, a, b in zip(lines, starts, ends):
+            reading = _chatter_of(result, slice(a, b))
+            if reading is None:
+                continue
+            row["chatter"] = reading.as_dict()
+            if reading.chatters:
+                warnings.append({"line": row["line"], "message": _chatter_message(reading), "text": row["text"]})
+    elif whole.chatters:
+        warnings.append({"line": None, "message": _chatter_message(whole), "text": ""})
+    return {"chatter": whole.as_dict(), "chatter_warnings": warnings}
+
+
+def _chatter_message(reading: ChatterReading) -> str:
+    """One warning's words: the indicator against its threshold, and the frequency."""
+    hz = "" if reading.chatter_hz is None else f" at {reading.chatter_hz:.0f} Hz"
+    return f"chatter{hz}: indicator {reading.indicator:.2f} over {CHATTER_THRESHOLD}"
 
 
 def line_table(result, contour_m: np.ndarray | None) -> list[dict]:

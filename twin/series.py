@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from twin.process.chatter import CHATTER_THRESHOLD, rolling_indicator
+
 #: Per axis: (actual, reference) colours, RGB.  Actual strong, reference pale of the same hue.
 AXIS_COLORS = {"x": ((31, 119, 180), (140, 190, 230)), "y": ((230, 85, 13), (250, 180, 120))}
 OTHER_AXIS_COLORS = ((44, 160, 44), (160, 220, 150))
@@ -97,6 +99,20 @@ def named_series(result, rows: slice = slice(None)) -> list[Series]:
                 strong,
             )
         )
+    if result.vibration_probe.any():  # milling: the chatter indicator
+        every = max(result.info.get("record_every", 1), 1)
+        indicator = rolling_indicator(result.vibration_probe, result.control_period_s * every)[rows]
+        out += [
+            Series("chatter/indicator", indicator, "chatter indicator", "1", OTHER_AXIS_COLORS[0]),
+            Series(
+                "chatter/threshold",
+                np.full(len(indicator), CHATTER_THRESHOLD),
+                "chatter threshold",
+                "1",
+                OTHER_AXIS_COLORS[1],
+                3.0,
+            ),
+        ]
     if result.program is None:
         return out
     engagement = result.program.engagement

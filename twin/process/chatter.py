@@ -46,7 +46,8 @@ class ChatterReading:
         Median over the windows of RMS(once-per-tooth vibration difference) / RMS(planned feed
         per tooth).
     chatter_hz : float or None
-        The vibration's frequency in the windows that chatter (Hz); None where none does.
+        The vibration's frequency in the windows that chatter (Hz); None where the stretch does
+        not chatter.
     windows : int
         Windows read (those the tool cut for at least :data:`MIN_CUT_SHARE` of).
     """
@@ -71,10 +72,9 @@ class ChatterReading:
         }
 
 
-def window_ratios(probe: np.ndarray, steps_per_row: int, rows_per_window: int, timestep_s: float) -> np.ndarray:
-    """Per window of ``rows_per_window`` probe rows that cut long enough: ``(ratio, hz)``,
-    shape (n, 2): the RMS of the once-per-tooth vibration difference over that of the planned
-    feed per tooth, and the difference's frequency from its sign changes (Hz).
+def windows(probe: np.ndarray, steps_per_row: int, rows_per_window: int) -> np.ndarray:
+    """The probe summed over windows of ``rows_per_window`` rows, those the tool cut for at
+    least :data:`MIN_CUT_SHARE` of, shape (n, len(PROBE)).
 
     Parameters
     ----------
@@ -83,22 +83,30 @@ def window_ratios(probe: np.ndarray, steps_per_row: int, rows_per_window: int, t
     steps_per_row : int
         Physics steps per row (steps per tick times ticks per row).
     rows_per_window : int
-    timestep_s : float
-        The physics step (s).
     """
     rows = probe.shape[0]
     if rows == 0:
-        return np.zeros((0, 2))
+        return np.zeros((0, probe.shape[1]))
     starts = np.arange(0, rows, max(rows_per_window, 1))
     sums = np.add.reduceat(probe, starts, axis=0)
     span = np.diff(np.append(starts, rows)) * steps_per_row
-    steps = sums[:, PROBE_STEPS]
-    keep = (steps >= MIN_CUT_SHARE * span) & (sums[:, PROBE_FEED2] > 0.0)
-    sums, steps = sums[keep], steps[keep]
-    ratio = np.sqrt((sums[:, PROBE_U2] + sums[:, PROBE_W2]) / sums[:, PROBE_FEED2])
-    along = sums[:, PROBE_U2] >= sums[:, PROBE_W2]
-    crossings = np.where(along, sums[:, PROBE_CROSS_U], sums[:, PROBE_CROSS_W])
-    return np.column_stack([ratio, crossings / (2.0 * steps * timestep_s)])
+    keep = (sums[:, PROBE_STEPS] >= MIN_CUT_SHARE * span) & (sums[:, PROBE_FEED2] > 0.0)
+    return sums[keep]
+
+
+def ratios(sums: np.ndarray) -> np.ndarray:
+    """Per window (:func:`windows`): the RMS of the once-per-tooth vibration difference over
+    that of the planned feed per tooth (1)."""
+    return np.sqrt((sums[:, PROBE_U2] + sums[:, PROBE_W2]) / sums[:, PROBE_FEED2])
+
+
+def frequency_hz(sums: np.ndarray, timestep_s: float) -> float:
+    """The vibration difference's frequency over windows (:func:`windows`), from its sign
+    changes along the direction (along or across the feed) where it is largest:
+    ``crossings / (2 time)`` (Hz)."""
+    along = sums[:, PROBE_U2].sum() >= sums[:, PROBE_W2].sum()
+    crossings = sums[:, PROBE_CROSS_U if along else PROBE_CROSS_W].sum()
+    return float(crossings / (2.0 * sums[:, PROBE_STEPS].sum() * timestep_s))
 
 
 def chatter_reading(
@@ -118,10 +126,24 @@ def chatter_reading(
         The physics step (s).
     """
     rows_per_window = max(1, round(WINDOW_S / row_period_s))
-    windows = window_ratios(probe, steps_per_row, min(rows_per_window, len(probe)), timestep_s)
-    if not len(windows):
+    sums = windows(probe, steps_per_row, min(rows_per_window, len(probe)))
+    if not len(sums):
         return None
-    indicator = float(np.median(windows[:, 0]))
-    chattering = windows[windows[:, 0] > CHATTER_THRESHOLD]
-    hz = float(np.median(chattering[:, 1])) if len(chattering) else None
-    return ChatterReading(indicator, hz, len(windows))
+    ratio = ratios(sums)
+    indicator = float(np.median(ratio))
+    chattering = ratio > CHATTER_THRESHOLD
+    hz = frequency_hz(sums[chattering], timestep_s) if indicator > CHATTER_THRESHOLD else None
+    return ChatterReading(indicator, hz, len(sums))
+
+
+def rolling_indicator(probe: np.ndarray, row_period_s: float) -> np.ndarray:
+    """At each probe row, the indicator over the :data:`WINDOW_S` up to it (trailing window):
+    RMS of the once-per-tooth vibration difference over that of the planned feed per tooth; 0
+    where the tool did not cut in the window, shape (rows,)."""
+    rows = max(1, round(WINDOW_S / row_period_s))
+    sums = np.cumsum(probe, axis=0)
+    past = np.vstack([np.zeros((rows, probe.shape[1])), sums[:-rows]]) if len(sums) > rows else np.zeros_like(sums)
+    window = sums - past[: len(sums)]
+    feed = window[:, PROBE_FEED2]
+    vibration = window[:, PROBE_U2] + window[:, PROBE_W2]
+    return np.sqrt(np.divide(vibration, feed, out=np.zeros_like(feed), where=feed > 0.0))

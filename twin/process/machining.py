@@ -44,6 +44,7 @@ from twin.process.cutting import (
     chip_state,
     helix_lag_rad_per_mm,
     history_rows,
+    mode_rows,
 )
 from twin.process.materials import MATERIALS, CuttingCoefficients
 from twin.process.tool_dynamics import ToolDynamicsSpec
@@ -825,9 +826,13 @@ class ProgramMilling:
             for t in self.tools
         ]
         jacobian = np.asarray(machine.workpiece_jacobian(), float).ravel()
-        head = dict(zip(PROGRAM_MILLING_SLOTS, (len(self.tools), self.period_s, len(rows), dt, n_hist, jacobian.size)))
-        params = np.concatenate([[float(head[name]) for name in PROGRAM_MILLING_SLOTS], jacobian, *tools, rows.ravel()])
-        return PROGRAM_MILLING, params, chip_state(n_hist, (0.0, 0.0))  # no force before the first move
+        modes = mode_rows([t.dynamics for t in self.tools], dt)
+        values = (len(self.tools), self.period_s, len(rows), dt, n_hist, jacobian.size, len(modes))
+        head = dict(zip(PROGRAM_MILLING_SLOTS, values))
+        params = np.concatenate(
+            [[float(head[name]) for name in PROGRAM_MILLING_SLOTS], jacobian, *tools, modes.ravel(), rows.ravel()]
+        )
+        return PROGRAM_MILLING, params, chip_state(n_hist, (0.0, 0.0), len(modes))  # no force before the first move
 
 
 @dataclass

@@ -169,12 +169,19 @@ class ToolDynamicsSpec(StrictSpec):
         description="measured tool-tip receptance CSV (frequency_hz, xx_real, xx_imag, yy_real, yy_imag"
         "[, xy_real, xy_imag, yx_real, yx_imag], m/N), relative to the scenario file",
     )
+    modes_in_run: bool = Field(
+        False,
+        description="the modes vibrate in the run too: the tool's deflection enters the chip "
+        "(twin.process.cutting; the physics step must resolve the highest mode)",
+    )
     _measured: MeasuredFrf | None = PrivateAttr(None)
 
     @model_validator(mode="after")
     def _modes_or_file(self):
         if bool(self.modes) == (self.frf_file is not None):
             raise ValueError("give modes = [...] or frf_file = '...', one of the two")
+        if self.modes_in_run and not self.modes:
+            raise ValueError("modes_in_run needs modes = [...]: a measured FRF has no modes to integrate")
         if self.frf_file is not None:
             try:
                 self._measured = read_frf_csv(self.frf_file, "frf_file")

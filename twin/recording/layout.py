@@ -121,6 +121,12 @@ def series_views(result, prefix: str = "") -> list:
                 axis_y=readable_y_axis(result.workpiece_force_N[:, : len(machine.axes)]),
             )
         )
+    if result.vibration_probe.any():
+        views.append(
+            rrb.TimeSeriesView(
+                name="chatter indicator: once-per-tooth vibration / feed per tooth (1)", origin=f"{prefix}chatter"
+            )
+        )
     if len(views) % 2:
         return [*views, rrb.Tabs(*joints)]
     return [rrb.Tabs(views[0], *joints, active_tab=0), *views[1:]]
