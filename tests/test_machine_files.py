@@ -446,7 +446,7 @@ def tuned():
     return tune(MID)
 
 
-@pytest.mark.parametrize("name", ["mid_size", "compact", "heavy"])
+@pytest.mark.parametrize("name", ["mid_size", "compact", "heavy", "sgm7j"])
 def test_the_part_scenario_holds_the_tuned_gains(name, tuned):
     """examples/machines/<name>_part.toml carries `twin tune`'s gains for <name>_xy.toml,
     rounded to 4 digits."""
@@ -725,7 +725,7 @@ def test_frf_position_measures_the_mode_where_the_nut_is(tmp_path):
     assert np.abs(measured / 244.5 - 1).min() < 0.01
     for args, message in (
         ([MID, "--position", "0.2"], "--position = 0.2: needs screw_root_diameter_m"),
-        ([path, "--position", "1.5"], "x_nut_position_m = 1.5: must be within the screw's 1.0 m"),
+        ([path, "--position", "1.5"], "x_nut_position_m = 1.5: nut_position_m = 1.5 must be within the screw's 1.0 m"),
         (
             [_positional_machine(tmp_path, "\nk_axial_N_per_m = 1e8", "both.toml")],
             "give k_axial_N_per_m or screw_root_diameter_m",

@@ -311,12 +311,16 @@ def calibrate(
     *,
     sensor: str = "table",
     progress: bool = False,
+    timestep_s: float | None = None,
 ) -> Calibration:
     """Fit machine parameters to a measured trace or FRF, as ``twin calibrate`` (``axis`` and
-    ``sensor``: where an FRF was measured; ``progress``: a progress bar)."""
+    ``sensor``: where an FRF was measured; ``progress``: a progress bar; ``timestep_s``: the
+    physics step of the fit's twin runs, default the machine's)."""
     from twin.commissioning.calibration import calibrate as fit_machine
 
-    summary = fit_machine(machine, trace, list(fit), overrides, axis, progress=progress, sensor=sensor)
+    summary = fit_machine(
+        machine, trace, list(fit), overrides, axis, progress=progress, sensor=sensor, timestep_s=timestep_s
+    )
     return Calibration(machine, str(trace), summary)
 
 

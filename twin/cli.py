@@ -387,6 +387,18 @@ def _parse_sets(sets: list[str]) -> dict[str, float]:
     return out
 
 
+def _timestep_and_sets(sets: list[str], option: str = "--set timestep_s") -> tuple[float | None, dict[str, float]]:
+    """``--set`` items as the physics step (``timestep_s=S``, None where not given, within the
+    scenario's bounds) and the parameter overrides (the others)."""
+    from twin.scenario import MAX_TIMESTEP_S, MIN_TIMESTEP_S
+
+    overrides = _parse_sets(sets)
+    timestep = overrides.pop("timestep_s", None)
+    if timestep is not None and not (MIN_TIMESTEP_S <= timestep <= MAX_TIMESTEP_S):
+        raise TwinInputError(option, timestep, f"must be in [{MIN_TIMESTEP_S:g}, {MAX_TIMESTEP_S:g}] s")
+    return timestep, overrides
+
+
 @app.command()
 @_guard
 def fidelity(
@@ -752,7 +764,11 @@ def calibrate(
     fit: str = typer.Option(..., "--fit", help="Parameters to fit, SYM,SYM"),
     axis: str = typer.Option("x", "--axis", help="The axis an FRF was measured on"),
     sensor: str = typer.Option("table", "--sensor", help="motor | table: where an FRF was measured"),
-    sets: list[str] = typer.Option(None, "--set", help="Parameter override SYMBOL=VALUE before the fit"),
+    sets: list[str] = typer.Option(
+        None,
+        "--set",
+        help="Parameter override SYMBOL=VALUE before the fit; timestep_s=S: the physics step of the fit's twin runs",
+    ),
     as_json: bool = typer.Option(False, "--json", help="Print the result as JSON"),
     out: Path = typer.Option(None, "--out", help="Write the calibrated machine file (.toml; machine files only)"),
 ):
@@ -766,8 +782,9 @@ def calibrate(
     if out is not None:  # before the fit's minutes
         check_calibrated_output(machine, "--out", out)
     symbols = [s.strip() for s in fit.split(",") if s.strip()]
+    timestep, overrides = _timestep_and_sets(sets or [])
     calibration = api.calibrate(
-        machine, trace, symbols, _parse_sets(sets or []), axis, sensor=sensor, progress=not as_json
+        machine, trace, symbols, overrides, axis, sensor=sensor, progress=not as_json, timestep_s=timestep
     )
     result = calibration.summary
     if as_json:

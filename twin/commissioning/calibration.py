@@ -224,8 +224,10 @@ def calibrate(
     axis: str = "x",
     progress: bool = False,
     sensor: str = "table",
+    timestep_s: float | None = None,
 ) -> dict:
-    """Fit ``fit`` (parameter symbols) to a measured trace or FRF (see the module docstring).
+    """Fit ``fit`` (parameter symbols) to a measured trace or FRF (see the module docstring);
+    ``timestep_s`` replaces the machine's physics step (a finer one: the model's own error).
 
     Returns
     -------
@@ -248,7 +250,7 @@ def calibrate(
     spec = get_machine(machine)
     fit = _fit_parameters(spec, fit)
     base = spec.resolve(overrides)
-    bm0 = build(machine, overrides)
+    bm0 = build(machine, overrides, timestep_s)
     names = [a.name for a in bm0.axes]
     columns = read_table(trace)
     nominal = np.array([base[s] for s in fit])
@@ -256,6 +258,10 @@ def calibrate(
     lower = np.array(
         [1e-6 if spec.parameters[s].positive else 0.0 if spec.parameters[s].nonnegative else -np.inf for s in fit]
     )
+    # within each parameter's physical range too (a machine file's): a trial beyond it is refused
+    ranges = [spec.parameters[s].bounds for s in fit]
+    lower = np.maximum(lower, [-np.inf if r is None else r.low for r in ranges] / scale)
+    upper = np.array([np.inf if r is None else r.high for r in ranges]) / scale
 
     def values(x):
         """All parameter values with the fitted ones at ``x`` (in units of their scale)."""
@@ -263,7 +269,9 @@ def calibrate(
 
     if "frequency_hz" in columns:
         kind = "frf"
-        residual, measured_vector, model_vector = _frf_problem(machine, columns, names, axis, values, sensor)
+        residual, measured_vector, model_vector = _frf_problem(
+            machine, columns, names, axis, values, sensor, timestep_s
+        )
         basin_residual = residual
 
         def at_noise_floor(solution) -> bool:  # an FRF's noise is not known: every start is tried
@@ -281,7 +289,7 @@ def calibrate(
             )
 
         def model_vector(x):
-            return replay(build(machine, values(x)), dt, u, y[0])[:, measured]
+            return replay(build(machine, values(x), timestep_s), dt, u, y[0])[:, measured]
 
         def measured_vector():
             return y[:, measured]
@@ -302,7 +310,7 @@ def calibrate(
             rms = float(np.sqrt(np.mean(solution.fun**2))) * np.std(measured_velocity)
             return bool(rms <= NOISE_FLOOR_FACTOR * velocity_floor)
 
-    x0 = np.maximum(nominal / scale, lower + 0.01)  # a value on its bound starts just inside
+    x0 = np.minimum(np.maximum(nominal / scale, lower + 0.01), upper)  # a value on its low bound starts inside
     runs = tqdm(desc=f"calibrating {', '.join(fit)}", unit="run", disable=not progress, leave=False)
     evaluations = []
     rejected = []
@@ -337,17 +345,20 @@ def calibrate(
         before = model_vector(x0)
         stiff = np.array([spec.parameters[s].infinite for s in fit])
         every = np.ones(len(fit), bool)
-        sol = _solve(counted(basin_residual), x0, lower, every)
+        sol = _solve(counted(basin_residual), x0, (lower, upper), every)
         if not at_noise_floor(sol):  # from each stiffness's other starts too, the least cost kept
-            others = (_solve(counted(basin_residual), start, lower, every) for start in _starts(x0, stiff))
+            others = (
+                _solve(counted(basin_residual), np.clip(start, lower, upper), (lower, upper), every)
+                for start in _starts(x0, stiff)
+            )
             sol = min([sol, *others], key=lambda solution: solution.cost)
         if basin_residual is not residual:  # the position's own fit, from the velocity's basin
-            sol = _solve(counted(residual), sol.x, lower, every)
+            sol = _solve(counted(residual), sol.x, (lower, upper), every)
         unidentifiable = _unidentifiable(sol.jac, sol.x, scale, fit, sol.cost)
         fitted_x, free = sol.x.copy(), np.array([s not in unidentifiable for s in fit])
         fitted_x[~free] = (nominal / scale)[~free]  # held at nominal, all together
         if unidentifiable and free.any():  # the others fitted again with them held
-            sol = _solve(counted(residual), fitted_x, lower, free)
+            sol = _solve(counted(residual), fitted_x, (lower, upper), free)
             fitted_x = sol.x
     except TwinInputError as exc:
         raise TwinInputError(exc.field, exc.value, f"{exc.reason} (during the fit)") from None
@@ -372,12 +383,12 @@ def calibrate(
         "after": float(np.mean(fit_index(_real(target), _real(after)))),
     }
     if kind == "time":  # confirmed by a twin run with the fitted values, in full
-        confirm = replay(build(machine, values(fitted_x)), dt, u, y[0])[:, measured]
+        confirm = replay(build(machine, values(fitted_x), timestep_s), dt, u, y[0])[:, measured]
         fit_index_pct["twin"] = float(np.mean(fit_index(target, confirm)))
         solver.update(_against_noise(float(np.sqrt(np.mean((confirm - target) ** 2))), position_floor))
     band_hz = float(columns["frequency_hz"].max()) if kind == "frf" else excited_band_hz(u, dt)
     not_excited = _not_excited(
-        machine, values(fitted_x), [s for s, stiffness in zip(fit, stiff) if stiffness], names, band_hz
+        machine, values(fitted_x), [s for s, stiffness in zip(fit, stiff) if stiffness], names, band_hz, timestep_s
     )
     return {
         "machine": machine,
@@ -435,13 +446,21 @@ def excited_band_hz(u: np.ndarray, dt: float) -> float:
     return float(freqs[weak[0] + 1] if weak.size else freqs[-1])
 
 
-def _not_excited(machine: str, values: dict[str, float], stiffnesses: list[str], axes: list[str], band_hz: float):
+def _not_excited(
+    machine: str,
+    values: dict[str, float],
+    stiffnesses: list[str],
+    axes: list[str],
+    band_hz: float,
+    timestep_s: float | None = None,
+):
     """The fitted stiffnesses whose mode the input does not reach, each with the excitation that
     would.  A stiffness's mode is the model's (table sensor, any axis) that moves most when it
-    changes by 1 %; it is excited where the input reaches :data:`EXCITE_BEYOND_MODE` times it."""
+    changes by 1 %; it is excited where the input reaches :data:`EXCITE_BEYOND_MODE` times it
+    (the models built at the physics step ``timestep_s``, default the machine's)."""
 
     def modes(params):
-        bm = build(machine, params)
+        bm = build(machine, params, timestep_s)
         return np.concatenate([model_modes(bm, k, "table")[0] for k in range(len(axes))])
 
     nominal = modes(values)
@@ -517,7 +536,7 @@ def _starts(x0: np.ndarray, stiff: np.ndarray) -> list[np.ndarray]:
     return starts
 
 
-def _solve(residual, x0: np.ndarray, lower: np.ndarray, free: np.ndarray):
+def _solve(residual, x0: np.ndarray, bounds: tuple[np.ndarray, np.ndarray], free: np.ndarray):
     """Least squares over the ``free`` entries of ``x`` (in units of their scale), the others held
     at ``x0``: trust-region reflective, a finite-difference Jacobian, at most
     :data:`MAX_EVALUATIONS` evaluations.  The solution's ``x`` is the whole vector."""
@@ -528,7 +547,12 @@ def _solve(residual, x0: np.ndarray, lower: np.ndarray, free: np.ndarray):
         return residual(x)
 
     sol = optimize.least_squares(
-        partial, x0[free], bounds=(lower[free], np.inf), diff_step=1e-4, x_scale="jac", max_nfev=MAX_EVALUATIONS
+        partial,
+        x0[free],
+        bounds=(bounds[0][free], bounds[1][free]),
+        diff_step=1e-4,
+        x_scale="jac",
+        max_nfev=MAX_EVALUATIONS,
     )
     x = x0.copy()
     x[free] = sol.x
@@ -605,9 +629,10 @@ def _real(values: np.ndarray) -> np.ndarray:
     return values
 
 
-def _frf_problem(machine, columns, names, axis, values, sensor):
+def _frf_problem(machine, columns, names, axis, values, sensor, timestep_s=None):
     """Residual and vectors of an FRF fit (see the module docstring), through the transfer
-    function to the ``sensor`` it was measured at (the table's or the motor's)."""
+    function to the ``sensor`` it was measured at (the table's or the motor's); the models are
+    built at the physics step ``timestep_s`` (default the machine's)."""
     import control
 
     needed = ("frequency_hz", "magnitude_db", "phase_deg")
@@ -631,7 +656,7 @@ def _frf_problem(machine, columns, names, axis, values, sensor):
     g_meas = 10 ** (columns["magnitude_db"] / 20) * np.exp(1j * np.radians(columns["phase_deg"]))
 
     def model_vector(x):
-        bm = build(machine, values(x))
+        bm = build(machine, values(x), timestep_s)
         g = sensor_plant(bm, k, sensor)
         s = 2j * math.pi * f
         return control.tf(list(g.num), list(g.den))(s) * np.exp(-s * bm.delay_s)

@@ -59,6 +59,10 @@ PEAK_LINES = 4
 MULTISINE_PERIOD = 8192
 MULTISINE_PERIODS = 2
 MIN_REALIZATIONS = 4
+#: The smallest excitation (V): a +-10 V analogue command's 16-bit step is 0.3 mV, a field bus's
+#: torque command's 0.1 % of rated torque 10 mV of a 10 V scale; below it a drive does not move
+#: (1e-300 V overflowed the estimator's spectra).
+MIN_AMPLITUDE_V = 1e-3
 
 
 @dataclass(frozen=True)
@@ -106,8 +110,8 @@ class FrfSettings:
                 raise TwinInputError(name, value, f"must be one of {', '.join(allowed)}")
         if not (0 <= self.seed < 2**32):
             raise TwinInputError("--seed", self.seed, "must be in [0, 2**32)")
-        if not (0 < self.amplitude_V <= 10):
-            raise TwinInputError("--amplitude", self.amplitude_V, "must be in (0, 10] V")
+        if not (MIN_AMPLITUDE_V <= self.amplitude_V <= 10):
+            raise TwinInputError("--amplitude", self.amplitude_V, f"must be in [{MIN_AMPLITUDE_V:g}, 10] V")
         if not (2 * SEGMENT * SAMPLE_PERIOD_S <= self.duration_s <= MAX_DURATION_S):
             raise TwinInputError(
                 "--duration", self.duration_s, f"must be in [{2 * SEGMENT * SAMPLE_PERIOD_S:g}, {MAX_DURATION_S:g}] s"

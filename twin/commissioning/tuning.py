@@ -197,8 +197,15 @@ def tune(
     }
 
 
+#: The verification's circle: radius (mm) and feed (mm/min); a one-axis machine runs its
+#: projection on the axis, a sine of the radius's amplitude at feed / (2 pi radius).
+CIRCLE_RADIUS_MM = 10.0
+CIRCLE_FEED_MM_PER_MIN = 2000.0
+
+
 def scenario_text(result: dict, machine_path: str, reference: str = "circle") -> str:
-    """The tuned cascade as a scenario TOML (a circle of 10 mm at 2 m/min, or a 1 mm step)."""
+    """The tuned cascade as a scenario TOML (a circle of 10 mm at 2 m/min, on a one-axis machine
+    its projection on the axis; or a 1 mm step)."""
     lines = [
         f'name = "tuned_{result["machine_name"]}"',
         f'description = "twin tune: position P / velocity PI cascade with feedforward on {result["machine_name"]}"',
@@ -207,14 +214,24 @@ def scenario_text(result: dict, machine_path: str, reference: str = "circle") ->
     ]
     if result["overrides"]:
         lines.append("overrides = { " + ", ".join(f"{k} = {v!r}" for k, v in result["overrides"].items()) + " }")
-    if reference == "circle":
+    if reference == "circle" and len(result["axes"]) == 1:
+        frequency = CIRCLE_FEED_MM_PER_MIN / 60.0 / (2.0 * math.pi * CIRCLE_RADIUS_MM)
+        lines += [
+            "duration_s = 2.0",
+            "",
+            "[reference]  # the 10 mm circle at 2 m/min projected on the axis",
+            'type = "sines"',
+            f"amplitudes_m = [{CIRCLE_RADIUS_MM / 1e3!r}]",
+            f"frequencies_hz = [{frequency!r}]",
+        ]
+    elif reference == "circle":
         lines += [
             "duration_s = 2.0",
             "",
             "[reference]",
             'type = "circle"',
-            "radius_mm = 10.0",
-            "feed_mm_per_min = 2000.0",
+            f"radius_mm = {CIRCLE_RADIUS_MM!r}",
+            f"feed_mm_per_min = {CIRCLE_FEED_MM_PER_MIN!r}",
         ]
     else:
         lines += ["duration_s = 0.3", "", "[reference]", 'type = "step"', "amplitude_m = 0.001", "t0_s = 0.01"]
@@ -243,10 +260,10 @@ def verify(result: dict, machine_path: str, folder: Path) -> dict:
                 out.setdefault(a, {})["step_overshoot_pct"] = float(max(over, 0.0))
                 out[a]["step_settling_s"] = float(t[outside[-1]] - 0.01) if outside.size else 0.0
         else:
-            summary = tracking_summary(run)
+            summary = tracking_summary(run)  # a one-axis machine's projection has no contour
+            contour = ("max_contour_error_um", "rms_contour_error_um")
             out["circle"] = {
-                "max_contour_error_um": summary["max_contour_error_um"],
-                "rms_contour_error_um": summary["rms_contour_error_um"],
+                **{key: summary[key] for key in contour if key in summary},
                 **{f"max_tracking_error_um_{a}": v for a, v in summary["max_tracking_error_um"].items()},
             }
     return out

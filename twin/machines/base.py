@@ -17,6 +17,7 @@ import numpy as np
 
 from controllers.lti import SisoTf
 from twin.errors import TwinInputError
+from twin.machines.machine_file import PhysicalRange
 
 
 def mjcf_dir() -> Path:
@@ -48,6 +49,9 @@ class Parameter:
         Whether the value must be >= 0 (for parameters that may be zero, e.g. friction).
     infinite : bool
         Whether the value may be infinite (a stiffness: infinite is rigid).
+    bounds : PhysicalRange or None
+        The physical range a value must lie in (a machine file's,
+        :class:`twin.machines.machine_file.PhysicalRange`).
     """
 
     value: float
@@ -57,6 +61,7 @@ class Parameter:
     positive: bool = True
     nonnegative: bool = False
     infinite: bool = False
+    bounds: PhysicalRange | None = None
 
 
 @dataclass(frozen=True)
@@ -336,6 +341,11 @@ class Machine:
                 raise TwinInputError(f"overrides.{key}", value, f"must be > 0 ({self.parameters[key].description})")
             if self.parameters[key].nonnegative and value < 0:
                 raise TwinInputError(f"overrides.{key}", value, f"must be >= 0 ({self.parameters[key].description})")
+            bounds = self.parameters[key].bounds
+            if bounds is not None and not (
+                bounds.low <= value <= bounds.high or infinite or (bounds.zero and value == 0)
+            ):
+                raise TwinInputError(f"overrides.{key}", value, f"must be {bounds.describe()}: {bounds.why}")
             params[key] = value
         self.check(params)
         return params

@@ -46,6 +46,7 @@ from pathlib import Path
 
 import mujoco
 import numpy as np
+from pydantic import ValidationError
 
 from twin.errors import TwinInputError
 from twin.machines.base import Axis, Coupling, Machine, MotionLimits, Parameter, diagonal_plant
@@ -59,7 +60,14 @@ from twin.machines.drive_train import (
     screw_inertia_kg_m2,
     torsion_N_m_per_rad,
 )
-from twin.machines.machine_file import BallScrewSpec, MachineFile, read_machine_file, unit_of
+from twin.machines.machine_file import (
+    BallScrewSpec,
+    MachineFile,
+    MachineSpec,
+    physical_range,
+    read_machine_file,
+    unit_of,
+)
 
 #: The largest 2 pi f h (fastest mode f, physics step h) a machine file may be simulated at:
 #: MuJoCo integrates its springs explicitly (semi-implicit Euler: 17 deg of phase a step at 0.3).
@@ -104,8 +112,17 @@ class DatasheetMachine(Machine):
     def _parameters(self) -> dict[str, Parameter]:
         m = self.spec.machine
         out = {
-            "workpiece_mass_kg": Parameter(m.workpiece_mass_kg, "kg", "workpiece mass"),
-            "delay_s": Parameter(m.delay_s, "s", "drive transport delay", positive=False, nonnegative=True),
+            "workpiece_mass_kg": Parameter(
+                m.workpiece_mass_kg, "kg", "workpiece mass", bounds=physical_range(MachineSpec, "workpiece_mass_kg")
+            ),
+            "delay_s": Parameter(
+                m.delay_s,
+                "s",
+                "drive transport delay",
+                positive=False,
+                nonnegative=True,
+                bounds=physical_range(MachineSpec, "delay_s"),
+            ),
         }
         for a in m.stacking:
             ax = self.spec.axes[a]
@@ -131,8 +148,35 @@ class DatasheetMachine(Machine):
                     positive=positive,
                     nonnegative=not positive,
                     infinite=key.startswith(("k_axial", "k_torsion", "k_screw_torsion", "k_nut", "k_bearing")),
+                    bounds=physical_range(type(ax), key),
                 )
         return out
+
+    def check(self, params) -> None:
+        """The overridden values of each axis through the machine file's own schema (a root
+        diameter over the screw's, a nut beyond its end, a drive gain given twice).
+
+        Raises
+        ------
+        TwinInputError
+            Under the first overridden symbol of the axis the schema refuses.
+        """
+        for a in self.spec.machine.stacking:
+            ax = self.spec.axes[a]
+            changed = {
+                key.removeprefix(f"{a}_"): value
+                for key, value in params.items()
+                if key.startswith(f"{a}_") and value != self.parameters[key].value
+            }
+            if not changed:
+                continue
+            try:
+                type(ax).model_validate({**ax.model_dump(exclude_unset=True), **changed})
+            except ValidationError as exc:
+                error = exc.errors()[0]
+                key = str(error["loc"][0]) if error["loc"] else next(iter(changed))
+                reason = error["msg"].removeprefix("Value error, ")
+                raise TwinInputError(f"overrides.{a}_{key}", params.get(f"{a}_{key}"), reason) from None
 
     def axis_values(self, params) -> list[AxisValues]:
         """Every axis's values resolved from ``params`` (by the symbols ``<axis>_<key>``), in

@@ -12,7 +12,6 @@ from typing import Literal
 import numpy as np
 
 from controllers.lti import SisoTf
-from twin.errors import TwinInputError
 from twin.machines.machine_file import BallScrewSpec, LinearMotorSpec
 
 #: Density of screw steel (kg/m^3), for a screw inertia the file does not give.
@@ -143,20 +142,17 @@ def _screw_to_nut(axis: AxisValues) -> tuple[float, float, float]:
     values = axis.values
     assert isinstance(values, BallScrewSpec) and values.screw_root_diameter_m is not None
     assert values.nut_position_m is not None  # the parameters default it to half the screw
-    d, position = values.screw_root_diameter_m, values.nut_position_m
-    if not position < values.screw_length_m:
-        raise TwinInputError(
-            f"{axis.name}_nut_position_m", position, f"must be within the screw's {values.screw_length_m} m"
-        )
+    d, position = values.screw_root_diameter_m, values.nut_position_m  # within the screw: the schema's check
     return math.pi * d**2 / 4.0, math.pi * d**4 / 32.0, position
 
 
 def axial_N_per_m(axis: AxisValues) -> float:
     """The axial stiffness (N/m): the file's ``k_axial_N_per_m``, or, with the shaft's root
     diameter, the nut, the bearings and the shaft up to the nut in series. The shaft at the
-    nut's distance a from the drive end: E A / a held at the drive end only (fixed_free),
-    E A L / (a (L - a)) held at both (fixed_fixed, the two lengths in parallel; THK's ball screw
-    catalogue, "Axial rigidity of the feed screw system")."""
+    nut's distance a from the drive end: E A / a held axially at the drive end only (fixed_free,
+    and fixed_supported, whose far bearing holds the shaft radially only), E A L / (a (L - a))
+    held at both (fixed_fixed, the two lengths in parallel; THK's ball screw catalogue, "Axial
+    rigidity of the feed screw system")."""
     values = axis.values
     assert isinstance(values, BallScrewSpec)
     if values.screw_root_diameter_m is None:
