@@ -644,13 +644,13 @@ def lobes(
     depth_max: float = typer.Option(None, "--depth-max", help="Deepest depth the semi-discretization scans, mm"),
     immersion: float = typer.Option(None, "--immersion", help="Radial immersion a_e/D in (0, 1] (default: a slot)"),
     down: bool = typer.Option(None, "--down/--up", help="Down (climb) or up (conventional) milling"),
-    tool: int = typer.Option(None, "--tool", help="The [[tools]] entry of this T number"),
+    tool: int = typer.Option(None, "--tool", help="The tools entry of this T number"),
     feed_per_tooth: float = typer.Option(0.1, "--feed-per-tooth", help="Chip of a Kienzle material, mm"),
     sets: list[str] = typer.Option(None, "--set", help="Change a field: PATH=VALUE"),
     as_json: bool = typer.Option(False, "--json", help="Print the lobes as JSON"),
     plots: Path = typer.Option(None, "--plots", help="Write the lobes (PNG) to this folder"),
 ):
-    """Stability lobes of the scenario's tool (its [tool.dynamics]): the critical axial depth
+    """Stability lobes of the scenario's tool (its dynamics table): the critical axial depth
     against spindle speed by the zero-order solution and semi-discretization, and with a stock
     and a program every cutting line checked against them."""
     from twin import api

@@ -70,7 +70,9 @@ class Run:
 
     def lines_to_parquet(self, path: str | Path) -> Path:
         """Write the per-line table of a G-code run (``summary["lines"]``, the per-axis
-        tracking errors as columns ``max_tracking_error_um_<axis>``) to a Parquet file.
+        tracking errors as columns ``max_tracking_error_um_<axis>``, a cutting line's chatter
+        check as ``stability_<key>`` with ``stability_stable_rpm_low`` and ``_high``) to a
+        Parquet file.
 
         Raises
         ------
@@ -86,8 +88,15 @@ class Run:
         flat = []
         for row in rows:
             per_axis = {f"max_tracking_error_um_{a}": v for a, v in row["max_tracking_error_um"].items()}
-            flat.append({**{k: v for k, v in row.items() if k != "max_tracking_error_um"}, **per_axis})
-        pq.write_table(pa.Table.from_pylist(flat), Path(path))
+            check = dict(row.get("stability", {}))
+            low, high = check.pop("stable_rpm", None) or (None, None)
+            stability = {f"stability_{k}": v for k, v in check.items()}
+            if "stability" in row:
+                stability.update(stability_stable_rpm_low=low, stability_stable_rpm_high=high)
+            plain = {k: v for k, v in row.items() if k not in ("max_tracking_error_um", "stability")}
+            flat.append({**plain, **per_axis, **stability})
+        columns = list(dict.fromkeys(key for row in flat for key in row))  # every row's, in order
+        pq.write_table(pa.Table.from_pylist([{c: row.get(c) for c in columns} for row in flat]), Path(path))
         return Path(path)
 
     def to_pandas(self) -> pd.DataFrame:

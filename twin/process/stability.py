@@ -46,9 +46,9 @@ from twin.process.tool_dynamics import DIRECTIONS, ToolDynamicsSpec, feed_frame_
 
 #: Frequency points of the zero-order solution at most (memory and time are bounded).
 MAX_FREQUENCIES = 200_000
-#: Relative step of the zero-order frequency grid per damping ratio (a tenth of a mode's half
-#: power band width).
-FREQUENCY_STEP_PER_ZETA = 0.1
+#: Relative step of the zero-order frequency grid per damping ratio (an 80th of a mode's half
+#: power band width, 2 zeta: the lobes' cusps, where two lobes cross steeply, need it).
+FREQUENCY_STEP_PER_ZETA = 0.025
 #: Speeds times chatter frequencies the zero-order solution holds at once.
 ZOA_CELLS = 2_000_000
 #: Grid points per spindle speed and depth at most in one batch of the semi-discretization.
@@ -184,10 +184,10 @@ class Lobes:
 
 
 def frequency_grid_hz(dynamics: ToolDynamicsSpec, longest_period_s: float) -> np.ndarray:
-    """The chatter frequencies the zero-order solution searches (Hz): geometric, a tenth of
+    """The chatter frequencies the zero-order solution searches (Hz): geometric, an 80th of
     the least damped mode's half power band width apart and under ``1/(4 T)`` apart (so that
     ``w T`` moves less than half a turn a step), over the receptance's known range (modes:
-    0.2 to 4 times their natural frequencies).
+    0.2 to 4 times their natural frequencies; a measured FRF: 2.5e-4 apart, relative, over its range).
 
     Raises
     ------
@@ -199,17 +199,20 @@ def frequency_grid_hz(dynamics: ToolDynamicsSpec, longest_period_s: float) -> np
         low = 0.2 * min(m.frequency_hz for m in dynamics.modes)
         ratio = FREQUENCY_STEP_PER_ZETA * min(m.damping_ratio for m in dynamics.modes)
     else:
-        ratio = 1e-3
+        ratio = 2.5e-4
     ratio = min(ratio, 1.0 / (4.0 * longest_period_s * high))
     count = math.ceil(math.log(high / low) / math.log1p(ratio)) + 1
     if count > MAX_FREQUENCIES:
         raise TwinInputError(
-            "spindle_rpm", f"T = {longest_period_s:g} s", f"needs {count} chatter frequencies, over {MAX_FREQUENCIES}"
+            "spindle_rpm",
+            f"{60.0 / longest_period_s:g} teeth/min",
+            f"the tool's dynamics at this speed need {count} chatter frequencies, over {MAX_FREQUENCIES}: a higher "
+            "lowest speed",
         )
     return np.geomspace(low, high, count)
 
 
-def zoa_critical_depths(cut: Cut, dynamics: ToolDynamicsSpec, spindle_rpm, extra_receptance=None) -> Lobes:
+def zoa_critical_depths(cut: Cut, dynamics: ToolDynamicsSpec, spindle_rpm) -> Lobes:
     """Critical depth (m) and chatter frequency (Hz) at each speed by the zero-order
     approximation (module docstring).
 
@@ -220,17 +223,11 @@ def zoa_critical_depths(cut: Cut, dynamics: ToolDynamicsSpec, spindle_rpm, extra
         The tool's structure (X/Y).
     spindle_rpm : array_like
         Speeds (rev/min, positive).
-    extra_receptance : callable, optional
-        ``f(frequency_hz) -> (n, 2, 2)`` receptance (m/N, X/Y) added to the tool's: the
-        workpiece's side (the feed drive).
     """
     speeds = _speeds(spindle_rpm)
     periods = cut.tooth_period_s(speeds)
     freq = frequency_grid_hz(dynamics, float(periods.max()))
-    g = dynamics.receptance(freq)
-    if extra_receptance is not None:
-        g = g + extra_receptance(freq)
-    depth, freq_at = zoa_boundaries(cut.mean_matrix()[None], freq, g, periods[None])
+    depth, freq_at = zoa_boundaries(cut.mean_matrix()[None], freq, dynamics.receptance(freq), periods[None])
     return Lobes("zoa", speeds, depth[0], freq_at[0])
 
 
@@ -250,8 +247,8 @@ def zoa_boundaries(
     periods_s : ndarray (c, p)
         Tooth periods (s) per cut.
     """
-    lam = eigenvalues_2x2(mean_h[:, None] @ receptance[None])  # (c, f, 2)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(all="ignore"):  # a singular or huge receptance: no boundary there, not a warning
+        lam = eigenvalues_2x2(mean_h[:, None] @ receptance[None])  # (c, f, 2)
         nu = 1.0 / lam
         valid = nu.real > 0
     # only the frequencies where some cut can chatter (and their neighbours) are searched
@@ -262,7 +259,7 @@ def zoa_boundaries(
     frequency_hz, nu, valid = frequency_hz[near], nu[:, near], valid[:, near]
     if frequency_hz.size < 2:
         return np.full(periods_s.shape, np.nan), np.full(periods_s.shape, np.nan)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(all="ignore"):
         depth = np.where(valid, np.abs(nu) ** 2 / (2.0 * nu.real), np.nan)
         theta = np.pi - 2.0 * np.angle(nu)  # w T less its whole turns, in (0, 2 pi)
     omega = 2 * np.pi * frequency_hz
@@ -282,7 +279,7 @@ def zoa_boundaries(
                 lo, hi = turns[..., :-1], turns[..., 1:]
                 k = np.ceil(np.minimum(lo, hi))
                 crosses = seg & (k <= np.maximum(lo, hi)) & (k >= 0)
-                with np.errstate(divide="ignore", invalid="ignore"):
+                with np.errstate(all="ignore"):
                     frac = np.where(crosses, (k - lo) / (hi - lo), 0.0)
                     a_cross = np.where(crosses, a_b[..., :-1] + frac * (a_b[..., 1:] - a_b[..., :-1]), np.inf)
                 where = np.argmin(a_cross, axis=2)[..., None]

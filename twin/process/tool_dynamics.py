@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import Literal
 
 import numpy as np
-from pydantic import Field, PositiveFloat, PrivateAttr, model_validator
+from pydantic import Field, PrivateAttr, model_validator
 
 from twin.errors import TwinInputError, input_file
 from twin.spec import StrictSpec
@@ -42,6 +42,11 @@ MAX_FRF_ROWS = 200_000
 MAX_MODES = 50
 #: Highest natural frequency of a mode (Hz): far above any tool's (a few kHz to 20 kHz).
 MAX_FREQUENCY_HZ = 1e6
+#: Lowest natural frequency of a mode (Hz): under any machine structure's.
+MIN_FREQUENCY_HZ = 1.0
+#: Lightest damping of a mode: under any measured structure's (0.1 %), over which the chatter
+#: frequencies' grid (a fraction of the half-power band) stays bounded.
+MIN_DAMPING_RATIO = 1e-4
 #: The columns a measured FRF file must have, and those it may have besides.
 FRF_COLUMNS = ("frequency_hz", "xx_real", "xx_imag", "yy_real", "yy_imag")
 FRF_CROSS_COLUMNS = ("xy_real", "xy_imag", "yx_real", "yx_imag")
@@ -53,10 +58,10 @@ class ModeSpec(StrictSpec):
     """One vibration mode of the tool in X or Y."""
 
     direction: Literal["x", "y"] = Field(description="the machine axis it vibrates along")
-    frequency_hz: PositiveFloat = Field(le=MAX_FREQUENCY_HZ, description="natural frequency (Hz)")
-    damping_ratio: float = Field(gt=0.0, lt=1.0, description="viscous damping ratio (1)")
-    stiffness_N_per_m: PositiveFloat | None = Field(None, description="modal stiffness (N/m); or modal_mass_kg")
-    modal_mass_kg: PositiveFloat | None = Field(None, description="modal mass (kg); or stiffness_N_per_m")
+    frequency_hz: float = Field(ge=MIN_FREQUENCY_HZ, le=MAX_FREQUENCY_HZ, description="natural frequency (Hz)")
+    damping_ratio: float = Field(ge=MIN_DAMPING_RATIO, lt=1.0, description="viscous damping ratio (1)")
+    stiffness_N_per_m: float | None = Field(None, ge=1.0, description="modal stiffness (N/m); or modal_mass_kg")
+    modal_mass_kg: float | None = Field(None, ge=1e-9, le=1e6, description="modal mass (kg); or stiffness_N_per_m")
 
     @model_validator(mode="after")
     def _stiffness_or_mass(self):

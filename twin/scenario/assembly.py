@@ -198,6 +198,7 @@ def assemble(scn: Scenario) -> RunInputs:
             )
         cut = program_milling(reference.plan, scn.stock, scn.tool, scn.tools, scn.seed)
         reference = reference.cutting(cut)
+        reference.line_stability  # noqa: B018 - each line's chatter check, its bad input caught before the run
         disturbances.append(cut.milling)
     return RunInputs(
         machine=machine,
