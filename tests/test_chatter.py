@@ -214,19 +214,25 @@ def test_a_run_that_chatters_says_so_and_strict_exits_4():
     assert strict.stderr.strip().splitlines()[-1].startswith("error: 1 chatter warning(s) under --strict")
 
 
-def test_a_program_line_that_chatters_is_named():
+def test_a_program_line_that_chatters_is_named(tmp_path):
     """The bundled 16 mm slot: line 13 (the slot) chatters mildly through the table at about
-    half the tooth frequency (10 000 rpm, 2 flutes: 167 Hz), its mean force the closed form's."""
+    half the tooth frequency (10 000 rpm, 2 flutes: 167 Hz); the per-line Parquet says so too."""
     import json
 
+    import pandas as pd
     from cli_process import twin
 
-    summary = json.loads(twin("run", "gcode_deep_slot", "--set", "duration_s=4.0", "--json").stdout)
+    lines = tmp_path / "lines.parquet"
+    done = twin("run", "gcode_deep_slot", "--set", "duration_s=4.0", "--json", "--lines", lines)
+    summary = json.loads(done.stdout)
     rows = {row["line"]: row for row in summary["lines"]}
     assert rows[13]["chatter"]["chatter"]
     assert rows[13]["chatter"]["chatter_hz"] == pytest.approx(10000 / 60, rel=0.1)
     assert "chatter" not in rows[11]  # the rapid: no cut
     assert [w["line"] for w in summary["chatter_warnings"]] == [13]
+    table = pd.read_parquet(lines).set_index("line")
+    assert table.loc[13, "chatter"] and table.loc[13, "chatter_hz"] == rows[13]["chatter"]["chatter_hz"]
+    assert table.loc[13, "chatter_indicator"] == rows[13]["chatter"]["indicator"]
 
 
 @pytest.mark.slow

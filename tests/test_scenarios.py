@@ -12,7 +12,7 @@ from twin.metrics import tracking_summary
 from twin.scenario import assemble, bundled_scenarios, load_scenario, run_scenario, scenario_from_dict
 from twin.settings import parse_settings
 
-SERIES = ("qpos", "qvel", "meas_m", "u_V", "u_applied_V", "actuator_force", "workpiece_force_N")
+SERIES = ("qpos", "qvel", "meas_m", "u_V", "u_applied_V", "actuator_force", "workpiece_force_N", "vibration_probe")
 
 
 @pytest.mark.parametrize("name", sorted(bundled_scenarios()))

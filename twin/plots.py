@@ -1,5 +1,6 @@
-"""Static report plots of a run (PNG, matplotlib): tracking errors, control inputs, forces and,
-for two axes, the contour with the magnified error (+x right, +y up, equal scales)."""
+"""Static report plots of a run (PNG, matplotlib): tracking errors, control inputs, forces, the
+chatter indicator when milling and, for two axes, the contour with the magnified error (+x
+right, +y up, equal scales)."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from twin.process.chatter import CHATTER_THRESHOLD, rolling_indicator
 from twin.scales import contour_gain
 
 
@@ -45,8 +47,9 @@ def _axes_plot(plt, t, series: dict, ylabel: str, title: str, path: Path) -> Pat
 
 
 def write_plots(result, directory: Path, name: str = "run") -> list[Path]:
-    """Write ``<name>_tracking_error.png``, ``<name>_control.png``, ``<name>_forces.png`` and,
-    for two axes, ``<name>_contour.png`` into ``directory`` (created if missing).
+    """Write ``<name>_tracking_error.png``, ``<name>_control.png``, ``<name>_forces.png``, with
+    milling ``<name>_chatter.png`` and, for two axes, ``<name>_contour.png`` into ``directory``
+    (created if missing).
 
     Returns
     -------
@@ -103,6 +106,19 @@ def write_plots(result, directory: Path, name: str = "run") -> list[Path]:
     written.append(directory / f"{name}_forces.png")
     fig.savefig(written[-1], dpi=120, bbox_inches="tight")
     plt.close(fig)
+    if result.vibration_probe.any():  # milling: the chatter indicator against its threshold
+        every = max(result.info.get("record_every", 1), 1)
+        indicator = rolling_indicator(result.vibration_probe, result.control_period_s * every)
+        written.append(
+            _axes_plot(
+                plt,
+                t,
+                {"indicator (20 ms)": indicator, "threshold": np.full(len(t), CHATTER_THRESHOLD)},
+                "once-per-tooth vibration / feed per tooth (1)",
+                f"{name}: chatter indicator",
+                directory / f"{name}_chatter.png",
+            )
+        )
     if len(axes) == 2:
         gain = contour_gain(result)
         ref, act = result.ref[:, :, 0] * 1e3, result.table_position_m() * 1e3

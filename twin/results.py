@@ -71,8 +71,9 @@ class Run:
     def lines_to_parquet(self, path: str | Path) -> Path:
         """Write the per-line table of a G-code run (``summary["lines"]``, the per-axis
         tracking errors as columns ``max_tracking_error_um_<axis>``, a cutting line's chatter
-        check as ``stability_<key>`` with ``stability_stable_rpm_low`` and ``_high``) to a
-        Parquet file.
+        check as ``stability_<key>`` with ``stability_stable_rpm_low`` and ``_high``, its chatter
+        in the run as ``chatter``, ``chatter_hz``, ``chatter_indicator``, ``chatter_threshold``
+        and ``chatter_windows``) to a Parquet file.
 
         Raises
         ------
@@ -93,8 +94,9 @@ class Run:
             stability = {f"stability_{k}": v for k, v in check.items()}
             if "stability" in row:
                 stability.update(stability_stable_rpm_low=low, stability_stable_rpm_high=high)
-            plain = {k: v for k, v in row.items() if k not in ("max_tracking_error_um", "stability")}
-            flat.append({**plain, **per_axis, **stability})
+            chatter = {k if k.startswith("chatter") else f"chatter_{k}": v for k, v in row.get("chatter", {}).items()}
+            plain = {k: v for k, v in row.items() if k not in ("max_tracking_error_um", "stability", "chatter")}
+            flat.append({**plain, **per_axis, **stability, **chatter})
         columns = list(dict.fromkeys(key for row in flat for key in row))  # every row's, in order
         pq.write_table(pa.Table.from_pylist([{c: row.get(c) for c in columns} for row in flat]), Path(path))
         return Path(path)
