@@ -113,12 +113,18 @@ def test_bore_diameter_is_the_envelope_of_the_actual_motion(bore):
 
 
 def test_a_run_stopped_halfway_is_compared_with_what_the_program_had_cut_by_then(bore):
-    """The bore's run stopped at 1.5 s of its 2.9 s: the part is the nominal part as far as the
-    run went, its surface error within the whole run's (66 um); against the whole program's
-    part it read the half of the bore never reached as material left (3 mm)."""
-    half = api.run("gcode_choi1999_circle_stock", duration_s=1.5).summary["part"]["surface_error_um"]
+    """The bore's run stopped at 1.5 s of its 2.9 s moves as the whole run did, and its part is
+    the nominal part as far as the run went: its surface error within the whole run's (61 um)
+    plus the tool's lag behind the plan where it stopped (26 um: material the nominal part as far
+    as then has cut and the tool had not yet reached); against the whole program's part it read
+    the half of the bore never reached as material left (3 mm)."""
+    run = api.run("gcode_choi1999_circle_stock", duration_s=1.5)
+    moved = run.result.table_position_m()
+    assert np.array_equal(moved, bore.table_position_m()[: len(moved)])
+    lag_um = float(np.hypot(*run.result.error_m()[-1])) * 1e6
+    half = run.summary["part"]["surface_error_um"]
     whole = bore.part.summary()["surface_error_um"]
-    assert half["max"] <= whole["max"] + 1.0
+    assert half["max"] <= whole["max"] + lag_um
     assert half["min"] >= whole["min"] - 1.0
 
 
