@@ -897,6 +897,11 @@ def tune(
                 f"PM {r['phase_margin_deg']:.1f} deg, "
                 f"GM {_gain_margin(r['velocity_loop'])} (velocity loop), {_gain_margin(r['position_loop'])} (position)"
             )
+            cascade = r["cascade_margins"]
+            typer.echo(
+                "     whole cascade, the gain increase to instability: "
+                + ", ".join(f"{k} {_gain_margin(cascade[k])}" for k in ("kp_pos", "kp_vel", "ki_vel"))
+            )
         for a, v in result.get("verification", {}).items():
             typer.echo(f"  verified on the twin, {a}: " + ", ".join(f"{k} {x:.4g}" for k, x in v.items()))
     if out is not None:

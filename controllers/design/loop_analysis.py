@@ -158,17 +158,33 @@ def crossing_margins(freqs_hz: np.ndarray, response: np.ndarray) -> CrossingMarg
         frac = log_mag[i] / (log_mag[i] - log_mag[i + 1])
         margin = between(i, frac, phase) % 360.0 - 180.0
         pm.append((margin, math.exp(between(i, frac, log_f))))
+    best_pm = min(pm, key=lambda m: abs(m[0]), default=(None, None))
+    best_gm = min(phase_crossings(f, response), key=lambda m: abs(m[0]), default=(None, None))
+    return CrossingMargins(best_pm[0], best_pm[1], best_gm[0], best_gm[1])
+
+
+def phase_crossings(freqs_hz: np.ndarray, response: np.ndarray) -> list[tuple[float, float]]:
+    """Every -180 deg (mod 360) crossing of a loop's frequency ``response`` on an increasing
+    grid ``freqs_hz``, as (gain margin, dB: -20 log10 |L| there; frequency, Hz), placed as
+    :func:`crossing_margins` places them (a phase within :data:`END_CROSSING_DEG` of -180 deg at
+    the grid's end counts).  For a stable closed loop the smallest positive margin is the gain
+    increase it takes to go unstable, the negative margin nearest 0 the decrease."""
+    nonzero = np.abs(response) > 0.0
+    f = np.asarray(freqs_hz, float)[nonzero]
+    response = np.asarray(response)[nonzero]
+    log_f = np.log(f)
+    log_mag = np.log(np.abs(response))
+    phase = np.degrees(np.unwrap(np.angle(response)))
     gm: list[tuple[float, float]] = []
     turn = np.floor((phase + 180.0) / 360.0)  # the -180 deg (mod 360) lines passed
     for i in np.flatnonzero(turn[:-1] != turn[1:]).tolist():
         target = 360.0 * max(turn[i], turn[i + 1]) - 180.0
-        frac = (target - phase[i]) / (phase[i + 1] - phase[i])
-        gm.append((-20.0 * between(i, frac, log_mag) / math.log(10.0), math.exp(between(i, frac, log_f))))
+        frac = float((target - phase[i]) / (phase[i + 1] - phase[i]))
+        magnitude = log_mag[i] + frac * (log_mag[i + 1] - log_mag[i])
+        gm.append((float(-20.0 * magnitude / math.log(10.0)), math.exp(log_f[i] + frac * (log_f[i + 1] - log_f[i]))))
     if abs((phase[-1] % 360.0) - 180.0) < END_CROSSING_DEG:
         gm.append((-20.0 * float(log_mag[-1]) / math.log(10.0), float(f[-1])))
-    best_pm = min(pm, key=lambda m: abs(m[0]), default=(None, None))
-    best_gm = min(gm, key=lambda m: abs(m[0]), default=(None, None))
-    return CrossingMargins(best_pm[0], best_pm[1], best_gm[0], best_gm[1])
+    return gm
 
 
 def popov_crossing(L, w_min: float = W_MIN, w_max: float = W_MAX, n: int = N_GRID) -> tuple[float, float]:
