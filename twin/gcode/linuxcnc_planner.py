@@ -41,7 +41,7 @@ LIMIT_SLACK = 1.0 + 1e-6
 #: Servo periods between the end of the motion before a queue sync and the first motion after
 #: it, by what the task waited for (LinuxCNC 2.9's milltask, measured on the real planner; a
 #: dwell adds its own time; "no time": a dwell of 0 s, ``G4 P0``).
-SYNC_CYCLES = {"dwell": 2, "no time": 1, "spindle": 4, "other": 2}
+SYNC_CYCLES = {"dwell": 2, "no time": 1, "spindle": 3, "other": 2}
 #: Segments in the motion queue at which the task waits before it sends more (``tcqFull``: the
 #: queue of 2000 less its margin of 220).
 QUEUE_FULL = 2000 - 220
