@@ -23,6 +23,7 @@ report shows it against the machine's jerk limits, and it is above them).
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
@@ -336,7 +337,7 @@ def sampled(moves: Iterable[Move], limits: AxisLimits, period_s: float = 1e-3, b
     if canon.end is None or not head:
         return
     first_line = next(item.line_number for item in head if isinstance(item, _Motion))
-    yield from _run(config, canon.start, first_line, [*head, *source], block)
+    yield from _run(config, canon.start, first_line, itertools.chain(head, source), block)
 
 
 def _run(config: Config, start, line: int, items: Iterable[object], block: int):
