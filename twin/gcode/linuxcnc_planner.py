@@ -23,6 +23,7 @@ report shows it against the machine's jerk limits, and it is above them).
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
@@ -41,7 +42,7 @@ LIMIT_SLACK = 1.0 + 1e-6
 #: Servo periods between the end of the motion before a queue sync and the first motion after
 #: it, by what the task waited for (LinuxCNC 2.9's milltask, measured on the real planner; a
 #: dwell adds its own time; "no time": a dwell of 0 s, ``G4 P0``).
-SYNC_CYCLES = {"dwell": 2, "no time": 1, "spindle": 4, "other": 2}
+SYNC_CYCLES = {"dwell": 2, "no time": 1, "spindle": 3, "other": 2}
 #: Segments in the motion queue at which the task waits before it sends more (``tcqFull``: the
 #: queue of 2000 less its margin of 220).
 QUEUE_FULL = 2000 - 220
@@ -336,7 +337,7 @@ def sampled(moves: Iterable[Move], limits: AxisLimits, period_s: float = 1e-3, b
     if canon.end is None or not head:
         return
     first_line = next(item.line_number for item in head if isinstance(item, _Motion))
-    yield from _run(config, canon.start, first_line, [*head, *source], block)
+    yield from _run(config, canon.start, first_line, itertools.chain(head, source), block)
 
 
 def _run(config: Config, start, line: int, items: Iterable[object], block: int):
