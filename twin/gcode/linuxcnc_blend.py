@@ -1,3 +1,6 @@
+# SPDX-License-Identifier: GPL-2.0-only
+# A translation of LinuxCNC's trajectory planner (GPL Version 2): this file is under the GPL-2.0
+# (twin/gcode/COPYING.linuxcnc), not the MIT licence of the rest of the twin.
 """The blend arcs of LinuxCNC 2.9's trajectory planner, ported from ``blendmath.c``: the corner
 between two segments (line-line, line-arc, arc-line, arc-arc) under G64 replaced by a tangent
 arc within the tolerance, its size chosen from the segments' lengths, the tolerance (G64 P, or a

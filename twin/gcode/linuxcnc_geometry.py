@@ -1,3 +1,6 @@
+# SPDX-License-Identifier: GPL-2.0-only
+# A translation of LinuxCNC's trajectory planner (GPL Version 2): this file is under the GPL-2.0
+# (twin/gcode/COPYING.linuxcnc), not the MIT licence of the rest of the twin.
 """The geometry of LinuxCNC 2.9's trajectory planner, ported: posemath's lines and circles
 (``PmCartLine``, ``PmCircle``), the spiral arc-length fit of a circle, the spherical blend arc
 (``spherical_arc.c``) and the vector helpers they use, with LinuxCNC's order of operations so

@@ -1,3 +1,6 @@
+# SPDX-License-Identifier: GPL-2.0-only
+# A translation of LinuxCNC's trajectory planner (GPL Version 2): this file is under the GPL-2.0
+# (twin/gcode/COPYING.linuxcnc), not the MIT licence of the rest of the twin.
 """The LinuxCNC planning mode (``[planner] mode = "linuxcnc"``): a program's moves planned as
 LinuxCNC 2.9 plans them, sampled every servo period.
 

@@ -1,3 +1,6 @@
+# SPDX-License-Identifier: GPL-2.0-only
+# A translation of LinuxCNC's trajectory planner (GPL Version 2): this file is under the GPL-2.0
+# (twin/gcode/COPYING.linuxcnc), not the MIT licence of the rest of the twin.
 """LinuxCNC 2.9's trajectory planner (``tp``), ported: its queue of segments, how a segment is
 added (tangent or kinked junctions, blend arcs, the choice between an arc and a parabolic blend),
 the look-ahead (``tpRunOptimization``, depth ``ARC_BLEND_OPTIMIZATION_DEPTH``) and the
