@@ -242,7 +242,7 @@ def position_controller(channel, crossover_hz: float, settle_s: float) -> tuple[
     kp = 1.0 / abs(channel(1j * w))
     p_only = SisoTf((kp,), (1.0,))
     decay = -control.poles(control.feedback(kp * channel)).real.max()
-    if 12.0 / decay <= settle_s:
+    if decay * settle_s >= 12.0:  # (a frictionless double integrator's decay is 0)
         return p_only, decay
     zero, pole = w / LEAD_FACTOR, w * LEAD_FACTOR
     shape = control.tf([1.0 / zero, 1.0], [1.0 / pole, 1.0])
