@@ -102,6 +102,25 @@ def load_from_model(scenario: Scenario, settings: dict) -> Scenario:
     return scenario_from_dict(set_fields(scenario.model_dump(exclude_unset=True), _paths(settings)))
 
 
+def _refuse_all_failed(table) -> None:
+    """Refuse a sweep whose every sample was an ``error`` row (bad input for all of them), with
+    the first sample's error: a summary of nothing would exit 0.
+
+    Raises
+    ------
+    TwinInputError
+        Every row of ``table`` (the sweep's rows, sorted by index) has the status ``error``.
+    """
+    statuses = table.column("status").to_pylist()
+    if statuses and all(s == "error" for s in statuses):
+        first = table.slice(0, 1).to_pylist()[0]
+        raise TwinInputError(
+            "sweep",
+            f"{len(statuses)} samples",
+            f"every sample failed; the first (sample {first['index']}): {first['error']}",
+        )
+
+
 def sweep(
     target: str | Path,
     vary: list[str] | tuple = (),
@@ -162,6 +181,7 @@ def sweep(
     finally:
         client.close()
     table = read_sweep(out)
+    _refuse_all_failed(table)
     summary = summarize(table, sw.plan, sw.axes)
     summary.update(
         scenario=sw.name,

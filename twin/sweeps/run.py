@@ -177,7 +177,7 @@ def make_client(workers: int | None = None, scheduler: str | None = None):
     """
     import logging
 
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
     if scheduler:
         try:
@@ -185,11 +185,15 @@ def make_client(workers: int | None = None, scheduler: str | None = None):
         except (OSError, ValueError, TypeError) as exc:
             raise TwinInputError("--scheduler", scheduler, f"no Dask scheduler answers there ({exc})") from None
     n = workers or os.cpu_count() or 1
-    logging.getLogger("distributed").setLevel(logging.ERROR)  # its INFO lines would bury the progress bar
-    cluster = LocalCluster(
-        n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.ERROR
+    # Dask's own lines (INFO, and at shutdown a worker's heartbeat meeting a closed scheduler,
+    # logged with its traceback) would bury the progress bar and the twin's one error line: a
+    # sample's failure is its row, a lost worker an exception the CLI reports
+    logging.getLogger("distributed").setLevel(logging.CRITICAL)
+    # the client starts the cluster itself, so that closing the client closes the cluster before
+    # the interpreter's exit (a cluster handed in is left to a finalizer, whose shutdown races)
+    return Client(
+        n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.CRITICAL
     )
-    return Client(cluster)
 
 
 def run_sweep(
