@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Union, overload
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 if TYPE_CHECKING:
     from twin.errors import TwinInputError
@@ -50,6 +50,17 @@ MIN_MAGNITUDE = 1e-15
 MAX_MM = 1e4
 #: A coordinate or size (mm) within +-MAX_MM.
 Millimetres = Annotated[float, Field(ge=-MAX_MM, le=MAX_MM)]
+
+
+def _one_line(text: str) -> str:
+    """``text`` where every character prints (a newline would split a report's line)."""
+    if not text.isprintable():
+        raise ValueError("must be one line of printable characters (no newline, tab or control character)")
+    return text
+
+
+#: A name a report prints: 1 to 200 printable characters on one line.
+ReportName = Annotated[str, Field(min_length=1, max_length=200), AfterValidator(_one_line)]
 
 
 def _out_of_range(value, path: str = "") -> tuple[str, float] | None:
