@@ -142,6 +142,12 @@ def sweep(
     uniform(1000,3000)``...); ``settings`` change the scenario first, as for :func:`run`.  The
     defaults are the sweep file's, else 100 samples, seed 0, a local cluster of one worker per
     core, ``<scenario>_sweep.parquet``.
+
+    Raises
+    ------
+    TwinInputError
+        A bad variation, setting or option; or every sample failed (the first one's error; the
+        rows stay in ``out``).
     """
     from twin.settings import parse_settings
     from twin.sweeps import prepare_sweep, sweep_spec
