@@ -347,3 +347,18 @@ def test_a_sweep_of_failed_samples_exits_2_with_the_first_error_and_nothing_else
     assert r.stderr.splitlines() == [
         f"error: sweep = '2 samples': every sample failed; the first (sample 0): {first['error']}"
     ]
+
+
+@pytest.mark.parametrize("batch", [0, 10_001, True])
+def test_a_bad_batch_size_is_refused_before_a_cluster_starts(tmp_path, monkeypatch, batch):
+    from twin import api
+    from twin.sweeps import run
+
+    def no_cluster(*args, **kwargs):
+        raise AssertionError("a cluster was started")
+
+    monkeypatch.setattr(run, "make_client", no_cluster)
+    with pytest.raises(TwinInputError) as err:
+        api.sweep("choi1999_cutting_circle", ["overrides.m_x=box"], samples=2, batch=batch, out=tmp_path / "b.parquet")
+    assert (err.value.field, err.value.value) == ("--batch", batch)
+    assert not (tmp_path / "b.parquet").exists()

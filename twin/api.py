@@ -151,7 +151,7 @@ def sweep(
     """
     from twin.settings import parse_settings
     from twin.sweeps import prepare_sweep, sweep_spec
-    from twin.sweeps.run import make_client, read_sweep, run_sweep
+    from twin.sweeps.run import check_batch_size, make_client, read_sweep, run_sweep
     from twin.sweeps.summary import certificates, summarize
 
     spec = sweep_spec(str(target))
@@ -172,6 +172,8 @@ def sweep(
     out = Path(out or spec.out or f"{sw.name}_sweep.parquet")
     if not out.parent.is_dir():
         raise TwinInputError("out", str(out), f"folder {str(out.parent)!r} does not exist")
+    batch_size = spec.batch_size if batch is None else batch
+    check_batch_size(batch_size)  # before a cluster starts
     client = make_client(workers, scheduler)
     try:
         done = run_sweep(
@@ -180,7 +182,7 @@ def sweep(
             sw.axes,
             out,
             client,
-            spec.batch_size if batch is None else batch,
+            batch_size,
             resume,
             progress=progress,
         )

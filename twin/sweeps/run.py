@@ -166,6 +166,18 @@ class SweepRun:
     interrupted: bool = False
 
 
+def check_batch_size(batch_size) -> None:
+    """Refuse a batch size (samples per Dask task) that is not a whole number from 1 to 10 000.
+
+    Raises
+    ------
+    TwinInputError
+        Under ``--batch``.
+    """
+    if not (isinstance(batch_size, int) and not isinstance(batch_size, bool) and 1 <= batch_size <= 10_000):
+        raise TwinInputError("--batch", batch_size, "must be a whole number from 1 to 10000")
+
+
 def make_client(workers: int | None = None, scheduler: str | None = None):
     """A Dask client: on the scheduler at ``scheduler`` (``tcp://host:8786``), else on a new
     local cluster of ``workers`` processes (default one per core), one thread each.
@@ -234,8 +246,7 @@ def run_sweep(
         raise TwinInputError("--out", str(out), "exists: add --resume to complete it, or choose another path")
     if out.exists() and not out.is_dir():
         raise TwinInputError("--out", str(out), "is not a sweep's Parquet folder")
-    if not (isinstance(batch_size, int) and 1 <= batch_size <= 10_000):
-        raise TwinInputError("--batch", batch_size, "must be a whole number from 1 to 10000")
+    check_batch_size(batch_size)
     out.mkdir(parents=True, exist_ok=True)
     schema = _schema(plan, axes, is_program(base))
     done = done_indices(out)
