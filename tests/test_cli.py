@@ -358,10 +358,10 @@ def test_run_bad_setting(setting, message):
         (["--set", "timestep_s=5e-324", "--set", "control_period_s=5e-324"], "timestep_s = 5e-324"),
         (
             ["--set", 'reference.type="polyline"', "--set", "reference.points_mm=[[0,0],[1e157,0]]"],
-            "reference.polyline.points_mm.1.0 = 1e+157",
+            "reference.points_mm.1.0 = 1e+157",
         ),
         (["--set", "seed=-1"], "seed = -1"),
-        (["--set", "reference.radius_mm=5e-324"], "reference.circle.radius_mm"),
+        (["--set", "reference.radius_mm=5e-324"], "reference.radius_mm"),
         (["--set", "duration_s=1e-5"], "shorter than one control period"),
         (["--max-steps", "1000"], "more than the 1,000 allowed"),
         (["--rrd", "/nonexistent-folder/x.rrd"], "--rrd = '/nonexistent-folder/x.rrd'"),

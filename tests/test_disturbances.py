@@ -73,8 +73,8 @@ def test_disturbance_own_seed_overrides_scenario_seed():
     "entry, field",
     [
         ({**CUT, "radial_depth_mm": 12.0}, "disturbances.0.radial_depth_mm"),
-        ({**CUT, "n_flutes": 0}, "disturbances.0.end_milling.n_flutes"),
-        (dict(type="average_force", harmonic_fraction=0.3), "disturbances.0.average_force.harmonic_fraction"),
+        ({**CUT, "n_flutes": 0}, "disturbances.0.n_flutes"),
+        (dict(type="average_force", harmonic_fraction=0.3), "disturbances.0.harmonic_fraction"),
         (dict(type="harmonic_input", amplitudes_V=[0.1], frequencies_hz=[0.2], axes=["z"]), "disturbances.0.axes"),
         (dict(type="harmonic_input", amplitudes_V=[0.1, 0.2], frequencies_hz=[0.2]), "disturbances.0.frequencies_hz"),
         (dict(type="chatter"), "disturbances.0"),

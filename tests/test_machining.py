@@ -102,7 +102,11 @@ def test_air_moves_engage_nothing_and_a_stopped_spindle_no_force():
             "stock.islands_mm.0",
             "at least 3 items",
         ),
-        ({"tools": [{"number": 1, "diameter_mm": 0, "n_flutes": 2}]}, "tools.0.diameter_mm", "greater than 0"),
+        (
+            {"tools": [{"number": 1, "diameter_mm": 0, "n_flutes": 2}]},
+            "tools.0.diameter_mm",
+            "greater than or equal to 0.01",
+        ),
         ({"tools": [{"number": 1, "diameter_mm": 6, "n_flutes": 0}]}, "tools.0.n_flutes", "greater than or equal to 1"),
         (
             {"tools": [{"number": 1, "diameter_mm": 6, "n_flutes": 2, "corner_radius_mm": 3.5}]},

@@ -24,7 +24,7 @@ def test_a_slow_move_is_refused_before_it_is_planned(as_list):
     with pytest.raises(PlanningError) as caught:
         plan(list(moves) if as_list else moves, LIMITS, PlannerSettings())
     assert time.perf_counter() - t0 < 5.0
-    assert str(caught.value).startswith(f"line 2: {HELD} (run it without a stock")
+    assert str(caught.value).startswith(f"line 2: {HELD} (split it, or run it in a scenario without a stock")
     assert "its moves to this line take at least 6000000 s (1666.7 h)" in str(caught.value)
 
 
@@ -55,8 +55,9 @@ def test_the_cli_refuses_a_program_longer_than_it_plans_at_once(tmp_path):
     assert out.exit_code == 2, out.output
     lines = out.output.strip().splitlines()
     assert lines == [
-        f"error: file = {str(slow)!r}: line 2: {HELD} (run it without a stock, which streams it, or split it): its "
-        "moves to this line take at least 6000000 s (1666.7 h) at their feeds and the axes' velocity limits"
+        f"error: file = {str(slow)!r}: line 2: {HELD} (split it, or run it in a scenario without a stock, whose "
+        "reference streams it): its moves to this line take at least 6000000 s (1666.7 h) at their feeds and the "
+        "axes' velocity limits"
     ]
 
 

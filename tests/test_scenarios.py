@@ -177,8 +177,8 @@ def test_inverse_model_observer_removes_a_step_input_disturbance_on_the_twin():
 @pytest.mark.parametrize(
     "setting, field, words",
     [
-        ("disturbances.0.n_flutes=2147483648", "disturbances.0.end_milling.n_flutes", "less than or equal to 100"),
-        ("disturbances.0.spindle_rpm=0.5", "disturbances.0.end_milling.spindle_rpm", "greater than or equal to 1"),
+        ("disturbances.0.n_flutes=2147483648", "disturbances.0.n_flutes", "less than or equal to 100"),
+        ("disturbances.0.spindle_rpm=0.5", "disturbances.0.spindle_rpm", "greater than or equal to 1"),
         ("timestep_s=1e308", "timestep_s", "less than or equal to 0.01"),
     ],
 )
@@ -190,15 +190,32 @@ def test_counts_and_rates_the_loops_run_over_are_bounded(setting, field, words):
     assert words in err.value.reason
 
 
+@pytest.mark.parametrize(
+    "setting, field, value, words",
+    [
+        ("sensors.noise_std_m=-1", "sensors.noise_std_m", -1, "greater than or equal to 0"),
+        ("sensors.noise_std_m=[0, 2e-3]", "sensors.noise_std_m.1", 2e-3, "less than or equal to 0.001"),
+        ("sensors.encoder_resolution_m='x'", "sensors.encoder_resolution_m", "x", "valid number"),
+    ],
+)
+def test_a_number_or_list_setting_names_the_field_the_user_wrote(setting, field, value, words):
+    """A union of a number and a list is refused under the user's path (no pydantic member such as
+    ``constrained-float``), for the member the value is: a list for its item."""
+    with pytest.raises(TwinInputError) as err:
+        load_scenario("square_sabau_pid", parse_settings([setting]))
+    assert (err.value.field, err.value.value) == (field, value)
+    assert words in err.value.reason
+
+
 def test_harmonic_and_sine_counts_are_bounded():
     many = "[" + ", ".join(["0.001"] * 101) + "]"
     with pytest.raises(TwinInputError) as err:
         load_scenario("maharof2021_cascade", parse_settings([f"disturbances.0.amplitudes_V={many}"]))
-    assert err.value.field == "disturbances.0.harmonic_input.amplitudes_V"
+    assert err.value.field == "disturbances.0.amplitudes_V"
     assert "at most 100" in err.value.reason
     with pytest.raises(TwinInputError) as err:
         load_scenario("maharof2021_cascade", parse_settings([f"reference.amplitudes_m={many}"]))
-    assert err.value.field == "reference.sines.amplitudes_m"
+    assert err.value.field == "reference.amplitudes_m"
     assert "at most 100" in err.value.reason
 
 

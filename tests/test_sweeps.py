@@ -11,7 +11,7 @@ import time
 
 import numpy as np
 import pytest
-from cli_process import interruptible
+from cli_process import TWIN, interruptible
 from cli_process import twin as twin_cli
 
 from twin.errors import TwinInputError
@@ -327,3 +327,38 @@ def test_a_sweep_runs_on_a_scheduler_by_address(tmp_path):
     assert set(table.column("status").to_pylist()) == {"ok"}
     with pytest.raises(TwinInputError, match="no Dask scheduler"):
         make_client(scheduler="not-an-address")
+
+
+def test_a_sweep_of_failed_samples_exits_2_with_the_first_error_and_nothing_else_on_stderr(tmp_path):
+    # a real process: the local cluster's workers write on the process's own stderr, where Dask's
+    # shutdown chatter (a heartbeat's CommClosedError traceback) came out
+    import subprocess
+
+    out = tmp_path / "f.parquet"
+    vary = "controller.params.kp=choice('abc', 'x')"
+    args = ["sweep", "square_sabau_pid", "--vary", vary, "--samples", "2", "--workers", "1"]
+    args += ["--set", "duration_s=0.02", "--out", str(out), "--json"]
+    r = subprocess.run([*TWIN, *args], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 2, r.stderr
+    assert r.stdout == ""
+    first = read_sweep(out).slice(0, 1).to_pylist()[0]
+    assert first["controller.params.kp"] in ("abc", "x")
+    assert first["error"] == f"controller.params.kp = {first['controller.params.kp']!r}: Input should be a valid number"
+    assert r.stderr.splitlines() == [
+        f"error: sweep = '2 samples': every sample failed; the first (sample 0): {first['error']}"
+    ]
+
+
+@pytest.mark.parametrize("batch", [0, 10_001, True])
+def test_a_bad_batch_size_is_refused_before_a_cluster_starts(tmp_path, monkeypatch, batch):
+    from twin import api
+    from twin.sweeps import run
+
+    def no_cluster(*args, **kwargs):
+        raise AssertionError("a cluster was started")
+
+    monkeypatch.setattr(run, "make_client", no_cluster)
+    with pytest.raises(TwinInputError) as err:
+        api.sweep("choi1999_cutting_circle", ["overrides.m_x=box"], samples=2, batch=batch, out=tmp_path / "b.parquet")
+    assert (err.value.field, err.value.value) == ("--batch", batch)
+    assert not (tmp_path / "b.parquet").exists()

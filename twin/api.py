@@ -102,6 +102,25 @@ def load_from_model(scenario: Scenario, settings: dict) -> Scenario:
     return scenario_from_dict(set_fields(scenario.model_dump(exclude_unset=True), _paths(settings)))
 
 
+def _refuse_all_failed(table) -> None:
+    """Refuse a sweep whose every sample was an ``error`` row (bad input for all of them), with
+    the first sample's error: a summary of nothing would exit 0.
+
+    Raises
+    ------
+    TwinInputError
+        Every row of ``table`` (the sweep's rows, sorted by index) has the status ``error``.
+    """
+    statuses = table.column("status").to_pylist()
+    if statuses and all(s == "error" for s in statuses):
+        first = table.slice(0, 1).to_pylist()[0]
+        raise TwinInputError(
+            "sweep",
+            f"{len(statuses)} samples",
+            f"every sample failed; the first (sample {first['index']}): {first['error']}",
+        )
+
+
 def sweep(
     target: str | Path,
     vary: list[str] | tuple = (),
@@ -123,10 +142,16 @@ def sweep(
     uniform(1000,3000)``...); ``settings`` change the scenario first, as for :func:`run`.  The
     defaults are the sweep file's, else 100 samples, seed 0, a local cluster of one worker per
     core, ``<scenario>_sweep.parquet``.
+
+    Raises
+    ------
+    TwinInputError
+        A bad variation, setting or option; or every sample failed (the first one's error; the
+        rows stay in ``out``).
     """
     from twin.settings import parse_settings
     from twin.sweeps import prepare_sweep, sweep_spec
-    from twin.sweeps.run import make_client, read_sweep, run_sweep
+    from twin.sweeps.run import check_batch_size, make_client, read_sweep, run_sweep
     from twin.sweeps.summary import certificates, summarize
 
     spec = sweep_spec(str(target))
@@ -147,6 +172,8 @@ def sweep(
     out = Path(out or spec.out or f"{sw.name}_sweep.parquet")
     if not out.parent.is_dir():
         raise TwinInputError("out", str(out), f"folder {str(out.parent)!r} does not exist")
+    batch_size = spec.batch_size if batch is None else batch
+    check_batch_size(batch_size)  # before a cluster starts
     client = make_client(workers, scheduler)
     try:
         done = run_sweep(
@@ -155,13 +182,14 @@ def sweep(
             sw.axes,
             out,
             client,
-            spec.batch_size if batch is None else batch,
+            batch_size,
             resume,
             progress=progress,
         )
     finally:
         client.close()
     table = read_sweep(out)
+    _refuse_all_failed(table)
     summary = summarize(table, sw.plan, sw.axes)
     summary.update(
         scenario=sw.name,

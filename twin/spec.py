@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Union, overload
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 if TYPE_CHECKING:
     from twin.errors import TwinInputError
@@ -52,6 +52,17 @@ MAX_MM = 1e4
 Millimetres = Annotated[float, Field(ge=-MAX_MM, le=MAX_MM)]
 
 
+def _one_line(text: str) -> str:
+    """``text`` where every character prints (a newline would split a report's line)."""
+    if not text.isprintable():
+        raise ValueError("must be one line of printable characters (no newline, tab or control character)")
+    return text
+
+
+#: A name a report prints: 1 to 200 printable characters on one line.
+ReportName = Annotated[str, Field(min_length=1, max_length=200), AfterValidator(_one_line)]
+
+
 def _out_of_range(value, path: str = "") -> tuple[str, float] | None:
     """The path (``key.0``; empty for ``value`` itself) and value of the first finite number
     in ``value`` (a number, or lists, tuples and dicts of them) whose magnitude is over
@@ -88,19 +99,39 @@ class StrictSpec(BaseModel):
         return value
 
 
-def validation_error(
-    err: ValidationError, prefix: str = "", skip: tuple[str, ...] = (), whole: str = "scenario"
-) -> TwinInputError:
-    """The first error of pydantic's ``err`` as the twin's error line: its field path (after
-    ``prefix``; the union tags starting with one of ``skip`` left out; ``whole`` for an error
-    of the whole table), the value and the reason (without pydantic's "Value error, ")."""
+def validation_error(err: ValidationError, data, prefix: str = "", whole: str = "scenario") -> TwinInputError:
+    """The error of pydantic's ``err`` for the user's ``data`` (the dict validated) as the
+    twin's error line: the field path as the user wrote it (after ``prefix``; ``whole`` for an
+    error of the whole table), the value and the reason (without pydantic's "Value error, ").
+
+    Pydantic's path holds the union members it tried (``constrained-float``,
+    ``list[constrained-float]``, a tagged table's tag): a step of its path that the data does not
+    hold is such a member and is left out (the last step of a missing field excepted).  Of the
+    union members' errors for one field, the deepest is reported: ``[-1]`` for a number or a list
+    of numbers is refused for its item ``0``, not as "not a number".
+    """
     from twin.errors import TwinInputError
 
-    e = err.errors()[0]
-    field = ".".join(str(p) for p in e["loc"] if not str(p).startswith(skip))
+    errors = [(_written_path(e, data), e) for e in err.errors()]
+    stem = errors[0][0]
+    path, e = max((pe for pe in errors if pe[0][: len(stem)] == stem), key=lambda pe: len(pe[0]))
     value = e.get("input")
     reason = e["msg"].removeprefix("Value error, ")
+    field = ".".join(str(step) for step in path)
     return TwinInputError(prefix + (field or whole), "{...}" if isinstance(value, dict) else value, reason)
+
+
+def _written_path(error, data) -> list:
+    """The steps of pydantic's ``error["loc"]`` that ``data`` holds (a missing field's name last)."""
+    loc, path, node = error["loc"], [], data
+    for i, step in enumerate(loc):
+        in_table = isinstance(node, dict) and step in node
+        if in_table or (isinstance(node, list) and isinstance(step, int) and 0 <= step < len(node)):
+            path.append(step)
+            node = node[step]
+        elif i == len(loc) - 1 and error["type"] == "missing":
+            path.append(step)
+    return path
 
 
 @overload

@@ -252,6 +252,7 @@ def calibrate(
     base = spec.resolve(overrides)
     bm0 = build(machine, overrides, timestep_s)
     names = [a.name for a in bm0.axes]
+    axes_indices([axis], names, "--axis")  # an FRF's axis; a time trace's axes are its columns
     columns = read_table(trace)
     nominal = np.array([base[s] for s in fit])
     scale = np.where(nominal != 0, np.abs(nominal), 1.0)

@@ -1240,8 +1240,8 @@ def plan(moves: Iterable[Move], limits: Limits, settings: PlannerSettings | None
 
 #: What :func:`plan` refuses a longer program for.
 HELD_LIMIT = (
-    f"the {MAX_SAMPLES * SAMPLE_PERIOD_S:.0f} s of motion a reference held whole may hold (run it without a "
-    "stock, which streams it, or split it)"
+    f"the {MAX_SAMPLES * SAMPLE_PERIOD_S:.0f} s of motion a reference held whole may hold (split it, or run it "
+    "in a scenario without a stock, whose reference streams it)"
 )
 #: What a run refuses a program longer than :data:`MAX_PROGRAM_SAMPLES` for.
 PROGRAM_LIMIT = f"the {MAX_PROGRAM_SAMPLES * SAMPLE_PERIOD_S / 3600:.0f} hours of motion a run may plan"

@@ -291,7 +291,7 @@ def read_machine_file(path: str | Path) -> MachineFile:
     try:
         return MachineFile.model_validate(data)
     except ValidationError as exc:
-        raise validation_error(exc, f"{path.name}: ", ("ball_screw", "linear_motor"), "machine file") from None
+        raise validation_error(exc, data, f"{path.name}: ", "machine file") from None
 
 
 def _toml_value(value) -> str:

@@ -929,20 +929,32 @@ class ForceModels:
         return total
 
 
+#: A cutting coefficient's magnitude at most (N/mm^2): twice hardened steel's kc1 (about 5 000).
+MAX_CUTTING_N_PER_MM2 = 10_000.0
+#: An edge coefficient's magnitude at most (N/mm): ten times the largest measured (tens of N/mm).
+MAX_EDGE_N_PER_MM = 1_000.0
+
+
 class CoefficientsSpec(StrictSpec):
     """Overrides of the material's coefficients: linear cutting (N/mm^2) and edge (N/mm) ones,
     or the Kienzle form ``kc1_N_per_mm2`` with ``mc`` (radial and axial then our ratios of it,
     :data:`~twin.process.materials.KIENZLE_RADIAL_RATIO`, unless ``K_rc``, ``K_ac`` are given:
     at h = 1 mm)."""
 
-    K_tc: float | None = None
-    K_rc: float | None = None
-    K_ac: float | None = None
-    K_te: float | None = None
-    K_re: float | None = None
-    K_ae: float | None = None
+    # the chip is sheared against the cut: the tangential cutting and edge forces oppose the
+    # cutting speed (positive); hardened steels' kc1 are about 5 000 N/mm^2 and edge forces tens
+    # of N/mm, so a magnitude twice that (MAX_CUTTING_N_PER_MM2, MAX_EDGE_N_PER_MM) is no material
+    K_tc: float | None = Field(None, gt=0, le=MAX_CUTTING_N_PER_MM2, description="tangential cutting, N/mm^2")
+    K_rc: float | None = Field(None, ge=-MAX_CUTTING_N_PER_MM2, le=MAX_CUTTING_N_PER_MM2, description="N/mm^2")
+    K_ac: float | None = Field(None, ge=-MAX_CUTTING_N_PER_MM2, le=MAX_CUTTING_N_PER_MM2, description="N/mm^2")
+    K_te: float | None = Field(None, ge=0, le=MAX_EDGE_N_PER_MM, description="tangential edge (rubbing), N/mm")
+    K_re: float | None = Field(None, ge=-MAX_EDGE_N_PER_MM, le=MAX_EDGE_N_PER_MM, description="N/mm")
+    K_ae: float | None = Field(None, ge=-MAX_EDGE_N_PER_MM, le=MAX_EDGE_N_PER_MM, description="N/mm")
     kc1_N_per_mm2: float | None = Field(
-        None, gt=0, description="Kienzle: specific cutting force at h = 1 mm, N/mm^2 (give mc with it)"
+        None,
+        gt=0,
+        le=MAX_CUTTING_N_PER_MM2,
+        description="Kienzle: specific cutting force at h = 1 mm, N/mm^2 (give mc with it)",
     )
     mc: float | None = Field(None, ge=0, lt=1, description="Kienzle exponent, kc = kc1 h^-mc (give kc1_N_per_mm2)")
 

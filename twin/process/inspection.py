@@ -30,7 +30,7 @@ from pydantic import Field, PositiveFloat
 from scipy.optimize import least_squares
 
 from twin.process.part import MachinedPart
-from twin.spec import MAX_MM, Millimetres, StrictSpec
+from twin.spec import MAX_MM, Millimetres, ReportName, StrictSpec
 
 #: Distance from a nominal feature (mm) within which the boundary counts as its points.
 BAND_MM = 0.5
@@ -43,7 +43,7 @@ Point = tuple[Millimetres, Millimetres]
 
 
 class _Feature(StrictSpec):
-    name: str = Field(min_length=1, max_length=200, description="the feature's name in the report")
+    name: ReportName = Field(description="the feature's name in the report")
     z_mm: Millimetres = Field(description="height measured at (mm)")
     tolerance_um: PositiveFloat | None = Field(None, description="± tolerance of the size or position (µm)")
 

@@ -60,6 +60,8 @@ MAX_CELLS = 40_000_000
 ANGLE_STEP_DEG = 1.0
 #: XY speed (m/s) over which the tool moves (a side cut, a feed direction).
 MOVING_M_PER_S = 1e-6
+#: A cutter's or shank's diameter at least (mm): the finest micro end mills made are 10 um.
+MIN_TOOL_MM = 0.01
 #: Material thinner than this above the tool tip (mm) is not cut (rounding of heights).
 MIN_DEPTH_MM = 1e-6
 #: Columns of the engagement table, per sample of the planned reference: two engaged arcs
@@ -213,7 +215,7 @@ class ToolSpec(StrictSpec):
     """A cutter: the ``[tool]`` table, or an entry of ``[[tools]]`` with its ``number``."""
 
     number: int | None = Field(None, ge=0, description="T number ([[tools]] only)")
-    diameter_mm: PositiveFloat = Field(le=MAX_MM, description="cutter diameter (mm)")
+    diameter_mm: float = Field(ge=MIN_TOOL_MM, le=MAX_MM, description="cutter diameter (mm)")
     n_flutes: int = Field(ge=1, le=MAX_FLUTES, description="teeth")
     corner_radius_mm: float = Field(
         0.0, ge=0.0, le=MAX_MM, description="corner radius (mm): 0 a flat end mill, half the diameter a ball end mill"
@@ -223,8 +225,9 @@ class ToolSpec(StrictSpec):
         le=MAX_MM,
         description="length of the cutting edge from the tip (mm); material above it is not cut by the flutes",
     )
-    shank_diameter_mm: PositiveFloat | None = Field(
+    shank_diameter_mm: float | None = Field(
         None,
+        ge=MIN_TOOL_MM,
         le=MAX_MM,
         description="diameter of the shank above the flutes (mm; default the cutter's): material within it above "
         "the flute length rubs",

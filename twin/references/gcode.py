@@ -545,7 +545,7 @@ def program_settings(file: str, settings: dict):
         try:
             parsed[key] = model.model_validate(data[key])
         except ValidationError as exc:
-            raise validation_error(exc, f"{key}.") from None
+            raise validation_error(exc, data[key], f"{key}.") from None
     drive = parsed["drive"]
     assert isinstance(drive, ProgramDrive)
     return parsed["reference"], parsed["planner"], drive.saturation_V

@@ -86,4 +86,4 @@ def scenario_from_dict(data: dict) -> Scenario:
     try:
         return Scenario.model_validate(data)
     except ValidationError as exc:
-        raise validation_error(exc) from None
+        raise validation_error(exc, data) from None

@@ -50,7 +50,7 @@ def sweep_spec(target: str) -> SweepFile:
     try:
         spec = SweepFile(**data)
     except ValidationError as exc:
-        raise validation_error(exc) from None
+        raise validation_error(exc, data) from None
     candidate = path.parent / spec.scenario
     if candidate.suffix == ".toml" and os.path.isfile(candidate):
         spec.scenario = str(candidate)

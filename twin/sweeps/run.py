@@ -166,6 +166,18 @@ class SweepRun:
     interrupted: bool = False
 
 
+def check_batch_size(batch_size) -> None:
+    """Refuse a batch size (samples per Dask task) that is not a whole number from 1 to 10 000.
+
+    Raises
+    ------
+    TwinInputError
+        Under ``--batch``.
+    """
+    if not (isinstance(batch_size, int) and not isinstance(batch_size, bool) and 1 <= batch_size <= 10_000):
+        raise TwinInputError("--batch", batch_size, "must be a whole number from 1 to 10000")
+
+
 def make_client(workers: int | None = None, scheduler: str | None = None):
     """A Dask client: on the scheduler at ``scheduler`` (``tcp://host:8786``), else on a new
     local cluster of ``workers`` processes (default one per core), one thread each.
@@ -177,7 +189,7 @@ def make_client(workers: int | None = None, scheduler: str | None = None):
     """
     import logging
 
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
     if scheduler:
         try:
@@ -185,11 +197,15 @@ def make_client(workers: int | None = None, scheduler: str | None = None):
         except (OSError, ValueError, TypeError) as exc:
             raise TwinInputError("--scheduler", scheduler, f"no Dask scheduler answers there ({exc})") from None
     n = workers or os.cpu_count() or 1
-    logging.getLogger("distributed").setLevel(logging.ERROR)  # its INFO lines would bury the progress bar
-    cluster = LocalCluster(
-        n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.ERROR
+    # Dask's own lines (INFO, and at shutdown a worker's heartbeat meeting a closed scheduler,
+    # logged with its traceback) would bury the progress bar and the twin's one error line: a
+    # sample's failure is its row, a lost worker an exception the CLI reports
+    logging.getLogger("distributed").setLevel(logging.CRITICAL)
+    # the client starts the cluster itself, so that closing the client closes the cluster before
+    # the interpreter's exit (a cluster handed in is left to a finalizer, whose shutdown races)
+    return Client(
+        n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.CRITICAL
     )
-    return Client(cluster)
 
 
 def run_sweep(
@@ -230,8 +246,7 @@ def run_sweep(
         raise TwinInputError("--out", str(out), "exists: add --resume to complete it, or choose another path")
     if out.exists() and not out.is_dir():
         raise TwinInputError("--out", str(out), "is not a sweep's Parquet folder")
-    if not (isinstance(batch_size, int) and 1 <= batch_size <= 10_000):
-        raise TwinInputError("--batch", batch_size, "must be a whole number from 1 to 10000")
+    check_batch_size(batch_size)
     out.mkdir(parents=True, exist_ok=True)
     schema = _schema(plan, axes, is_program(base))
     done = done_indices(out)
