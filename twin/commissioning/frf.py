@@ -45,6 +45,8 @@ SAMPLE_PERIOD_S = 1e-4
 MAX_DURATION_S = 120.0
 #: Welch segment length (samples): 1.6 s at 0.1 ms, a 0.61 Hz resolution.
 SEGMENT = 16384
+#: The highest frequency of a chirp, as a fraction of the sample rate (below its Nyquist 0.5).
+CHIRP_TOP_PER_SAMPLE_RATE = 0.45
 #: Peaks of the magnitude this prominent (dB) and this coherent count as (anti-)resonances.
 PEAK_PROMINENCE_DB = 3.0
 #: ... within this factor of its frequency on either side.
@@ -166,7 +168,9 @@ def excitation_signal(kind: str, n: int, dt: float, amplitude: float, f_max_hz: 
 
     prbs: a maximum-length sequence (``scipy.signal.max_len_seq``) of +-amplitude, each bit held
     for ``round(0.4 / (f_max dt))`` samples (flat spectrum to about f_max); chirp: logarithmic
-    sweep from 1 Hz to f_max over the record (``scipy.signal.chirp``); multisine: realizations
+    sweep from 1 Hz (``scipy.signal.chirp``) that reaches f_max a :data:`SEGMENT` before the
+    record's end (a quarter of a shorter record) and goes on to at most
+    :data:`CHIRP_TOP_PER_SAMPLE_RATE` / dt; multisine: realizations
     (:func:`multisine_realizations`), each every DFT line of a :data:`MULTISINE_PERIOD`-sample
     period up to f_max with its own random phases, scaled to the amplitude's peak and repeated
     for 1 + :data:`MULTISINE_PERIODS` periods.
@@ -179,7 +183,12 @@ def excitation_signal(kind: str, n: int, dt: float, amplitude: float, f_max_hz: 
         return amplitude * (2.0 * np.repeat(seq, hold)[:n] - 1.0)
     t = np.arange(n) * dt
     if kind == "chirp":
-        return amplitude * signal.chirp(t, 1.0, t[-1], f_max_hz, method="logarithmic", phi=-90)
+        # reach f_max a Welch segment before the end (a quarter of a short record), then sweep
+        # on at the same rate: the band's top lies inside whole segments, not under the last
+        # one's closing window (compact_xy Y's 784.6 Hz mode, swept at 15.4 of 16 s, read 775 Hz)
+        lead = min(SEGMENT, n // 4)
+        top = min(f_max_hz ** (n / (n - lead)), CHIRP_TOP_PER_SAMPLE_RATE / dt)
+        return amplitude * signal.chirp(t, 1.0, t[-1], top, method="logarithmic", phi=-90)
     lines = np.arange(1, int(f_max_hz * MULTISINE_PERIOD * dt) + 1)
     blocks = []
     for _ in range(max(1, multisine_realizations(n))):
