@@ -802,9 +802,13 @@ def calibrate(
             unit = get_machine(machine).parameters[s].unit
             error = result["standard_errors"].get(s)
             spread = f" +- {error:.2g}" if error is not None else " (no standard error: the fit did not converge)"
+            if s in result["model_errors"]:
+                spread += f" (noise {result['statistical_errors'][s]:.2g}, model {result['model_errors'][s]:.2g})"
             typer.echo(f"  {s} = {v:.6g} {unit}{spread} (nominal {result['nominal'][s]:.6g})")
         for s, why in result["unidentifiable"].items():
             typer.echo(f"  {s}: not identifiable, kept at {result['nominal'][s]:.6g}: {why}")
+        for s, why in result["poorly_determined"].items():
+            typer.echo(f"  {s}: poorly determined: {why}")
         fi = result["fit_index_pct"]
         typer.echo("  fit index: " + ", ".join(f"{k} {v:.2f} %" for k, v in fi.items()))
         if "residual_rms_m" in solver:
