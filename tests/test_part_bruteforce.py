@@ -23,8 +23,9 @@ import numpy as np
 import pytest
 import shapely
 
-from twin.process.inspection import CircleFeature, WidthFeature, measure
-from twin.process.part import Sweep, machined_part
+from twin.machining.inspection import CircleFeature, WidthFeature, measure
+from twin.machining.part import machined_part
+from twin.machining.sweep import Sweep
 
 UM = 1e-3  # mm
 TOL_UM = 0.01  # the wall error's agreement (µm)

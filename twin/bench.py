@@ -155,7 +155,8 @@ def gcode_figures(lines: int = 1_000_000, repeats: int = 5, moves: int = 10_000)
     from twin import api
     from twin.gcode.planner import PlannerSettings, plan, plan_stream
     from twin.gcode.reader import Reader, read_program
-    from twin.process.machining import StockSpec, ToolSpec, program_milling
+    from twin.machining.engagement import StockSpec, ToolSpec
+    from twin.machining.program_cut import program_milling
 
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "cam.ngc"
@@ -339,9 +340,10 @@ def finish_figures(lines: int) -> dict:
 
     from twin.gcode.planner import PlannerSettings, plan
     from twin.gcode.reader import read_program
-    from twin.process.machining import StockSpec, ToolSpec, program_milling
-    from twin.process.part import Sweep
-    from twin.process.part_map import virtual_part
+    from twin.machining.engagement import StockSpec, ToolSpec
+    from twin.machining.part import virtual_part
+    from twin.machining.program_cut import program_milling
+    from twin.machining.sweep import Sweep
 
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "finish.ngc"

@@ -938,9 +938,9 @@ def list_things():
     """Machines, controller kinds, observers, disturbances, materials, references, bundled
     scenarios and reproducible papers."""
     from controllers import CONTROLLERS, OBSERVERS
+    from twin.disturbances import DISTURBANCES
     from twin.machines import MACHINES
-    from twin.process import DISTURBANCES
-    from twin.process.materials import KIENZLE_AXIAL_RATIO, KIENZLE_RADIAL_RATIO, MATERIALS
+    from twin.machining.materials import KIENZLE_AXIAL_RATIO, KIENZLE_RADIAL_RATIO, MATERIALS
     from twin.references import REFERENCES
     from twin.reproductions.registry import REPRODUCTIONS
     from twin.scenario import bundled_scenarios, load_scenario

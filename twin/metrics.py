@@ -13,8 +13,8 @@ from typing import Any
 import numpy as np
 from numba import njit
 
+from twin.machining.chatter import CHATTER_THRESHOLD, ChatterReading, chatter_reading
 from twin.numba_cache import configure as configure_numba_cache
-from twin.process.chatter import CHATTER_THRESHOLD, ChatterReading, chatter_reading
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
 
@@ -323,7 +323,7 @@ def tracking_summary(result) -> dict:
 
 
 def _chatter_of(result, rows: slice) -> ChatterReading | None:
-    """The chatter reading (:func:`twin.process.chatter.chatter_reading`) of the recorded rows
+    """The chatter reading (:func:`twin.machining.chatter.chatter_reading`) of the recorded rows
     ``rows`` of a run; None where the tool did not cut for a window's worth."""
     every = max(result.info.get("record_every", 1), 1)
     dt = result.machine.model.opt.timestep
@@ -332,7 +332,7 @@ def _chatter_of(result, rows: slice) -> ChatterReading | None:
 
 
 def chatter_summary(result, lines: list[dict]) -> dict:
-    """A milling run's chatter (:mod:`twin.process.chatter`): ``chatter`` (the whole run's
+    """A milling run's chatter (:mod:`twin.machining.chatter`): ``chatter`` (the whole run's
     indicator, frequency and verdict) and ``chatter_warnings`` (each program line that chatters,
     or the run), and each line's own reading into its row of ``lines`` (in place); nothing for a
     run that does not mill for a window's worth."""

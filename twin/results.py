@@ -125,7 +125,7 @@ class Run:
         """Write the virtual part of a run with a stock into ``folder`` (created if missing):
         ``<scenario>_part.stl``, the actual part's closed mesh (mm), and
         ``<scenario>_part_map.parquet``, the nominal and actual height maps and their
-        difference by cell (:mod:`twin.process.part_map`); their paths.
+        difference by cell (:mod:`twin.machining.part_map`); their paths.
 
         Raises
         ------
