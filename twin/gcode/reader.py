@@ -1361,21 +1361,6 @@ def _check_arc_radii(center, a0: float, b0: float, a1: float, b1: float, toleran
         )
 
 
-def program_lines(path: str | Path) -> Iterator[str]:
-    """The lines of a program file, decoded one at a time (memory stays bounded; bytes that
-    are not UTF-8 become U+FFFD, which the reader refuses outside comments as LinuxCNC does).
-
-    Raises
-    ------
-    GcodeError
-        A file that cannot be opened (line 0).
-    """
-    text = _open(path)
-    while (line := text.next_line()) is not None:
-        yield line
-    text.close()
-
-
 def _open(path: str | Path) -> ProgramText:
     try:
         return ProgramText(path=path)
