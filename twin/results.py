@@ -19,7 +19,7 @@ if TYPE_CHECKING:  # the heavy modules load on first use, not with `import twin`
     import pyarrow as pa
 
     from twin.commissioning.frf import FrfSettings
-    from twin.gcode.reader import Move
+    from twin.gcode.moves import Move
     from twin.sampling import Plan
     from twin.scenario import Scenario
     from twin.sim.runner import RunResult
