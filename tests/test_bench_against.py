@@ -34,7 +34,14 @@ def test_alternate_times_a_then_b_and_takes_the_median_of_the_pairs_ratios():
         def time(case: str) -> dict:
             k = sum(1 for t, c in calls if t == tree and c == case)
             calls.append((tree, case))
-            return {"closed_loop_steps_per_s": closed[case][k], "bare_steps_per_s": 2 * closed[case][k], "loop": tree}
+            wall = closed[case][k]  # a CPU second does 3 times a wall second's steps
+            return {
+                "closed_loop_steps_per_s": wall,
+                "bare_steps_per_s": 2 * wall,
+                "closed_loop_steps_per_cpu_s": 3 * wall,
+                "bare_steps_per_cpu_s": 4 * wall,
+                "loop": tree,
+            }
 
         return time
 
@@ -47,6 +54,9 @@ def test_alternate_times_a_then_b_and_takes_the_median_of_the_pairs_ratios():
         assert out[case]["b"]["closed_loop_steps_per_s"] == statistics.median(b_closed[case])
         assert out[case]["a"]["bare_steps_per_s"] == 2 * statistics.median(a_closed[case])
         assert out[case]["a"]["ratio"] == pytest.approx(0.5)
+        assert out[case]["b"]["ratio_cpu"] == pytest.approx(0.75)
+        assert out[case]["b_over_a_cpu"] == pytest.approx(out[case]["b_over_a"])
+        assert out[case]["a"]["closed_loop_steps_per_cpu_s"] == 3 * statistics.median(a_closed[case])
         assert out[case]["b"]["loop"] == "b"
     assert out["x"]["b_over_a"] == pytest.approx(0.9)  # the preempted round does not move the median
     assert out["y"]["b_over_a"] == pytest.approx(1.2)
@@ -91,6 +101,8 @@ def test_against_head_times_one_case_in_both_trees(tmp_path: Path):
     case = f["cases"]["npid_googol"]
     # one pair: the ratio is B's timing over A's
     assert case["b_over_a"] == case["b"]["closed_loop_steps_per_s"] / case["a"]["closed_loop_steps_per_s"]
+    cpu = case["b"]["closed_loop_steps_per_cpu_s"] / case["a"]["closed_loop_steps_per_cpu_s"]
+    assert case["b_over_a_cpu"] == cpu
     assert case["a"]["loop"] == case["b"]["loop"]
     assert _worktrees() == before
     r = twin("bench", "--against", "HEAD", "--case", "no_such_case", "--repeats", "1")

@@ -8,7 +8,9 @@ bench cases and warms them up; then, ``repeats`` times, every case is timed in A
 B (A, B, A, B, ...): bare ``mj_step`` and the closed loop back to back in each.  Reported per
 case: each tree's medians (closed-loop and bare steps/s, closed/bare) and ``b_over_a``, the
 median of the per-pair ratios of closed-loop steps/s B/A, each from two timings taken one after
-the other, so a busy machine slows both and the ratio less.
+the other, so a busy machine slows both and the ratio less; ``b_over_a_cpu`` the same per second
+of the worker thread's CPU time (``time.thread_time``), which leaves out the waits for a core
+that a machine shared with other work adds to wall time.
 """
 
 from __future__ import annotations
@@ -129,8 +131,8 @@ class Worker:
         return json.loads(line)
 
     def time(self, case: str, seconds: float) -> dict:
-        """One timing of ``case`` (``seconds`` simulated): ``bare_steps_per_s``,
-        ``closed_loop_steps_per_s``, ``loop``."""
+        """One timing of ``case`` (``seconds`` simulated): steps per wall and per CPU second,
+        bare and closed-loop, and ``loop`` (:mod:`twin.bench_worker`)."""
         assert self._process.stdin is not None
         self._process.stdin.write(json.dumps({"case": case, "seconds": seconds}) + "\n")
         self._process.stdin.flush()
@@ -164,7 +166,8 @@ def alternate(
     ----------
     time_a, time_b
         One timing of a case by name in tree A, B: ``bare_steps_per_s``,
-        ``closed_loop_steps_per_s`` (steps per wall second) and ``loop``.
+        ``closed_loop_steps_per_s`` (steps per wall second), ``bare_steps_per_cpu_s``,
+        ``closed_loop_steps_per_cpu_s`` (per second of the worker thread's CPU time) and ``loop``.
     cases
         Case names, in the order timed within a round.
     repeats
@@ -173,9 +176,10 @@ def alternate(
     Returns
     -------
     dict
-        ``<case>.{a, b}.{closed_loop_steps_per_s, bare_steps_per_s, ratio, loop}`` (medians;
-        ``ratio``: the median of closed/bare of each timing) and ``<case>.b_over_a``, the median
-        of the per-round ratios of closed-loop steps/s B over A.
+        ``<case>.{a, b}.{closed_loop_steps_per_s, bare_steps_per_s, ratio,
+        closed_loop_steps_per_cpu_s, ratio_cpu, loop}`` (medians; ``ratio``: the median of
+        closed/bare of each timing) and ``<case>.b_over_a``, the median of the per-round ratios
+        of closed-loop steps/s B over A (``b_over_a_cpu``: per CPU second).
     """
     timings: dict[str, list[tuple[dict, dict]]] = {case: [] for case in cases}
     for _ in range(repeats):
@@ -190,6 +194,9 @@ def alternate(
             "b_over_a": statistics.median(
                 b["closed_loop_steps_per_s"] / a["closed_loop_steps_per_s"] for a, b in pairs
             ),
+            "b_over_a_cpu": statistics.median(
+                b["closed_loop_steps_per_cpu_s"] / a["closed_loop_steps_per_cpu_s"] for a, b in pairs
+            ),
         }
     return out
 
@@ -199,6 +206,8 @@ def _medians(timings: list[dict]) -> dict:
         "closed_loop_steps_per_s": statistics.median(t["closed_loop_steps_per_s"] for t in timings),
         "bare_steps_per_s": statistics.median(t["bare_steps_per_s"] for t in timings),
         "ratio": statistics.median(t["closed_loop_steps_per_s"] / t["bare_steps_per_s"] for t in timings),
+        "closed_loop_steps_per_cpu_s": statistics.median(t["closed_loop_steps_per_cpu_s"] for t in timings),
+        "ratio_cpu": statistics.median(t["closed_loop_steps_per_cpu_s"] / t["bare_steps_per_cpu_s"] for t in timings),
         "loop": timings[-1]["loop"],
     }
 

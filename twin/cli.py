@@ -1139,12 +1139,13 @@ def _bench_against(as_json: bool, rev: str, cases: list[str], seconds: float, re
         f"medians of {repeats} alternating pairs, {seconds:g} s simulated each"
     )
     typer.echo(
-        f"{'case':<30} {'A steps/s':>11} {'B steps/s':>11} {'B/A':>6} {'A closed/bare':>14} {'B closed/bare':>14}"
+        f"{'case':<30} {'A steps/s':>11} {'B steps/s':>11} {'B/A':>6} {'B/A CPU':>8} "
+        f"{'A closed/bare':>14} {'B closed/bare':>14}"
     )
     for name, c in f["cases"].items():
         typer.echo(
             f"{name:<30} {c['a']['closed_loop_steps_per_s']:>11,.0f} {c['b']['closed_loop_steps_per_s']:>11,.0f} "
-            f"{c['b_over_a']:>6.3f} {c['a']['ratio']:>14.3f} {c['b']['ratio']:>14.3f}"
+            f"{c['b_over_a']:>6.3f} {c['b_over_a_cpu']:>8.3f} {c['a']['ratio']:>14.3f} {c['b']['ratio']:>14.3f}"
         )
     for tree in ("a", "b"):
         if f[f"only_in_{tree}"]:
