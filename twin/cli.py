@@ -1013,15 +1013,21 @@ def bench(
         1.0, "--planning-scale", help="Factor on the planning programs' lengths (lines, turns; 0: leave them out)"
     ),
     planning_file: Path = typer.Option(None, "--planning-file", help="A part program to plan too"),
+    against: str = typer.Option(
+        None, "--against", help="Time the closed-loop cases of commit REV (A) and this checkout (B) alternately"
+    ),
+    case: list[str] = typer.Option(None, "--case", help="--against: a case to time (repeat it; default all)"),
 ):
     """Steps per second, bare mj_step vs the closed loop, for four controller kinds and a part
     program, start-up time, the G-code reader's lines/s and the planner's time (twin/bench.py);
-    with --sweep, twin sweep's wall time, samples/s, parallel efficiency and memory."""
+    with --sweep, twin sweep's wall time, samples/s, parallel efficiency and memory; with
+    --against REV, the closed-loop cases of REV's tree and this checkout's, alternately, and
+    their ratio (twin/bench_against.py)."""
     from twin.bench import run_bench
 
     if not (seconds > 0 and seconds <= 600):
         raise TwinInputError("--seconds", seconds, "must be in (0, 600]")
-    repeats = repeats if repeats is not None else 1 if sweep else 5
+    repeats = repeats if repeats is not None else 1 if sweep else 15 if against is not None else 5
     if not 1 <= repeats <= 100:
         raise TwinInputError("--repeats", repeats, "must be in 1..100")
     if not 2 <= gcode_lines <= 10_000_000:
@@ -1036,6 +1042,11 @@ def bench(
         raise TwinInputError("--planning-scale", planning_scale, "must be 0 (leave planning out) or in [0.001, 10]")
     if planning_file is not None and not planning_file.is_file():
         raise TwinInputError("--planning-file", str(planning_file), "is not a file")
+    if case and against is None:
+        raise TwinInputError("--case", case[0], "is for --against only")
+    if against is not None:
+        _bench_against(as_json, against, case or [], seconds, repeats)
+        return
     if sweep:
         _bench_sweep(as_json, samples, memory_samples, repeats)
         return
@@ -1111,6 +1122,34 @@ def _print_part_bench(part: dict) -> None:
         f"at {f['resolution_mm']:g} mm cells: planned in {f['plan_s']:.1f} s, engagement {f['engagement_s']:.1f} s "
         f"(peak {f['plan_and_engagement_peak_mb']:.0f} MB), part {f['part_s']:.1f} s (peak {f['part_peak_mb']:.0f} MB)"
     )
+
+
+def _bench_against(as_json: bool, rev: str, cases: list[str], seconds: float, repeats: int) -> None:
+    """``twin bench --against REV``: each case's closed-loop steps/s in REV's tree (A) and this
+    checkout (B), timed alternately, and the median ratio B/A."""
+    from twin.bench_against import compare
+
+    f = compare(rev, cases, seconds, repeats)
+    if as_json:
+        _echo_json(f, 2)
+        return
+    edited = " with uncommitted edits" if f["b_modified"] else ""
+    typer.echo(
+        f"A = {rev} ({f['a_commit'][:10]}), B = this checkout ({f['b_commit'][:10]}{edited}); "
+        f"medians of {repeats} alternating pairs, {seconds:g} s simulated each"
+    )
+    typer.echo(
+        f"{'case':<30} {'A steps/s':>11} {'B steps/s':>11} {'B/A':>6} {'B/A CPU':>8} "
+        f"{'A closed/bare':>14} {'B closed/bare':>14}"
+    )
+    for name, c in f["cases"].items():
+        typer.echo(
+            f"{name:<30} {c['a']['closed_loop_steps_per_s']:>11,.0f} {c['b']['closed_loop_steps_per_s']:>11,.0f} "
+            f"{c['b_over_a']:>6.3f} {c['b_over_a_cpu']:>8.3f} {c['a']['ratio']:>14.3f} {c['b']['ratio']:>14.3f}"
+        )
+    for tree in ("a", "b"):
+        if f[f"only_in_{tree}"]:
+            typer.echo(f"only in {tree.upper()} (not timed): {', '.join(f[f'only_in_{tree}'])}")
 
 
 def _bench_sweep(as_json: bool, samples: int, memory_samples: int, repeats: int) -> None:
