@@ -869,6 +869,12 @@ def tune(
     as_json: bool = typer.Option(False, "--json", help="Print the design as JSON"),
     out: Path = typer.Option(None, "--out", help="Write the tuned cascade as a scenario (.toml, a 10 mm circle)"),
     check: bool = typer.Option(True, "--verify/--no-verify", help="Run a step and a circle on the twin"),
+    check_margins: bool = typer.Option(
+        False,
+        "--verify-margins",
+        help="Bisect each gain's stability boundary on the twin (as run, without Coulomb friction, and like for "
+        "like: the linear model's assumptions) and print it beside the cascade margin",
+    ),
 ):
     """Design each axis's position P / velocity PI cascade with feedforward and a notch or
     low-pass where a resonance needs it (phase margin >= 45 deg, gain margin >= 6 dB on the
@@ -881,6 +887,8 @@ def tune(
     tuned = api.tune(machine, _parse_sets(sets or []), control_period, feedback)
     if check:
         tuned.verify()
+    if check_margins:
+        tuned.verify_margins()
     result = tuned.summary
     if as_json:
         _echo_json(result, 2)
@@ -908,6 +916,20 @@ def tune(
             )
         for a, v in result.get("verification", {}).items():
             typer.echo(f"  verified on the twin, {a}: " + ", ".join(f"{k} {x:.4g}" for k, x in v.items()))
+        if check_margins:
+            from twin.commissioning.boundary import CONDITIONS
+
+            typer.echo(
+                "  the twin's bisected boundary (dB; less the cascade margin): as run, without Coulomb, like for like"
+            )
+            for row in result["margin_check"]:
+                typer.echo(
+                    f"  {row['axis']} {row['gain']:<7} margin {row['margin_db']:6.2f} dB: "
+                    + ", ".join(
+                        f"{row[name]['boundary_db']:6.2f} ({row[name + '_minus_margin_db']:+.2f})"
+                        for name in CONDITIONS
+                    )
+                )
     if out is not None:
         out.write_text(tuned.scenario_text(), encoding="utf-8")
         typer.echo(f"scenario written to {out} (run it: twin run {out})", err=as_json)

@@ -386,6 +386,22 @@ class Tuning:
             self.summary["verification"] = verify(self.summary, self.machine, Path(folder))
         return self.summary["verification"]
 
+    def verify_margins(
+        self,
+        gains: tuple[str, ...] = ("kp_pos", "kp_vel", "ki_vel"),
+        conditions: tuple[str, ...] | None = None,
+    ) -> list[dict]:
+        """Each axis's cascade margins beside the twin's own stability boundaries, bisected for
+        each of ``gains`` (:func:`twin.commissioning.boundary.verify_margins`) under the named
+        conditions (default all of :data:`twin.commissioning.boundary.CONDITIONS`: ``twin`` as
+        run, ``without_coulomb``, ``like_for_like``, the linear model's assumptions); adds them
+        to :attr:`summary` as ``margin_check`` and returns them."""
+        from twin.commissioning.boundary import CONDITIONS, verify_margins
+
+        chosen = {name: CONDITIONS[name] for name in (conditions or CONDITIONS)}
+        self.summary["margin_check"] = verify_margins(self.summary, self.machine, gains, chosen)
+        return self.summary["margin_check"]
+
     def scenario_text(self, reference: str = "circle") -> str:
         """The tuned cascade as a scenario (TOML) on a 10 mm circle (or a 1 mm ``step``)."""
         from twin.commissioning.tuning import scenario_text
