@@ -661,9 +661,17 @@ def frf(
                 f"  nut at {position:g} m: axial stiffness {nut['axial_N_per_m'] / 1e6:.4g} N/um, "
                 f"torsion {nut['torsion_N_m_per_rad']:.4g} N m/rad"
             )
-        for label, key in (("resonances", "resonances_hz"), ("anti-resonances", "antiresonances_hz")):
-            found, model = (", ".join(f"{f:.1f}" for f in result[k]) or "none" for k in (key, f"model_{key}"))
-            typer.echo(f"  {label} (Hz): {found}   model: {model}")
+        doubtful = {(q["kind"], q["frequency_hz"]) for q in result["modes"] if q["unreliable"] is not None}
+        for label, key, kind in (
+            ("resonances", "resonances_hz", "resonance"),
+            ("anti-resonances", "antiresonances_hz", "antiresonance"),
+        ):
+            found = ", ".join(f"{f:.1f}" + (" (unreliable)" if (kind, f) in doubtful else "") for f in result[key])
+            model = ", ".join(f"{f:.1f}" for f in result[f"model_{key}"])
+            typer.echo(f"  {label} (Hz): {found or 'none'}   model: {model or 'none'}")
+        for q in result["modes"]:
+            if q["unreliable"] is not None:
+                typer.echo(f"  unreliable {q['kind']} {q['frequency_hz']:.1f} Hz: {q['unreliable']}")
         error = result["max_model_error_db"]
         typer.echo(
             f"  coherence >= 0.9 on {100 * result['coherent_share']:.0f} % of the lines; "
