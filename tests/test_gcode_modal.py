@@ -5,7 +5,7 @@ handler table against the keywords the reader knows."""
 import pytest
 
 from twin.gcode.flow import Flow, ProgramText
-from twin.gcode.modal import COORD_SYSTEM_CODES, GCode, Param, coord_system_offset
+from twin.gcode.modal import COORD_SYSTEM_CODES, Param, coord_system_offset
 from twin.gcode.parameters import Parameters
 from twin.gcode.reader import Reader
 from twin.gcode.words import O_KEYWORDS
@@ -34,7 +34,7 @@ def test_coord_system_parameter_reads_as_linuxcnc_documents(code, documented):
     """``#<_coord_system>``: 550 in G55, 591 in G59.1; ``#5220`` the system's number 1-9."""
     (move,) = _moves(f"{code}\nG0 X[#<_coord_system> / 100] Y#{Param.COORD_SYSTEM}")
     assert move.end_mm[0] == pytest.approx(documented / 100)
-    assert move.end_mm[1] == COORD_SYSTEM_CODES.index(GCode(documented)) + 1
+    assert move.end_mm[1] == COORD_SYSTEM_CODES.index(documented) + 1
 
 
 def test_g28_home_and_g92_offset_parameters():

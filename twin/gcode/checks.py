@@ -24,8 +24,8 @@ from typing import Protocol
 
 import numpy as np
 
-from twin.gcode.moves import Move
-from twin.gcode.path import Segment, move_segment
+from twin.gcode.moves import Move, MoveKind
+from twin.gcode.path import Segment, SegmentKind, move_segment
 from twin.gcode.planner import PlanningError
 
 #: Warnings listed at most (each check); more are counted.
@@ -45,7 +45,7 @@ def segment_extent(seg: Segment) -> tuple[np.ndarray, np.ndarray]:
     line's and a dwell's at their ends; an arc's in-plane axes also where it passes their
     extremes, a helix's normal axis at its ends (it moves linearly with the angle)."""
     low, high = np.minimum(seg.start, seg.end), np.maximum(seg.start, seg.end)
-    if seg.kind != "arc":
+    if seg.kind != SegmentKind.ARC:
         return low, high
     assert seg.center is not None and seg.u is not None and seg.v is not None
     for axis in range(3):
@@ -155,11 +155,11 @@ class TravelCheck:
             if position is None:
                 position = (np.asarray(move.start_mm) + np.asarray(move.offset_mm)) * 1e-3
                 self._check(move, position, position)
-            if move.kind in ("rapid", "feed"):  # a line: its ends (what move_segment makes of it)
+            if move.kind in (MoveKind.RAPID, MoveKind.FEED):  # a line: its ends (what move_segment makes of it)
                 end = (np.asarray(move.end_mm) + np.asarray(move.offset_mm)) * 1e-3
                 self._check(move, np.minimum(position, end), np.maximum(position, end))
                 position = end
-            elif move.kind == "arc":
+            elif move.kind == MoveKind.ARC:
                 seg = move_segment(move, position, 0.0)
                 if seg is not None:
                     self._check(move, *segment_extent(seg))

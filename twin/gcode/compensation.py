@@ -22,6 +22,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from twin.gcode.modal import GCode
+from twin.gcode.moves import MoveKind
 from twin.gcode.words import BlockError
 
 #: The plane's coordinates (a, b, c) as indices of x, y, z: the two planes compensation works in.
@@ -40,7 +42,7 @@ ARC_END_RADIUS_SLACK = 0.01
 MAX_HELD = 10_000
 
 #: A move the reader makes from its modal state: (kind, end [x, y, z], centre, turns) to a Move.
-MoveMaker = Callable[[str, list[float], tuple[float, float], int], Any]
+MoveMaker = Callable[[MoveKind, list[float], tuple[float, float], int], Any]
 
 
 @dataclass
@@ -117,7 +119,7 @@ class CutterCompensation:
     # --- G40 / G41 / G42 -------------------------------------------------------------------
 
     def turn_on(self, code: int, words: dict[str, float], plane: str, diameter_of: Callable[[int | None], float]):
-        """LinuxCNC's ``convert_cutter_compensation_on``: G41 / G42 (``code`` 410 / 420) with
+        """LinuxCNC's ``convert_cutter_compensation_on``: G41 / G42 (``code`` G_41 / G_42) with
         the D word's tool (the tool in the spindle without D; ``diameter_of`` gives a tool's
         diameter, program units), G41.1 / G42.1 with the diameter as D and L the orientation
         (G18 only). A negative diameter switches the side."""
@@ -125,8 +127,8 @@ class CutterCompensation:
             raise BlockError("Cutter radius compensation allowed only in XY, XZ planes")
         if self.side is not None:
             raise BlockError("Cannot turn cutter radius comp on when on")
-        side = "left" if code in (410, 411) else "right"
-        if code in (411, 421):
+        side = "left" if code in (GCode.G_41, GCode.G_41_1) else "right"
+        if code in (GCode.G_41_1, GCode.G_42_1):
             if "d" not in words:
                 raise BlockError(f"G{code // 10}.1 with no D word (the tool's diameter)")
             radius = words["d"] / 2
@@ -204,8 +206,10 @@ class CutterCompensation:
 
     # --- straight moves ---------------------------------------------------------------------
 
-    def straight(self, kind: str, end: list[float], position: list[float], plane: str, make: MoveMaker) -> list[float]:
-        """G0 / G1 (``kind`` "rapid" / "feed") to the programmed ``end`` [x, y, z] from the
+    def straight(
+        self, kind: MoveKind, end: list[float], position: list[float], plane: str, make: MoveMaker
+    ) -> list[float]:
+        """G0 / G1 (``kind`` RAPID / FEED) to the programmed ``end`` [x, y, z] from the
         current point ``position``; the new current point (the compensated end)."""
         p = _in_plane(end, plane)
         c = _in_plane(position, plane)
@@ -257,22 +261,22 @@ class CutterCompensation:
         ea, eb = pa + radius * math.cos(alpha + gamma), pb + radius * math.sin(alpha + gamma)
         mid_a, mid_b = opa + radius * math.cos(alpha + gamma), opb + radius * math.sin(alpha + gamma)
         concave = beta < -small or beta > math.pi + small
-        if not concave and beta > math.pi - small and self.queue and self.queue[0].move.kind == "arc":
+        if not concave and beta > math.pi - small and self.queue and self.queue[0].move.kind == MoveKind.ARC:
             # "h" shape: over a tangent arc onto the line, stay on the arc's outer side
             turn = self.queue[0].turn
             concave = (self.side == "right" and turn > 0) or (self.side == "left" and turn < 0)
         if not concave and beta > small:  # outside corner: an arc about it (a G0 goes straight)
             self._move_endpoint_and_flush(ca, cb, plane)
-            if kind == "feed":
+            if kind == MoveKind.FEED:
                 turn = -1 if self.side == "left" else 1
-                self._enqueue("arc", [mid_a, mid_b, cc], make, plane, center=(opa, opb), turn=turn)
+                self._enqueue(MoveKind.ARC, [mid_a, mid_b, cc], make, plane, center=(opa, opb), turn=turn)
             else:
-                self._enqueue("rapid", [mid_a, mid_b, cc], make, plane)
+                self._enqueue(MoveKind.RAPID, [mid_a, mid_b, cc], make, plane)
             self._dequeue(plane)
             self._set_endpoint(mid_a, mid_b)
         elif concave:
             front = self._front()
-            if front is None or front.move.kind != "arc":  # line to line: pull back along the last
+            if front is None or front.move.kind != MoveKind.ARC:  # line to line: pull back along the last
                 halfcorner = (beta + math.pi) / 2
                 if halfcorner == 0.0:
                     raise BlockError("Zero degree inside corner is invalid for cutter compensation")
@@ -372,10 +376,10 @@ class CutterCompensation:
             raise BlockError("Bug in tool radius comp")
         self._begin(position)
         if self.orientation not in (0, 9):  # a lathe tool: its origin moved first
-            self._enqueue("feed", [ca, cb, cc], make, plane)
+            self._enqueue(MoveKind.FEED, [ca, cb, cc], make, plane)
             self._set_endpoint(ca, cb)
         sweep = find_turn(ca, cb, center_a, center_b, turn, ea, eb)
-        self._enqueue("arc", [ea, eb, pc], make, plane, center=(center_a, center_b), turn=turn, sweep=sweep)
+        self._enqueue(MoveKind.ARC, [ea, eb, pc], make, plane, center=(center_a, center_b), turn=turn, sweep=sweep)
         return [ea, eb, pc]
 
     def _arc_next(self, motion, p, c, plane, turns, center_of, make):
@@ -410,7 +414,7 @@ class CutterCompensation:
         sweep = find_turn(opa, opb, center_a, center_b, turn, pa, pb)
         if beta < -small or beta > math.pi + small or (abs(beta - math.pi) < small and not inside):
             front = self._front()
-            if front is None or front.move.kind != "arc":  # line to arc
+            if front is None or front.move.kind != MoveKind.ARC:  # line to arc
                 self._move_endpoint_and_flush(
                     *self._line_to_arc(beta, theta, arc_radius, inside, turn, center_a, center_b), plane
                 )
@@ -420,13 +424,15 @@ class CutterCompensation:
             mid_a, mid_b = opa + radius * math.cos(delta), opb + radius * math.sin(delta)
             self._dequeue(plane)
             corner_turn = -1 if side == "left" else 1
-            self._enqueue("arc", [mid_a, mid_b, cc], make, plane, center=(opa, opb), turn=corner_turn)
+            self._enqueue(MoveKind.ARC, [mid_a, mid_b, cc], make, plane, center=(opa, opb), turn=corner_turn)
             self._dequeue(plane)
             self._set_endpoint(mid_a, mid_b)
         else:  # straight on
             self._dequeue(plane)
             self._set_endpoint(ca, cb)
-        self._enqueue("arc", [new_a, new_b, pc], make, plane, center=(center_a, center_b), turn=turn, sweep=sweep)
+        self._enqueue(
+            MoveKind.ARC, [new_a, new_b, pc], make, plane, center=(center_a, center_b), turn=turn, sweep=sweep
+        )
         return [new_a, new_b, pc]
 
     def _line_to_arc(self, beta, theta, arc_radius, inside, turn, center_a, center_b) -> tuple[float, float]:
@@ -499,7 +505,7 @@ class CutterCompensation:
         ea, eb = self.endpoint
         for q in self.queue:
             kind = q.move.kind
-            if kind == "arc":
+            if kind == MoveKind.ARC:
                 ca, cb = q.center
                 r1 = math.hypot(q.end[0] - ca, q.end[1] - cb)
                 r2 = math.hypot(a - ca, b - cb)
@@ -512,10 +518,10 @@ class CutterCompensation:
                 slack = ARC_SWEEP_SLACK[self.inch]
                 if q.original_turns != 0.0 and self.endpoint_valid and abs(sweep) > abs(q.original_turns) + slack:
                     raise BlockError("Arc move in concave corner cannot be reached by the tool without gouging")
-            elif kind in ("feed", "rapid"):
+            elif kind in (MoveKind.FEED, MoveKind.RAPID):
                 da, db = q.direction
                 if self.endpoint_valid and da * (a - ea) + db * (b - eb) < 0:
-                    what = "Straight feed" if kind == "feed" else "Straight traverse"
+                    what = "Straight feed" if kind == MoveKind.FEED else "Straight traverse"
                     raise BlockError(f"{what} in concave corner cannot be reached by the tool without gouging")
             else:
                 continue
@@ -538,7 +544,7 @@ class CutterCompensation:
                 continue
             x, y, z = _from_plane(q.end, plane)
             end_mm = ((x + shift[0]) * s, y * s, (z + shift[2]) * s)
-            if q.move.kind == "arc":
+            if q.move.kind == MoveKind.ARC:
                 center = _from_plane([q.center[0], q.center[1], 0.0], plane)
                 ia, ib = (0, 1) if plane == "xy" else (2, 0)
                 center_mm = ((center[ia] + shift[ia]) * s, (center[ib] + shift[ib]) * s)

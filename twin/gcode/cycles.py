@@ -76,6 +76,7 @@ class CycleMemory:
 def cycle_calls(
     motion: int,
     words: dict[str, float],
+    *,
     previous_motion: int | None,
     plane: int,
     position: list[float],
@@ -87,10 +88,11 @@ def cycle_calls(
 ) -> Iterator[tuple[CycleStep, tuple[float, float, float] | float | str]]:
     """The canonical calls of one cycle block, each a :class:`CycleStep` and its value:
     ``(RAPID, xyz)``, ``(FEED, xyz)``, ``(DWELL, seconds)``, ``(SPINDLE, "off" | "cw" | "ccw")``
-    and ``(EXACT_PATH, "G61")``
-    where the cycle's own moves begin (as LinuxCNC, after the rapid up to the R plane from
-    below it, which runs in the path mode in force); ``position`` (work coordinates, program
-    units) is updated as the block ends.
+    and ``(EXACT_PATH, "G61")`` where the cycle's own moves begin (as LinuxCNC, after the rapid
+    up to the R plane from below it, which runs in the path mode in force); ``position`` (work
+    coordinates, program units) is updated as the block ends. The modal state comes by
+    keyword: the motion of the block before, the plane (G17, G18, G19), G91, G99, G20, the
+    spindle and the cycle's memory.
 
     Raises
     ------

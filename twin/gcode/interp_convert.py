@@ -242,14 +242,14 @@ class BlockConverter(Offsets, Arcs):
         calls = cycle_calls(
             motion,
             words,
-            s.motion,
-            s.plane,
-            s.position,
-            s.incremental,
-            s.retract_to_r,
-            s.inch,
-            s.spindle,
-            self.cycle,
+            previous_motion=s.motion,
+            plane=s.plane,
+            position=s.position,
+            incremental=s.incremental,
+            retract_to_r=s.retract_to_r,
+            inch=s.inch,
+            spindle=s.spindle,
+            memory=self.cycle,
         )
         mode, tolerance = s.path_mode, s.tolerance
         position = list(s.position)  # cycle_calls moves s.position to where the block ends

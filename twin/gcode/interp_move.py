@@ -99,7 +99,7 @@ class StraightMoves(InterpreterSetup):
         """G0 (``MoveKind.RAPID``) or G1 (``MoveKind.FEED``) to ``end``, into :attr:`out`."""
         self.out.append(self._linear_move(kind == MoveKind.FEED, end))
 
-    def _compensated_move(self, kind: str, end: list[float], center: tuple[float, float], turns: int) -> Move:
+    def _compensated_move(self, kind: MoveKind, end: list[float], center: tuple[float, float], turns: int) -> Move:
         """A move compensation holds (its start and end are set when it is released)."""
         s = self.state
         if kind == MoveKind.RAPID:

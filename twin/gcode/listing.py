@@ -14,7 +14,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from twin.errors import input_file
-from twin.gcode.moves import Move
+from twin.gcode.moves import Move, MoveKind
 from twin.gcode.reader import Settings, read_program
 
 #: Bytes of the listing held in memory before it goes to a temporary file (64 MiB).
@@ -47,10 +47,10 @@ class MoveJson:
             )
         x, y, z = move.end_mm
         text = f'{{"line": {move.line}, "kind": "{kind}", "end_mm": [{x:.6f}, {y:.6f}, {z:.6f}{self.tail}'
-        if kind == "arc":
+        if kind == MoveKind.ARC:
             a, b = move.center_mm
             return f'{text}, "plane": "{move.plane}", "center_mm": [{a:.6f}, {b:.6f}], "turns": {move.turns}}}'
-        if kind == "dwell":
+        if kind == MoveKind.DWELL:
             return text + f', "dwell_s": {move.dwell_s!r}}}'
         return text + "}"
 
@@ -58,7 +58,7 @@ class MoveJson:
 def move_row(move: Move) -> str:
     """The move as one row of the table under :data:`HEADER`."""
     end = ", ".join(f"{v:.4f}" for v in move.end_mm)
-    extra = f"  arc {move.plane} turns {move.turns}" if move.kind == "arc" else ""
+    extra = f"  arc {move.plane} turns {move.turns}" if move.kind == MoveKind.ARC else ""
     spindle = f"{move.spindle} {move.spindle_rpm:g}" if move.spindle != "off" else "off"
     return f"{move.line:>6}  {move.kind:<6} {end:<34} {move.feed_mm_per_min:>11.1f}  {spindle}{extra}"
 

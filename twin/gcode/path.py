@@ -12,11 +12,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from enum import StrEnum
 from typing import NamedTuple
 
 import numpy as np
 
-from twin.gcode.moves import PLANES, Move
+from twin.gcode.moves import PLANES, Move, MoveKind
 
 #: Moves shorter than this (m) are dropped: rs274 emits null moves (a bare G0, G28 where the tool is).
 MIN_LENGTH_M = 1e-9
@@ -24,6 +25,17 @@ MIN_LENGTH_M = 1e-9
 TANGENT_TOLERANCE_RAD = 1e-6
 #: Newton steps that put a spiral's angle at an arc length (each squares the error).
 SPIRAL_NEWTON_STEPS = 4
+
+
+class SegmentKind(StrEnum):
+    """The geometry of a :class:`Segment`."""
+
+    #: A straight line (a G0 or G1 move).
+    LINE = "line"
+    #: An arc, helix or spiral (a G2 / G3 move, or a blend the planner put in a corner).
+    ARC = "arc"
+    #: A dwell: no motion.
+    DWELL = "dwell"
 
 
 class Outward(NamedTuple):
@@ -52,7 +64,7 @@ class Segment:
     ----------
     line : int
         The program line it comes from (a blend: the line of the move it leads into).
-    kind : {"line", "arc", "dwell"}
+    kind : SegmentKind
         Geometry.
     rapid : bool
         A G0 move (runs at the axis limits, not at a feed).
@@ -84,7 +96,7 @@ class Segment:
     """
 
     line: int
-    kind: str
+    kind: SegmentKind
     rapid: bool
     feed_m_per_s: float
     start: np.ndarray
@@ -118,7 +130,7 @@ class Segment:
     @property
     def curvature(self) -> float:
         """The largest curvature (1/m) of the path along the segment: 0 on lines."""
-        if self.kind != "arc":
+        if self.kind != SegmentKind.ARC:
             return 0.0
         r = min(self.radius, self.radius_end)
         return r / (r * r + (self.rise / self.sweep) ** 2)
@@ -141,10 +153,10 @@ class Segment:
     def points(self, s: np.ndarray) -> np.ndarray:
         """Points (m) at arc lengths ``s`` (m), shape (len(s), 3)."""
         s = np.asarray(s, float)
-        if self.kind == "line":
+        if self.kind == SegmentKind.LINE:
             frac = s / self.length if self.length > 0 else np.zeros_like(s)
             return self.start + frac[:, None] * (self.end - self.start)
-        if self.kind == "dwell":
+        if self.kind == SegmentKind.DWELL:
             return np.broadcast_to(self.start, (s.size, 3)).copy()
         assert self.center is not None and self.u is not None and self.v is not None and self.normal is not None
         angle = self._angle_of(s)
@@ -178,7 +190,7 @@ class Segment:
         return self.planned[key]
 
     def _tangent(self, at_end: bool) -> np.ndarray:
-        if self.kind == "line":
+        if self.kind == SegmentKind.LINE:
             d = self.end - self.start
             return d / math.sqrt(float(d @ d))
         assert self.u is not None and self.v is not None and self.normal is not None
@@ -191,7 +203,7 @@ class Segment:
 
     def acceleration_direction(self, at_end: bool) -> np.ndarray:
         """The curvature vector (1/m) at the start or the end: towards the centre, 0 on lines."""
-        if self.kind != "arc":
+        if self.kind != SegmentKind.ARC:
             return np.zeros(3)
         assert self.u is not None and self.v is not None
         angle = self.sweep if at_end else 0.0
@@ -207,7 +219,7 @@ class Segment:
         return self.planned["axis_share"]
 
     def _axis_share(self) -> np.ndarray:
-        if self.kind == "line":
+        if self.kind == SegmentKind.LINE:
             return np.abs(self.tangent(False))
         assert self.u is not None and self.v is not None and self.normal is not None
         in_plane = max(self.radius, self.radius_end) * self.sweep / self.length
@@ -216,7 +228,7 @@ class Segment:
     def split(self, s: float) -> tuple[Segment, Segment]:
         """The segment cut at arc length ``s`` (0 < s < length) into two that make it up."""
         point = self.points(np.array([s]))[0]
-        if self.kind == "line":
+        if self.kind == SegmentKind.LINE:
             return self.copy_with(end=point, length=s, mode="G64"), self.copy_with(start=point, length=self.length - s)
         assert self.u is not None and self.v is not None and self.normal is not None
         angle = float(self._angle_of(np.array([s]))[0])
@@ -239,9 +251,9 @@ class Segment:
 
     def distance(self, p: np.ndarray) -> np.ndarray:
         """The exact distance (m) of each point of ``p`` (n, 3) to the segment."""
-        if self.kind == "dwell":
+        if self.kind == SegmentKind.DWELL:
             return np.linalg.norm(p - self.start, axis=1)
-        if self.kind == "line":
+        if self.kind == SegmentKind.LINE:
             d = self.end - self.start
             f = np.clip((p - self.start) @ d / max(float(d @ d), 1e-300), 0.0, 1.0)
             return np.linalg.norm(p - (self.start + f[:, None] * d), axis=1)
@@ -354,16 +366,26 @@ def move_segment(move: Move, start_m: np.ndarray, tolerance_m: float) -> Segment
     feed = move.feed_mm_per_min * 1e-3 / 60.0
     mode = move.path_mode
     tol = tolerance_m
-    if move.kind == "dwell":
+    if move.kind == MoveKind.DWELL:
         return Segment(
-            move.line, "dwell", False, 0.0, start_m, start_m, dwell_s=move.dwell_s, mode=mode, tolerance_m=tol
+            move.line, SegmentKind.DWELL, False, 0.0, start_m, start_m, dwell_s=move.dwell_s, mode=mode, tolerance_m=tol
         )
-    if move.kind in ("rapid", "feed"):
+    if move.kind in (MoveKind.RAPID, MoveKind.FEED):
         step = end - start_m
         length = math.sqrt(float(step @ step))
         if length < MIN_LENGTH_M:
             return None
-        return Segment(move.line, "line", move.kind == "rapid", feed, start_m, end, length, mode=mode, tolerance_m=tol)
+        return Segment(
+            move.line,
+            SegmentKind.LINE,
+            move.kind == MoveKind.RAPID,
+            feed,
+            start_m,
+            end,
+            length,
+            mode=mode,
+            tolerance_m=tol,
+        )
     first, second, normal_axis = PLANES[move.plane]
     e1, e2, n = _unit(first), _unit(second), _unit(normal_axis)
     center = start_m.copy()
@@ -394,7 +416,7 @@ def move_segment(move: Move, start_m: np.ndarray, tolerance_m: float) -> Segment
         length = float(_spiral_length(radius, k, abs(rise) / sweep, sweep))
     return Segment(
         move.line,
-        "arc",
+        SegmentKind.ARC,
         False,
         feed,
         start_m,
@@ -447,7 +469,7 @@ def blend(a: Segment, b: Segment, tolerance_m: float) -> tuple[Segment, Segment,
     u = (p0 - center) / radius
     v = ta
     normal = _cross(u, v)
-    arc = Segment(b.line, "arc", a.rapid, min(a.feed_m_per_s, b.feed_m_per_s), p0, p1, radius * turn)
+    arc = Segment(b.line, SegmentKind.ARC, a.rapid, min(a.feed_m_per_s, b.feed_m_per_s), p0, p1, radius * turn)
     arc.center, arc.u, arc.v, arc.normal, arc.radius, arc.sweep = center, u, v, normal, radius, turn
     arc.radius_end, arc.blend, arc.mode, arc.tolerance_m = radius, True, "G64", a.tolerance_m
     short_a = a.copy_with(end=p0, length=a.length - reach, mode="G64")

@@ -51,7 +51,7 @@ import numpy as np
 from pydantic import Field, field_validator
 
 from twin.gcode.moves import Move
-from twin.gcode.path import TANGENT_TOLERANCE_RAD, Segment, blend, move_segment, turn_angle
+from twin.gcode.path import TANGENT_TOLERANCE_RAD, Segment, SegmentKind, blend, move_segment, turn_angle
 from twin.numba_cache import configure as configure_numba_cache
 from twin.spec import StrictSpec
 
@@ -348,7 +348,7 @@ class ProgramFacts:
 
 def _feed_only_time(seg: Segment, limits: Limits) -> float:
     """The time (s) of a segment at its programmed feed alone (rapids at the axis limits)."""
-    if seg.kind == "dwell":
+    if seg.kind == SegmentKind.DWELL:
         return seg.dwell_s
     if seg.rapid:
         share = seg.axis_share()
@@ -397,7 +397,12 @@ def _blended(programmed: Iterable[Segment]) -> Iterator[Segment]:
             previous = seg
             continue
         pieces = None
-        if previous.kind == "line" and seg.kind == "line" and previous.rapid == seg.rapid and previous.mode == "G64":
+        if (
+            previous.kind == SegmentKind.LINE
+            and seg.kind == SegmentKind.LINE
+            and previous.rapid == seg.rapid
+            and previous.mode == "G64"
+        ):
             pieces = blend(previous, seg, 0.5 * previous.tolerance_m)
         if pieces is not None:
             yield pieces[0]
@@ -423,7 +428,7 @@ def _least_time(path: Iterable[Segment], ctx: _Context, most_s: float, limit: st
     """
     total = 0.0
     for seg in path:
-        if seg.kind == "dwell":
+        if seg.kind == SegmentKind.DWELL:
             total += seg.dwell_s
         else:
             total += seg.length / _segment_speed_limit(seg, ctx.limits, ctx.override, ctx.filter_s)
@@ -452,7 +457,7 @@ def refuse_long(moves: Iterable[Move], limits: Limits, settings: PlannerSettings
 def _junction_speed(a: Segment, b: Segment, ctx: _Context) -> float:
     """The speed (m/s) the motion may keep through the junction of ``a`` and ``b``; 0: a stop.
     Into and out of a corner blend: the blend's speed (held on the lines around it)."""
-    if a.kind == "dwell" or b.kind == "dwell" or a.rapid != b.rapid or a.mode == "G61.1":
+    if a.kind == SegmentKind.DWELL or b.kind == SegmentKind.DWELL or a.rapid != b.rapid or a.mode == "G61.1":
         return 0.0
     limits, filter_s = ctx.limits, ctx.filter_s
     blended = [seg for seg in (a, b) if seg.blend]
@@ -506,7 +511,7 @@ def _speed_limit(seg: Segment, limits: Limits, override: float, filter_s: float)
         if share[axis] > 1e-12:
             v_axis = min(v_axis, limits.velocity_m_per_s[axis] / float(share[axis]))
     v = v_axis if seg.rapid else min(seg.feed_m_per_s * override, v_axis)
-    if seg.kind == "arc":
+    if seg.kind == SegmentKind.ARC:
         # the turning acceleration and its jerk lie in the arc's plane (a helix's rise is at
         # constant speed): the plane's axes bound them
         assert seg.u is not None and seg.v is not None
@@ -533,7 +538,7 @@ def _speed_limit(seg: Segment, limits: Limits, override: float, filter_s: float)
 def _compensated(seg: Segment, filter_s: float) -> bool:
     """Whether the filter's shrink of ``seg`` is compensated: a programmed arc (not a corner
     blend), with a filter."""
-    return seg.kind == "arc" and not seg.blend and filter_s > 0
+    return seg.kind == SegmentKind.ARC and not seg.blend and filter_s > 0
 
 
 def _arc_end_speed(seg: Segment, at_end: bool, filter_s: float) -> float:
@@ -857,13 +862,13 @@ def _sample(grid: _Grid, v: np.ndarray, phase: float, to_end: bool, filter_s: fl
     lengths = np.array([seg.length for seg in segments])
     frac = np.clip((s_t - offsets[seg_t]) / np.maximum(lengths[seg_t], 1e-300), 0.0, 1.0)
     at_end = s_t - offsets[seg_t] >= lengths[seg_t]
-    on_line = np.array([seg.kind != "arc" for seg in segments])[seg_t]
+    on_line = np.array([seg.kind != SegmentKind.ARC for seg in segments])[seg_t]
     if on_line.any():
         starts = np.array([seg.start for seg in segments])
         steps = np.array([seg.end - seg.start for seg in segments])
         owner = seg_t[on_line]
         position[on_line] = starts[owner] + frac[on_line, None] * steps[owner]
-    circular = np.array([seg.kind == "arc" and seg.radius_end == seg.radius for seg in segments])
+    circular = np.array([seg.kind == SegmentKind.ARC and seg.radius_end == seg.radius for seg in segments])
     on_circle = circular[seg_t]
     if on_circle.any():
         arcs = [seg if circular[i] else segments[int(np.argmax(circular))] for i, seg in enumerate(segments)]
@@ -881,7 +886,7 @@ def _sample(grid: _Grid, v: np.ndarray, phase: float, to_end: bool, filter_s: fl
     position[ends] = np.array([seg.end for seg in segments])[seg_t[ends]]  # the programmed end exactly
     for i in range(len(segments)):
         lo, hi = bounds[i], bounds[i + 1]
-        if hi > lo and segments[i].kind == "arc" and (not circular[i] or _compensated(segments[i], filter_s)):
+        if hi > lo and segments[i].kind == SegmentKind.ARC and (not circular[i] or _compensated(segments[i], filter_s)):
             s_local = np.clip(s_t[lo:hi] - offsets[i], 0.0, segments[i].length)
             if not circular[i]:
                 position[lo:hi] = segments[i].points(s_local)
@@ -1000,7 +1005,7 @@ class _Stream:
     def _pieces(self) -> Iterator[Segment]:
         """The path with its long segments cut into pieces of :data:`PIECE_POINTS` grid points."""
         for seg in self.path:
-            while seg.kind != "dwell" and _grid_points(seg) > 2 * PIECE_POINTS:
+            while seg.kind != SegmentKind.DWELL and _grid_points(seg) > 2 * PIECE_POINTS:
                 piece, seg = seg.split(PIECE_POINTS * GRID_M)
                 yield piece
             yield seg
@@ -1020,7 +1025,7 @@ class _Stream:
                 yield from self._stretch(buffer, junctions, v_start, 0.0, phase, to_end=True)
                 buffer, junctions, points, v_start, phase, least_time = [], [], 0, 0.0, 0.0, 0.0
                 window_points, window_time = float(WINDOW_POINTS), WINDOW_TIME_S
-            if seg.kind == "dwell":
+            if seg.kind == SegmentKind.DWELL:
                 yield from self._rest(
                     seg.start, seg.line, max(1, round(seg.dwell_s / SAMPLE_PERIOD_S)), seg.tolerance_m
                 )

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from twin.gcode.path import SegmentKind
 from twin.gcode.planner import Limits, Plan
 
 #: Spacing (m) of the points of the programmed path that find each sample's nearest segments.
@@ -22,7 +23,7 @@ def path_deviation_m(plan: Plan) -> np.ndarray:
     (unblended): to the nearest of the segments whose points lie nearest it."""
     from scipy.spatial import cKDTree
 
-    drawn = [seg for seg in plan.segments if seg.kind != "dwell"]
+    drawn = [seg for seg in plan.segments if seg.kind != SegmentKind.DWELL]
     if not drawn:
         return np.linalg.norm(plan.position - plan.position[:1], axis=1)
     total = sum(seg.length for seg in drawn)

@@ -5,7 +5,7 @@ unary functions, parameter settings and O-word lines.
 Values are evaluated while the line is read, with the parameters as they were before the line:
 ``#1=10 #2=#1`` sets #2 to the old #1 (parameter settings take effect after the line, in
 :meth:`twin.gcode.reader.Reader`). G codes are kept as ten times their number (``G64`` is 640,
-``G91.1`` is 911), as LinuxCNC keeps them.
+``G91.1`` is 911), as LinuxCNC keeps them; :class:`twin.gcode.modal.GCode` names them.
 
 Most CAM lines are plain words (``G1 X12.5 Y-3 F1200``): they take a fast path of two regular
 expressions; everything else is read character by character by :class:`_LineReader`, which
