@@ -94,16 +94,23 @@ def test_a_bad_revision_is_one_error_line_and_exit_2():
 @pytest.mark.slow
 def test_against_head_times_one_case_in_both_trees(tmp_path: Path):
     before = _worktrees()
-    r = twin("bench", "--against", "HEAD", "--case", "npid_googol", "--repeats", "1", "--seconds", "0.01", "--json")
+    r = twin("bench", "--against", "HEAD", "--repeats", "1", "--seconds", "0.01", "--json")
     assert r.returncode == 0, r.stderr
     f = json.loads(r.stdout)
     assert f["a_commit"] == f["b_commit"] == _git("rev-parse", "HEAD").strip()
-    case = f["cases"]["npid_googol"]
-    # one pair: the ratio is B's timing over A's
-    assert case["b_over_a"] == case["b"]["closed_loop_steps_per_s"] / case["a"]["closed_loop_steps_per_s"]
-    cpu = case["b"]["closed_loop_steps_per_cpu_s"] / case["a"]["closed_loop_steps_per_cpu_s"]
-    assert case["b_over_a_cpu"] == cpu
-    assert case["a"]["loop"] == case["b"]["loop"]
+    assert sorted(f["cases"]) == [  # no --case: every case both trees have
+        "cascade_dob_googol",
+        "cutting_circle_linear_motor",
+        "gcode_test_piece_linear_motor",
+        "hinf_cncmt",
+        "npid_googol",
+    ]
+    assert f["only_in_a"] == f["only_in_b"] == []
+    for case in f["cases"].values():  # one pair: the ratio is B's timing over A's
+        assert case["b_over_a"] == case["b"]["closed_loop_steps_per_s"] / case["a"]["closed_loop_steps_per_s"]
+        cpu = case["b"]["closed_loop_steps_per_cpu_s"] / case["a"]["closed_loop_steps_per_cpu_s"]
+        assert case["b_over_a_cpu"] == cpu
+        assert case["a"]["loop"] == case["b"]["loop"]
     assert _worktrees() == before
     r = twin("bench", "--against", "HEAD", "--case", "no_such_case", "--repeats", "1")
     assert r.returncode == 2 and "no_such_case" in r.stderr

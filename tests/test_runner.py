@@ -65,7 +65,7 @@ def test_delay_splits_inside_a_tick():
     seen = []
     for k, s in [(0, 1), (2, 1), (2, 2), (3, 1), (3, 2)]:
         ctrl = np.full(2, -1.0)
-        actuator_input(k, s, state, ctrl)
+        actuator_input(k, s, state.substeps, state.delay_steps, state.delay_line, state.act_idx, ctrl)
         assert ctrl[0] == -1.0
         seen.append(ctrl[1])
     # step s of tick k sees the command of tick (5k + s - 12) // 5, none before step 12

@@ -4,6 +4,7 @@
 Run as a script (``python -P twin/bench_worker.py``, with the tree under test first on
 ``PYTHONPATH``), the worker imports that tree's ``twin.bench`` and builds its cases
 (``_cases()``: name -> (machine, run(seconds))), warms up the ones named on its command line
+(all of them where none is named)
 (the compiled loop loaded or compiled), prints one JSON line ``{"ready": [names]}`` and then
 answers each request line ``{"case": name, "seconds": s}`` with one JSON line ``{"bare_steps_per_s",
 "closed_loop_steps_per_s", "loop"}`` from :func:`time_case`, until its input closes.  The timing is
@@ -84,6 +85,7 @@ def serve(names: list[str]) -> None:
 
     # the tree under test's bench (first on PYTHONPATH), not this file's tree: imported by name
     cases = importlib.import_module("twin.bench")._cases()
+    names = names or list(cases)
     unknown = sorted(set(names) - set(cases))
     if unknown:
         answers.write(json.dumps({"unknown": unknown, "cases": list(cases)}) + "\n")

@@ -206,36 +206,41 @@ def _reading(qpos, q_idx, gain, resolution):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def sense(k, row, qpos, qvel, sensor, chunk, u_prev, bus):  # pragma: no cover - compiled
+def sense(
+    k, row, qpos, qvel, encoder_q_idx, gains, resolution, vel_q_idx, vel_v_idx, vel_gains, vel_resolution, vel_noise,
+    tachometer, period_s, meas_prev, preview, noise, ref, u_prev, bus,
+):  # pragma: no cover - compiled  # fmt: skip
     """Write tick ``k``'s loop signals onto the bus (layout of ``standard_signals``).
 
-    ``sensor`` is a :class:`twin.sim.loop.Sensor`, ``chunk`` a :class:`twin.sim.loop.Chunk` in
-    which ``row`` is tick k's row (``noise`` (n, n_axes), ``ref`` (n + preview, n_axes, 3)).
-    The position encoder reads ``gains * qpos[encoder_q_idx]`` quantized to ``resolution``
-    (m; 0 for ideal) plus noise.  The velocity encoder reads ``vel_gains * qpos[vel_q_idx]``
-    quantized to ``vel_resolution``, plus ``vel_noise`` times the same noise (1 where both are
-    one encoder, 0 for a second one); the velocity is its ``(y[k] - y[k-1]) / period_s`` (0 at
-    k = 0) or, with ``tachometer``, ``vel_gains * qvel[vel_v_idx]``.  ``sensor.meas_prev`` (the
-    velocity encoder's last reading) is updated in place; ``u_prev`` is the command the
-    controller knows it applied last tick (V).
+    The arguments after ``qvel`` are the fields of a :class:`twin.sim.loop.Sensor` (the loop
+    takes them out of it once, before its first tick: numba counts a reference each time an
+    array is taken out of a tuple), then the chunk's ``noise`` (n, n_axes) and ``ref``
+    (n + preview, n_axes, 3), in which ``row`` is tick k's row.  The position encoder reads
+    ``gains * qpos[encoder_q_idx]`` quantized to ``resolution`` (m; 0 for ideal) plus noise.  The
+    velocity encoder reads ``vel_gains * qpos[vel_q_idx]`` quantized to ``vel_resolution``, plus
+    ``vel_noise`` times the same noise (1 where both are one encoder, whose reading is then taken
+    once, 0 for a second one); the
+    velocity is its ``(y[k] - y[k-1]) / period_s`` (0 at k = 0) or, with ``tachometer``,
+    ``vel_gains * qvel[vel_v_idx]``.  ``meas_prev`` (the velocity encoder's last reading) is
+    updated in place; ``u_prev`` is the command the controller knows it applied last tick (V).
     """
-    ref, noise, preview = chunk.ref, chunk.noise, sensor.preview
-    meas_prev, vel_gains = sensor.meas_prev, sensor.vel_gains
-    n_axes = sensor.encoder_q_idx.shape[0]
+    n_axes = encoder_q_idx.shape[0]
     bus[TICK_INDEX] = k
     for a in range(n_axes):
-        y = _reading(qpos, sensor.encoder_q_idx[a], sensor.gains[a], sensor.resolution[a]) + noise[row, a]
-        y_vel = _reading(qpos, sensor.vel_q_idx[a], vel_gains[a], sensor.vel_resolution[a])
-        y_vel += sensor.vel_noise[a] * noise[row, a]
+        y = _reading(qpos, encoder_q_idx[a], gains[a], resolution[a]) + noise[row, a]
+        if vel_noise[a] == 1.0:  # the position encoder itself: its reading, not read again
+            y_vel = y
+        else:
+            y_vel = _reading(qpos, vel_q_idx[a], vel_gains[a], vel_resolution[a]) + vel_noise[a] * noise[row, a]
         base = axis_signal_index(a, 0)
         bus[base + REF] = ref[row, a, 0]
         bus[base + REF_VEL] = ref[row, a, 1]
         bus[base + REF_ACC] = ref[row, a, 2]
         bus[base + POS] = y
-        if sensor.tachometer:
-            bus[base + VEL] = vel_gains[a] * qvel[sensor.vel_v_idx[a]]
+        if tachometer:
+            bus[base + VEL] = vel_gains[a] * qvel[vel_v_idx[a]]
         else:
-            bus[base + VEL] = (y_vel - meas_prev[a]) / sensor.period_s if k > 0 else 0.0
+            bus[base + VEL] = (y_vel - meas_prev[a]) / period_s if k > 0 else 0.0
         bus[base + ERROR] = ref[row, a, 0] - y
         bus[base + U_PREV] = u_prev[a]
         meas_prev[a] = y_vel
@@ -244,20 +249,19 @@ def sense(k, row, qpos, qvel, sensor, chunk, u_prev, bus):  # pragma: no cover -
 
 
 @njit(cache=True, inline="always")
-def drive_command(k, row, bus, drive, u_dist):  # pragma: no cover - compiled
-    """Tick ``k``'s controller outputs ``drive.u`` (from the bus at ``drive.u_idx``), drive input
-    ``drive.ua = clip(u + u_dist[row], -limit, limit)`` (V, stored in the delay line) and
-    ``drive.u_sat = clip(u, -limit, limit)`` (V): what the controller knows it applied (the next
-    tick's ``u_prev``; the disturbance is unknown to it).  ``drive`` is a
-    :class:`twin.sim.loop.DriveState`.
+def drive_command(k, row, bus, u_idx, u_dist, limit, u, ua, u_sat, delay_line):  # pragma: no cover - compiled
+    """Tick ``k``'s controller outputs ``u`` (from the bus at ``u_idx``), drive input
+    ``ua = clip(u + u_dist[row], -limit, limit)`` (V, stored in ``delay_line``) and
+    ``u_sat = clip(u, -limit, limit)`` (V): what the controller knows it applied (the next
+    tick's ``u_prev``; the disturbance is unknown to it); the arrays are a
+    :class:`twin.sim.loop.DriveState`'s.
 
     Returns False if an input is not finite or beyond :data:`MAX_VALUE` (divergence).
     """
-    u, ua, u_sat, delay_line, limit = drive.u, drive.ua, drive.u_sat, drive.delay_line, drive.limit
     ok = True
     n = delay_line.shape[0]
-    for a in range(drive.u_idx.shape[0]):
-        u[a] = bus[drive.u_idx[a]]
+    for a in range(u_idx.shape[0]):
+        u[a] = bus[u_idx[a]]
         u_sat[a] = min(max(u[a], -limit), limit)
         ua[a] = min(max(u[a] + u_dist[row, a], -limit), limit)
         delay_line[k % n, a] = ua[a]
@@ -267,15 +271,14 @@ def drive_command(k, row, bus, drive, u_dist):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def actuator_input(k, s, drive, ctrl):  # pragma: no cover - compiled
-    """Set each axis's actuator ``ctrl[drive.act_idx[a]]`` for physics step ``s`` of tick ``k``:
-    the command of tick ``(k substeps + s - delay_steps) // substeps``, or 0 before the first
-    one arrives (``drive`` a :class:`twin.sim.loop.DriveState`)."""
-    substeps, delay_line = drive.substeps, drive.delay_line
-    j = k * substeps + s - drive.delay_steps
+def actuator_input(k, s, substeps, delay_steps, delay_line, act_idx, ctrl):  # pragma: no cover - compiled
+    """Set each axis's actuator ``ctrl[act_idx[a]]`` for physics step ``s`` of tick ``k``:
+    the command of tick ``(k substeps + s - delay_steps) // substeps`` from ``delay_line``, or 0
+    before the first one arrives (a :class:`twin.sim.loop.DriveState`'s fields)."""
+    j = k * substeps + s - delay_steps
     n = delay_line.shape[0]
-    for a in range(drive.act_idx.shape[0]):
-        ctrl[drive.act_idx[a]] = delay_line[(j // substeps) % n, a] if j >= 0 else 0.0
+    for a in range(act_idx.shape[0]):
+        ctrl[act_idx[a]] = delay_line[(j // substeps) % n, a] if j >= 0 else 0.0
 
 
 @njit(cache=True, inline="always")

@@ -166,63 +166,64 @@ class Accumulators(NamedTuple):
 
 
 @njit(cache=True, inline="always")
-def start_tick(k, row, mj, sensor, chunk, rec, acc):  # pragma: no cover - compiled
-    """Tick k's error metrics (into ``acc``) and state recording (into ``rec``); False if the
-    table ran away."""
-    qpos, q_idx, ref, error = mj.qpos, sensor.q_idx, chunk.ref, acc.error
-    if not table_in_bounds(qpos, q_idx, sensor.runaway_m):
+def start_tick(
+    k, row, qpos, qvel, act, q_idx, runaway_m, ref, error, every, rec_qpos, rec_qvel, rec_act, rec_ref
+):  # pragma: no cover - compiled
+    """Tick k's error metrics (into ``error``, an :class:`Accumulators`' field) and state
+    recording (into a :class:`Recording`'s fields); False if the table ran away."""
+    if not table_in_bounds(qpos, q_idx, runaway_m):
         return False
     for a in range(q_idx.shape[0]):
         e = ref[row, a, 0] - qpos[q_idx[a]]
         error[a, 0] = max(error[a, 0], abs(e))
         error[a, 1] += e * e
-    if rec.every > 0 and k % rec.every == 0:
-        r = k // rec.every
+    if every > 0 and k % every == 0:
+        r = k // every
         for i in range(qpos.shape[0]):
-            rec.qpos[r, i] = qpos[i]
-        for i in range(mj.qvel.shape[0]):
-            rec.qvel[r, i] = mj.qvel[i]
-        for i in range(mj.actuator_force.shape[0]):
-            rec.actuator_force[r, i] = mj.actuator_force[i]
+            rec_qpos[r, i] = qpos[i]
+        for i in range(qvel.shape[0]):
+            rec_qvel[r, i] = qvel[i]
+        for i in range(act.shape[0]):
+            rec_act[r, i] = act[i]
         for a in range(q_idx.shape[0]):
             for i in range(3):
-                rec.ref[r, a, i] = ref[row, a, i]
+                rec_ref[r, a, i] = ref[row, a, i]
     return True
 
 
 @njit(cache=True, inline="always")
-def start_forces(row, chunk, force):  # pragma: no cover - compiled
+def start_forces(row, ref, feed_jacobian, feed_velocity, f_sum, probe):  # pragma: no cover - compiled
     """Zero the tick's force sum and vibration probe; the planned feed velocity from the
-    reference's velocity at the tick (``force.feed_velocity``)."""
-    force.f_sum[:] = 0.0
-    force.probe[:] = 0.0
-    jac, ref = force.feed_jacobian, chunk.ref
+    reference's velocity at the tick (a :class:`ForceState`'s fields)."""
+    f_sum[:] = 0.0
+    probe[:] = 0.0
     for r in range(2):
         v = 0.0
-        for a in range(jac.shape[1]):
-            v += jac[r, a] * ref[row, a, 1]
-        force.feed_velocity[r] = v
+        for a in range(feed_jacobian.shape[1]):
+            v += feed_jacobian[r, a] * ref[row, a, 1]
+        feed_velocity[r] = v
 
 
 @njit(cache=True, inline="always")
-def end_tick(k, drive, force, bus, rec, acc):  # pragma: no cover - compiled
+def end_tick(
+    k, substeps, u, ua, f_sum, probe, force_max, bus, every, rec_meas, rec_u, rec_ua, rec_force, rec_probe
+):  # pragma: no cover - compiled
     """Record tick k's measurement, inputs and mean workpiece force (``f_sum`` over the tick's
     physics steps), add its vibration probe to its row; update the force maxima."""
-    u, ua, substeps, f_sum = drive.u, drive.ua, drive.substeps, force.f_sum
-    if rec.every > 0:
-        r = k // rec.every
-        for i in range(force.probe.shape[0]):
-            rec.probe[r, i] += force.probe[i]
+    if every > 0:
+        r = k // every
+        for i in range(probe.shape[0]):
+            rec_probe[r, i] += probe[i]
     for a in range(u.shape[0]):
-        acc.force_max[a] = max(acc.force_max[a], abs(f_sum[a] / substeps))
-    if rec.every > 0 and k % rec.every == 0:
-        r = k // rec.every
+        force_max[a] = max(force_max[a], abs(f_sum[a] / substeps))
+    if every > 0 and k % every == 0:
+        r = k // every
         for a in range(u.shape[0]):
-            rec.meas[r, a] = bus[axis_signal_index(a, POS)]
-            rec.u[r, a] = u[a]
-            rec.ua[r, a] = ua[a]
+            rec_meas[r, a] = bus[axis_signal_index(a, POS)]
+            rec_u[r, a] = u[a]
+            rec_ua[r, a] = ua[a]
         for i in range(3):
-            rec.workpiece_force[r, i] = f_sum[i] / substeps
+            rec_force[r, i] = f_sum[i] / substeps
 
 
 @njit(cache=True)
@@ -230,32 +231,54 @@ def compiled_ticks(
     k0, k1, mj_step, m_addr, d_addr, mj, sensor, drive, prog, force, chunk, rec, acc
 ):  # pragma: no cover - compiled
     """Ticks ``k0 <= k < k1``, compiled; ``mj_step`` is :data:`twin.sim.mujoco_c.MJ_STEP`
-    (an argument, so numba can cache the loop), ``m_addr``/``d_addr`` the struct addresses."""
-    qpos, qvel, qacc, ctrl, xfrc = mj.qpos, mj.qvel, mj.qacc, mj.ctrl, mj.xfrc_applied
+    (an argument, so numba can cache the loop), ``m_addr``/``d_addr`` the struct addresses.
+    The groups are unpacked once, before the first tick: numba counts a reference up and down
+    (atomically) each time an array is taken out of a tuple, which on every tick cost about 4 %
+    of the loop's speed (issue 49)."""
+    qpos, qvel, qacc, ctrl, act, xfrc = mj.qpos, mj.qvel, mj.qacc, mj.ctrl, mj.actuator_force, mj.xfrc_applied
+    q_idx, encoder_q_idx, gains, resolution = sensor.q_idx, sensor.encoder_q_idx, sensor.gains, sensor.resolution
+    vel_q_idx, vel_v_idx, vel_gains = sensor.vel_q_idx, sensor.vel_v_idx, sensor.vel_gains
+    vel_resolution, vel_noise, meas_prev = sensor.vel_resolution, sensor.vel_noise, sensor.meas_prev
+    tachometer, period_s, runaway_m, preview = sensor.tachometer, sensor.period_s, sensor.runaway_m, sensor.preview
+    u_idx, act_idx, limit, substeps = drive.u_idx, drive.act_idx, drive.limit, drive.substeps
+    delay_steps, delay_line, u, ua, u_sat = drive.delay_steps, drive.delay_line, drive.u, drive.ua, drive.u_sat
     fops, fpar, fstate, f_sum, clock = force.fops, force.fpar, force.fstate, force.f_sum, force.clock
+    wp, dt, jac, feed, probe = (
+        force.workpiece_body,
+        force.timestep_s,
+        force.feed_jacobian,
+        force.feed_velocity,
+        force.probe,
+    )
+    ref, noise, u_dist = chunk.ref, chunk.noise, chunk.u_dist
+    every, rec_qpos, rec_qvel, rec_act, rec_ref = rec.every, rec.qpos, rec.qvel, rec.actuator_force, rec.ref
+    rec_meas, rec_u, rec_ua, rec_force, rec_probe = rec.meas, rec.u, rec.ua, rec.workpiece_force, rec.probe
+    error, force_max = acc.error, acc.force_max
     ops, io, par, state, scratch, bus = prog.ops, prog.io, prog.par, prog.state, prog.scratch, prog.bus
     n_blocks = ops.shape[0]
     for k in range(k0, k1):
         row = k - k0
-        if not start_tick(k, row, mj, sensor, chunk, rec, acc):
+        if not start_tick(
+            k, row, qpos, qvel, act, q_idx, runaway_m, ref, error, every, rec_qpos, rec_qvel, rec_act, rec_ref
+        ):
             return RUNAWAY, k, 0
-        sense(k, row, qpos, qvel, sensor, chunk, drive.u_sat, bus)
+        sense(
+            k, row, qpos, qvel, encoder_q_idx, gains, resolution, vel_q_idx, vel_v_idx, vel_gains, vel_resolution,
+            vel_noise, tachometer, period_s, meas_prev, preview, noise, ref, u_sat, bus,
+        )  # fmt: skip
         run_blocks(0, n_blocks, ops, io, par, state, scratch, bus)
-        if not drive_command(k, row, bus, drive, chunk.u_dist):
+        if not drive_command(k, row, bus, u_idx, u_dist, limit, u, ua, u_sat, delay_line):
             return BAD_CONTROL, k, 0
-        start_forces(row, chunk, force)
-        for s in range(drive.substeps):
-            actuator_input(k, s, drive, ctrl)
+        start_forces(row, ref, jac, feed, f_sum, probe)
+        for s in range(substeps):
+            actuator_input(k, s, substeps, delay_steps, delay_line, act_idx, ctrl)
             if fops.shape[0]:
-                workpiece_forces(
-                    fops, fpar, fstate, qpos, qvel, force.feed_velocity, clock[0], xfrc, force.workpiece_body, f_sum,
-                    force.probe,
-                )  # fmt: skip
+                workpiece_forces(fops, fpar, fstate, qpos, qvel, feed, clock[0], xfrc, wp, f_sum, probe)
             mj_step(m_addr, d_addr)
-            clock[0] += force.timestep_s
+            clock[0] += dt
             if not accelerations_ok(qacc):
                 return BAD_QACC, k, s
-        end_tick(k, drive, force, bus, rec, acc)
+        end_tick(k, substeps, u, ua, f_sum, probe, force_max, bus, every, rec_meas, rec_u, rec_ua, rec_force, rec_probe)
     return OK, k1, 0
 
 
@@ -263,26 +286,38 @@ def python_ticks(k0, k1, model, data, program, mj, sensor, drive, force, chunk, 
     """Ticks ``k0 <= k < k1`` in Python: ``program.run()`` (Python blocks too) and
     ``mujoco.mj_step``; the simulation time is ``data.time``."""
     qpos, qvel, qacc, ctrl, xfrc = mj.qpos, mj.qvel, mj.qacc, mj.ctrl, mj.xfrc_applied
-    fops, fpar, fstate, f_sum = force.fops, force.fpar, force.fstate, force.f_sum
-    bus = program.bus
+    f_sum, probe, feed = force.f_sum, force.probe, force.feed_velocity
+    ref, bus = chunk.ref, program.bus
     for k in range(k0, k1):
         row = k - k0
-        if not start_tick(k, row, mj, sensor, chunk, rec, acc):
+        if not start_tick(
+            k, row, qpos, qvel, mj.actuator_force, sensor.q_idx, sensor.runaway_m, ref, acc.error, rec.every,
+            rec.qpos, rec.qvel, rec.actuator_force, rec.ref,
+        ):  # fmt: skip
             return RUNAWAY, k, 0
-        sense(k, row, qpos, qvel, sensor, chunk, drive.u_sat, bus)
+        sense(
+            k, row, qpos, qvel, sensor.encoder_q_idx, sensor.gains, sensor.resolution, sensor.vel_q_idx,
+            sensor.vel_v_idx, sensor.vel_gains, sensor.vel_resolution, sensor.vel_noise, sensor.tachometer,
+            sensor.period_s, sensor.meas_prev, sensor.preview, chunk.noise, ref, drive.u_sat, bus,
+        )  # fmt: skip
         program.run()
-        if not drive_command(k, row, bus, drive, chunk.u_dist):
+        if not drive_command(
+            k, row, bus, drive.u_idx, chunk.u_dist, drive.limit, drive.u, drive.ua, drive.u_sat, drive.delay_line
+        ):
             return BAD_CONTROL, k, 0
-        start_forces(row, chunk, force)
+        start_forces(row, ref, force.feed_jacobian, feed, f_sum, probe)
         for s in range(drive.substeps):
-            actuator_input(k, s, drive, ctrl)
-            if fops.shape[0]:
+            actuator_input(k, s, drive.substeps, drive.delay_steps, drive.delay_line, drive.act_idx, ctrl)
+            if force.fops.shape[0]:
                 workpiece_forces(
-                    fops, fpar, fstate, qpos, qvel, force.feed_velocity, data.time, xfrc, force.workpiece_body, f_sum,
-                    force.probe,
+                    force.fops, force.fpar, force.fstate, qpos, qvel, feed, data.time, xfrc, force.workpiece_body,
+                    f_sum, probe,
                 )  # fmt: skip
             mujoco.mj_step(model, data)
             if not accelerations_ok(qacc):
                 return BAD_QACC, k, s
-        end_tick(k, drive, force, bus, rec, acc)
+        end_tick(
+            k, drive.substeps, drive.u, drive.ua, f_sum, probe, acc.force_max, bus, rec.every, rec.meas, rec.u,
+            rec.ua, rec.workpiece_force, rec.probe,
+        )  # fmt: skip
     return OK, k1, 0

@@ -38,6 +38,23 @@ def _ticks(Ad, Bd, Cd, prog, sensor, drive, chunk, plant_dist, pos, u):  # pragm
     :func:`twin.sim.drive.actuator_input` (one plant step a tick); ``plant_dist`` is added at the
     plant input after the delay."""
     n, n_axes = pos.shape
+    ops, io, par, state, scratch, bus = prog.ops, prog.io, prog.par, prog.state, prog.scratch, prog.bus
+    enc, gains, resolution = sensor.encoder_q_idx, sensor.gains, sensor.resolution
+    vel_enc, vel_gains, vel_resolution, vel_noise = (
+        sensor.vel_q_idx,
+        sensor.vel_gains,
+        sensor.vel_resolution,
+        sensor.vel_noise,
+    )
+    u_idx, limit, u_drive, ua, u_sat, delay_line = (
+        drive.u_idx,
+        drive.limit,
+        drive.u,
+        drive.ua,
+        drive.u_sat,
+        drive.delay_line,
+    )
+    ref, noise, u_dist = chunk.ref, chunk.noise, chunk.u_dist
     x = np.zeros(Ad.shape[0])
     y = np.zeros(n_axes)
     applied = np.zeros(n_axes)
@@ -47,12 +64,15 @@ def _ticks(Ad, Bd, Cd, prog, sensor, drive, chunk, plant_dist, pos, u):  # pragm
             for i in range(x.shape[0]):
                 y[a] += Cd[a, i] * x[i]
             pos[k, a] = y[a]
-        sense(k, k, y, y, sensor, chunk, drive.u_sat, prog.bus)
-        run_blocks(0, prog.ops.shape[0], prog.ops, prog.io, prog.par, prog.state, prog.scratch, prog.bus)
-        drive_command(k, k, prog.bus, drive, chunk.u_dist)
-        actuator_input(k, 0, drive, applied)
+        sense(
+            k, k, y, y, enc, gains, resolution, vel_enc, sensor.vel_v_idx, vel_gains, vel_resolution, vel_noise,
+            sensor.tachometer, sensor.period_s, sensor.meas_prev, sensor.preview, noise, ref, u_sat, bus,
+        )  # fmt: skip
+        run_blocks(0, ops.shape[0], ops, io, par, state, scratch, bus)
+        drive_command(k, k, bus, u_idx, u_dist, limit, u_drive, ua, u_sat, delay_line)
+        actuator_input(k, 0, drive.substeps, drive.delay_steps, delay_line, drive.act_idx, applied)
         for a in range(n_axes):
-            u[k, a] = drive.u[a]
+            u[k, a] = u_drive[a]
             applied[a] += plant_dist[k, a]
         x[:] = Ad @ x + Bd @ applied
 
