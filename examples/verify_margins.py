@@ -6,10 +6,12 @@ boundaries, on every catalogue machine, axis and feedback.
 Per machine (the machine files under examples/machines and the bundled machines) and feedback
 (dual, motor, table; a machine without a motor's encoder: its own), ``twin.tune`` designs the
 cascade and :meth:`twin.results.Tuning.verify_margins` bisects each gain on the twin to 0.1 dB
-(a 1 mm step, 0.5 s; growth: the table's peak-to-peak over the last quarter against the quarter
-before), three ways: the twin as run, without the guideways' Coulomb friction, and like for
-like (no Coulomb friction, ideal encoders, a quarter of the physics step). Printed: a Markdown
-table, each boundary less the reported margin (dB); ``--json`` prints the rows.
+(a 1 mm step, 0.5 s; growth: the table's peak-to-peak over the last quarter 1 % above the
+quarter's before), four ways: the twin as run, without the guideways' Coulomb friction, linear
+(no Coulomb friction, ideal encoders) at the machine's physics step and at a quarter of it;
+and from the last two the linear boundary extrapolated to a zero step. Printed: a Markdown
+table, each boundary and, in brackets, less the reported margin (dB); ``--json`` prints the
+rows (``tests/fixtures/margins/verify_margins.json`` is that output).
 """
 
 import argparse

@@ -872,8 +872,8 @@ def tune(
     check_margins: bool = typer.Option(
         False,
         "--verify-margins",
-        help="Bisect each gain's stability boundary on the twin (as run, without Coulomb friction, and like for "
-        "like: the linear model's assumptions) and print it beside the cascade margin",
+        help="Bisect each gain's stability boundary on the twin (as run, without Coulomb friction, linear at the "
+        "machine's physics step and a quarter of it) and print it beside the cascade margin",
     ),
 ):
     """Design each axis's position P / velocity PI cascade with feedforward and a notch or
@@ -920,7 +920,9 @@ def tune(
             from twin.commissioning.boundary import CONDITIONS
 
             typer.echo(
-                "  the twin's bisected boundary (dB; less the cascade margin): as run, without Coulomb, like for like"
+                "  the twin's bisected boundary, dB (less the cascade margin): "
+                + ", ".join(CONDITIONS)
+                + ", zero step (the linear boundary extrapolated to a zero physics step)"
             )
             for row in result["margin_check"]:
                 typer.echo(
@@ -929,6 +931,7 @@ def tune(
                         f"{row[name]['boundary_db']:6.2f} ({row[name + '_minus_margin_db']:+.2f})"
                         for name in CONDITIONS
                     )
+                    + f", {row['zero_step_db']:6.2f} ({row['zero_step_minus_margin_db']:+.2f})"
                 )
     if out is not None:
         out.write_text(tuned.scenario_text(), encoding="utf-8")
