@@ -4,7 +4,8 @@ boundaries, on every catalogue machine, axis and feedback.
     uv run python examples/verify_margins.py [--machines NAME ...] [--gains kp_vel ...] [--json]
 
 Per machine (the machine files under examples/machines and the bundled machines) and feedback
-(dual, motor, table; a machine without a motor's encoder: its own), ``twin.tune`` designs the
+(dual, motor, table, less those that tune the same loops; a machine without a motor's encoder:
+its own), ``twin.tune`` designs the
 cascade and :meth:`twin.results.Tuning.verify_margins` bisects each gain on the twin to 0.1 dB
 (a 1 mm step, 0.5 s; growth: the table's peak-to-peak over the last quarter 1 % above the
 quarter's before), four ways: the twin as run, without the guideways' Coulomb friction, linear
@@ -40,8 +41,13 @@ def feedbacks(machine: str) -> list[str | None]:
 def main(machines: list[str], gains: tuple[str, ...]) -> list[dict]:
     rows = []
     for machine in machines:
+        designs: list[dict] = []
         for feedback in feedbacks(machine):
             tuned = twin.tune(machine, feedback=feedback)
+            gains_of = {a: r["gains"] for a, r in tuned.summary["axes"].items()}
+            if gains_of in designs:
+                continue  # the same loops as a feedback before (one transfer function per axis)
+            designs.append(gains_of)
             checked = tuned.verify_margins(gains)
             rows += [{"machine": Path(machine).stem, **row} for row in checked]
     return rows

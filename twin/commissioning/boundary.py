@@ -210,8 +210,9 @@ def verify_margins(
     -------
     list of dict
         Per axis and gain with a finite margin: ``axis``, ``gain``, ``feedback``, ``margin_db``,
-        ``margin_hz``, per condition its :func:`twin_boundary` and ``<name>_minus_margin_db``,
-        and with ``linear`` and ``linear_quarter_step`` both, ``zero_step_db`` (the linear
+        ``margin_hz``, per condition its :func:`twin_boundary` and ``<name>_minus_margin_db``
+        (both None where the twin does not grow within :data:`MAX_WIDENINGS` dB of the margin),
+        and with ``linear`` and ``linear_quarter_step`` both found, ``zero_step_db`` (the linear
         boundary extrapolated to a zero step, :func:`zero_step_boundary`) and
         ``zero_step_minus_margin_db``.
     """
@@ -230,10 +231,14 @@ def verify_margins(
                 "margin_hz": margin["gain_margin_hz"],
             }
             for name, condition in conditions.items():
-                found = twin_boundary(design, machine, axis, gain, condition)
+                try:
+                    found = twin_boundary(design, machine, axis, gain, condition)
+                except TwinInputError:  # no growth within MAX_WIDENINGS dB of the margin
+                    row[name], row[f"{name}_minus_margin_db"] = None, None
+                    continue
                 row[name] = found
                 row[f"{name}_minus_margin_db"] = round(found["boundary_db"] - margin["gain_margin_db"], 3)
-            if "linear" in row and "linear_quarter_step" in row:
+            if row.get("linear") and row.get("linear_quarter_step"):
                 zero = zero_step_boundary(
                     row["linear"]["boundary_db"],
                     row["linear_quarter_step"]["boundary_db"],
@@ -254,13 +259,16 @@ def margin_table(rows: list[dict]) -> str:
         "| linear, 1/4 step | zero step |",
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
+
+    def cell(found: dict | None, less: float | None) -> str:
+        return f" none within {MAX_WIDENINGS} dB |" if found is None else f" {found['boundary_db']:.2f} ({less:+.2f}) |"
+
     for r in rows:
-        boundaries = "".join(
-            f" {r[name]['boundary_db']:.2f} ({r[f'{name}_minus_margin_db']:+.2f}) |" for name in CONDITIONS
-        )
+        boundaries = "".join(cell(r[name], r[f"{name}_minus_margin_db"]) for name in CONDITIONS)
+        zero = r.get("zero_step_db")
         lines.append(
             f"| {r['machine']} | {r['feedback']} | {r['axis']} | {r['gain']} "
             f"| {r['margin_db']:.2f} dB at {r['margin_hz']:.0f} Hz |{boundaries}"
-            f" {r['zero_step_db']:.2f} ({r['zero_step_minus_margin_db']:+.2f}) |"
+            + (" - |" if zero is None else f" {zero:.2f} ({r['zero_step_minus_margin_db']:+.2f}) |")
         )
     return "\n".join(lines) + "\n"
