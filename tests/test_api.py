@@ -69,6 +69,12 @@ def test_bad_settings_and_divergence_are_the_twins_errors():
         ("sweep_box.py", ["--samples", "4", "--workers", "1"], "4 samples in"),
         ("tune_vs_papers.py", ["--duration", "0.3"], "tuned servo_cascade (ours)"),
         pytest.param(
+            "verify_margins.py",
+            ["--machines", "googol_xy", "--gains", "kp_vel"],
+            "| googol_xy | dual | x | kp_vel |",
+            marks=pytest.mark.slow,  # three designs and 56 runs of 0.5 s: about 30 s
+        ),
+        pytest.param(
             "feed_override.py",
             ["--overrides", "0.8", "1.2", "--workers", "1", "--duration", "1.0"],
             "largest feed override with rms_contour_error_feed_um < 10 µm:",
@@ -77,7 +83,11 @@ def test_bad_settings_and_divergence_are_the_twins_errors():
     ],
 )
 def test_examples_run(tmp_path, script, args, check):
-    extra = ["--out", str(tmp_path)] if script not in ("compare_controllers.py", "tune_vs_papers.py") else []
+    extra = (
+        ["--out", str(tmp_path)]
+        if script not in ("compare_controllers.py", "tune_vs_papers.py", "verify_margins.py")
+        else []
+    )
     r = subprocess.run(
         [sys.executable, str(EXAMPLES / script), *args, *extra],
         capture_output=True,

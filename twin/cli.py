@@ -880,8 +880,8 @@ def tune(
     check_margins: bool = typer.Option(
         False,
         "--verify-margins",
-        help="Bisect each gain's stability boundary on the twin (as run, without Coulomb friction, and like for "
-        "like: the linear model's assumptions) and print it beside the cascade margin",
+        help="Bisect each gain's stability boundary on the twin (as run, without Coulomb friction, linear at the "
+        "machine's physics step and a quarter of it) and print it beside the cascade margin",
     ),
 ):
     """Design each axis's position P / velocity PI cascade with feedforward and a notch or
@@ -925,17 +925,29 @@ def tune(
         for a, v in result.get("verification", {}).items():
             typer.echo(f"  verified on the twin, {a}: " + ", ".join(f"{k} {x:.4g}" for k, x in v.items()))
         if check_margins:
-            from twin.commissioning.boundary import CONDITIONS
+            from twin.commissioning.boundary import CONDITIONS, MAX_WIDENINGS
 
             typer.echo(
-                "  the twin's bisected boundary (dB; less the cascade margin): as run, without Coulomb, like for like"
+                "  the twin's bisected boundary, dB (less the cascade margin): "
+                + ", ".join(CONDITIONS)
+                + ", zero step (the linear boundary extrapolated to a zero physics step)"
             )
+
+            def found(boundary: float | None, less: float | None) -> str:
+                return f"none within {MAX_WIDENINGS} dB" if boundary is None else f"{boundary:6.2f} ({less:+.2f})"
+
             for row in result["margin_check"]:
                 typer.echo(
                     f"  {row['axis']} {row['gain']:<7} margin {row['margin_db']:6.2f} dB: "
                     + ", ".join(
-                        f"{row[name]['boundary_db']:6.2f} ({row[name + '_minus_margin_db']:+.2f})"
+                        found(row[name] and row[name]["boundary_db"], row[name + "_minus_margin_db"])
                         for name in CONDITIONS
+                    )
+                    + ", "
+                    + (
+                        "-"
+                        if row.get("zero_step_db") is None
+                        else found(row["zero_step_db"], row["zero_step_minus_margin_db"])
                     )
                 )
     if out is not None:

@@ -5,15 +5,20 @@ One gain of one axis (``kp_pos``, ``kp_vel``, or the integral gain ``ki_vel`` = 
 scaled by a factor in dB and the tuned scenario (``twin tune --out``'s, with a 1 mm step) runs
 on the twin (MuJoCo) for :data:`DURATION_S`. The growth criterion: the peak-to-peak of that
 axis's table position over the run's last quarter against the quarter before it (a constant
-offset, such as the drive train's deflection under friction, drops out); a ratio above 1, or a
-run that diverges, is growth. The factor is bisected between one that decays and one that
-grows until they are :data:`RESOLUTION_DB` apart; the boundary is where the log of the ratio,
-interpolated linearly between the two, crosses zero.
+offset, such as the drive train's deflection under friction, drops out); a ratio above
+:data:`GROWTH_RATIO` with the last quarter's peak-to-peak above :data:`GROWTH_FLOOR_M`, or a
+run that diverges, is growth. Both bounds keep out the bounded limit cycles of the twin's
+nonlinearities: the Coulomb friction's hunting (heavy_xy's X on the scale: about 0.6 µm
+peak-to-peak at 85 Hz 2 dB below the boundary, its ratio 1.00) and the encoders' quantization's
+(about 1.5 steps of the 10 nm scale, its ratio up to 1.0125). The factor is bisected between
+one that decays and one that grows until they are :data:`RESOLUTION_DB` apart; the boundary is
+where the ratio, interpolated linearly in its log between the two, crosses the threshold.
 
 The cascade's margins assume a linear plant sampled exactly (zero-order hold). The twin
 differs in three ways, each one an option here so that the comparison can be made like for like:
-the guideways' Coulomb friction (MuJoCo's friction loss), the physics step (MuJoCo's Euler
-integrator, not an exact hold) and the encoders' quantization.
+the guideways' Coulomb friction (MuJoCo's friction loss), the encoders' quantization and the
+physics step (MuJoCo's Euler integrator, not an exact hold, whose error is of first order in
+the step: :func:`zero_step_boundary`).
 """
 
 from __future__ import annotations
@@ -33,6 +38,11 @@ from twin.scenario import run_scenario, scenario_from_dict
 GAINS = ("kp_pos", "kp_vel", "ki_vel")
 #: Length of each run (s): the growth of the least damped mode shows over its last half.
 DURATION_S = 0.5
+#: The growth criterion's threshold: the last quarter's peak-to-peak over the quarter's before.
+GROWTH_RATIO = 1.01
+#: The growth criterion's floor (m): the last quarter's peak-to-peak, ten times the catalogue's
+#: finest scale (a growing oscillation near the boundary is tens of µm there after a 1 mm step).
+GROWTH_FLOOR_M = 1e-7
 #: Width of the final bracket (dB).
 RESOLUTION_DB = 0.1
 #: The first bracket: the reported margin less and plus this much (dB), widened by as much
@@ -60,13 +70,19 @@ class TwinConditions:
     ideal_sensors: bool = False
 
 
-#: The twin as a user runs it, and the linear model's assumptions (no Coulomb friction, ideal
-#: sensors, a physics step a quarter of the machine's).
+#: The twin as a user runs it; without the Coulomb friction; linear (without the friction and
+#: the quantization) at the machine's physics step and at a quarter of it.
 AS_RUN = TwinConditions()
 WITHOUT_COULOMB = TwinConditions(coulomb=False)
-LIKE_FOR_LIKE = TwinConditions(coulomb=False, timestep_divisor=4, ideal_sensors=True)
+LINEAR = TwinConditions(coulomb=False, ideal_sensors=True)
+LINEAR_QUARTER_STEP = TwinConditions(coulomb=False, timestep_divisor=4, ideal_sensors=True)
 #: The conditions by name (``twin tune --verify-margins``'s columns).
-CONDITIONS = {"twin": AS_RUN, "without_coulomb": WITHOUT_COULOMB, "like_for_like": LIKE_FOR_LIKE}
+CONDITIONS = {
+    "twin": AS_RUN,
+    "without_coulomb": WITHOUT_COULOMB,
+    "linear": LINEAR,
+    "linear_quarter_step": LINEAR_QUARTER_STEP,
+}
 
 
 def _scaled(design: dict, axis: str, gain: str, db: float) -> dict:
@@ -83,7 +99,8 @@ def _scaled(design: dict, axis: str, gain: str, db: float) -> dict:
 
 def growth_ratio(design: dict, machine: str, axis: str, gain: str, db: float, conditions: TwinConditions) -> float:
     """The peak-to-peak of ``axis``'s table position over the run's last quarter divided by the
-    quarter's before it, with ``gain`` times 10^(db/20) (``inf`` where the run diverges).
+    quarter's before it, with ``gain`` times 10^(db/20) (``inf`` where the run diverges, 0 where
+    the last quarter's is below :data:`GROWTH_FLOOR_M`).
 
     Parameters
     ----------
@@ -110,8 +127,10 @@ def growth_ratio(design: dict, machine: str, axis: str, gain: str, db: float, co
     y = result.table_position_m()[:, list(design["axes"]).index(axis)]
     n = len(y)
     earlier, last = y[n // 2 : 3 * n // 4], y[3 * n // 4 :]
-    spread = float(np.ptp(earlier))
-    return math.inf if spread == 0.0 else float(np.ptp(last)) / spread
+    spread, final = float(np.ptp(earlier)), float(np.ptp(last))
+    if final < GROWTH_FLOOR_M:
+        return 0.0
+    return math.inf if spread == 0.0 else final / spread
 
 
 def twin_boundary(
@@ -143,21 +162,21 @@ def twin_boundary(
 
     low, high = start - BRACKET_DB, start + BRACKET_DB
     for _ in range(MAX_WIDENINGS):
-        if ratio(low) > 1.0:
+        if ratio(low) > GROWTH_RATIO:
             low, high = low - BRACKET_DB, low
-        elif ratio(high) <= 1.0:
+        elif ratio(high) <= GROWTH_RATIO:
             low, high = high, high + BRACKET_DB
         else:
             break
-    if not (ratio(low) <= 1.0 < ratio(high)):
+    if not (ratio(low) <= GROWTH_RATIO < ratio(high)):
         raise TwinInputError(gain, start, f"no growth boundary within {MAX_WIDENINGS} dB of the margin on axis {axis}")
     while high - low > RESOLUTION_DB + 1e-9:
         middle = 0.5 * (low + high)
-        if ratio(middle) > 1.0:
+        if ratio(middle) > GROWTH_RATIO:
             high = middle
         else:
             low = middle
-    at_low, at_high = math.log(max(ratio(low), 1e-300)), math.log(ratio(high))
+    at_low, at_high = (math.log(max(ratio(db), 1e-300) / GROWTH_RATIO) for db in (low, high))
     share = 0.5 if not math.isfinite(at_high) or at_high == at_low else -at_low / (at_high - at_low)
     return {
         "boundary_db": round(low + share * (high - low), 3),
@@ -165,6 +184,13 @@ def twin_boundary(
         "grows_db": round(high, 4),
         "runs": len(ratios),
     }
+
+
+def zero_step_boundary(at_step_db: float, at_fine_step_db: float, divisor: int) -> float:
+    """The boundary extrapolated to a physics step of zero (Richardson, first order: the Euler
+    integrator's error), from the boundaries at the machine's step and at the step / ``divisor``
+    (dB)."""
+    return (divisor * at_fine_step_db - at_step_db) / (divisor - 1)
 
 
 def verify_margins(
@@ -178,14 +204,17 @@ def verify_margins(
     Parameters
     ----------
     conditions : dict, optional
-        Named :class:`TwinConditions` (default :data:`CONDITIONS`: ``twin`` as run,
-        ``without_coulomb``, ``like_for_like``).
+        Named :class:`TwinConditions` (default :data:`CONDITIONS`).
 
     Returns
     -------
     list of dict
-        Per axis and gain with a finite margin: ``axis``, ``gain``, ``feedback``, ``margin_db``, ``margin_hz`` and per
-        condition its :func:`twin_boundary` and ``<name>_minus_margin_db``.
+        Per axis and gain with a finite margin: ``axis``, ``gain``, ``feedback``, ``margin_db``,
+        ``margin_hz``, per condition its :func:`twin_boundary` and ``<name>_minus_margin_db``
+        (both None where the twin does not grow within :data:`MAX_WIDENINGS` dB of the margin),
+        and with ``linear`` and ``linear_quarter_step`` both found, ``zero_step_db`` (the linear
+        boundary extrapolated to a zero step, :func:`zero_step_boundary`) and
+        ``zero_step_minus_margin_db``.
     """
     conditions = conditions or CONDITIONS
     rows = []
@@ -202,26 +231,44 @@ def verify_margins(
                 "margin_hz": margin["gain_margin_hz"],
             }
             for name, condition in conditions.items():
-                found = twin_boundary(design, machine, axis, gain, condition)
+                try:
+                    found = twin_boundary(design, machine, axis, gain, condition)
+                except TwinInputError:  # no growth within MAX_WIDENINGS dB of the margin
+                    row[name], row[f"{name}_minus_margin_db"] = None, None
+                    continue
                 row[name] = found
                 row[f"{name}_minus_margin_db"] = round(found["boundary_db"] - margin["gain_margin_db"], 3)
+            if row.get("linear") and row.get("linear_quarter_step"):
+                zero = zero_step_boundary(
+                    row["linear"]["boundary_db"],
+                    row["linear_quarter_step"]["boundary_db"],
+                    LINEAR_QUARTER_STEP.timestep_divisor,
+                )
+                row["zero_step_db"] = round(zero, 3)
+                row["zero_step_minus_margin_db"] = round(zero - margin["gain_margin_db"], 3)
             rows.append(row)
     return rows
 
 
 def margin_table(rows: list[dict]) -> str:
-    """:func:`verify_margins`'s rows (each with its ``machine``) as a Markdown table: the
-    cascade margin and each condition's boundary, with the boundary less the margin (dB)."""
+    """:func:`verify_margins`'s rows (each with its ``machine``, every condition of
+    :data:`CONDITIONS`) as a Markdown table: the cascade margin and each boundary with the
+    boundary less the margin (dB)."""
     lines = [
-        "| machine | feedback | axis | gain | cascade margin | twin | without Coulomb | like for like |",
-        "|---|---|---|---|---|---|---|---|",
+        "| machine | feedback | axis | gain | cascade margin | twin | without Coulomb | linear "
+        "| linear, 1/4 step | zero step |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
+
+    def cell(found: dict | None, less: float | None) -> str:
+        return f" none within {MAX_WIDENINGS} dB |" if found is None else f" {found['boundary_db']:.2f} ({less:+.2f}) |"
+
     for r in rows:
-        boundaries = "".join(
-            f" {r[name]['boundary_db']:.2f} ({r[f'{name}_minus_margin_db']:+.2f}) |" for name in CONDITIONS
-        )
+        boundaries = "".join(cell(r[name], r[f"{name}_minus_margin_db"]) for name in CONDITIONS)
+        zero = r.get("zero_step_db")
         lines.append(
             f"| {r['machine']} | {r['feedback']} | {r['axis']} | {r['gain']} "
             f"| {r['margin_db']:.2f} dB at {r['margin_hz']:.0f} Hz |{boundaries}"
+            + (" - |" if zero is None else f" {zero:.2f} ({r['zero_step_minus_margin_db']:+.2f}) |")
         )
     return "\n".join(lines) + "\n"
