@@ -87,6 +87,7 @@ def frf_rows(machine: str, axes: list[str], excitations: list[str], frictions: l
                             "friction": friction,
                             "modes": found,
                             "missing": missing,
+                            "incoherent_bands_hz": r["incoherent_bands_hz"],
                         }
                     )
                     print_frf_row(rows[-1])
@@ -97,11 +98,19 @@ def print_frf_row(row: dict) -> None:
     reliable = [abs(q["error_pct"]) for q in row["modes"] if q["unreliable"] is None]
     flagged = sum(q["unreliable"] is not None for q in row["modes"])
     cells = [
-        f"{'R' if q['kind'] == 'resonance' else 'A'} {q['frequency_hz']:.2f}/{q['model_hz']:.2f} {q['error_pct']:+.2f}%"
-        + ("!" if q["unreliable"] is not None else "")
+        f"{'R' if q['kind'] == 'resonance' else 'A'} {q['frequency_hz']:.2f}/{q['model_hz']:.2f} "
+        f"{q['error_pct']:+.2f}% c{q['coherence']:.3f}" + ("!" if q["unreliable"] is not None else "")
         for q in row["modes"]
     ]
-    cells += [f"{'R' if kind == 'resonance' else 'A'} missing {f:.2f}" for kind, f in row["missing"]]
+    cells += [
+        f"{'R' if kind == 'resonance' else 'A'} missing {f:.2f}"
+        + (
+            " (incoherent band within 5 %)"
+            if any(lo <= 1.05 * f and hi >= f / 1.05 for lo, hi in row["incoherent_bands_hz"])
+            else ""
+        )
+        for kind, f in row["missing"]
+    ]
     worst = f"{max(reliable):.2f}" if reliable else "-"
     print(
         f"{row['machine']:<11} {row['axis']} {row['sensor']:<5} {row['excitation']:<9} {row['friction']:<3} "
@@ -168,7 +177,10 @@ def calibration_rows(machine: str, axes: list[str], folder: Path) -> list[dict]:
 def main(machines: list[str], excitations: list[str], frictions: list[str], frf: bool, calibration: bool) -> dict:
     out: dict = {"frf": [], "calibration": []}
     if frf:
-        print("FRF modes against the lumped model (measured/model Hz, error; ! unreliable):")
+        print(
+            "FRF modes against the lumped model: measured/model Hz, error, the lowest coherence within 5 %, "
+            "! marked unreliable"
+        )
         for machine in machines:
             axes = [a.name for a in build(str(MACHINES / f"{machine}.toml")).axes]
             out["frf"] += frf_rows(machine, axes, excitations, frictions)

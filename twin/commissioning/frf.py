@@ -77,7 +77,7 @@ CREST_CLIP = 0.8
 #: within MODE_BAND of its frequency (:func:`mode_quality`).
 MODE_BAND = 0.05
 MODE_MIN_COHERENCE = 0.95
-#: Lines of low coherence this few coherent lines apart count as one band.
+#: Lines of low coherence with at most this many coherent lines between count as one band.
 BAND_GAP_LINES = 3
 #: The smallest excitation (V): a +-10 V analogue command's 16-bit step is 0.3 mV, a field bus's
 #: torque command's 0.1 % of rated torque 10 mV of a 10 V scale; below it a drive does not move
@@ -516,13 +516,13 @@ def mode_quality(
 
 def incoherent_bands(freqs: np.ndarray, coherence: np.ndarray) -> list[list[float]]:
     """The bands (Hz, [first, last line]) where the ``coherence`` is below :data:`MIN_COHERENCE`:
-    runs of such lines, merged across gaps of fewer than :data:`BAND_GAP_LINES` coherent lines.
+    runs of such lines, merged across gaps of up to :data:`BAND_GAP_LINES` coherent lines.
     No mode is reported from a line there (:func:`peaks`), and one whose band reaches in is
     unreliable (:func:`mode_quality`): a mode missing from the list may lie inside."""
     low = np.flatnonzero(coherence < MIN_COHERENCE)
     if not len(low):
         return []
-    breaks = np.flatnonzero(np.diff(low) > BAND_GAP_LINES)
+    breaks = np.flatnonzero(np.diff(low) > BAND_GAP_LINES + 1)
     starts, ends = low[np.r_[0, breaks + 1]], low[np.r_[breaks, len(low) - 1]]
     return [[float(freqs[a]), float(freqs[b])] for a, b in zip(starts, ends, strict=True)]
 
