@@ -232,3 +232,22 @@ def test_a_mode_is_unreliable_where_a_line_near_it_is_incoherent():
     assert doubtful["coherence"] == 0.5 and doubtful["distortion_db"] == -20.0
     assert doubtful["unreliable"].startswith("coherence 0.500 < 0.95 within 5 % of it")
     assert incoherent_bands(freqs, coherence) == [[94.0, 94.0], [150.0, 156.0], [161.0, 161.0]]
+
+
+def test_the_cli_marks_an_unreliable_mode_with_its_reason():
+    """`twin frf` prints a mode with low coherence near it as unreliable, with the coherence,
+    and the incoherent bands (mid_size_xy X, its friction, the motor's sensor, a 0.45 V
+    multisine: the first resonance, 2-3 % low, and the anti-resonances)."""
+    from cli_process import twin
+
+    r = twin("frf", MID, "--sensor", "motor", "--excitation", "multisine", "--amplitude", "0.45", "--duration", "9.9")
+    assert r.returncode == 0, r.stderr
+    listed = next(line for line in r.stdout.splitlines() if line.strip().startswith("resonances (Hz):"))
+    first = float(listed.split(":")[1].split(",")[0].split()[0])
+    assert 165 < first < 175.02 * 0.99 and "(unreliable)" in listed.split(",")[0]
+    reason = next(
+        line for line in r.stdout.splitlines() if line.strip().startswith(f"unreliable resonance {first:.1f} Hz")
+    )
+    coherence = float(reason.split("coherence ")[1].split()[0])
+    assert coherence < 0.95
+    assert "coherence < 0.9 (no mode read there) at " in r.stdout
