@@ -137,12 +137,13 @@ def test_a_multisine_with_friction_gives_its_best_linear_approximation_without_p
     periodic multisine made friction's distortion repeat and look coherent (48 resonances
     reported, 36 Hz to 875 Hz); over six realizations of random phases the distortion lowers
     the coherence and widens the BLA's scatter, and only the model's two modes are found (the
-    first within 4 %: friction damps it and flattens its top).  The distortion is measured
-    where the model says it is large: within 30 dB of the BLA between 300 and 600 Hz."""
+    first within 1 % at the low crest factor's RMS, 4 % at random phases' 2.1 times less:
+    friction damps it).  The distortion is measured where the model says it is large: within
+    30 dB of the BLA between 300 and 600 Hz."""
     r = measure(MID, FrfSettings(excitation="multisine"))
     assert r["realizations"] == 6
     assert len(r["resonances_hz"]) == len(r["model_resonances_hz"]) == 2
-    np.testing.assert_allclose(r["resonances_hz"], r["model_resonances_hz"], rtol=0.04)
+    np.testing.assert_allclose(r["resonances_hz"], r["model_resonances_hz"], rtol=0.01)
     f, mag = np.array(r["frequency_hz"]), np.array(r["magnitude_db"])
     distortion = np.array([-np.inf if v is None else v for v in r["distortion_db"]])
     band = (f > 300) & (f < 600)
@@ -250,4 +251,4 @@ def test_the_cli_marks_an_unreliable_mode_with_its_reason():
     )
     coherence = float(reason.split("coherence ")[1].split()[0])
     assert coherence < 0.95
-    assert "coherence < 0.9 (no mode read there) at " in r.stdout
+    assert "coherence < 0.95 (a mode there is unreliable or missing) at " in r.stdout
