@@ -1,6 +1,7 @@
 """Frequency-response measurement on the twin, as a drive's commissioning tool does it.
 
-An excitation ``d`` (PRBS, logarithmic chirp or random-phase multisine, volts) is added to one
+An excitation ``d`` (PRBS, logarithmic chirp or multisine of random phases and low crest factor,
+volts) is added to one
 axis's drive input, with the loop open or closed around the axis (a velocity loop: derivative
 feedback of the position; a position loop: PD; on the motor's encoder by default, as a drive
 closes it, collocated with the drive), and the plant's FRF from drive input ``u`` (V)
@@ -12,8 +13,10 @@ recorded signals with Welch's averaged cross spectra (``scipy.signal.csd``):
 In the open loop ``u = d`` and G is the H1 estimator S_uy / S_uu; in a closed loop the ratio
 through the excitation removes the feedback's correlation (the indirect method). Resonances
 and anti-resonances are the local maxima and minima of the magnitude (prominence >= 3 dB, with
-coherence >= 0.9). The model's FRF is the zero-order-hold equivalent of the machine's transfer
-function at the sample period, with the drive delay.
+coherence >= 0.9); each is marked unreliable, with the reason, where the coherence within 5 % of
+it falls under 0.95 (:func:`mode_quality`: Coulomb friction's distortion). The model's FRF is the
+zero-order-hold equivalent of the machine's transfer function at the sample period, with the
+drive delay.
 """
 
 from __future__ import annotations
@@ -182,8 +185,9 @@ def excitation_signal(kind: str, n: int, dt: float, amplitude: float, f_max_hz: 
     record's end (a quarter of a shorter record) and goes on to at most
     :data:`CHIRP_TOP_PER_SAMPLE_RATE` / dt; multisine: realizations
     (:func:`multisine_realizations`), each every DFT line of a :data:`MULTISINE_PERIOD`-sample
-    period up to f_max with its own random phases, scaled to the amplitude's peak and repeated
-    for 1 + :data:`MULTISINE_PERIODS` periods.
+    period up to f_max with its own random phases, its crest factor lowered
+    (:func:`low_crest_period`), scaled to the amplitude's peak and repeated for
+    1 + :data:`MULTISINE_PERIODS` periods.
     """
     rng = np.random.default_rng(seed)
     if kind == "prbs":
@@ -567,7 +571,9 @@ def measure(machine: str, settings: FrfSettings, overrides: dict[str, float] | N
         ``machine``, ``settings``, ``parameters`` (symbol: value in effect), ``frequency_hz``,
         ``magnitude_db``, ``phase_deg``, ``coherence``, ``model_magnitude_db``,
         ``model_phase_deg``, ``resonances_hz``, ``antiresonances_hz``, ``model_resonances_hz``,
-        ``model_antiresonances_hz``, ``max_model_error_db`` (where the coherence >= 0.9) and
+        ``model_antiresonances_hz``, ``modes`` (each reported mode's :func:`mode_quality`),
+        ``unreliable_modes`` (how many are marked), ``incoherent_bands_hz``
+        (:func:`incoherent_bands`), ``max_model_error_db`` (where the coherence >= 0.9) and
         ``run`` (the simulation, for plots and recordings; not JSON).
 
     Raises
