@@ -10,7 +10,7 @@ function or MuJoCo.
 
 FRF table: for each machine, axis, sensor (motor, table), excitation (PRBS, chirp, multisine)
 and Coulomb friction (the file's, or none), `twin frf`'s default measurement (velocity loop on the
-motor's encoder, 1 V, 16 s, to 1 kHz): each reported mode beside the lumped model's, its error,
+motor's encoder, 1 V, 16 s or --duration, to 1 kHz): each reported mode beside the lumped model's, its error,
 and `unreliable` where the FRF marks it so (coherence or nonlinear distortion, with the reason);
 a model mode below 980 Hz that the measurement does not report is listed as missing.
 
@@ -42,6 +42,8 @@ CATALOGUE = ("compact_xy", "mid_size_xy", "heavy_xy", "sgm7j_xy", "sgm7j_axis")
 EXCITATIONS = ("prbs", "chirp", "multisine")
 #: Modes the measurement covers: below the band's top (1 kHz) less the peak's flank.
 TOP_HZ = 980.0
+#: A multisine's shortest record (s): four realizations of three 0.82 s periods.
+SHORTEST_MULTISINE_S = 9.9
 #: The measured trace's scale resolution and white noise (m).
 SCALE_M = 1e-8
 NOISE_M = 1e-7
@@ -51,8 +53,11 @@ def no_friction(axes: list[str]) -> dict[str, float]:
     return {f"{a}_friction_coulomb_N": 0.0 for a in axes}
 
 
-def frf_rows(machine: str, axes: list[str], excitations: list[str], frictions: list[str]) -> list[dict]:
-    """One row per axis, sensor, excitation and friction: the reported modes against the oracle's."""
+def frf_rows(
+    machine: str, axes: list[str], excitations: list[str], frictions: list[str], duration_s: float
+) -> list[dict]:
+    """One row per axis, sensor, excitation and friction: the reported modes against the oracle's
+    (a multisine over at least its shortest record)."""
     rows = []
     for friction in frictions:
         overrides = None if friction == "on" else no_friction(axes)
@@ -63,7 +68,14 @@ def frf_rows(machine: str, axes: list[str], excitations: list[str], frictions: l
                 for excitation in excitations:
                     r = measure(
                         str(MACHINES / f"{machine}.toml"),
-                        FrfSettings(axis=axis, sensor=sensor, excitation=excitation),
+                        FrfSettings(
+                            axis=axis,
+                            sensor=sensor,
+                            excitation=excitation,
+                            duration_s=max(duration_s, SHORTEST_MULTISINE_S)
+                            if excitation == "multisine"
+                            else duration_s,
+                        ),
                         overrides,
                     )
                     expected = {"resonance": resonances, "antiresonance": antiresonances if sensor == "motor" else []}
@@ -87,6 +99,7 @@ def frf_rows(machine: str, axes: list[str], excitations: list[str], frictions: l
                             "friction": friction,
                             "modes": found,
                             "missing": missing,
+                            "incoherent_bands_hz": r["incoherent_bands_hz"],
                         }
                     )
                     print_frf_row(rows[-1])
@@ -97,11 +110,19 @@ def print_frf_row(row: dict) -> None:
     reliable = [abs(q["error_pct"]) for q in row["modes"] if q["unreliable"] is None]
     flagged = sum(q["unreliable"] is not None for q in row["modes"])
     cells = [
-        f"{'R' if q['kind'] == 'resonance' else 'A'} {q['frequency_hz']:.2f}/{q['model_hz']:.2f} {q['error_pct']:+.2f}%"
-        + ("!" if q["unreliable"] is not None else "")
+        f"{'R' if q['kind'] == 'resonance' else 'A'} {q['frequency_hz']:.2f}/{q['model_hz']:.2f} "
+        f"{q['error_pct']:+.2f}% c{q['coherence']:.3f}" + ("!" if q["unreliable"] is not None else "")
         for q in row["modes"]
     ]
-    cells += [f"{'R' if kind == 'resonance' else 'A'} missing {f:.2f}" for kind, f in row["missing"]]
+    cells += [
+        f"{'R' if kind == 'resonance' else 'A'} missing {f:.2f}"
+        + (
+            " (incoherent band within 5 %)"
+            if any(lo <= 1.05 * f and hi >= f / 1.05 for lo, hi in row["incoherent_bands_hz"])
+            else ""
+        )
+        for kind, f in row["missing"]
+    ]
     worst = f"{max(reliable):.2f}" if reliable else "-"
     print(
         f"{row['machine']:<11} {row['axis']} {row['sensor']:<5} {row['excitation']:<9} {row['friction']:<3} "
@@ -165,13 +186,18 @@ def calibration_rows(machine: str, axes: list[str], folder: Path) -> list[dict]:
     return rows
 
 
-def main(machines: list[str], excitations: list[str], frictions: list[str], frf: bool, calibration: bool) -> dict:
+def main(
+    machines: list[str], excitations: list[str], frictions: list[str], frf: bool, calibration: bool, duration_s: float
+) -> dict:
     out: dict = {"frf": [], "calibration": []}
     if frf:
-        print("FRF modes against the lumped model (measured/model Hz, error; ! unreliable):")
+        print(
+            "FRF modes against the lumped model: measured/model Hz, error, the lowest coherence within 5 %, "
+            "! marked unreliable"
+        )
         for machine in machines:
             axes = [a.name for a in build(str(MACHINES / f"{machine}.toml")).axes]
-            out["frf"] += frf_rows(machine, axes, excitations, frictions)
+            out["frf"] += frf_rows(machine, axes, excitations, frictions, duration_s)
     if calibration:
         print("Calibration of hidden variants made by the lumped model (error beside the stated standard error):")
         with tempfile.TemporaryDirectory() as folder:
@@ -186,6 +212,7 @@ if __name__ == "__main__":
     parser.add_argument("--machine", action="append", choices=CATALOGUE, help="repeat; default: all")
     parser.add_argument("--excitation", action="append", choices=EXCITATIONS, help="repeat; default: all")
     parser.add_argument("--friction", action="append", choices=("on", "off"), help="repeat; default: both")
+    parser.add_argument("--duration", type=float, default=16.0, help="recorded time (s), a multisine's at least 9.9")
     parser.add_argument("--no-frf", action="store_true", help="skip the FRF table")
     parser.add_argument("--no-calibration", action="store_true", help="skip the calibration table")
     a = parser.parse_args()
@@ -195,4 +222,5 @@ if __name__ == "__main__":
         a.friction or ["off", "on"],
         not a.no_frf,
         not a.no_calibration,
+        a.duration,
     )

@@ -68,6 +68,21 @@ def test_bad_settings_and_divergence_are_the_twins_errors():
         ("compare_controllers.py", ["--duration", "0.3"], "MIMO H-infinity"),
         ("sweep_box.py", ["--samples", "4", "--workers", "1"], "4 samples in"),
         ("tune_vs_papers.py", ["--duration", "0.3"], "tuned servo_cascade (ours)"),
+        (
+            "frf_accuracy.py",
+            [
+                "--machine",
+                "sgm7j_axis",
+                "--excitation",
+                "prbs",
+                "--friction",
+                "off",
+                "--no-calibration",
+                "--duration",
+                "3.3",
+            ],
+            "sgm7j_axis  x motor prbs      off max|err|  0.0",  # each mode within 0.1 % of the lumped model
+        ),
         pytest.param(
             "verify_margins.py",
             ["--machines", "googol_xy", "--gains", "kp_vel"],
@@ -85,7 +100,7 @@ def test_bad_settings_and_divergence_are_the_twins_errors():
 def test_examples_run(tmp_path, script, args, check):
     extra = (
         ["--out", str(tmp_path)]
-        if script not in ("compare_controllers.py", "tune_vs_papers.py", "verify_margins.py")
+        if script not in ("compare_controllers.py", "tune_vs_papers.py", "verify_margins.py", "frf_accuracy.py")
         else []
     )
     r = subprocess.run(

@@ -620,7 +620,7 @@ def frf(
     """Measure an axis's frequency response on the twin as a commissioning tool does (excite,
     H1 with coherence, resonances and anti-resonances) beside the model's."""
     from twin import api
-    from twin.commissioning.frf import nut_stiffness
+    from twin.commissioning.frf import MODE_MIN_COHERENCE, nut_stiffness
 
     _check_output("--rrd", rrd, ".rrd")
     _check_folder(plots)
@@ -671,7 +671,13 @@ def frf(
             typer.echo(f"  {label} (Hz): {found or 'none'}   model: {model or 'none'}")
         for q in result["modes"]:
             if q["unreliable"] is not None:
-                typer.echo(f"  unreliable {q['kind']} {q['frequency_hz']:.1f} Hz: {q['unreliable']}")
+                kind = "anti-resonance" if q["kind"] == "antiresonance" else q["kind"]
+                typer.echo(f"  unreliable {kind} {q['frequency_hz']:.1f} Hz: {q['unreliable']}")
+        if result["incoherent_bands_hz"]:
+            bands = ", ".join(
+                f"{lo:.1f}" if lo == hi else f"{lo:.1f}-{hi:.1f}" for lo, hi in result["incoherent_bands_hz"]
+            )
+            typer.echo(f"  coherence < {MODE_MIN_COHERENCE:g} (a mode there is unreliable or missing) at {bands} Hz")
         error = result["max_model_error_db"]
         typer.echo(
             f"  coherence >= 0.9 on {100 * result['coherent_share']:.0f} % of the lines; "

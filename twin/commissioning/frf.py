@@ -1,6 +1,7 @@
 """Frequency-response measurement on the twin, as a drive's commissioning tool does it.
 
-An excitation ``d`` (PRBS, logarithmic chirp or random-phase multisine, volts) is added to one
+An excitation ``d`` (PRBS, logarithmic chirp or multisine of random phases and low crest factor,
+volts) is added to one
 axis's drive input, with the loop open or closed around the axis (a velocity loop: derivative
 feedback of the position; a position loop: PD; on the motor's encoder by default, as a drive
 closes it, collocated with the drive), and the plant's FRF from drive input ``u`` (V)
@@ -12,8 +13,10 @@ recorded signals with Welch's averaged cross spectra (``scipy.signal.csd``):
 In the open loop ``u = d`` and G is the H1 estimator S_uy / S_uu; in a closed loop the ratio
 through the excitation removes the feedback's correlation (the indirect method). Resonances
 and anti-resonances are the local maxima and minima of the magnitude (prominence >= 3 dB, with
-coherence >= 0.9). The model's FRF is the zero-order-hold equivalent of the machine's transfer
-function at the sample period, with the drive delay.
+coherence >= 0.9); each is marked unreliable, with the reason, where the coherence within 5 % of
+it falls under 0.95 (:func:`mode_quality`: Coulomb friction's distortion). The model's FRF is the
+zero-order-hold equivalent of the machine's transfer function at the sample period, with the
+drive delay.
 """
 
 from __future__ import annotations
@@ -77,7 +80,7 @@ CREST_CLIP = 0.8
 #: within MODE_BAND of its frequency (:func:`mode_quality`).
 MODE_BAND = 0.05
 MODE_MIN_COHERENCE = 0.95
-#: Lines of low coherence this few coherent lines apart count as one band.
+#: Lines of low coherence with at most this many coherent lines between count as one band.
 BAND_GAP_LINES = 3
 #: The smallest excitation (V): a +-10 V analogue command's 16-bit step is 0.3 mV, a field bus's
 #: torque command's 0.1 % of rated torque 10 mV of a 10 V scale; below it a drive does not move
@@ -182,8 +185,9 @@ def excitation_signal(kind: str, n: int, dt: float, amplitude: float, f_max_hz: 
     record's end (a quarter of a shorter record) and goes on to at most
     :data:`CHIRP_TOP_PER_SAMPLE_RATE` / dt; multisine: realizations
     (:func:`multisine_realizations`), each every DFT line of a :data:`MULTISINE_PERIOD`-sample
-    period up to f_max with its own random phases, scaled to the amplitude's peak and repeated
-    for 1 + :data:`MULTISINE_PERIODS` periods.
+    period up to f_max with its own random phases, its crest factor lowered
+    (:func:`low_crest_period`), scaled to the amplitude's peak and repeated for
+    1 + :data:`MULTISINE_PERIODS` periods.
     """
     rng = np.random.default_rng(seed)
     if kind == "prbs":
@@ -515,14 +519,16 @@ def mode_quality(
 
 
 def incoherent_bands(freqs: np.ndarray, coherence: np.ndarray) -> list[list[float]]:
-    """The bands (Hz, [first, last line]) where the ``coherence`` is below :data:`MIN_COHERENCE`:
-    runs of such lines, merged across gaps of fewer than :data:`BAND_GAP_LINES` coherent lines.
-    No mode is reported from a line there (:func:`peaks`), and one whose band reaches in is
-    unreliable (:func:`mode_quality`): a mode missing from the list may lie inside."""
-    low = np.flatnonzero(coherence < MIN_COHERENCE)
+    """The bands (Hz, [first, last line]) where the ``coherence`` is below
+    :data:`MODE_MIN_COHERENCE`: runs of such lines, merged across gaps of up to
+    :data:`BAND_GAP_LINES` coherent lines.  A mode within :data:`MODE_BAND` of one is
+    unreliable (:func:`mode_quality`), none is read from a line under :data:`MIN_COHERENCE`
+    (:func:`peaks`): a mode missing from the lists may lie inside (heavy_xy Y's 199.96 Hz
+    anti-resonance, at 0.45 V of multisine, with the coherence at 0.907 beside it)."""
+    low = np.flatnonzero(coherence < MODE_MIN_COHERENCE)
     if not len(low):
         return []
-    breaks = np.flatnonzero(np.diff(low) > BAND_GAP_LINES)
+    breaks = np.flatnonzero(np.diff(low) > BAND_GAP_LINES + 1)
     starts, ends = low[np.r_[0, breaks + 1]], low[np.r_[breaks, len(low) - 1]]
     return [[float(freqs[a]), float(freqs[b])] for a, b in zip(starts, ends, strict=True)]
 
@@ -565,7 +571,9 @@ def measure(machine: str, settings: FrfSettings, overrides: dict[str, float] | N
         ``machine``, ``settings``, ``parameters`` (symbol: value in effect), ``frequency_hz``,
         ``magnitude_db``, ``phase_deg``, ``coherence``, ``model_magnitude_db``,
         ``model_phase_deg``, ``resonances_hz``, ``antiresonances_hz``, ``model_resonances_hz``,
-        ``model_antiresonances_hz``, ``max_model_error_db`` (where the coherence >= 0.9) and
+        ``model_antiresonances_hz``, ``modes`` (each reported mode's :func:`mode_quality`),
+        ``unreliable_modes`` (how many are marked), ``incoherent_bands_hz``
+        (:func:`incoherent_bands`), ``max_model_error_db`` (where the coherence >= 0.9) and
         ``run`` (the simulation, for plots and recordings; not JSON).
 
     Raises
