@@ -21,6 +21,7 @@ from twin.gcode.planner import Limits, PlannerSettings, PlanningError, plan
 from twin.gcode.reader import PLANES, Move, Reader, Settings
 from twin.machines import build
 from twin.machines.rigid_drive import rigid_drives, table_travel_m
+from twin.records import plan_warning
 from twin.references.gcode import planned_for
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -410,4 +411,4 @@ def test_a_streamed_program_gets_the_held_ones_drive_warnings(monkeypatch):
     for k0 in range(0, samples * 2, 700):  # the runner's chunks at a 0.5 ms period
         streamed.sample(np.arange(k0, k0 + 710) * 5e-4)
     assert len(whole.warnings.listed()) >= 5
-    assert streamed.plan_warnings == (whole.warnings.listed(), whole.warnings.total)
+    assert streamed.plan_warnings == ([plan_warning(row) for row in whole.warnings.listed()], whole.warnings.total)

@@ -48,6 +48,7 @@ from twin.process.cutting import (
 )
 from twin.process.materials import MATERIALS, CuttingCoefficients
 from twin.process.tool_dynamics import ToolDynamicsSpec
+from twin.records import MachiningWarning
 from twin.spec import MAX_MM, Millimetres, StrictSpec
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
@@ -850,7 +851,7 @@ class ProgramCut:
         The engagement at each sample of the plan.
     height_map : HeightMap
         The stock as the program leaves it.
-    warnings : list of dict
+    warnings : list of twin.records.MachiningWarning
         Crashes and misuse by line (:func:`twin.process.misuse.machining_warnings`).
     warnings_total : int
         Every warning, listed or not.
@@ -861,7 +862,7 @@ class ProgramCut:
     milling: ProgramMilling
     table: np.ndarray
     height_map: HeightMap
-    warnings: list[dict]
+    warnings: list[MachiningWarning]
     warnings_total: int
     radius_m: np.ndarray
     corner_m: np.ndarray
