@@ -111,8 +111,8 @@ def test_bore_diameter_is_the_envelope_of_the_actual_motion(bore):
     assert isinstance(row, CircleMeasured)
     assert row.diameter_mm == pytest.approx(2 * reach.mean(), abs=1e-4)  # 0.1 µm
     assert row.roundness_um == pytest.approx(np.ptp(reach) * 1e3, abs=1.5)
-    assert row["deviation_um"] == pytest.approx((row["diameter_mm"] - 66.0) * 1e3, abs=1e-3)
-    assert row["pass"] is (abs(row["deviation_um"]) <= 10)
+    assert row.deviation_um == pytest.approx((row.diameter_mm - 66.0) * 1e3, abs=1e-3)
+    assert row.passed is (abs(row.deviation_um) <= 10)
 
 
 def test_a_run_stopped_halfway_is_compared_with_what_the_program_had_cut_by_then(bore):
