@@ -387,11 +387,11 @@ def chatter_check(result, lines: list[LineRow]) -> tuple[dict[str, Any] | None, 
             if reading is not None:
                 row = replace(row, chatter=reading.as_dict())
                 if reading.chatters:
-                    warnings.append(ChatterWarning(row.line, _chatter_message(reading), row.text))
+                    warnings.append(ChatterWarning(line=row.line, message=_chatter_message(reading), text=row.text))
             checked.append(row)
         lines = checked
     elif whole.chatters:
-        warnings.append(ChatterWarning(None, _chatter_message(whole), ""))
+        warnings.append(ChatterWarning(line=None, message=_chatter_message(whole), text=""))
     return whole.as_dict(), lines, warnings
 
 

@@ -22,7 +22,8 @@ the nominal feature are its measured points:
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal
+from collections.abc import Callable
+from typing import Annotated, Any, Literal
 
 import numpy as np
 import shapely
@@ -94,7 +95,7 @@ def _verdict(deviation_um: float, tolerance_um: float | None) -> bool | None:
 
 def not_found(feature: InspectSpec, message: str) -> FeatureNotFound:
     """A feature that could not be measured, with why."""
-    return FeatureNotFound(feature.name, FeatureType(feature.type), feature.z_mm, message)
+    return FeatureNotFound(name=feature.name, type=FeatureType(feature.type), z_mm=feature.z_mm, message=message)
 
 
 def _circle_hits(centre: np.ndarray, radius_mm: float, origin: np.ndarray, direction: np.ndarray) -> np.ndarray:
@@ -220,10 +221,14 @@ def _measured(feature, deviation_um: float) -> dict:
 
 
 #: Each feature type's measurement: the one place the types are told apart.
-MEASURES = {FeatureType.CIRCLE: _measure_circle, FeatureType.LINE: _measure_line, FeatureType.WIDTH: _measure_width}
+MEASURES: dict[FeatureType, Callable[[Any, MachinedPart], Inspected]] = {
+    FeatureType.CIRCLE: _measure_circle,
+    FeatureType.LINE: _measure_line,
+    FeatureType.WIDTH: _measure_width,
+}
 
 
 def measure(feature: InspectSpec, part: MachinedPart) -> Inspected:
     """One feature of ``inspection`` measured on the actual ``part`` at its height (see the
     module docstring): probes every :data:`PROBE_STEP_MM` along the nominal feature."""
-    return MEASURES[FeatureType(feature.type)](feature, part)  # type: ignore[operator]
+    return MEASURES[FeatureType(feature.type)](feature, part)
