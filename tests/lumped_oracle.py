@@ -74,7 +74,8 @@ def oracle(machine: str, axis: str, overrides: dict | None = None) -> tuple[sign
     path = MACHINES / f"{machine}.toml"
     support = tomllib.loads(path.read_text())["axes"][axis].get("screw_support", "fixed_fixed")
     bm = build(str(path), overrides)
-    return lumped_axis(bm.params, axis, "y" if axis == "x" else None, support), bm.delay_s
+    above = "y" if axis == "x" and "y_table_mass_kg" in bm.params else None  # Y rides on X
+    return lumped_axis(bm.params, axis, above, support), bm.delay_s
 
 
 def modes(sys: signal.StateSpace, sensor: str) -> tuple[list[float], list[float]]:

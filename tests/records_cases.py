@@ -11,7 +11,7 @@ from pathlib import Path
 
 from twin import api
 from twin.exits import strict_json
-from twin.process.inspection import CircleFeature, LineFeature, WidthFeature
+from twin.machining.inspection import CircleFeature, LineFeature, WidthFeature
 
 #: Where the fixtures are.
 FIXTURES = Path(__file__).resolve().parent / "fixtures" / "records"

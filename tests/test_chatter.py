@@ -9,10 +9,11 @@ import math
 import numpy as np
 import pytest
 
-from twin.process.chatter import CHATTER_THRESHOLD, frequency_hz, ratios, windows
-from twin.process.cutting import ALUMINIUM_7075_T6, chip_arc, immersion_angles, mode_rows, step_tool_forces_N
-from twin.process.stability import Cut, sd_critical_depths
-from twin.process.tool_dynamics import ToolDynamicsSpec
+from twin.machining.chatter import CHATTER_THRESHOLD, frequency_hz, ratios, windows
+from twin.machining.cutting import chip_arc, immersion_angles, mode_rows, step_tool_forces_N
+from twin.machining.materials import ALUMINIUM_7075_T6
+from twin.machining.stability import Cut, sd_critical_depths
+from twin.machining.tool_dynamics import ToolDynamicsSpec
 from twin.scenario import run_scenario, scenario_from_dict
 
 K = ALUMINIUM_7075_T6
@@ -262,7 +263,7 @@ def test_a_run_that_chatters_says_so_and_strict_exits_4():
     closed-form mean, not the 1e8 N of the chip that followed the vibration."""
     import json
 
-    from twin.process.cutting import mean_tool_forces_N
+    from twin.machining.cutting import mean_tool_forces_N
 
     stable = json.loads(_slot(10, "--json").stdout)
     assert stable["chatter"]["indicator"] < 0.05 and stable["chatter_warnings"] == []
@@ -310,8 +311,8 @@ def test_issue_47s_deep_slot_runs_to_its_end_with_the_closed_form_force():
     out of the cut, and their edge force, K_te a = 443 N a tooth, with them), the largest force
     under three times the mean, the slot line's chatter mild (under 1: the vibration small
     against the feed)."""
+    from twin.machining.cutting import mean_tool_forces_N
     from twin.metrics import tracking_summary
-    from twin.process.cutting import mean_tool_forces_N
     from twin.scenario import load_scenario
 
     result = run_scenario(load_scenario("gcode_deep_slot"))

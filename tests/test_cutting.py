@@ -9,8 +9,7 @@ from scipy.integrate import quad
 
 from twin.errors import TwinInputError
 from twin.machines import build
-from twin.process.cutting import (
-    ALUMINIUM_7075_T6,
+from twin.machining.cutting import (
     AverageForce,
     EndMilling,
     ForceModels,
@@ -18,6 +17,7 @@ from twin.process.cutting import (
     mean_tool_forces_N,
     step_tool_forces_N,
 )
+from twin.machining.materials import ALUMINIUM_7075_T6
 from twin.scenario import run_scenario, scenario_from_dict
 
 K = ALUMINIUM_7075_T6

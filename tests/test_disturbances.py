@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
+from twin.disturbances.drive_input import HarmonicInput
 from twin.errors import TwinInputError
-from twin.process.disturbances import HarmonicInput
 from twin.scenario import run_scenario, scenario_from_dict
 
 CUT = dict(
@@ -88,7 +88,7 @@ def test_bad_disturbance_names_its_field(entry, field):
 
 def test_the_disturbance_schema_is_the_registry():
     """[[disturbances]] entries are the registered kinds, each built by its own module's builder."""
-    from twin.process import DISTURBANCES
+    from twin.disturbances import DISTURBANCES
     from twin.scenario import Scenario
 
     schema = Scenario.model_json_schema()

@@ -11,7 +11,8 @@ import pytest
 
 from twin.gcode.planner import Limits, PlannerSettings, plan
 from twin.gcode.reader import Reader
-from twin.process.machining import StockSpec, ToolSpec, engaged_degrees, program_milling
+from twin.machining.engagement import StockSpec, ToolSpec, engaged_degrees
+from twin.machining.program_cut import program_milling
 
 LIMITS = Limits((0.5, 0.5, 0.2), (5.0, 5.0, 2.0), (100.0, 100.0, 200.0))
 FLAT = ToolSpec(diameter_mm=6.0, n_flutes=2)

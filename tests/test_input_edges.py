@@ -8,8 +8,8 @@ from cli_process import twin as twin_cli
 
 from twin.commissioning.calibration import calibrate
 from twin.errors import TwinInputError
-from twin.process.cutting import MAX_CUTTING_N_PER_MM2, MAX_EDGE_N_PER_MM
-from twin.process.machining import MIN_TOOL_MM
+from twin.machining.cutting import MAX_CUTTING_N_PER_MM2, MAX_EDGE_N_PER_MM
+from twin.machining.engagement import MIN_TOOL_MM
 from twin.scenario import load_scenario
 from twin.settings import parse_settings
 

@@ -13,7 +13,8 @@ from twin import api
 from twin.errors import TwinInputError
 from twin.gcode.planner import Limits, PlannerSettings, plan
 from twin.gcode.reader import Reader
-from twin.process.machining import StockSpec, ToolSpec, engaged_degrees, program_milling
+from twin.machining.engagement import StockSpec, ToolSpec, engaged_degrees
+from twin.machining.program_cut import program_milling
 from twin.scenario import assemble, read_scenario_data, scenario_from_dict
 
 LIMITS = Limits((0.5, 0.5, 0.2), (5.0, 5.0, 2.0), (100.0, 100.0, 200.0))
@@ -71,7 +72,7 @@ def test_an_inside_arc_engages_more_than_a_straight_cut_as_the_two_circles_say()
 
 def test_air_moves_engage_nothing_and_a_stopped_spindle_no_force():
     """Above the top nothing is engaged; a tool that does not turn (no M3) still meets the
-    material it is moved through (a crash: :mod:`twin.process.misuse` warns of it), but the
+    material it is moved through (a crash: :mod:`twin.machining.misuse` warns of it), but the
     force model's table carries no spindle speed there, so no cutting force."""
     stock = StockSpec(corners_mm=((0, -10), (40, 10)), top_mm=0, bottom_mm=-10)
     _, air = _engagement(["G21 G90 G0 X-10 Y0 Z5", "M3 S10000", "G1 X30 F600"], stock)  # above the top

@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 from pydantic import ValidationError
 
-from twin.process.cutting import (
+from twin.machining.cutting import (
     CoefficientsSpec,
     kienzle_coefficients,
     mean_tool_forces_N,
     step_tool_forces_N,
 )
-from twin.process.materials import (
+from twin.machining.materials import (
     KIENZLE_AXIAL_RATIO,
     KIENZLE_RADIAL_RATIO,
     MATERIALS,

@@ -11,7 +11,8 @@ from cli_process import twin as _twin
 
 from twin.gcode.planner import Limits, PlannerSettings, plan
 from twin.gcode.reader import Reader
-from twin.process.machining import StockSpec, ToolSpec, program_milling
+from twin.machining.engagement import StockSpec, ToolSpec
+from twin.machining.program_cut import program_milling
 
 LIMITS = Limits((0.5, 0.5, 0.2), (5.0, 5.0, 2.0), (100.0, 100.0, 200.0))
 BLOCK = StockSpec(corners_mm=((0, -10), (40, 10)), top_mm=0, bottom_mm=-20)
@@ -97,7 +98,7 @@ def test_strict_turns_warnings_into_exit_code_4(tmp_path):
 
 def test_a_tools_material_and_the_users_own_coefficients_reach_the_force_model():
     """The kernel's tool row is the material's coefficients with the user's over them."""
-    from twin.process.materials import MATERIALS
+    from twin.machining.materials import MATERIALS
 
     tool = ToolSpec(diameter_mm=6.0, n_flutes=3, material="aluminium_6082_t6", coefficients={"K_tc": 500.0})
     expected = MATERIALS["aluminium_6082_t6"].coefficients.as_array()
@@ -114,7 +115,7 @@ def test_a_tools_material_and_the_users_own_coefficients_reach_the_force_model()
 
 
 def test_twin_list_shows_every_material_with_its_source():
-    from twin.process.materials import MATERIALS
+    from twin.machining.materials import MATERIALS
 
     listed = _twin("list")
     assert listed.returncode == 0
@@ -130,7 +131,7 @@ def test_the_docs_materials_table_is_the_library():
     from pathlib import Path
 
     from twin.kinds_doc import materials_table
-    from twin.process.materials import MATERIALS
+    from twin.machining.materials import MATERIALS
 
     page = (Path(__file__).resolve().parent.parent / "docs" / "pages" / "machining.md").read_text()
     assert "<!-- table: materials -->" in page

@@ -10,8 +10,9 @@ import shapely
 
 from twin import api
 from twin.errors import TwinInputError
-from twin.process.inspection import CircleFeature, LineFeature, WidthFeature, measure
-from twin.process.part import Sweep, machined_part, swept_radius_mm, wall_levels
+from twin.machining.inspection import CircleFeature, LineFeature, WidthFeature, measure
+from twin.machining.part import machined_part, section, swept_radius_mm, wall_levels
+from twin.machining.sweep import Sweep
 from twin.records import CircleMeasured, FeatureNotFound, FeatureType, WidthMeasured
 
 STOCK = shapely.box(0.0, 0.0, 30.0, 20.0)
@@ -189,8 +190,8 @@ def test_the_part_s_files_hold_the_cut(bore, tmp_path):
     import pyarrow.parquet as pq
     import trimesh
 
-    from twin.process.machining import HeightMap
-    from twin.process.part_map import PartMap
+    from twin.machining.engagement import HeightMap
+    from twin.machining.part_map import PartMap
 
     run = api.Run(api.load("gcode_choi1999_circle_stock"), bore)
     stl, parquet = run.write_part(tmp_path / "part")
@@ -204,7 +205,7 @@ def test_the_part_s_files_hold_the_cut(bore, tmp_path):
     mesh = trimesh.Trimesh(*PartMap(stock, uncut, uncut).mesh(), process=False)
     assert part.is_watertight
     assert mesh.is_watertight
-    area = bore.part.stock.area - bore.part.actual.section(bore.part.stock, -1.5).area
+    area = bore.part.stock.area - section(bore.part.stock, bore.part.actual, -1.5).area
     assert mesh.volume - part.volume == pytest.approx(3.0 * area, abs=3.0)  # mm³, of 1 783
     table = pq.read_table(parquet).to_pandas()
     assert len(table) == np.isfinite(uncut.heights).sum()  # one row per cell of the stock
@@ -258,7 +259,7 @@ def test_a_level_the_tool_ramps_through_is_skipped_not_swept_disc_by_disc(monkey
     # a bull-nose tool (0.5 mm corner) ramping from Z -1 to -3: at Z -2 its corner sweeps a new
     # radius at every sample of the ramp (50 of them); over the budget the level is not
     # sectioned (memory and time stay bounded) and says so; at Z -0.5 it is its full radius
-    import twin.process.part as part_module
+    import twin.machining.part as part_module
 
     monkeypatch.setattr(part_module, "MAX_SECTION_RUNS", 20)
     n = 400
@@ -277,7 +278,7 @@ def test_a_level_the_tool_ramps_through_is_skipped_not_swept_disc_by_disc(monkey
     assert summary["skipped_levels_mm"] == [-2.0]
     assert "moves in Z" in summary["skipped_note"]
     with pytest.raises(part_module.SectionTooComplex, match="radii at Z -2 mm"):
-        ramp.section(STOCK, -2.0)
+        section(STOCK, ramp, -2.0)
 
 
 @pytest.fixture(scope="module")

@@ -23,8 +23,9 @@ import numpy as np
 import pytest
 import shapely
 
-from twin.process.inspection import CircleFeature, WidthFeature, measure
-from twin.process.part import Sweep, machined_part
+from twin.machining.inspection import CircleFeature, WidthFeature, measure
+from twin.machining.part import machined_part
+from twin.machining.sweep import Sweep
 from twin.records import CircleMeasured, WidthMeasured
 
 UM = 1e-3  # mm

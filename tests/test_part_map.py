@@ -9,10 +9,10 @@ import pyarrow.parquet as pq
 import pytest
 import trimesh
 
-import twin.process.part_map as part_map_module
-from twin.process.machining import StockSpec
-from twin.process.part import Sweep
-from twin.process.part_map import part_map
+import twin.machining.part_map as part_map_module
+from twin.machining.engagement import StockSpec
+from twin.machining.part_map import part_map
+from twin.machining.sweep import Sweep
 
 RES = 0.05
 STOCK = StockSpec(corners_mm=[[0.0, 0.0], [30.0, 20.0]], top_mm=0.0, bottom_mm=-10.0, resolution_mm=RES)

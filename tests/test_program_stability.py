@@ -1,4 +1,4 @@
-"""Every cutting line of a program checked against chatter (twin.process.program_stability)."""
+"""Every cutting line of a program checked against chatter (twin.machining.program_stability)."""
 
 from __future__ import annotations
 
@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from twin.process.machining import COLUMNS, ToolSpec
-from twin.process.program_stability import ProgramSamples, describe, line_stability
-from twin.process.stability import Cut, zoa_critical_depths
+from twin.machining.engagement import COLUMNS, ToolSpec
+from twin.machining.program_stability import ProgramSamples, describe, line_stability
+from twin.machining.stability import Cut, zoa_critical_depths
 
 MODES = [{"direction": d, "frequency_hz": 3150.0, "damping_ratio": 0.03, "stiffness_N_per_m": 6e6} for d in ("x", "y")]
 TOOL = ToolSpec.model_validate({"diameter_mm": 10.0, "n_flutes": 2, "dynamics": {"modes": MODES}})

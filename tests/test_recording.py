@@ -8,7 +8,7 @@ from rerun.chunk import RrdReader
 
 from controllers import make_controller
 from twin.machines import build
-from twin.process.cutting import AverageForce
+from twin.machining.cutting import AverageForce
 from twin.recording import read_back, record, record_runs
 from twin.references import Circle, Step
 from twin.scales import contour_gain, round_down, round_up

@@ -10,7 +10,7 @@ import typing
 import pytest
 from records_cases import CASES, FIXTURES, json_report, run_case, text_report
 
-from twin.process.inspection import MEASURES, InspectSpec
+from twin.machining.inspection import MEASURES, InspectSpec
 from twin.records import FeatureType
 
 _RUNS: dict = {}

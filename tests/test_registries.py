@@ -14,10 +14,10 @@ from controllers.kinds.generic import error_feedback_each_axis
 from controllers.registry import ControllerKind, ParameterError, Params, controller_kind
 from twin import api
 from twin.cli import app
+from twin.disturbances import DISTURBANCES
 from twin.errors import TwinInputError
 from twin.kinds_doc import SECTIONS, kinds_markdown
 from twin.machines import MACHINES
-from twin.process import DISTURBANCES
 from twin.references import REFERENCES
 from twin.reproductions.base import Reproduction
 from twin.reproductions.registry import REPRODUCTIONS

@@ -9,7 +9,7 @@ from controllers.blocks import Controller, Sum
 from controllers.papers import yadav2020
 from twin.errors import SimulationDiverged, TwinInputError
 from twin.machines import build
-from twin.process.cutting import AverageForce
+from twin.machining.cutting import AverageForce
 from twin.references import Circle, Step
 from twin.sim.drive import Drive, Encoder, actuator_input
 from twin.sim.loop import DriveState

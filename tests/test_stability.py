@@ -1,4 +1,4 @@
-"""Stability lobes (twin.process.stability) against closed forms and a second implementation
+"""Stability lobes (twin.machining.stability) against closed forms and a second implementation
 written here from the papers.
 
 The Insperger-Stepan benchmark (Insperger and Stepan, Int. J. Numer. Meth. Eng. 61 (2004)
@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from twin.process.stability import Cut, sd_critical_depths, zoa_critical_depths
-from twin.process.tool_dynamics import ToolDynamicsSpec
+from twin.machining.stability import Cut, sd_critical_depths, zoa_critical_depths
+from twin.machining.tool_dynamics import ToolDynamicsSpec
 
 MASS, F_N, ZETA, K_T, K_N, TEETH = 0.03993, 922.0, 0.011, 6e8, 2e8, 2
 OMEGA_N = 2 * math.pi * F_N

@@ -1,4 +1,4 @@
-"""The tool's structure: modes and a measured FRF (twin.process.tool_dynamics)."""
+"""The tool's structure: modes and a measured FRF (twin.machining.tool_dynamics)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from twin.errors import TwinInputError
-from twin.process.tool_dynamics import ToolDynamicsSpec
+from twin.machining.tool_dynamics import ToolDynamicsSpec
 from twin.scenario.files import bundled_scenarios, load_scenario, read_scenario_data
 
 MODE_X = {"direction": "x", "frequency_hz": 922.0, "damping_ratio": 0.011, "modal_mass_kg": 0.03993}

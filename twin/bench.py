@@ -57,12 +57,12 @@ import time
 from collections.abc import Iterator
 from typing import Any
 
-import mujoco
 import numpy as np
 
 from controllers import make_controller
 from controllers.blocks import with_correction
 from controllers.registry import Context, make_observers
+from twin.bench_worker import time_case
 from twin.machines import build
 from twin.references import Step, SumOfSines
 from twin.scenario import assemble, load_scenario, run_scenario
@@ -155,7 +155,8 @@ def gcode_figures(lines: int = 1_000_000, repeats: int = 5, moves: int = 10_000)
     from twin import api
     from twin.gcode.planner import PlannerSettings, plan, plan_stream
     from twin.gcode.reader import Reader, read_program
-    from twin.process.machining import StockSpec, ToolSpec, program_milling
+    from twin.machining.engagement import StockSpec, ToolSpec
+    from twin.machining.program_cut import program_milling
 
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "cam.ngc"
@@ -339,9 +340,10 @@ def finish_figures(lines: int) -> dict:
 
     from twin.gcode.planner import PlannerSettings, plan
     from twin.gcode.reader import read_program
-    from twin.process.machining import StockSpec, ToolSpec, program_milling
-    from twin.process.part import Sweep
-    from twin.process.part_map import virtual_part
+    from twin.machining.engagement import StockSpec, ToolSpec
+    from twin.machining.part import virtual_part
+    from twin.machining.program_cut import program_milling
+    from twin.machining.sweep import Sweep
 
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "finish.ngc"
@@ -381,14 +383,6 @@ def finish_figures(lines: int) -> dict:
         "part_peak_mb": part_peak,
         "floor_error_um": part.floor_error_um,
     }
-
-
-def _bare_steps_per_s(model, n: int) -> float:
-    data = mujoco.MjData(model)
-    data.ctrl[:] = 0.1
-    t0 = time.perf_counter()
-    mujoco.mj_step(model, data, nstep=n)
-    return n / (time.perf_counter() - t0)
 
 
 def _wall_s(command: list[str]) -> float:
@@ -449,21 +443,19 @@ def run_bench(
     }
     for name, (bm, run) in _cases().items():
         dt = bm.model.opt.timestep
-        n = round(seconds / dt)
         run(0.01)  # warm-up: load the compiled loop
         raw, closed, ratios = [], [], []
         for _ in range(repeats):
-            raw.append(_bare_steps_per_s(bm.model, n))
-            t0 = time.perf_counter()
-            result = run(seconds)
-            closed.append(n / (time.perf_counter() - t0))
-            ratios.append(closed[-1] / raw[-1])
+            timing = time_case(bm.model, run, seconds)
+            raw.append(timing.bare_steps_per_s)
+            closed.append(timing.closed_loop_steps_per_s)
+            ratios.append(timing.closed_loop_steps_per_s / timing.bare_steps_per_s)
         out["cases"][name] = {
             "raw_steps_per_s": statistics.median(raw),
             "closed_loop_steps_per_s": statistics.median(closed),
             "ratio": statistics.median(ratios),
             "realtime_factor": statistics.median(closed) * dt,
-            "loop": result.info["loop"],
+            "loop": timing.result.info["loop"],
             "timestep_s": dt,
         }
     return out

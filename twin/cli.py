@@ -620,9 +620,17 @@ def frf(
                 f"  nut at {position:g} m: axial stiffness {nut['axial_N_per_m'] / 1e6:.4g} N/um, "
                 f"torsion {nut['torsion_N_m_per_rad']:.4g} N m/rad"
             )
-        for label, key in (("resonances", "resonances_hz"), ("anti-resonances", "antiresonances_hz")):
-            found, model = (", ".join(f"{f:.1f}" for f in result[k]) or "none" for k in (key, f"model_{key}"))
-            typer.echo(f"  {label} (Hz): {found}   model: {model}")
+        doubtful = {(q["kind"], q["frequency_hz"]) for q in result["modes"] if q["unreliable"] is not None}
+        for label, key, kind in (
+            ("resonances", "resonances_hz", "resonance"),
+            ("anti-resonances", "antiresonances_hz", "antiresonance"),
+        ):
+            found = ", ".join(f"{f:.1f}" + (" (unreliable)" if (kind, f) in doubtful else "") for f in result[key])
+            model = ", ".join(f"{f:.1f}" for f in result[f"model_{key}"])
+            typer.echo(f"  {label} (Hz): {found or 'none'}   model: {model or 'none'}")
+        for q in result["modes"]:
+            if q["unreliable"] is not None:
+                typer.echo(f"  unreliable {q['kind']} {q['frequency_hz']:.1f} Hz: {q['unreliable']}")
         error = result["max_model_error_db"]
         typer.echo(
             f"  coherence >= 0.9 on {100 * result['coherent_share']:.0f} % of the lines; "
@@ -828,6 +836,12 @@ def tune(
     as_json: bool = typer.Option(False, "--json", help="Print the design as JSON"),
     out: Path = typer.Option(None, "--out", help="Write the tuned cascade as a scenario (.toml, a 10 mm circle)"),
     check: bool = typer.Option(True, "--verify/--no-verify", help="Run a step and a circle on the twin"),
+    check_margins: bool = typer.Option(
+        False,
+        "--verify-margins",
+        help="Bisect each gain's stability boundary on the twin (as run, without Coulomb friction, and like for "
+        "like: the linear model's assumptions) and print it beside the cascade margin",
+    ),
 ):
     """Design each axis's position P / velocity PI cascade with feedforward and a notch or
     low-pass where a resonance needs it (phase margin >= 45 deg, gain margin >= 6 dB on the
@@ -840,6 +854,8 @@ def tune(
     tuned = api.tune(machine, _parse_sets(sets or []), control_period, feedback)
     if check:
         tuned.verify()
+    if check_margins:
+        tuned.verify_margins()
     result = tuned.summary
     if as_json:
         _echo_json(result, 2)
@@ -867,6 +883,20 @@ def tune(
             )
         for a, v in result.get("verification", {}).items():
             typer.echo(f"  verified on the twin, {a}: " + ", ".join(f"{k} {x:.4g}" for k, x in v.items()))
+        if check_margins:
+            from twin.commissioning.boundary import CONDITIONS
+
+            typer.echo(
+                "  the twin's bisected boundary (dB; less the cascade margin): as run, without Coulomb, like for like"
+            )
+            for row in result["margin_check"]:
+                typer.echo(
+                    f"  {row['axis']} {row['gain']:<7} margin {row['margin_db']:6.2f} dB: "
+                    + ", ".join(
+                        f"{row[name]['boundary_db']:6.2f} ({row[name + '_minus_margin_db']:+.2f})"
+                        for name in CONDITIONS
+                    )
+                )
     if out is not None:
         out.write_text(tuned.scenario_text(), encoding="utf-8")
         typer.echo(f"scenario written to {out} (run it: twin run {out})", err=as_json)
@@ -897,9 +927,9 @@ def list_things():
     """Machines, controller kinds, observers, disturbances, materials, references, bundled
     scenarios and reproducible papers."""
     from controllers import CONTROLLERS, OBSERVERS
+    from twin.disturbances import DISTURBANCES
     from twin.machines import MACHINES
-    from twin.process import DISTURBANCES
-    from twin.process.materials import KIENZLE_AXIAL_RATIO, KIENZLE_RADIAL_RATIO, MATERIALS
+    from twin.machining.materials import KIENZLE_AXIAL_RATIO, KIENZLE_RADIAL_RATIO, MATERIALS
     from twin.references import REFERENCES
     from twin.reproductions.registry import REPRODUCTIONS
     from twin.scenario import bundled_scenarios, load_scenario
@@ -972,15 +1002,21 @@ def bench(
         1.0, "--planning-scale", help="Factor on the planning programs' lengths (lines, turns; 0: leave them out)"
     ),
     planning_file: Path = typer.Option(None, "--planning-file", help="A part program to plan too"),
+    against: str = typer.Option(
+        None, "--against", help="Time the closed-loop cases of commit REV (A) and this checkout (B) alternately"
+    ),
+    case: list[str] = typer.Option(None, "--case", help="--against: a case to time (repeat it; default all)"),
 ):
     """Steps per second, bare mj_step vs the closed loop, for four controller kinds and a part
     program, start-up time, the G-code reader's lines/s and the planner's time (twin/bench.py);
-    with --sweep, twin sweep's wall time, samples/s, parallel efficiency and memory."""
+    with --sweep, twin sweep's wall time, samples/s, parallel efficiency and memory; with
+    --against REV, the closed-loop cases of REV's tree and this checkout's, alternately, and
+    their ratio (twin/bench_against.py)."""
     from twin.bench import run_bench
 
     if not (seconds > 0 and seconds <= 600):
         raise TwinInputError("--seconds", seconds, "must be in (0, 600]")
-    repeats = repeats if repeats is not None else 1 if sweep else 5
+    repeats = repeats if repeats is not None else 1 if sweep else 15 if against is not None else 5
     if not 1 <= repeats <= 100:
         raise TwinInputError("--repeats", repeats, "must be in 1..100")
     if not 2 <= gcode_lines <= 10_000_000:
@@ -995,6 +1031,11 @@ def bench(
         raise TwinInputError("--planning-scale", planning_scale, "must be 0 (leave planning out) or in [0.001, 10]")
     if planning_file is not None and not planning_file.is_file():
         raise TwinInputError("--planning-file", str(planning_file), "is not a file")
+    if case and against is None:
+        raise TwinInputError("--case", case[0], "is for --against only")
+    if against is not None:
+        _bench_against(as_json, against, case or [], seconds, repeats)
+        return
     if sweep:
         _bench_sweep(as_json, samples, memory_samples, repeats)
         return
@@ -1070,6 +1111,34 @@ def _print_part_bench(part: dict) -> None:
         f"at {f['resolution_mm']:g} mm cells: planned in {f['plan_s']:.1f} s, engagement {f['engagement_s']:.1f} s "
         f"(peak {f['plan_and_engagement_peak_mb']:.0f} MB), part {f['part_s']:.1f} s (peak {f['part_peak_mb']:.0f} MB)"
     )
+
+
+def _bench_against(as_json: bool, rev: str, cases: list[str], seconds: float, repeats: int) -> None:
+    """``twin bench --against REV``: each case's closed-loop steps/s in REV's tree (A) and this
+    checkout (B), timed alternately, and the median ratio B/A."""
+    from twin.bench_against import compare
+
+    f = compare(rev, cases, seconds, repeats)
+    if as_json:
+        _echo_json(f, 2)
+        return
+    edited = " with uncommitted edits" if f["b_modified"] else ""
+    typer.echo(
+        f"A = {rev} ({f['a_commit'][:10]}), B = this checkout ({f['b_commit'][:10]}{edited}); "
+        f"medians of {repeats} alternating pairs, {seconds:g} s simulated each"
+    )
+    typer.echo(
+        f"{'case':<30} {'A steps/s':>11} {'B steps/s':>11} {'B/A':>6} {'B/A CPU':>8} "
+        f"{'A closed/bare':>14} {'B closed/bare':>14}"
+    )
+    for name, c in f["cases"].items():
+        typer.echo(
+            f"{name:<30} {c['a']['closed_loop_steps_per_s']:>11,.0f} {c['b']['closed_loop_steps_per_s']:>11,.0f} "
+            f"{c['b_over_a']:>6.3f} {c['b_over_a_cpu']:>8.3f} {c['a']['ratio']:>14.3f} {c['b']['ratio']:>14.3f}"
+        )
+    for tree in ("a", "b"):
+        if f[f"only_in_{tree}"]:
+            typer.echo(f"only in {tree.upper()} (not timed): {', '.join(f[f'only_in_{tree}'])}")
 
 
 def _bench_sweep(as_json: bool, samples: int, memory_samples: int, repeats: int) -> None:

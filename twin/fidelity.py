@@ -19,7 +19,7 @@ integrator) from the sampling itself.
 Friction is forced off (the reference models have none).
 
 Besides one case per machine, ``linear_motor_xy+average_force`` runs ``linear_motor_xy`` with
-Choi 1999's average cutting force (:class:`twin.process.cutting.AverageForce`, Table 1's nominal
+Choi 1999's average cutting force (:class:`twin.machining.cutting.AverageForce`, Table 1's nominal
 k_il = -2500, k_c = 2500 N s/m, written into ``xfrc_applied`` every physics step) against the
 coupled 4-state model of eq. (11) (:func:`controllers.papers.choi1999.cutting_coupled_plant`).
 """
@@ -37,7 +37,7 @@ from controllers.lti import SisoTf
 from controllers.papers.choi1999 import cutting_coupled_plant
 from twin.errors import TwinInputError
 from twin.machines import MACHINES, build, get_machine, is_machine_file
-from twin.process.cutting import AverageForce
+from twin.machining.cutting import AverageForce
 from twin.references import Step, SumOfSines
 from twin.sim.runner import simulate
 

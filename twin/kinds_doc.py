@@ -86,10 +86,10 @@ TABLES = ("materials",)
 
 
 def materials_table() -> str:
-    """The materials library (:data:`twin.process.materials.MATERIALS`) as a markdown table:
+    """The materials library (:data:`twin.machining.materials.MATERIALS`) as a markdown table:
     each entry's model, alloy, cutter, lubrication, coefficients, Kienzle exponent, fit residual
     and source."""
-    from twin.process.materials import ALUMINIUM_7075_T6, MATERIALS
+    from twin.machining.materials import DEFAULT_MATERIAL, MATERIALS
 
     rows = [
         "| name | model | alloy | cutter | lubrication | K_tc or kc1 | K_rc | K_ac | K_te | K_re | K_ae | mc "
@@ -98,7 +98,7 @@ def materials_table() -> str:
     ]
     for name, m in MATERIALS.items():
         k = m.coefficients
-        default = " (default)" if k == ALUMINIUM_7075_T6 else ""
+        default = " (default)" if name == DEFAULT_MATERIAL else ""
         values = " | ".join(f"{v:g}" for v in k.as_array())
         residual = f"{m.fit.max_relative_residual:.1%}" if m.fit else ""
         described = " | ".join(_cell(text) for text in (m.model, m.alloy, m.cutter, m.lubrication))
@@ -132,7 +132,7 @@ def kinds_markdown(section: str) -> str:
 
         return _kinds(REFERENCES, lambda k: k.spec)
     if section == "disturbances":
-        from twin.process import DISTURBANCES
+        from twin.disturbances import DISTURBANCES
 
         return _kinds(DISTURBANCES, lambda k: k.spec)
     if section == "controllers":

@@ -14,8 +14,8 @@ from typing import Any
 import numpy as np
 from numba import njit
 
+from twin.machining.chatter import CHATTER_THRESHOLD, ChatterReading, chatter_reading
 from twin.numba_cache import configure as configure_numba_cache
-from twin.process.chatter import CHATTER_THRESHOLD, ChatterReading, chatter_reading
 from twin.records import ChatterWarning, LineRow, RunRecords
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
@@ -359,7 +359,7 @@ def run_records(result, contour_m: np.ndarray | None) -> RunRecords:
 
 
 def _chatter_of(result, rows: slice) -> ChatterReading | None:
-    """The chatter reading (:func:`twin.process.chatter.chatter_reading`) of the recorded rows
+    """The chatter reading (:func:`twin.machining.chatter.chatter_reading`) of the recorded rows
     ``rows`` of a run; None where the tool did not cut for a window's worth."""
     every = max(result.info.get("record_every", 1), 1)
     dt = result.machine.model.opt.timestep
@@ -368,8 +368,8 @@ def _chatter_of(result, rows: slice) -> ChatterReading | None:
 
 
 def chatter_check(result, lines: list[LineRow]) -> tuple[dict[str, Any] | None, list[LineRow], list[ChatterWarning]]:
-    """A milling run's chatter (:mod:`twin.process.chatter`): the whole run's reading
-    (indicator, frequency and verdict, :meth:`~twin.process.chatter.ChatterReading.as_dict`),
+    """A milling run's chatter (:mod:`twin.machining.chatter`): the whole run's reading
+    (indicator, frequency and verdict, :meth:`~twin.machining.chatter.ChatterReading.as_dict`),
     the rows of ``lines`` each with its own reading, and the warnings (each program line that
     chatters, or the run); None, ``lines`` and none for a run that does not mill for a window's
     worth."""

@@ -3,7 +3,7 @@
 numba invalidates a cached function when its own file changes, not when a kernel it inlines
 from another file does: the compiled loop (``twin/sim/loop.py``) inlines ``sense`` and
 ``drive_command`` (``twin/sim/drive.py``), ``run_blocks`` (``controllers/kernels.py``) and the
-force kernels (``twin/process/cutting.py``), and the transfer-function loop
+force kernels (``twin/machining/cutting.py``), and the transfer-function loop
 (``twin/sim/tf_loop.py``) the same.  So every module that defines cached kernels calls
 :func:`configure` before its first ``@njit(cache=True)``: the cache then lives in a folder named by
 a hash of all of :data:`KERNEL_FILES`, and an edit to any of them starts a fresh folder (tested in
@@ -32,7 +32,7 @@ KERNEL_FILES = (
     "twin/sim/drive.py",
     "twin/sim/loop.py",
     "twin/sim/tf_loop.py",
-    "twin/process/cutting.py",
+    "twin/machining/cutting.py",
     "twin/metrics.py",
 )
 

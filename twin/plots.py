@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from twin.process.chatter import CHATTER_THRESHOLD, rolling_indicator
+from twin.machining.chatter import CHATTER_THRESHOLD, rolling_indicator
 from twin.scales import contour_gain
 
 

@@ -19,7 +19,7 @@ from typing import Any, ClassVar, Literal
 
 
 class FeatureType(StrEnum):
-    """An ``[[inspect]]`` feature's ``type``: what it measures (:mod:`twin.process.inspection`)."""
+    """An ``[[inspect]]`` feature's ``type``: what it measures (:mod:`twin.machining.inspection`)."""
 
     #: A bore or boss: the least-squares circle's diameter, centre and roundness.
     CIRCLE = "circle"
@@ -197,7 +197,7 @@ Inspected = CircleMeasured | LineMeasured | WidthMeasured | FeatureNotFound
 
 @dataclass(frozen=True)
 class MachiningWarning:
-    """A crash or misuse on a program line (:func:`twin.process.misuse.machining_warnings`): its
+    """A crash or misuse on a program line (:func:`twin.machining.misuse.machining_warnings`): its
     ``kind``, the worst ``value`` on the line in ``unit`` and the ``message`` that says it."""
 
     line: int
@@ -319,9 +319,9 @@ class LineRow:
     max_wall_error_um : float or None
         With a stock: the largest wall error the line left (µm).
     stability : dict or None
-        A cutting line's chatter check (:func:`twin.process.program_stability.line_stability`).
+        A cutting line's chatter check (:func:`twin.machining.program_stability.line_stability`).
     chatter : dict or None
-        The line's chatter in the run (:meth:`twin.process.chatter.ChatterReading.as_dict`).
+        The line's chatter in the run (:meth:`twin.machining.chatter.ChatterReading.as_dict`).
     """
 
     line: int
@@ -414,7 +414,7 @@ class RunRecords:
         :class:`LineMeasured`, :class:`WidthMeasured`) or :class:`FeatureNotFound`.
     chatter : dict or None
         A milling run's chatter reading over the whole run
-        (:meth:`twin.process.chatter.ChatterReading.as_dict`); None: it did not mill for a window.
+        (:meth:`twin.machining.chatter.ChatterReading.as_dict`); None: it did not mill for a window.
     chatter_warnings : tuple of ChatterWarning
         Each line that chatters, or the run.
     """

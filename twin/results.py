@@ -20,7 +20,7 @@ if TYPE_CHECKING:  # the heavy modules load on first use, not with `import twin`
     import pyarrow as pa
 
     from twin.commissioning.frf import FrfSettings
-    from twin.gcode.reader import Move
+    from twin.gcode.moves import Move
     from twin.records import RunRecords
     from twin.sampling import Plan
     from twin.scenario import Scenario
@@ -130,7 +130,7 @@ class Run:
         """Write the virtual part of a run with a stock into ``folder`` (created if missing):
         ``<scenario>_part.stl``, the actual part's closed mesh (mm), and
         ``<scenario>_part_map.parquet``, the nominal and actual height maps and their
-        difference by cell (:mod:`twin.process.part_map`); their paths.
+        difference by cell (:mod:`twin.machining.part_map`); their paths.
 
         Raises
         ------
@@ -390,6 +390,22 @@ class Tuning:
         with tempfile.TemporaryDirectory() as folder:
             self.summary["verification"] = verify(self.summary, self.machine, Path(folder))
         return self.summary["verification"]
+
+    def verify_margins(
+        self,
+        gains: tuple[str, ...] = ("kp_pos", "kp_vel", "ki_vel"),
+        conditions: tuple[str, ...] | None = None,
+    ) -> list[dict]:
+        """Each axis's cascade margins beside the twin's own stability boundaries, bisected for
+        each of ``gains`` (:func:`twin.commissioning.boundary.verify_margins`) under the named
+        conditions (default all of :data:`twin.commissioning.boundary.CONDITIONS`: ``twin`` as
+        run, ``without_coulomb``, ``like_for_like``, the linear model's assumptions); adds them
+        to :attr:`summary` as ``margin_check`` and returns them."""
+        from twin.commissioning.boundary import CONDITIONS, verify_margins
+
+        chosen = {name: CONDITIONS[name] for name in (conditions or CONDITIONS)}
+        self.summary["margin_check"] = verify_margins(self.summary, self.machine, gains, chosen)
+        return self.summary["margin_check"]
 
     def scenario_text(self, reference: str = "circle") -> str:
         """The tuned cascade as a scenario (TOML) on a 10 mm circle (or a 1 mm ``step``)."""

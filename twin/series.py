@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from twin.process.chatter import CHATTER_THRESHOLD, rolling_indicator
+from twin.machining.chatter import CHATTER_THRESHOLD, rolling_indicator
 
 #: Per axis: (actual, reference) colours, RGB.  Actual strong, reference pale of the same hue.
 AXIS_COLORS = {"x": ((31, 119, 180), (140, 190, 230)), "y": ((230, 85, 13), (250, 180, 120))}

@@ -170,7 +170,7 @@ class KindSpec(StrictSpec):
 
 @dataclass(frozen=True)
 class Kind:
-    """One kind of a registry (:data:`twin.references.REFERENCES`, :data:`twin.process.DISTURBANCES`).
+    """One kind of a registry (:data:`twin.references.REFERENCES`, :data:`twin.disturbances.DISTURBANCES`).
 
     Attributes
     ----------

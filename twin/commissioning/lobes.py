@@ -5,10 +5,10 @@ or an ``end_milling`` disturbance), or the ``[[tools]]`` entry of ``tool_number`
 its radial immersion (``a_e/D``; default the ``end_milling``'s, else a full slot) in up or down
 milling (default the ``end_milling``'s, else down milling), feeding along the machine's X, with
 the tool's material (a Kienzle material linearised at ``feed_per_tooth_mm``).  The lobes by the
-zero-order solution and/or semi-discretization (:mod:`twin.process.stability`) over the speeds
+zero-order solution and/or semi-discretization (:mod:`twin.machining.stability`) over the speeds
 asked (default: a quarter of the scenario's lowest spindle speed to twice its highest, 200
 speeds).  With a stock and a program, each cutting line checked
-(:func:`twin.process.program_stability.line_stability`) with its stable speeds searched over the
+(:func:`twin.machining.program_stability.line_stability`) with its stable speeds searched over the
 same range.
 """
 
@@ -21,12 +21,13 @@ from pathlib import Path
 
 import numpy as np
 
+from twin.disturbances.cutting_forces import EndMillingSpec
 from twin.errors import TwinInputError
-from twin.process.cutting import EndMillingSpec, immersion_angles
-from twin.process.materials import CuttingCoefficients
-from twin.process.program_stability import default_rpm_range, line_stability, milling_cut
-from twin.process.stability import Lobes, sd_critical_depths, zoa_critical_depths
-from twin.process.tool_dynamics import ToolDynamicsSpec
+from twin.machining.cutting import immersion_angles
+from twin.machining.materials import CuttingCoefficients
+from twin.machining.program_stability import default_rpm_range, line_stability, milling_cut
+from twin.machining.stability import Lobes, sd_critical_depths, zoa_critical_depths
+from twin.machining.tool_dynamics import ToolDynamicsSpec
 from twin.scenario import Scenario
 
 #: The methods, and "both".

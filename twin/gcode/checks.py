@@ -24,9 +24,9 @@ from typing import Protocol
 
 import numpy as np
 
+from twin.gcode.moves import Move
 from twin.gcode.path import Segment, move_segment
 from twin.gcode.planner import PlanningError
-from twin.gcode.reader import Move
 
 #: Warnings listed at most (each check); more are counted.
 MAX_WARNINGS = 100

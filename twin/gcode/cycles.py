@@ -14,23 +14,43 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
+from enum import StrEnum
 
+from twin.gcode.modal import GCode
 from twin.gcode.words import BlockError
 
-#: The cycles read (ten times the G number).
-CYCLES = (730, 810, 820, 830, 850, 860, 890)
+#: The cycles read.
+CYCLES = (GCode.G_73, GCode.G_81, GCode.G_82, GCode.G_83, GCode.G_85, GCode.G_86, GCode.G_89)
 #: The cycles that are not: tapping, back boring, boring with a manual retract.
-REFUSED_CYCLES = {
-    740: "left-hand tapping (G74)",
-    840: "tapping (G84)",
-    870: "back boring (G87)",
-    880: "boring with a manual retract (G88)",
-    760: "threading (G76)",
+REFUSED_CYCLES: dict[int, str] = {
+    GCode.G_74: "left-hand tapping (G74)",
+    GCode.G_84: "tapping (G84)",
+    GCode.G_87: "back boring (G87)",
+    GCode.G_88: "boring with a manual retract (G88)",
+    GCode.G_76: "threading (G76)",
 }
+#: The cycles that dwell at the bottom (P) and those that peck (Q).
+_DWELLING = (GCode.G_82, GCode.G_86, GCode.G_89)
+_PECKING = (GCode.G_73, GCode.G_83)
 #: The rapid clearance of a G73 / G83 peck, inches (LinuxCNC 2.9's G83_RAPID_DELTA).
 PECK_CLEARANCE_INCH = 0.010
 #: The (aa, bb, cc) axis indices (x 0, y 1, z 2) of each plane.
-CYCLE_AXES = {170: (0, 1, 2), 180: (2, 0, 1), 190: (1, 2, 0)}
+CYCLE_AXES: dict[int, tuple[int, int, int]] = {GCode.G_17: (0, 1, 2), GCode.G_18: (2, 0, 1), GCode.G_19: (1, 2, 0)}
+
+
+class CycleStep(StrEnum):
+    """What one of a cycle's canonical calls does."""
+
+    #: A rapid to the point given.
+    RAPID = "rapid"
+    #: A feed to the point given.
+    FEED = "feed"
+    #: A dwell of the seconds given.
+    DWELL = "dwell"
+    #: The spindle set ("off", "cw", "ccw").
+    SPINDLE = "spindle"
+    #: The cycle's own moves begin: exact path (G61) from here.
+    EXACT_PATH = "exact_path"
 
 
 @dataclass
@@ -64,9 +84,10 @@ def cycle_calls(
     inch: bool,
     spindle: str,
     memory: CycleMemory,
-) -> Iterator[tuple[str, tuple[float, float, float] | float | str]]:
-    """The canonical calls of one cycle block: ``("rapid", xyz)``, ``("feed", xyz)``,
-    ``("dwell", seconds)``, ``("spindle", "off" | "cw" | "ccw")`` and ``("exact_path", "G61")``
+) -> Iterator[tuple[CycleStep, tuple[float, float, float] | float | str]]:
+    """The canonical calls of one cycle block, each a :class:`CycleStep` and its value:
+    ``(RAPID, xyz)``, ``(FEED, xyz)``, ``(DWELL, seconds)``, ``(SPINDLE, "off" | "cw" | "ccw")``
+    and ``(EXACT_PATH, "G61")``
     where the cycle's own moves begin (as LinuxCNC, after the rapid up to the R plane from
     below it, which runs in the path mode in force); ``position`` (work coordinates, program
     units) is updated as the block ends.
@@ -120,19 +141,19 @@ def cycle_calls(
     if r < cc:
         raise BlockError(f"R less than {letter_c.upper()} in cycle: the R plane ({r:g}) is below the bottom ({cc:g})")
     p = q = 0.0
-    if motion in (820, 860, 890):
+    if motion in _DWELLING:
         if "p" not in words and not same:
             raise BlockError(f"dwell time P word missing with {g}")
         p = words.get("p", memory.p)
         if p < 0.0:  # rs274 refuses P-1 (its "no P"), reads P-2 as a dwell of -2 s: a dwell is not negative
             raise BlockError(f"P = {p:g}: a dwell cannot be negative (with {g})")
-    if motion in (730, 830):
+    if motion in _PECKING:
         if "q" not in words and not same:
             raise BlockError(f"Q word missing with {g}")
         q = words.get("q", memory.q)
         if q <= 0.0:
             raise BlockError(f"negative or zero Q value used with {g}")
-    if motion == 860 and spindle == "off":
+    if motion == GCode.G_86 and spindle == "off":
         raise BlockError("spindle not turning in G86")
 
     def point(a: float, b: float, c: float) -> tuple[float, float, float]:
@@ -141,10 +162,10 @@ def cycle_calls(
         return (xyz[0], xyz[1], xyz[2])
 
     if old_cc < r:  # below the R plane: straight up to it first
-        yield ("rapid", point(position[a_i], position[b_i], r))
+        yield (CycleStep.RAPID, point(position[a_i], position[b_i], r))
         old_cc = r
         current_cc = old_cc
-    yield ("exact_path", "G61")
+    yield (CycleStep.EXACT_PATH, "G61")
     clear_cc = r if retract_to_r else old_cc
     delta = PECK_CLEARANCE_INCH if inch else PECK_CLEARANCE_INCH * 25.4
     for repeat in range(repeats, 0, -1):
@@ -157,38 +178,38 @@ def cycle_calls(
                 theta, radius = math.atan2(bb, aa) + theta_add, math.hypot(bb, aa) + radius_add
                 aa, bb = radius * math.cos(theta), radius * math.sin(theta)
         if repeat == repeats and current_cc > r:
-            yield ("rapid", point(aa, bb, current_cc))
-            yield ("rapid", point(aa, bb, r))
+            yield (CycleStep.RAPID, point(aa, bb, current_cc))
+            yield (CycleStep.RAPID, point(aa, bb, r))
         else:
-            yield ("rapid", point(aa, bb, clear_cc))
+            yield (CycleStep.RAPID, point(aa, bb, clear_cc))
             if clear_cc > r:
-                yield ("rapid", point(aa, bb, r))
-        if motion in (730, 830):
+                yield (CycleStep.RAPID, point(aa, bb, r))
+        if motion in _PECKING:
             depth = r - q
             while depth > cc:
-                yield ("feed", point(aa, bb, depth))
-                if motion == 830:
-                    yield ("rapid", point(aa, bb, r))
-                yield ("rapid", point(aa, bb, depth + delta))
+                yield (CycleStep.FEED, point(aa, bb, depth))
+                if motion == GCode.G_83:
+                    yield (CycleStep.RAPID, point(aa, bb, r))
+                yield (CycleStep.RAPID, point(aa, bb, depth + delta))
                 depth = depth - q
-        yield ("feed", point(aa, bb, cc))
-        if motion in (820, 860, 890):
-            yield ("dwell", p)
-        if motion == 860:
-            yield ("spindle", "off")
-        if motion == 850:
-            yield ("feed", point(aa, bb, r))
-        if motion == 890:
-            yield ("feed", point(aa, bb, clear_cc))
+        yield (CycleStep.FEED, point(aa, bb, cc))
+        if motion in _DWELLING:
+            yield (CycleStep.DWELL, p)
+        if motion == GCode.G_86:
+            yield (CycleStep.SPINDLE, "off")
+        if motion == GCode.G_85:
+            yield (CycleStep.FEED, point(aa, bb, r))
+        if motion == GCode.G_89:
+            yield (CycleStep.FEED, point(aa, bb, clear_cc))
         else:
-            yield ("rapid", point(aa, bb, clear_cc))
-        if motion == 860:
-            yield ("spindle", spindle)
+            yield (CycleStep.RAPID, point(aa, bb, clear_cc))
+        if motion == GCode.G_86:
+            yield (CycleStep.SPINDLE, spindle)
     position[a_i], position[b_i], position[c_i] = aa, bb, clear_cc
     memory.r, memory.cc = r_word, c_word
-    if motion in (820, 860, 890):
+    if motion in _DWELLING:
         memory.p = p
-    if motion in (730, 830):
+    if motion in _PECKING:
         memory.q = q
     if not math.isfinite(aa + bb + clear_cc):
         raise BlockError("the cycle's positions are not finite")

@@ -15,8 +15,9 @@ limit is refused at it, with its line.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
+from enum import Enum, StrEnum
 from pathlib import Path
 from typing import NamedTuple
 
@@ -136,9 +137,29 @@ class ProgramText:
         return text
 
 
+class LoopKind(StrEnum):
+    """The three loops, by the keyword that opens them."""
+
+    WHILE = "while"
+    DO = "do"
+    REPEAT = "repeat"
+
+
+#: The keyword that ends each loop (``do`` ... ``while``).
+LOOP_END = {LoopKind.WHILE: "endwhile", LoopKind.DO: "while", LoopKind.REPEAT: "endrepeat"}
+
+
+class SkipEnd(Enum):
+    """What the O line that ends a skip does: runs (it is evaluated and its keyword's handler
+    called) or is passed (the flow goes on after it)."""
+
+    RUN = "run"
+    PASS = "pass"
+
+
 @dataclass
 class _Loop:
-    kind: str  # "while", "do" or "repeat"
+    kind: LoopKind
     start: Position  # while: the while line; do / repeat: the line after
     remaining: int = 0
 
@@ -159,11 +180,11 @@ class _Frame:
 @dataclass
 class _Skip:
     """Reading on without evaluating, to an O line of ``label`` with one of ``keywords``;
-    ``then`` says what to do there ("run" its evaluation, or "pass" on after it)."""
+    ``then`` says what to do there (run it, or pass on after it)."""
 
     label: str
     keywords: frozenset[str]
-    then: str
+    then: SkipEnd
     started: int
 
 
@@ -187,6 +208,24 @@ class Flow:
         self.iterations = 0
         self.return_value = 0.0
         self.value_returned = 0.0
+        #: What each O-word keyword does (LinuxCNC's ``control_*`` of ``interp_o_word.cc``).
+        self.handlers: dict[str, Callable[[OLine], None]] = {
+            "sub": self._sub,
+            "endsub": self._return,
+            "call": self._call,
+            "do": self._do,
+            "while": self._while,
+            "repeat": self._repeat,
+            "if": self._if,
+            "elseif": self._elseif,
+            "else": self._else,
+            "endif": self._endif,
+            "break": self._break,
+            "continue": self._continue,
+            "endwhile": self._endwhile,
+            "endrepeat": self._endrepeat,
+            "return": self._return,
+        }
 
     @property
     def skipping(self) -> bool:
@@ -220,7 +259,7 @@ class Flow:
 
     def end_needs_values(self) -> bool:
         """Whether the O line that ends the skip runs with its values (a condition to test)."""
-        return self.skip is not None and self.skip.then == "run" and self.searching is None
+        return self.skip is not None and self.skip.then is SkipEnd.RUN and self.searching is None
 
     def is_end(self, o: OLine) -> bool:
         """Whether the O line ``o`` read while skipping ends the skip (and then runs).
@@ -253,11 +292,11 @@ class Flow:
         if self.skip is not None:
             self._end_skip(o)
             return
-        getattr(self, f"_{o.keyword}")(o)
+        self.handlers[o.keyword](o)
 
     # --- skipping -------------------------------------------------------------------------
 
-    def _skip_to(self, label: str, keywords: tuple[str, ...], then: str) -> None:
+    def _skip_to(self, label: str, keywords: tuple[str, ...], then: SkipEnd) -> None:
         self.skip = _Skip(label, frozenset(keywords), then, self.line_start.number)
 
     def _end_skip(self, o: OLine) -> None:
@@ -273,8 +312,8 @@ class Flow:
         if self.defining is not None:  # the endsub of a definition
             self.defining = None
             return
-        if skip.then == "run":
-            getattr(self, f"_{o.keyword}")(o)
+        if skip.then is SkipEnd.RUN:
+            self.handlers[o.keyword](o)
 
     # --- subroutines ----------------------------------------------------------------------
 
@@ -291,7 +330,7 @@ class Flow:
         self.subs[name] = body
         if skipping:
             self.defining = name
-            self._skip_to(name, ("endsub",), "pass")
+            self._skip_to(name, ("endsub",), SkipEnd.PASS)
 
     def _sub(self, o: OLine) -> None:
         if self.depth:
@@ -303,7 +342,7 @@ class Flow:
         if o.label not in self.subs:  # read on to find it, as LinuxCNC 2.9 does
             self.searching = (o.label, o.values, back)
             self.text.keep(back)
-            self._skip_to(o.label, ("sub",), "pass")
+            self._skip_to(o.label, ("sub",), SkipEnd.PASS)
             return
         self._enter(o.label, o.values, back)
 
@@ -315,9 +354,6 @@ class Flow:
         self.return_value = self.value_returned = 0.0
         self.frames.append(_Frame(name, back))
         self.text.seek(self.subs[name])
-
-    def _endsub(self, o: OLine) -> None:
-        self._return(o)
 
     def _return(self, o: OLine) -> None:
         if not self.depth:
@@ -365,12 +401,12 @@ class Flow:
         self._label(o)
         start = self.text.tell()
         self.text.keep(start)
-        self.frames[-1].loops[o.label] = _Loop("do", start)
+        self.frames[-1].loops[o.label] = _Loop(LoopKind.DO, start)
 
     def _while(self, o: OLine) -> None:
         loops = self.frames[-1].loops
         loop = loops.get(o.label)
-        if loop is not None and loop.kind == "do":  # the end of a do loop
+        if loop is not None and loop.kind is LoopKind.DO:  # the end of a do loop
             if o.values[0] != 0.0:
                 self._jump_back(loop.start)
             else:
@@ -380,14 +416,14 @@ class Flow:
         if o.values[0] != 0.0:
             if loop is None:
                 self.text.keep(self.line_start)
-                loops[o.label] = _Loop("while", self.line_start)
+                loops[o.label] = _Loop(LoopKind.WHILE, self.line_start)
             return
         loops.pop(o.label, None)
-        self._skip_to(o.label, ("endwhile",), "pass")
+        self._skip_to(o.label, ("endwhile",), SkipEnd.PASS)
 
     def _endwhile(self, o: OLine) -> None:
         loop = self.frames[-1].loops.get(o.label)
-        if loop is None or loop.kind != "while":
+        if loop is None or loop.kind is not LoopKind.WHILE:
             raise BlockError(f"o{o.label} endwhile: no while loop of that label")
         self._jump_back(loop.start)
 
@@ -395,16 +431,16 @@ class Flow:
         self._label(o)
         count = int(o.values[0])
         if count <= 0:
-            self._skip_to(o.label, ("endrepeat",), "pass")
+            self._skip_to(o.label, ("endrepeat",), SkipEnd.PASS)
             return
         start = self.text.tell()
         self.text.keep(start)
-        self.frames[-1].loops[o.label] = _Loop("repeat", start, count)
+        self.frames[-1].loops[o.label] = _Loop(LoopKind.REPEAT, start, count)
 
     def _endrepeat(self, o: OLine) -> None:
         loops = self.frames[-1].loops
         loop = loops.get(o.label)
-        if loop is None or loop.kind != "repeat":
+        if loop is None or loop.kind is not LoopKind.REPEAT:
             raise BlockError(f"o{o.label} endrepeat: no repeat loop of that label")
         loop.remaining -= 1
         if loop.remaining > 0:
@@ -421,17 +457,14 @@ class Flow:
     def _break(self, o: OLine) -> None:
         loop = self._loop(o)
         del self.frames[-1].loops[o.label]
-        end = {"while": "endwhile", "do": "while", "repeat": "endrepeat"}[loop.kind]
-        self._skip_to(o.label, (end,), "pass")
+        self._skip_to(o.label, (LOOP_END[loop.kind],), SkipEnd.PASS)
 
     def _continue(self, o: OLine) -> None:
         loop = self._loop(o)
-        if loop.kind == "while":
+        if loop.kind is LoopKind.WHILE:
             self._jump_back(loop.start)
-        elif loop.kind == "do":
-            self._skip_to(o.label, ("while",), "run")
-        else:
-            self._skip_to(o.label, ("endrepeat",), "run")
+        else:  # do: on to its while (run: its condition); repeat: to its endrepeat (run: it counts)
+            self._skip_to(o.label, (LOOP_END[loop.kind],), SkipEnd.RUN)
 
     # --- conditions -----------------------------------------------------------------------
 
@@ -441,23 +474,23 @@ class Flow:
             self.frames[-1].ifs.add(o.label)
         else:
             self.frames[-1].ifs.discard(o.label)
-            self._skip_to(o.label, ("elseif", "else", "endif"), "run")
+            self._skip_to(o.label, ("elseif", "else", "endif"), SkipEnd.RUN)
 
     def _elseif(self, o: OLine) -> None:
         self._of_if(o)
         ifs = self.frames[-1].ifs
         if o.label in ifs:  # a branch before was taken
-            self._skip_to(o.label, ("endif",), "run")
+            self._skip_to(o.label, ("endif",), SkipEnd.RUN)
         elif o.values[0] != 0.0:
             ifs.add(o.label)
         else:
-            self._skip_to(o.label, ("elseif", "else", "endif"), "run")
+            self._skip_to(o.label, ("elseif", "else", "endif"), SkipEnd.RUN)
 
     def _else(self, o: OLine) -> None:
         self._of_if(o)
         ifs = self.frames[-1].ifs
         if o.label in ifs:
-            self._skip_to(o.label, ("endif",), "run")
+            self._skip_to(o.label, ("endif",), SkipEnd.RUN)
         else:
             ifs.add(o.label)
 

@@ -14,7 +14,8 @@ from collections.abc import Callable
 from pathlib import Path
 
 from twin.errors import input_file
-from twin.gcode.reader import Move, Settings, read_program
+from twin.gcode.moves import Move
+from twin.gcode.reader import Settings, read_program
 
 #: Bytes of the listing held in memory before it goes to a temporary file (64 MiB).
 IN_MEMORY_BYTES = 64 << 20

@@ -16,7 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from twin.gcode.reader import PLANES, Move
+from twin.gcode.moves import PLANES, Move
 
 #: Moves shorter than this (m) are dropped: rs274 emits null moves (a bare G0, G28 where the tool is).
 MIN_LENGTH_M = 1e-9

@@ -50,8 +50,8 @@ import numba
 import numpy as np
 from pydantic import Field, field_validator
 
+from twin.gcode.moves import Move
 from twin.gcode.path import TANGENT_TOLERANCE_RAD, Segment, blend, move_segment, turn_angle
-from twin.gcode.reader import Move
 from twin.numba_cache import configure as configure_numba_cache
 from twin.spec import StrictSpec
 

@@ -18,6 +18,8 @@ import math
 import re
 from typing import NamedTuple, Protocol
 
+from twin.gcode.modal import MGroup, ModalGroup
+
 #: Longest line LinuxCNC reads (characters, the newline excluded): its LINELEN buffer of 255
 #: holds 253 characters and the newline, and a line that fills it is "Command too long".
 MAX_LINE_CHARS = 252
@@ -34,33 +36,33 @@ MAX_CALL_ARGUMENTS = 30
 
 #: The modal group of each G code (ten times its number); LinuxCNC's ``gees`` table.
 G_GROUPS: dict[int, int] = {
-    **dict.fromkeys((40, 53, 63, 100, 280, 281, 300, 301, 520, 530, 920), 0),
-    **dict.fromkeys((0, 10, 20, 30, 50, 51, 52, 60, 61, 62, 330, 331, 382, 383, 384, 385), 1),
-    **dict.fromkeys((700, 710, 711, 712, 720, 721, 722, 730, 740, 760, 800), 1),
-    **dict.fromkeys(range(810, 900, 10), 1),
-    **dict.fromkeys((170, 171, 180, 181, 190, 191), 2),
-    **dict.fromkeys((900, 910), 3),
-    **dict.fromkeys((901, 911), 4),
-    **dict.fromkeys((930, 940, 950), 5),
-    **dict.fromkeys((200, 210), 6),
-    **dict.fromkeys((400, 410, 411, 420, 421), 7),
-    **dict.fromkeys((430, 431, 432, 490), 8),
-    **dict.fromkeys((980, 990), 10),
-    **dict.fromkeys((540, 550, 560, 570, 580, 590, 591, 592, 593), 12),
-    **dict.fromkeys((610, 611, 640), 13),
-    **dict.fromkeys((960, 970), 14),
-    **dict.fromkeys((70, 80), 15),
-    **dict.fromkeys((921, 922, 923), 16),
+    **dict.fromkeys((40, 53, 63, 100, 280, 281, 300, 301, 520, 530, 920), ModalGroup.MODAL_0),
+    **dict.fromkeys((0, 10, 20, 30, 50, 51, 52, 60, 61, 62, 330, 331, 382, 383, 384, 385), ModalGroup.MOTION),
+    **dict.fromkeys((700, 710, 711, 712, 720, 721, 722, 730, 740, 760, 800), ModalGroup.MOTION),
+    **dict.fromkeys(range(810, 900, 10), ModalGroup.MOTION),
+    **dict.fromkeys((170, 171, 180, 181, 190, 191), ModalGroup.SET_PLANE),
+    **dict.fromkeys((900, 910), ModalGroup.DISTANCE_MODE),
+    **dict.fromkeys((901, 911), ModalGroup.IJK_DISTANCE_MODE),
+    **dict.fromkeys((930, 940, 950), ModalGroup.FEED_MODE),
+    **dict.fromkeys((200, 210), ModalGroup.LENGTH_UNITS),
+    **dict.fromkeys((400, 410, 411, 420, 421), ModalGroup.CUTTER_COMP),
+    **dict.fromkeys((430, 431, 432, 490), ModalGroup.TOOL_LENGTH_OFFSET),
+    **dict.fromkeys((980, 990), ModalGroup.RETRACT_MODE),
+    **dict.fromkeys((540, 550, 560, 570, 580, 590, 591, 592, 593), ModalGroup.COORD_SYSTEM),
+    **dict.fromkeys((610, 611, 640), ModalGroup.CONTROL_MODE),
+    **dict.fromkeys((960, 970), ModalGroup.SPINDLE_MODE),
+    **dict.fromkeys((70, 80), ModalGroup.LATHE_DIAMETER_MODE),
+    **dict.fromkeys((921, 922, 923), ModalGroup.G92_IS_APPLIED),
 }
 #: The modal group of each M code; LinuxCNC's ``ems`` table.
 M_GROUPS: dict[int, int] = {
-    **dict.fromkeys((0, 1, 2, 30, 60, 99), 4),
-    **dict.fromkeys((3, 4, 5, 19, 70, 71, 72, 73), 7),
-    **dict.fromkeys((6, 61), 6),
-    **dict.fromkeys((7, 8, 9), 8),
-    **dict.fromkeys((48, 49, 50, 51, 52, 53), 9),
-    **dict.fromkeys((62, 63, 64, 65, 66, 67, 68), 5),
-    **dict.fromkeys(range(100, 200), 10),
+    **dict.fromkeys((0, 1, 2, 30, 60, 99), MGroup.STOPPING),
+    **dict.fromkeys((3, 4, 5, 19, 70, 71, 72, 73), MGroup.SPINDLE),
+    **dict.fromkeys((6, 61), MGroup.TOOL_CHANGE),
+    **dict.fromkeys((7, 8, 9), MGroup.COOLANT),
+    **dict.fromkeys((48, 49, 50, 51, 52, 53), MGroup.OVERRIDES),
+    **dict.fromkeys((62, 63, 64, 65, 66, 67, 68), MGroup.IO),
+    **dict.fromkeys(range(100, 200), MGroup.USER_DEFINED),
 }
 #: The O-word keywords, in the order LinuxCNC tries them (``elseif`` before ``else``).
 O_KEYWORDS = (

@@ -36,8 +36,9 @@ from twin.gcode.report import planned_summary
 from twin.machines import BuiltMachine
 from twin.machines import build as build_machine
 from twin.machines.rigid_drive import rigid_drives, table_travel_m
-from twin.process.machining import COLUMNS, ProgramCut, engaged_degrees
-from twin.process.program_stability import ProgramSamples, default_rpm_range, line_stability
+from twin.machining.engagement import COLUMNS, engaged_degrees
+from twin.machining.program_cut import ProgramCut
+from twin.machining.program_stability import ProgramSamples, default_rpm_range, line_stability
 from twin.records import MachiningWarning, PlanWarning, plan_warning
 from twin.references.kinds import ReferenceContext, ReferenceSpecBase, register, two_axes
 from twin.settings import set_fields
@@ -141,7 +142,7 @@ class GcodeReference(_Samples):
         Which of x, y, z (indices) the machine's axes follow, in its order.
     n_lines : int
         The program's lines read, to its end (M2, M30, the second %) (for the progress bar).
-    cut : twin.process.machining.ProgramCut or None
+    cut : twin.machining.program_cut.ProgramCut or None
         With a stock: the program through it (engagement at each sample, the stock as the program
         leaves it, machining warnings).
     checks : tuple of TravelCheck, DriveCheck or None
@@ -162,12 +163,12 @@ class GcodeReference(_Samples):
         self.n_samples = len(planned.position)
 
     def cutting(self, cut: ProgramCut) -> GcodeReference:
-        """The same program cutting a stock (``cut``, :func:`twin.process.machining.program_milling`)."""
+        """The same program cutting a stock (``cut``, :func:`twin.machining.program_cut.program_milling`)."""
         return GcodeReference(self.plan, self.axes, self.n_lines, cut, self.checks)
 
     @property
     def warnings(self) -> list[MachiningWarning]:
-        """With a stock: crashes and misuse by line (:func:`twin.process.misuse.machining_warnings`)."""
+        """With a stock: crashes and misuse by line (:func:`twin.machining.misuse.machining_warnings`)."""
         return [] if self.cut is None else self.cut.warnings
 
     @property
@@ -198,8 +199,8 @@ class GcodeReference(_Samples):
     @cached_property
     def line_stability(self) -> dict[int, dict]:
         """With a stock and tools with ``dynamics``: each cutting line's chatter check
-        (:func:`twin.process.program_stability.line_stability`, stable speeds searched over
-        :func:`~twin.process.program_stability.default_rpm_range`); else empty."""
+        (:func:`twin.machining.program_stability.line_stability`, stable speeds searched over
+        :func:`~twin.machining.program_stability.default_rpm_range`); else empty."""
         samples = self.program_samples()
         if samples is None:
             return {}
@@ -230,7 +231,7 @@ class GcodeReference(_Samples):
     @cached_property
     def outlines(self) -> dict[str, list[np.ndarray]]:
         """With a stock: its outline and the machined one (mm, see
-        :meth:`twin.process.machining.HeightMap.outlines`, computed once); else empty."""
+        :meth:`twin.machining.engagement.HeightMap.outlines`, computed once); else empty."""
         return {} if self.cut is None else self.cut.height_map.outlines()
 
     @property

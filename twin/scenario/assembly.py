@@ -13,10 +13,10 @@ import numpy as np
 from controllers import CONTROLLERS, OBSERVERS
 from controllers.blocks import Controller, with_correction
 from controllers.registry import Context, ParameterError, build_controller, make_observers
+from twin.disturbances import DISTURBANCES
 from twin.errors import TwinInputError
 from twin.machines import BuiltMachine, build
-from twin.process import DISTURBANCES
-from twin.process.machining import program_milling
+from twin.machining.program_cut import program_milling
 from twin.references import REFERENCES, ReferenceContext
 from twin.scenario.schema import ControllerSpec, Scenario
 from twin.sim.drive import Drive, Encoder, substeps_per_tick

@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from twin.process.inspection import measure, not_found
-from twin.process.machining import StockSpec
-from twin.process.part import MachinedPart, Sweep
-from twin.process.part_map import virtual_part
+from twin.machining.engagement import StockSpec
+from twin.machining.inspection import measure, not_found
+from twin.machining.part import MachinedPart, virtual_part
+from twin.machining.sweep import Sweep
 from twin.records import Inspected
 from twin.scenario.assembly import assemble
 from twin.scenario.schema import Scenario

@@ -9,10 +9,10 @@ from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 from pydantic import Field, PositiveFloat
 
+from twin.disturbances import DISTURBANCES, DisturbanceSpecBase
 from twin.gcode.planner import PlannerSettings
-from twin.process import DISTURBANCES, DisturbanceSpecBase
-from twin.process.inspection import InspectSpec
-from twin.process.machining import StockSpec, ToolSpec
+from twin.machining.engagement import StockSpec, ToolSpec
+from twin.machining.inspection import InspectSpec
 from twin.references import REFERENCES, ReferenceSpecBase
 from twin.spec import StrictSpec, tagged_union
 
@@ -75,7 +75,7 @@ class SensorSpec(StrictSpec):
     )
 
 
-#: The ``[[disturbances]]`` entries: one spec per registered kind (:mod:`twin.process`), the same way.
+#: The ``[[disturbances]]`` entries: one spec per registered kind (:mod:`twin.disturbances`), the same way.
 if TYPE_CHECKING:
     DisturbanceSpec = DisturbanceSpecBase
 else:

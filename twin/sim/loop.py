@@ -7,7 +7,7 @@ piece of arithmetic: :func:`start_tick` (metrics, state recording),
 :func:`controllers.kernels.run_blocks` (the blocks, every kind, relay included),
 :func:`twin.sim.drive.drive_command`
 (disturbance, saturation, delay line), :func:`twin.sim.drive.actuator_input`,
-:func:`twin.process.cutting.workpiece_forces` (into ``xfrc_applied`` before each physics step)
+:func:`twin.machining.cutting.workpiece_forces` (into ``xfrc_applied`` before each physics step)
 and :func:`end_tick` (recording, force maxima).  They differ only in how they step MuJoCo (ctypes ``mj_step`` on the
 struct addresses, with the simulation time accumulated as MuJoCo accumulates it, against
 ``mujoco.mj_step`` and ``data.time``) and in running Python blocks.  The state they carry
@@ -33,8 +33,8 @@ import numpy as np
 from numba import njit
 
 from controllers.kernels import run_blocks
+from twin.machining.cutting import workpiece_forces
 from twin.numba_cache import configure as configure_numba_cache
-from twin.process.cutting import workpiece_forces
 from twin.sim.drive import (
     POS,
     accelerations_ok,
@@ -118,7 +118,7 @@ class ForceState(NamedTuple):
     the physics step (s), the simulation clock (s, in place), the tick's summed force (N), the
     workpiece's XY velocity per axis velocity (2, n_axes: the reference's velocity to the planned
     feed), the planned feed velocity (2, m/s, in place) and the tick's vibration probe
-    (:data:`twin.process.cutting.PROBE`)."""
+    (:data:`twin.machining.cutting.PROBE`)."""
 
     fops: np.ndarray
     fpar: np.ndarray

@@ -81,7 +81,7 @@ class InputDisturbance(Protocol):
 class ForceModel(Protocol):
     """A force on the workpiece before each physics step, computed by a compiled kernel:
     ``kernel_arrays(machine)`` gives its kind, parameters and state
-    (:func:`twin.process.cutting.workpiece_forces`)."""
+    (:func:`twin.machining.cutting.workpiece_forces`)."""
 
     def kernel_arrays(self, machine) -> tuple[int, np.ndarray, np.ndarray]: ...
 

@@ -30,7 +30,7 @@ from tqdm import tqdm
 from controllers.blocks import Controller, Program, SignalError, preview_ticks_needed, standard_signals
 from twin.errors import RunInterrupted, SimulationDiverged, TwinInputError
 from twin.machines import BuiltMachine
-from twin.process.cutting import PROBE, ForceModels
+from twin.machining.cutting import PROBE, ForceModels
 from twin.records import Inspected, MachiningWarning, PlanWarning
 from twin.sim import loop, mujoco_c
 from twin.sim.drive import MAX_VALUE, Drive, Encoder, substeps_per_tick
@@ -83,7 +83,7 @@ class ProgramTrace:
         With a stock: ``stock`` and ``machined`` outlines (mm), as the program leaves them.
     machining_warnings : list of twin.records.MachiningWarning
         With a stock: crashes and misuse by program line
-        (:func:`twin.process.misuse.machining_warnings`), the first ones.
+        (:func:`twin.machining.misuse.machining_warnings`), the first ones.
     machining_warnings_total : int
         How many there are in all.
     plan_warnings : list of twin.records.TravelWarning or twin.records.DriveWarning
@@ -93,7 +93,7 @@ class ProgramTrace:
         How many there are in all.
     line_stability : dict of int to dict
         With a stock and a tool with ``dynamics``: each cutting line's chatter check
-        (:func:`twin.process.program_stability.line_stability`).
+        (:func:`twin.machining.program_stability.line_stability`).
     """
 
     lines: np.ndarray
@@ -134,8 +134,8 @@ class RunResult:
     workpiece_force_N : ndarray, shape (n, 3)
         External force on the workpiece (world frame, N), mean over the tick's physics steps.
     vibration_probe : ndarray, shape (n, len(PROBE))
-        The milling kernels' vibration probe (:data:`twin.process.cutting.PROBE`) summed over
-        the physics steps from each recorded tick to the next (:mod:`twin.process.chatter`).
+        The milling kernels' vibration probe (:data:`twin.machining.cutting.PROBE`) summed over
+        the physics steps from each recorded tick to the next (:mod:`twin.machining.chatter`).
     control_period_s : float
     error_max_m, error_rms_m : ndarray, shape (n_axes,)
         Max |ref - table position| and its RMS over every tick, recorded or not (m).
@@ -146,10 +146,10 @@ class RunResult:
         ``completed_ticks`` (all of them, unless the run diverged or was interrupted).
     program : ProgramTrace or None
         For a part program's reference: its lines, feeds and engagement at the recorded ticks.
-    part : twin.process.part.MachinedPart or None
+    part : twin.machining.part.MachinedPart or None
         With a stock: the part the actual motion cut, against the nominal one.
     inspection : list of twin.records.Inspected
-        The ``[[inspect]]`` features measured on it (:func:`twin.process.inspection.measure`).
+        The ``[[inspect]]`` features measured on it (:func:`twin.machining.inspection.measure`).
     """
 
     machine: BuiltMachine

@@ -35,7 +35,7 @@ from controllers.lti import SisoTf, discretize, tf_to_ss
 from controllers.papers import anang2017
 from twin.machines import build
 from twin.machines.googol import GoogolXY
-from twin.process.cutting import EndMilling
+from twin.machining.cutting import EndMilling
 from twin.references import SumOfSines
 from twin.reproductions.base import twin_vs_tf
 from twin.sim.runner import simulate

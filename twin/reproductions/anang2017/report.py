@@ -265,7 +265,7 @@ def write_plots(directory: Path, results: dict | None = None) -> list[Path]:
 def twin_runs() -> dict:
     """The twin runs of Fig. 10: 0.4 Hz, 10 mm, 1500 rpm, PID and NPID."""
     from controllers import make_controller
-    from twin.process.cutting import EndMilling
+    from twin.machining.cutting import EndMilling
     from twin.references import SumOfSines
     from twin.sim.runner import simulate
 

@@ -31,9 +31,9 @@ from controllers.blocks import with_correction
 from controllers.design.dob import delay_and_gain_error, q_cutoff, q_response
 from controllers.papers import maharof2021
 from controllers.registry import Context, make_observers
+from twin.disturbances.drive_input import HarmonicInput
 from twin.machines.googol import GoogolXY
-from twin.process.cutting import EndMilling
-from twin.process.disturbances import HarmonicInput
+from twin.machining.cutting import EndMilling
 from twin.references import SumOfSines
 from twin.reproductions.anang2017.procedure import CUT, DT_S, TWIN_TOL_REL, machine, sine_reference
 from twin.reproductions.base import twin_vs_tf

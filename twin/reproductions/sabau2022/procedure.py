@@ -23,9 +23,9 @@ from controllers.blocks import Controller
 from controllers.design.statefeedback import mimo_model
 from controllers.design.tuning import limit_cycle, relay_ultimate_gain
 from controllers.papers import sabau2022 as s1
+from twin.disturbances.drive_input import VoltageStep
 from twin.machines import build, get_machine
 from twin.metrics import step_metrics
-from twin.process.disturbances import VoltageStep
 from twin.references import Step
 from twin.sim.drive import Drive
 from twin.sim.runner import simulate

@@ -40,10 +40,10 @@ from controllers.design.imc import imc_controller
 from controllers.design.kharitonov import kharitonov_polynomials, robustly_stable, stability_margin_third_order
 from controllers.design.robust_pi import design_robust_pi, worst_case_margins
 from controllers.papers import yadav2020
+from twin.disturbances.drive_input import VoltageStep
 from twin.machines import build, get_machine
 from twin.machines.cncmt import leadscrew_tf
 from twin.metrics import step_metrics
-from twin.process.disturbances import VoltageStep
 from twin.references import Step
 from twin.sim.drive import Encoder
 from twin.sim.runner import simulate

@@ -1,12 +1,12 @@
 """The machined part as files for the user's own tools: the height map of the nominal and the
 actual part on the stock's grid (Parquet) and a closed triangle mesh of the actual part (STL).
 
-Both maps are the stock's :class:`~twin.process.machining.HeightMap` cut by
-:func:`~twin.process.machining.cut_path` (the engagement's own cut) along a
-:class:`~twin.process.part.Sweep`: the nominal one along the plan, the actual one where the
+Both maps are the stock's :class:`~twin.machining.engagement.HeightMap` cut by
+:func:`~twin.machining.engagement.cut_path` (the engagement's own cut) along a
+:class:`~twin.machining.sweep.Sweep`: the nominal one along the plan, the actual one where the
 twin moved the tool.  A cell's height is the material's top at its centre, so a wall is placed
 to the cell (``stock.resolution_mm``); the walls to a micrometre are
-:class:`~twin.process.part.MachinedPart`'s exact sections.  What the map adds is the floors and
+:class:`~twin.machining.part.MachinedPart`'s exact sections.  What the map adds is the floors and
 3-D surfaces: a ball tool's scallops, a floor left by a pass that went elsewhere.
 
 The mesh is the actual map's top surface (a vertex at each cell centre, two triangles per
@@ -26,8 +26,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from twin.process.machining import MAP_MARGIN_MM, HeightMap, StockSpec, cut_path
-from twin.process.part import MachinedPart, Sweep, machined_part
+from twin.machining.engagement import MAP_MARGIN_MM, HeightMap, StockSpec, cut_path
+from twin.machining.sweep import Sweep
 
 #: Cells the mesh takes at most (every k-th cell each way beyond it): about a million
 #: triangles, a 50 MB binary STL.
@@ -197,19 +197,10 @@ class PartMap:
 
 def part_map(stock: StockSpec, nominal: Sweep, actual: Sweep) -> PartMap:
     """The nominal and the actual part's height maps: ``stock`` cut along each sweep, on one
-    grid with the engagement's margin (:data:`~twin.process.machining.MAP_MARGIN_MM`) rounded up
+    grid with the engagement's margin (:data:`~twin.machining.engagement.MAP_MARGIN_MM`) rounded up
     to whole cells, so that the cells' edges fall on the stock's corner."""
     margin_mm = math.ceil(MAP_MARGIN_MM / stock.resolution_mm) * stock.resolution_mm
     # the two maps at once, a thread each (the compiled cut releases the GIL)
     with ThreadPoolExecutor(max_workers=2) as pool:
         maps = list(pool.map(lambda sweep: cut_height_map(stock, sweep, margin_mm), (nominal, actual)))
     return PartMap(stock, *maps)
-
-
-def virtual_part(stock: StockSpec, nominal: Sweep, actual: Sweep) -> MachinedPart:
-    """The part ``actual`` cut against the one ``nominal`` cuts: the walls
-    (:func:`~twin.process.part.machined_part`) with both height maps and their floor error."""
-    part = machined_part(stock.polygon(), nominal, actual, stock.top_mm, stock.bottom_mm)
-    part.maps = part_map(stock, nominal, actual)
-    part.floor_error_um = part.maps.floor_error()
-    return part

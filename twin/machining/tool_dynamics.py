@@ -172,7 +172,7 @@ class ToolDynamicsSpec(StrictSpec):
     modes_in_run: bool = Field(
         False,
         description="the modes vibrate in the run too: the tool's deflection enters the chip "
-        "(twin.process.cutting; the physics step must resolve the highest mode)",
+        "(twin.machining.cutting; the physics step must resolve the highest mode)",
     )
     _measured: MeasuredFrf | None = PrivateAttr(None)
 

@@ -17,7 +17,7 @@ Kienzle
     :class:`CuttingCoefficients` with ``mc > 0``: ``K_tc = kc1`` and ``K_rc``, ``K_ac`` the
     radial and axial forces' values at h = 1 mm, no edge coefficients (the exponent carries the
     size effect instead).  The force kernels linearise it about the mean chip thickness of the
-    engaged arc at each step (:func:`twin.process.cutting.kienzle_coefficients`).
+    engaged arc at each step (:func:`twin.machining.cutting.kienzle_coefficients`).
 
     Where the source gives kc at several feeds, kc1 and mc are a least-squares fit in log-log
     (:func:`fit_kienzle`), done here from the source's numbers (:data:`MITSUBISHI_MILLING_KC`),
@@ -230,3 +230,6 @@ MATERIALS: dict[str, Material] = {
         _ISCAR,
     ),
 }
+
+#: The material of a tool or an end-milling disturbance that names none.
+DEFAULT_MATERIAL = "aluminium_7075_t6"

@@ -1,7 +1,7 @@
 """Every cutting line of a program checked against chatter: from the engagement the twin computes
-along the planned path (:func:`twin.process.machining.engagement_table`: the engaged arcs and
+along the planned path (:func:`twin.machining.engagement.engagement_table`: the engaged arcs and
 their axial depths), the spindle speed, the feed's direction and the tool at each sample, the
-zero-order critical depth (:mod:`twin.process.stability`) at that speed, the margin (critical
+zero-order critical depth (:mod:`twin.machining.stability`) at that speed, the margin (critical
 over actual depth), and the nearest speeds at which the line's cut is stable.
 
 A sample's two engaged arcs each push with their own depth: the cut's mean force matrix is
@@ -19,10 +19,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from twin.process.cutting import MIN_SPINDLE_RPM, kienzle_coefficients
-from twin.process.machining import COLUMNS, ToolSpec
-from twin.process.materials import CuttingCoefficients
-from twin.process.stability import Cut, frequency_grid_hz, zoa_boundaries
+from twin.machining.cutting import MIN_SPINDLE_RPM, kienzle_coefficients
+from twin.machining.engagement import COLUMNS, ToolSpec
+from twin.machining.materials import CuttingCoefficients
+from twin.machining.stability import Cut, frequency_grid_hz, zoa_boundaries
 
 #: Angles (arcs, feed direction) are compared to this step (deg).
 ANGLE_STEP_DEG = 1.0
@@ -39,7 +39,7 @@ def milling_cut(
     feed_angle_rad: float = 0.0,
     feed_per_tooth_mm: float = 0.1,
 ) -> Cut:
-    """The :class:`~twin.process.stability.Cut` of a tool's material and flutes on ``arcs``
+    """The :class:`~twin.machining.stability.Cut` of a tool's material and flutes on ``arcs``
     (entry, exit (rad), depth share); a Kienzle material's coefficients linearised at the mean
     chip thickness of the first arc at ``feed_per_tooth_mm`` (as the force kernels do)."""
     st, ex, _share = arcs[0]
@@ -50,7 +50,7 @@ def milling_cut(
 @dataclass(frozen=True)
 class ProgramSamples:
     """What the planned program does at each sample: the engagement table
-    (:data:`~twin.process.machining.COLUMNS`), spindle speed (rpm), index into ``tools``,
+    (:data:`~twin.machining.engagement.COLUMNS`), spindle speed (rpm), index into ``tools``,
     program line, and the XY velocity (m/s)."""
 
     table: np.ndarray

@@ -1,7 +1,7 @@
 """Stability of milling against regenerative chatter: the critical axial depth against the
 spindle speed (stability lobes), by two methods.
 
-The cut is the twin's own (:mod:`twin.process.cutting`, Altintas, *Manufacturing Automation*,
+The cut is the twin's own (:mod:`twin.machining.cutting`, Altintas, *Manufacturing Automation*,
 2nd ed., ch. 2.5 and 3.4): in the feed frame (x along the feed, y = z x feed), flute ``j`` at
 immersion angle ``phi_j`` (clockwise from y) engaged on ``[phi_st, phi_ex]`` takes the dynamic
 chip ``h = dx sin(phi) + dy cos(phi)`` with ``d = q(t) - q(t - T)`` the tool's displacement
@@ -42,7 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from twin.errors import TwinInputError
-from twin.process.tool_dynamics import DIRECTIONS, ToolDynamicsSpec, feed_frame_rotation
+from twin.machining.tool_dynamics import DIRECTIONS, ToolDynamicsSpec, feed_frame_rotation
 
 #: Frequency points of the zero-order solution at most (memory and time are bounded).
 MAX_FREQUENCIES = 200_000
@@ -75,7 +75,7 @@ MAX_SPEEDS = 10_000
 class Cut:
     """A milling cut's regenerative force: ``N`` flutes, tangential cutting coefficient
     ``K_t`` (N/m^2), ``K_r = K_rc/K_tc``, the engaged arcs ``(phi_st, phi_ex)`` (rad, immersion
-    angles of :func:`twin.process.cutting.immersion_angles`) each with its share of the axial
+    angles of :func:`twin.machining.cutting.immersion_angles`) each with its share of the axial
     depth (1 for a single arc), and the feed's angle from the machine's X (rad)."""
 
     n_flutes: int

@@ -30,7 +30,7 @@ the drive:
 
 Default cutting coefficients: aluminium Al7075-T6 with a carbide cutter, dry:
 K_tc 767.01, K_rc 168.8, K_ac 222 N/mm^2, K_te 27.7, K_re 26.6, K_ae 0.7 N/mm
-(:mod:`twin.process.materials`, with the other materials and their sources).
+(:mod:`twin.machining.materials`, with the other materials and their sources).
 
 A Kienzle material (``kc = kc1 h^-mc``, the coefficients' ``mc > 0``) reaches the same closed
 forms linearised: each step, its cutting coefficients are taken at the mean chip thickness of
@@ -51,13 +51,12 @@ from typing import Literal
 
 import numpy as np
 from numba import njit
-from pydantic import Field, PositiveFloat, model_validator
+from pydantic import Field, model_validator
 
 from twin.errors import TwinInputError
+from twin.machining.materials import DEFAULT_MATERIAL, MATERIALS, CuttingCoefficients, kienzle
+from twin.machining.tool_dynamics import ToolDynamicsSpec
 from twin.numba_cache import configure as configure_numba_cache
-from twin.process.kinds import DisturbanceSpecBase, register
-from twin.process.materials import ALUMINIUM_7075_T6, MATERIALS, CuttingCoefficients, kienzle
-from twin.process.tool_dynamics import ToolDynamicsSpec
 from twin.spec import StrictSpec
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
@@ -305,7 +304,7 @@ def _tooth_frequency_hz(spindle_rpm: float, n_flutes: int) -> float:
     return n_flutes * spindle_rpm / 60.0
 
 
-def _spindle_phase(phase_rad: float | None, seed: int) -> float:
+def spindle_phase(phase_rad: float | None, seed: int) -> float:
     """The given initial spindle angle, or one drawn from ``seed`` (rad)."""
     if phase_rad is not None:
         return float(phase_rad)
@@ -344,7 +343,7 @@ class EndMilling:
     axial_depth_mm: float
     radial_depth_mm: float
     mode: str = "up"
-    coefficients: CuttingCoefficients = ALUMINIUM_7075_T6
+    coefficients: CuttingCoefficients = MATERIALS[DEFAULT_MATERIAL].coefficients
     start_s: float = 0.0
     stop_s: float | None = None
     spindle_phase_rad: float | None = None
@@ -395,7 +394,7 @@ class EndMilling:
                 "phi_st": phi_st,
                 "phi_ex": phi_ex,
                 "omega": 2.0 * math.pi * self.spindle_rpm / 60.0,
-                "phase0": _spindle_phase(self.spindle_phase_rad, self.seed),
+                "phase0": spindle_phase(self.spindle_phase_rad, self.seed),
                 "dt": dt,
                 "lag_steps": lag_steps,
                 "lo": lo,
@@ -462,7 +461,7 @@ class AverageForce:
                 "k_c": self.k_c_N_s_per_m,
                 "harmonic_fraction": self.harmonic_fraction,
                 "omega": 2.0 * math.pi * _tooth_frequency_hz(self.spindle_rpm, self.n_flutes),
-                "phase": _spindle_phase(self.harmonic_phase_rad, self.seed),
+                "phase": spindle_phase(self.harmonic_phase_rad, self.seed),
                 "lo": lo,
                 "hi": hi,
             },
@@ -500,7 +499,7 @@ END_MILLING_SLOTS = (
     "n_modes",
 )
 AVERAGE_FORCE_SLOTS = ("k_il", "k_c", "harmonic_fraction", "omega", "phase", "lo", "hi")
-#: A part program's milling (:class:`twin.process.machining.ProgramMilling`): then the workpiece
+#: A part program's milling (:class:`twin.machining.program_cut.ProgramMilling`): then the workpiece
 #: Jacobian (2 x nq), each tool's :data:`PM_TOOL_COLUMNS`, the tools' ``n_modes`` modes
 #: (:data:`MODE_COLUMNS`) and the engagement table of ``n_table`` rows of :data:`PM_COLUMNS`,
 #: one every ``table_period`` seconds.
@@ -543,7 +542,7 @@ REGENERATIONS = 12
 #: :data:`REGENERATIONS` tooth periods do not fit keeps as many as do (one at least).
 MAX_HISTORY_ROWS = 2_000_000
 #: What the milling kernels add up over each physics step that cuts, for the chatter indicator
-#: (:mod:`twin.process.chatter`): the steps, the squares of the once-per-tooth difference of
+#: (:mod:`twin.machining.chatter`): the steps, the squares of the once-per-tooth difference of
 #: the vibration along and across the feed (mm^2), its sign changes along and across, and the
 #: square of the planned feed per tooth (mm^2).
 PROBE = ("cut_steps", "vib_u2", "vib_w2", "crossings_u", "crossings_w", "feed2")
@@ -938,7 +937,7 @@ MAX_EDGE_N_PER_MM = 1_000.0
 class CoefficientsSpec(StrictSpec):
     """Overrides of the material's coefficients: linear cutting (N/mm^2) and edge (N/mm) ones,
     or the Kienzle form ``kc1_N_per_mm2`` with ``mc`` (radial and axial then our ratios of it,
-    :data:`~twin.process.materials.KIENZLE_RADIAL_RATIO`, unless ``K_rc``, ``K_ac`` are given:
+    :data:`~twin.machining.materials.KIENZLE_RADIAL_RATIO`, unless ``K_rc``, ``K_ac`` are given:
     at h = 1 mm)."""
 
     # the chip is sheared against the cut: the tangential cutting and edge forces oppose the
@@ -969,7 +968,7 @@ class CoefficientsSpec(StrictSpec):
         return self
 
     def applied_to(self, material: str) -> CuttingCoefficients:
-        """The coefficients of ``material`` (:data:`~twin.process.materials.MATERIALS`) with the
+        """The coefficients of ``material`` (:data:`~twin.machining.materials.MATERIALS`) with the
         ones given here in their place; a Kienzle form given replaces the material's whole."""
         given = self.model_dump(exclude_none=True)
         kc1 = given.pop("kc1_N_per_mm2", None)
@@ -977,80 +976,19 @@ class CoefficientsSpec(StrictSpec):
         return replace(base, **given)
 
 
-class EndMillingSpec(DisturbanceSpecBase):
-    """end_milling: the mechanistic milling force on the workpiece (EndMilling), driven by its motion."""
+class WorkMaterialSpec(StrictSpec):
+    """What a cutter cuts: the ``material`` (its coefficients from
+    :data:`~twin.machining.materials.MATERIALS`) and the user's ``coefficients`` over them; a
+    ``[tool]``, a ``[[tools]]`` entry and an ``end_milling`` disturbance have both."""
 
-    type: Literal["end_milling"]
-    spindle_rpm: float = Field(ge=MIN_SPINDLE_RPM, description="rev/min; at least 1 (a tooth period of at most 60 s)")
-    n_flutes: int = Field(ge=1, le=MAX_FLUTES, description="teeth of the cutter")
-    diameter_mm: PositiveFloat = Field(description="cutter diameter, mm")
-    axial_depth_mm: PositiveFloat = Field(description="axial depth of cut, mm")
-    radial_depth_mm: PositiveFloat = Field(description="radial depth of cut (the diameter: a slot), mm")
-    mode: Literal["up", "down"] = Field("up", description="up (conventional) or down (climb) milling")
     # the names of the materials table (pydantic evaluates the Literal at run time; mypy cannot)
     material: Literal[tuple(MATERIALS)] = Field(  # type: ignore[valid-type]
-        "aluminium_7075_t6", description="cutting coefficients of: " + ", ".join(MATERIALS)
+        DEFAULT_MATERIAL, description="cutting coefficients of: " + ", ".join(MATERIALS)
     )
     coefficients: CoefficientsSpec = Field(
-        default_factory=CoefficientsSpec, description="overrides of the material's coefficients"
-    )
-    start_s: float = Field(0.0, ge=0, description="the cut starts, s")
-    stop_s: PositiveFloat | None = Field(None, description="the cut stops, s (default: never)")
-    spindle_phase_rad: float | None = Field(None, description="None: drawn from the seed")
-    seed: int | None = Field(None, ge=0, description="default: the scenario's seed")
-    helix_deg: float = Field(0.0, ge=0.0, lt=MAX_HELIX_DEG, description="helix angle of the flutes, deg (0: straight)")
-    dynamics: ToolDynamicsSpec | None = Field(
-        None, description="the structure at the tool tip: modes in X/Y or a measured FRF (twin.process.tool_dynamics)"
+        default_factory=CoefficientsSpec, description="the user's own coefficients, over the material's"
     )
 
-
-class AverageForceSpec(DisturbanceSpecBase):
-    """average_force: Choi 1999's average cutting force k_il v + k_c (z x v) (AverageForce)."""
-
-    type: Literal["average_force"]
-    k_il_N_s_per_m: float = Field(-2500.0, description="force along the velocity per velocity, N s/m")
-    k_c_N_s_per_m: float = Field(2500.0, description="force across the velocity per velocity, N s/m")
-    harmonic_fraction: float = Field(0.0, ge=0, le=0.2, description="tooth-passing harmonic, a fraction of the force")
-    spindle_rpm: float = Field(10000.0, ge=MIN_SPINDLE_RPM, description="rev/min (sets the tooth frequency)")
-    n_flutes: int = Field(2, ge=1, le=MAX_FLUTES, description="teeth of the cutter")
-    start_s: float = Field(0.0, ge=0, description="the cut starts, s")
-    stop_s: PositiveFloat | None = Field(None, description="the cut stops, s (default: never)")
-    harmonic_phase_rad: float | None = Field(None, description="None: drawn from the seed")
-    seed: int | None = Field(None, ge=0, description="default: the scenario's seed")
-
-
-def _end_milling_from(spec: EndMillingSpec, axis_names: list[str], seed: int, field: str) -> EndMilling:
-    coefficients = spec.coefficients.applied_to(spec.material)
-    return EndMilling(
-        spindle_rpm=spec.spindle_rpm,
-        n_flutes=spec.n_flutes,
-        diameter_mm=spec.diameter_mm,
-        axial_depth_mm=spec.axial_depth_mm,
-        radial_depth_mm=spec.radial_depth_mm,
-        mode=spec.mode,
-        coefficients=coefficients,
-        start_s=spec.start_s,
-        stop_s=spec.stop_s,
-        spindle_phase_rad=spec.spindle_phase_rad,
-        seed=seed,
-        helix_deg=spec.helix_deg,
-        dynamics=spec.dynamics,
-    )
-
-
-def _average_force_from(spec: AverageForceSpec, axis_names: list[str], seed: int, field: str) -> AverageForce:
-    return AverageForce(
-        spec.k_il_N_s_per_m,
-        spec.k_c_N_s_per_m,
-        spec.harmonic_fraction,
-        spec.spindle_rpm,
-        spec.n_flutes,
-        spec.start_s,
-        spec.stop_s,
-        spec.harmonic_phase_rad,
-        seed,
-    )
-
-
-register("end_milling", EndMillingSpec, _end_milling_from)
-register("average_force", AverageForceSpec, _average_force_from)
+    def cutting_coefficients(self) -> CuttingCoefficients:
+        """The material's coefficients with the user's given ones in their place."""
+        return self.coefficients.applied_to(self.material)

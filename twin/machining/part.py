@@ -42,16 +42,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 import shapely
 from numba import njit
 
+from twin.machining.engagement import StockSpec
+from twin.machining.part_map import PartMap, part_map
+from twin.machining.sweep import Sweep
 from twin.numba_cache import configure as configure_numba_cache
-
-if TYPE_CHECKING:
-    from twin.process.part_map import PartMap
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
 
@@ -101,7 +101,7 @@ MAX_BINS = 4_000_000
 #: Runs of one radius a nominal section sweeps at most (about 5 s of GEOS buffering and union).
 #: A tool that moves in Z through a level (a 3-D surface, a long ramp) sweeps a new radius at
 #: every sample there: such a level is not sectioned, and its surface is in the height maps'
-#: floor error instead (:mod:`twin.process.part_map`).
+#: floor error instead (:mod:`twin.machining.part_map`).
 MAX_SECTION_RUNS = 20_000
 
 
@@ -133,8 +133,9 @@ def _swept(shapes: list, radius: float) -> shapely.Geometry:
     return shapely.union_all(shapely.buffer(np.array(shapes, dtype=object), radius, quad_segs=quad_segs(radius)))
 
 
-def section(stock: shapely.Geometry, xy_mm, tip_mm, radius_mm, corner_mm, z_mm: float) -> shapely.Geometry:
-    """The material a smooth path leaves at height ``z_mm``: ``stock`` less the tool's sweep
+def section(stock: shapely.Geometry, sweep: Sweep, z_mm: float) -> shapely.Geometry:
+    """The material a smooth path (the plan; an actual path is probed, :func:`nearest_cuts`)
+    leaves at height ``z_mm``: ``stock`` less the tool's sweep
     there, inside it by at most :func:`_section_slack_mm`: each run of samples at one radius (a
     step of :data:`SAME_RADIUS_MM`) a line simplified within :data:`NOMINAL_SIMPLIFY_MM` and
     widened by the run's smallest radius, each pair of samples between which the radius changes
@@ -144,10 +145,8 @@ def section(stock: shapely.Geometry, xy_mm, tip_mm, radius_mm, corner_mm, z_mm: 
     ----------
     stock : shapely geometry
         The stock's outline less its islands (mm).
-    xy_mm : ndarray (n, 2)
-        The tool's axis in time order (mm).
-    tip_mm, radius_mm, corner_mm : ndarray (n,)
-        The tool's tip height, radius and corner radius at each sample (mm).
+    sweep : Sweep
+        The tool's axis in time order, its tip height, radius and corner radius at each sample (mm).
     z_mm : float
 
     Raises
@@ -155,8 +154,9 @@ def section(stock: shapely.Geometry, xy_mm, tip_mm, radius_mm, corner_mm, z_mm: 
     SectionTooComplex
         More than :data:`MAX_SECTION_RUNS` runs and pairs.
     """
-    xy_mm = np.asarray(xy_mm, float)
-    r = swept_radius_mm(np.asarray(tip_mm), np.asarray(radius_mm), np.asarray(corner_mm), z_mm)
+    xy_mm = np.asarray(sweep.xy_mm, float)
+    tool = (np.asarray(sweep.tip_mm), np.asarray(sweep.radius_mm), np.asarray(sweep.corner_mm))
+    r = swept_radius_mm(*tool, z_mm)
     on = r > 0.0
     if len(r) == 1:
         return shapely.difference(stock, _swept([shapely.Point(xy_mm[0])], float(r[0]))) if on[0] else stock
@@ -183,7 +183,6 @@ def section(stock: shapely.Geometry, xy_mm, tip_mm, radius_mm, corner_mm, z_mm: 
         )
     swept = [_swept(shapes, radius) for radius, shapes in by_radius.items()]
     pairs = np.flatnonzero(changing)
-    tool = (np.asarray(tip_mm), np.asarray(radius_mm), np.asarray(corner_mm))
     for start in range(0, len(pairs), HULL_PAIRS):  # in blocks: memory stays bounded
         discs = _ramp_discs(xy_mm, *tool, pairs[start : start + HULL_PAIRS], z_mm)
         swept.append(shapely.union_all(_disc_hulls(*discs)))
@@ -272,40 +271,6 @@ def wall_levels(tip_mm: np.ndarray, moving: np.ndarray, top_mm: float, bottom_mm
     if len(floors) > MAX_WALL_LEVELS:
         edges = np.linspace(top_mm, floors[-1], MAX_WALL_LEVELS + 1)
     return [float(z) for z in 0.5 * (edges[:-1] + edges[1:])]
-
-
-@dataclass
-class Sweep:
-    """A tool path through the stock, all in mm.
-
-    Attributes
-    ----------
-    xy_mm : ndarray (n, 2)
-        The tool's axis relative to the stock.
-    tip_mm, radius_mm, corner_mm : ndarray (n,)
-        Its tip height, radius and corner radius.
-    line : ndarray (n,) of int
-        The program line at each sample.
-    """
-
-    xy_mm: np.ndarray
-    tip_mm: np.ndarray
-    radius_mm: np.ndarray
-    corner_mm: np.ndarray
-    line: np.ndarray
-
-    @classmethod
-    def planned(cls, plan, cut) -> Sweep:
-        """The planned path of a program through its stock: a
-        :class:`twin.gcode.planner.Plan`'s tips with the tool of each sample of its
-        :class:`twin.process.machining.ProgramCut`."""
-        xyz = plan.position * 1e3
-        return cls(xyz[:, :2], xyz[:, 2], cut.radius_m * 1e3, cut.corner_m * 1e3, plan.line)
-
-    def section(self, stock: shapely.Geometry, z_mm: float) -> shapely.Geometry:
-        """The material this sweep leaves of ``stock`` at ``z_mm`` (:func:`section`): for a
-        smooth path (the plan); an actual path is probed (:func:`nearest_cuts`)."""
-        return section(stock, self.xy_mm, self.tip_mm, self.radius_mm, self.corner_mm, z_mm)
 
 
 class Probes(NamedTuple):
@@ -594,7 +559,7 @@ class MachinedPart:
     skipped_levels_mm : list of float
         Levels not read: the tool moves in Z through them (:class:`SectionTooComplex`).
     maps : PartMap or None
-        The nominal and actual height maps (:mod:`twin.process.part_map`), when computed.
+        The nominal and actual height maps (:mod:`twin.machining.part_map`), when computed.
     floor_error_um : dict
         Their error on the floors and 3-D surfaces (:meth:`PartMap.floor_error`).
     """
@@ -658,7 +623,7 @@ def wall_points(stock, nominal: Sweep, levels_mm: list[float]) -> tuple[np.ndarr
     boundaries, skipped = {}, []
     for z in levels_mm:
         try:
-            boundaries[z] = nominal.section(stock, z).boundary
+            boundaries[z] = section(stock, nominal, z).boundary
         except SectionTooComplex:
             skipped.append(z)
     step = max(WALL_STEP_MM, sum(b.length for b in boundaries.values()) / MAX_WALL_POINTS)
@@ -710,3 +675,13 @@ def machined_part(stock, nominal: Sweep, actual: Sweep, top_mm: float, bottom_mm
     found = nearest_cuts(points[:, :2], points[:, 2], actual)
     walls = np.column_stack([points, found.distance * 1e3, found.line]) if len(points) else np.zeros((0, 5))
     return MachinedPart(stock, nominal, actual, [z for z in levels if z not in skipped], walls, skipped)
+
+
+def virtual_part(stock: StockSpec, nominal: Sweep, actual: Sweep) -> MachinedPart:
+    """The part ``actual`` cut against the one ``nominal`` cuts: the walls
+    (:func:`machined_part`) with both height maps (:func:`~twin.machining.part_map.part_map`)
+    and their floor error."""
+    part = machined_part(stock.polygon(), nominal, actual, stock.top_mm, stock.bottom_mm)
+    part.maps = part_map(stock, nominal, actual)
+    part.floor_error_um = part.maps.floor_error()
+    return part

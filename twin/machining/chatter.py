@@ -3,9 +3,9 @@
 In a stable cut the tool and the workpiece vibrate at the tooth-passing frequency and its
 harmonics, forced by the cut; that vibration is the same one tooth period later, so it cancels
 out of the once-per-tooth-period difference of their relative position, and the chip vector
-(:func:`twin.process.cutting._chips`) is the planned feed per tooth.  Regenerative chatter
+(:func:`twin.machining.cutting._chips`) is the planned feed per tooth.  Regenerative chatter
 vibrates at a frequency that is not a tooth harmonic, which the difference keeps.  Every physics
-step that cuts, the kernels add to the probe (:data:`twin.process.cutting.PROBE`) the square of
+step that cuts, the kernels add to the probe (:data:`twin.machining.cutting.PROBE`) the square of
 that difference less the planned feed per tooth, along and across the feed (mm^2), its sign
 changes, and the square of the planned feed per tooth; the runner sums it per recorded tick.
 
@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from twin.process.cutting import PROBE_CROSS_U, PROBE_CROSS_W, PROBE_FEED2, PROBE_STEPS, PROBE_U2, PROBE_W2
+from twin.machining.cutting import PROBE_CROSS_U, PROBE_CROSS_W, PROBE_FEED2, PROBE_STEPS, PROBE_U2, PROBE_W2
 
 #: Indicator over which a stretch of a run chatters: the vibration's once-per-tooth difference
 #: at a quarter of the feed per tooth (RMS).

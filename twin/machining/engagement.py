@@ -5,15 +5,16 @@ The stock is an outline polygon (shapely) between ``bottom_mm`` and ``top_mm``, 
 islands (openings through it), held as a height map (a Z-map) on a square grid of
 ``resolution_mm``.  Along the planned reference, sample by sample (every 1 ms), the edge at each
 angle of the tool's leading half circle (immersion angles clockwise from the feed normal on the
-left, as :func:`twin.process.cutting.immersion_angles`) is read against the height map where it
+left, as :func:`twin.machining.cutting.immersion_angles`) is read against the height map where it
 will be a little further along the path (:data:`TEST_MARGIN_CELLS` outside the tool's surface
 now, or where the tool stops if sooner): the engaged axial extent there is the material left
 between the tip (or the stock's bottom) and the flute length, a flat tool in one reading, a ball
 or bull-nose corner in :data:`CORNER_DISCS` discs.  The engaged arcs (up to two, their ends by
 bisection) carry the mean extent over each; then the tool's surface is cut into the map.  This
 is computed once along the nominal path (the table follows it within micrometres), and the
-mechanistic force kernel reads it by time each physics step (:class:`ProgramMilling`), with the
-spindle turning at the programmed S between M3/M4 and M5.
+mechanistic force kernel reads it by time each physics step
+(:class:`~twin.machining.program_cut.ProgramMilling`), with the spindle turning at the
+programmed S between M3/M4 and M5.
 
 Resolution (ours): 0.05 mm cells by default and 1 degree steps on the tool's circle (read every
 :data:`COARSE_STEPS`, the steps between where readings differ); against closed forms and a
@@ -23,8 +24,7 @@ brute-force reference the arcs' ends agree within a degree and the depths within
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import Annotated, Literal, NamedTuple
+from typing import Annotated, NamedTuple
 
 import numpy as np
 import shapely
@@ -32,23 +32,9 @@ from numba import njit
 from pydantic import Field, PositiveFloat, model_validator
 
 from twin.errors import TwinInputError
+from twin.machining.cutting import MAX_FLUTES, MAX_HELIX_DEG, WorkMaterialSpec
+from twin.machining.tool_dynamics import ToolDynamicsSpec
 from twin.numba_cache import configure as configure_numba_cache
-from twin.process.cutting import (
-    MAX_FLUTES,
-    MAX_HELIX_DEG,
-    MIN_SPINDLE_RPM,
-    PM_COLUMNS,
-    PROGRAM_MILLING,
-    PROGRAM_MILLING_SLOTS,
-    CoefficientsSpec,
-    chip_state,
-    helix_lag_rad_per_mm,
-    history_rows,
-    mode_rows,
-)
-from twin.process.materials import MATERIALS, CuttingCoefficients
-from twin.process.tool_dynamics import ToolDynamicsSpec
-from twin.records import MachiningWarning
 from twin.spec import MAX_MM, Millimetres, StrictSpec
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
@@ -212,7 +198,7 @@ class StockSpec(StrictSpec):
         return outline
 
 
-class ToolSpec(StrictSpec):
+class ToolSpec(WorkMaterialSpec):
     """A cutter: the ``[tool]`` table, or an entry of ``[[tools]]`` with its ``number``."""
 
     number: int | None = Field(None, ge=0, description="T number ([[tools]] only)")
@@ -242,20 +228,9 @@ class ToolSpec(StrictSpec):
     helix_deg: float = Field(
         0.0, ge=0.0, lt=MAX_HELIX_DEG, description="helix angle of the flutes (deg); 0: straight flutes"
     )
-    # the names of the materials table (pydantic evaluates the Literal at run time; mypy cannot)
-    material: Literal[tuple(MATERIALS)] = Field(  # type: ignore[valid-type]
-        "aluminium_7075_t6", description="cutting coefficients of: " + ", ".join(MATERIALS)
-    )
-    coefficients: CoefficientsSpec = Field(
-        default_factory=CoefficientsSpec, description="the user's own coefficients, over the material's"
-    )
     dynamics: ToolDynamicsSpec | None = Field(
-        None, description="the structure at the tool tip: modes in X/Y or a measured FRF (twin.process.tool_dynamics)"
+        None, description="the structure at the tool tip: modes in X/Y or a measured FRF (twin.machining.tool_dynamics)"
     )
-
-    def cutting_coefficients(self) -> CuttingCoefficients:
-        """The material's coefficients with the user's given ones in their place."""
-        return self.coefficients.applied_to(self.material)
 
     @model_validator(mode="after")
     def _corner(self):
@@ -784,144 +759,3 @@ def engaged_degrees(table: np.ndarray) -> np.ndarray:
     """The engaged angle of each row (degrees, both arcs together)."""
     column = {name: table[:, COLUMNS.index(name)] for name in ("phi_st1", "phi_ex1", "phi_st2", "phi_ex2")}
     return np.degrees((column["phi_ex1"] - column["phi_st1"]) + (column["phi_ex2"] - column["phi_st2"]))
-
-
-class ProgramMilling:
-    """The milling force of a part program through a stock, for the compiled loop: the
-    engagement table (:func:`engagement_table`) with the spindle speed, its angle and the tool
-    at each sample, read by :func:`twin.process.cutting._program_milling` each physics step.
-
-    Parameters
-    ----------
-    table : ndarray (n, 6)
-        The engagement (:data:`COLUMNS`) every ``period_s``.
-    spindle_rpm : ndarray (n,)
-        Spindle speed at each sample (0: stopped).
-    tool_index : ndarray (n,) of int
-        Index into ``tools`` at each sample.
-    tools : list of ToolSpec
-    period_s : float
-        The table's sample period (s).
-    spindle_phase_rad : float
-        Flute 0's angle at t = 0.
-    """
-
-    def __init__(self, table, spindle_rpm, tool_index, tools, period_s, spindle_phase_rad=0.0):
-        self.table, self.spindle_rpm, self.tool_index = table, spindle_rpm, tool_index
-        self.tools, self.period_s, self.spindle_phase_rad = list(tools), period_s, spindle_phase_rad
-
-    def kernel_arrays(self, machine) -> tuple[int, np.ndarray, np.ndarray]:
-        """``(PROGRAM_MILLING, params, state)`` for :func:`twin.process.cutting.workpiece_forces`."""
-
-        dt = machine.model.opt.timestep
-        omega = 2.0 * math.pi * self.spindle_rpm / 60.0
-        angle = self.spindle_phase_rad + np.concatenate([[0.0], np.cumsum(omega[:-1] * self.period_s)])
-        flutes = np.array([t.n_flutes for t in self.tools])[self.tool_index]
-        turning = self.spindle_rpm >= MIN_SPINDLE_RPM
-        lag = np.max(2.0 * math.pi / (omega[turning] * flutes[turning]) / dt) if turning.any() else 1.0
-        n_hist = history_rows(lag)
-        columns = {name: self.table[:, COLUMNS.index(name)] for name in COLUMNS}
-        columns.update(omega=omega, angle=angle, tool=self.tool_index)
-        rows = np.column_stack([columns[name] for name in PM_COLUMNS]).astype(float)
-        tools = [
-            np.concatenate(
-                [t.cutting_coefficients().as_array(), [t.n_flutes, helix_lag_rad_per_mm(t.helix_deg, t.diameter_mm)]]
-            )
-            for t in self.tools
-        ]
-        jacobian = np.asarray(machine.workpiece_jacobian(), float).ravel()
-        modes = mode_rows([t.dynamics for t in self.tools], dt)
-        values = (len(self.tools), self.period_s, len(rows), dt, n_hist, jacobian.size, len(modes))
-        head = dict(zip(PROGRAM_MILLING_SLOTS, values))
-        params = np.concatenate(
-            [[float(head[name]) for name in PROGRAM_MILLING_SLOTS], jacobian, *tools, modes.ravel(), rows.ravel()]
-        )
-        return PROGRAM_MILLING, params, chip_state(n_hist, (0.0, 0.0), len(modes))  # no force before the first move
-
-
-@dataclass
-class ProgramCut:
-    """A planned program through its stock (:func:`program_milling`).
-
-    Attributes
-    ----------
-    milling : ProgramMilling
-        The force model for the run.
-    table : ndarray (n, len(COLUMNS))
-        The engagement at each sample of the plan.
-    height_map : HeightMap
-        The stock as the program leaves it.
-    warnings : list of twin.records.MachiningWarning
-        Crashes and misuse by line (:func:`twin.process.misuse.machining_warnings`).
-    warnings_total : int
-        Every warning, listed or not.
-    radius_m, corner_m : ndarray (n,)
-        The tool's radius and corner radius at each sample (m).
-    """
-
-    milling: ProgramMilling
-    table: np.ndarray
-    height_map: HeightMap
-    warnings: list[MachiningWarning]
-    warnings_total: int
-    radius_m: np.ndarray
-    corner_m: np.ndarray
-
-
-def program_milling(plan, stock: StockSpec, tool: ToolSpec | None, tools: list[ToolSpec], seed: int) -> ProgramCut:
-    """The stock cut by a planned program: the force model, its engagement table and warnings.
-
-    Parameters
-    ----------
-    plan : twin.gcode.planner.Plan
-    stock : StockSpec
-    tool : ToolSpec or None
-        The tool of a program without T words.
-    tools : list of ToolSpec
-        The tools of a program that changes them, by ``number``.
-    seed : int
-        Seeds the spindle's angle at t = 0.
-
-    Raises
-    ------
-    TwinInputError
-        No tool given, a tool without a number in ``[[tools]]`` or a number twice, or a T word
-        with no such tool (naming the program line).
-    """
-    from twin.process.cutting import _spindle_phase
-    from twin.process.misuse import machining_warnings
-
-    if tool is None and not tools:
-        raise TwinInputError("tool", None, "a stock is cut by a tool: give [tool] or [[tools]]")
-    by_number: dict[int, ToolSpec] = {}
-    for i, t in enumerate(tools):
-        if t.number is None:
-            raise TwinInputError(f"tools.{i}.number", None, "each of [[tools]] needs its T number")
-        if t.number in by_number:
-            raise TwinInputError(f"tools.{i}.number", t.number, "two tools with one number")
-        by_number[t.number] = t
-    numbers = plan.per_sample(plan.tools, 0)
-    chosen: list[ToolSpec] = []
-    index = np.zeros(len(numbers), int)
-    for number in np.unique(numbers):
-        if int(number) in by_number:
-            spec = by_number[int(number)]
-        elif tool is not None and (number == 0 or not by_number):
-            spec = tool
-        else:
-            line = next(line for line, t in plan.tools.items() if t == number)
-            raise TwinInputError(
-                f"program line {line}", f"T{int(number)}", f"no such tool (tools: {sorted(by_number)})"
-            )
-        chosen.append(spec)
-        index[numbers == number] = len(chosen) - 1
-    radius = np.array([t.diameter_mm for t in chosen])[index] * 0.5e-3
-    corner = np.array([t.corner_radius_mm for t in chosen])[index] * 1e-3
-    flute = np.array([math.inf if t.flute_length_mm is None else t.flute_length_mm for t in chosen])[index] * 1e-3
-    shank = np.array([t.shank_diameter_mm or 0.0 for t in chosen])[index] * 0.5e-3
-    rpm = plan.per_sample(plan.spindle_rpm, 0.0)
-    height_map = HeightMap(stock, MAP_MARGIN_MM)
-    table = engagement_table(plan.position, plan.velocity, radius, height_map, corner, flute, shank)
-    model = ProgramMilling(table, rpm, index, chosen, plan.period_s, _spindle_phase(None, seed))
-    warnings, total = machining_warnings(plan, table, chosen, index, rpm, stock)
-    return ProgramCut(model, table, height_map, warnings, total, radius, corner)

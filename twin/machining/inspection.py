@@ -2,7 +2,7 @@
 
 Each ``[[inspect]]`` feature names a place on the nominal part; it is measured on the actual
 part at its ``z_mm`` by probes every :data:`PROBE_STEP_MM` along the nominal feature
-(:meth:`twin.process.part.MachinedPart.probe`): each finds the nearest point of the actual cut's
+(:meth:`twin.machining.part.MachinedPart.probe`): each finds the nearest point of the actual cut's
 boundary (the side of the nearest capsule the tool swept), and those within :data:`BAND_MM` of
 the nominal feature are its measured points:
 
@@ -30,7 +30,7 @@ import shapely
 from pydantic import Field, PositiveFloat
 from scipy.optimize import least_squares
 
-from twin.process.part import MachinedPart
+from twin.machining.part import MachinedPart
 from twin.records import CircleMeasured, FeatureNotFound, FeatureType, Inspected, LineMeasured, WidthMeasured
 from twin.spec import MAX_MM, Millimetres, ReportName, StrictSpec
 

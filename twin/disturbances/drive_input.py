@@ -3,7 +3,7 @@
 The runner samples them once per chunk of ticks (vectorized numpy, the same arrays for the
 compiled and the Python loop); they have no state, so a chunked evaluation equals a whole one.
 
-Forces on the workpiece (cutting) are in :mod:`twin.process.cutting`; sensor noise is the encoder's
+Forces on the workpiece (cutting) are in :mod:`twin.machining.cutting`; sensor noise is the encoder's
 (:class:`twin.sim.drive.Encoder`, seeded).
 """
 
@@ -16,8 +16,8 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, PositiveFloat
 
+from twin.disturbances.kinds import DisturbanceSpecBase, register
 from twin.errors import TwinInputError
-from twin.process.kinds import DisturbanceSpecBase, register
 from twin.spec import axes_indices
 
 

@@ -1,5 +1,5 @@
 """Crashes and misuse of a part program through its stock, per program line, from the
-engagement along the planned path (:func:`twin.process.machining.engagement_table`): a rapid
+engagement along the planned path (:func:`twin.machining.engagement.engagement_table`): a rapid
 through material, the spindle off in material, the tip below the stock's bottom in material,
 material above the flute length (the shank or holder rubs), a descent into material steeper
 than the tool's ``max_ramp_deg``, a feed per tooth outside the tool's ``feed_per_tooth_mm``.
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from twin.process.machining import COLUMNS, StockSpec, ToolSpec
+from twin.machining.engagement import COLUMNS, StockSpec, ToolSpec
 from twin.records import MachiningWarning
 
 #: Warnings kept (the first by line); the count of all is reported beside them.
@@ -45,7 +45,7 @@ def machining_warnings(
     ----------
     plan : twin.gcode.planner.Plan
     table : ndarray (n, len(COLUMNS))
-        The engagement along ``plan`` (:func:`twin.process.machining.engagement_table`).
+        The engagement along ``plan`` (:func:`twin.machining.engagement.engagement_table`).
     tools : list of ToolSpec
         The tools in use; ``tool_index`` (n,) says which at each sample.
     spindle_rpm : ndarray (n,)

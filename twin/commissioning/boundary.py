@@ -1,0 +1,227 @@
+"""The twin's own stability boundary of a tuned cascade, by bisection, beside the margins the
+design reports (:func:`twin.commissioning.tuning.cascade_margins`).
+
+One gain of one axis (``kp_pos``, ``kp_vel``, or the integral gain ``ki_vel`` = kv / Ti) is
+scaled by a factor in dB and the tuned scenario (``twin tune --out``'s, with a 1 mm step) runs
+on the twin (MuJoCo) for :data:`DURATION_S`. The growth criterion: the peak-to-peak of that
+axis's table position over the run's last quarter against the quarter before it (a constant
+offset, such as the drive train's deflection under friction, drops out); a ratio above 1, or a
+run that diverges, is growth. The factor is bisected between one that decays and one that
+grows until they are :data:`RESOLUTION_DB` apart; the boundary is where the log of the ratio,
+interpolated linearly between the two, crosses zero.
+
+The cascade's margins assume a linear plant sampled exactly (zero-order hold). The twin
+differs in three ways, each one an option here so that the comparison can be made like for like:
+the guideways' Coulomb friction (MuJoCo's friction loss), the physics step (MuJoCo's Euler
+integrator, not an exact hold) and the encoders' quantization.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass
+
+import numpy as np
+
+from twin.commissioning.tuning import scenario_text
+from twin.errors import SimulationDiverged, TwinInputError
+from twin.machines import get_machine
+from twin.scenario import run_scenario, scenario_from_dict
+
+#: The gains whose boundaries are bisected (the cascade's margins' keys).
+GAINS = ("kp_pos", "kp_vel", "ki_vel")
+#: Length of each run (s): the growth of the least damped mode shows over its last half.
+DURATION_S = 0.5
+#: Width of the final bracket (dB).
+RESOLUTION_DB = 0.1
+#: The first bracket: the reported margin less and plus this much (dB), widened by as much
+#: again (at most :data:`MAX_WIDENINGS` times) while it does not bracket the boundary.
+BRACKET_DB = 1.0
+MAX_WIDENINGS = 8
+
+
+@dataclass(frozen=True)
+class TwinConditions:
+    """How the twin runs for a bisection.
+
+    Attributes
+    ----------
+    coulomb : bool
+        Keep the guideways' Coulomb friction (False: every axis's set to 0).
+    timestep_divisor : int
+        The machine's physics step divided by this (1: as the machine sets it).
+    ideal_sensors : bool
+        Encoders without quantization (the table's scale and the motor's).
+    """
+
+    coulomb: bool = True
+    timestep_divisor: int = 1
+    ideal_sensors: bool = False
+
+
+#: The twin as a user runs it, and the linear model's assumptions (no Coulomb friction, ideal
+#: sensors, a physics step a quarter of the machine's).
+AS_RUN = TwinConditions()
+WITHOUT_COULOMB = TwinConditions(coulomb=False)
+LIKE_FOR_LIKE = TwinConditions(coulomb=False, timestep_divisor=4, ideal_sensors=True)
+#: The conditions by name (``twin tune --verify-margins``'s columns).
+CONDITIONS = {"twin": AS_RUN, "without_coulomb": WITHOUT_COULOMB, "like_for_like": LIKE_FOR_LIKE}
+
+
+def _scaled(design: dict, axis: str, gain: str, db: float) -> dict:
+    """A copy of ``design`` with ``axis``'s ``gain`` times 10^(db/20)."""
+    factor = 10 ** (db / 20)
+    axes = {a: {**r, "gains": dict(r["gains"])} for a, r in design["axes"].items()}
+    gains = axes[axis]["gains"]
+    if gain == "ki_vel":
+        gains["ti_vel_s"] /= factor  # ki = kv / Ti
+    else:
+        gains[gain] *= factor
+    return {**design, "axes": axes}
+
+
+def growth_ratio(design: dict, machine: str, axis: str, gain: str, db: float, conditions: TwinConditions) -> float:
+    """The peak-to-peak of ``axis``'s table position over the run's last quarter divided by the
+    quarter's before it, with ``gain`` times 10^(db/20) (``inf`` where the run diverges).
+
+    Parameters
+    ----------
+    design : dict
+        :func:`twin.commissioning.tuning.tune`'s result.
+    machine : str
+        The machine as the scenario names it (a bundled name or an absolute path).
+    """
+    changed = _scaled(design, axis, gain, db)
+    if not conditions.coulomb:
+        changed["overrides"] = {**changed["overrides"], **dict.fromkeys(get_machine(machine).coulomb_symbols(), 0.0)}
+    scenario = tomllib.loads(scenario_text(changed, machine, "step"))
+    scenario["duration_s"] = DURATION_S
+    scenario["record_every_ticks"] = 1
+    if conditions.timestep_divisor != 1:
+        step = get_machine(machine).build(changed["overrides"]).model.opt.timestep
+        scenario["timestep_s"] = step / conditions.timestep_divisor
+    if conditions.ideal_sensors:
+        scenario["sensors"].update(encoder_resolution_m=0.0, motor_encoder_resolution_m=0.0)
+    try:
+        result = run_scenario(scenario_from_dict(scenario))
+    except SimulationDiverged:
+        return math.inf
+    y = result.table_position_m()[:, list(design["axes"]).index(axis)]
+    n = len(y)
+    earlier, last = y[n // 2 : 3 * n // 4], y[3 * n // 4 :]
+    spread = float(np.ptp(earlier))
+    return math.inf if spread == 0.0 else float(np.ptp(last)) / spread
+
+
+def twin_boundary(
+    design: dict, machine: str, axis: str, gain: str, conditions: TwinConditions = AS_RUN
+) -> dict[str, float | int]:
+    """The factor (dB) on ``gain`` of ``axis`` at which the twin's tuned cascade starts to grow,
+    bisected from the reported cascade margin (see the module docstring).
+
+    Returns
+    -------
+    dict
+        ``boundary_db`` (the interpolated crossing), ``decays_db`` and ``grows_db`` (the final
+        bracket, at most :data:`RESOLUTION_DB` apart) and ``runs``.
+
+    Raises
+    ------
+    TwinInputError
+        Where the gain has no reported margin, or no bracket is found.
+    """
+    start = design["axes"][axis]["cascade_margins"][gain]["gain_margin_db"]
+    if start is None:
+        raise TwinInputError(gain, "inf", f"axis {axis} reports no cascade margin to check")
+    ratios: dict[float, float] = {}
+
+    def ratio(db: float) -> float:
+        if db not in ratios:
+            ratios[db] = growth_ratio(design, machine, axis, gain, db, conditions)
+        return ratios[db]
+
+    low, high = start - BRACKET_DB, start + BRACKET_DB
+    for _ in range(MAX_WIDENINGS):
+        if ratio(low) > 1.0:
+            low, high = low - BRACKET_DB, low
+        elif ratio(high) <= 1.0:
+            low, high = high, high + BRACKET_DB
+        else:
+            break
+    if not (ratio(low) <= 1.0 < ratio(high)):
+        raise TwinInputError(gain, start, f"no growth boundary within {MAX_WIDENINGS} dB of the margin on axis {axis}")
+    while high - low > RESOLUTION_DB + 1e-9:
+        middle = 0.5 * (low + high)
+        if ratio(middle) > 1.0:
+            high = middle
+        else:
+            low = middle
+    at_low, at_high = math.log(max(ratio(low), 1e-300)), math.log(ratio(high))
+    share = 0.5 if not math.isfinite(at_high) or at_high == at_low else -at_low / (at_high - at_low)
+    return {
+        "boundary_db": round(low + share * (high - low), 3),
+        "decays_db": round(low, 4),
+        "grows_db": round(high, 4),
+        "runs": len(ratios),
+    }
+
+
+def verify_margins(
+    design: dict,
+    machine: str,
+    gains: tuple[str, ...] = GAINS,
+    conditions: dict[str, TwinConditions] | None = None,
+) -> list[dict]:
+    """Each axis's reported cascade margins beside the twin's bisected boundaries.
+
+    Parameters
+    ----------
+    conditions : dict, optional
+        Named :class:`TwinConditions` (default :data:`CONDITIONS`: ``twin`` as run,
+        ``without_coulomb``, ``like_for_like``).
+
+    Returns
+    -------
+    list of dict
+        Per axis and gain with a finite margin: ``axis``, ``gain``, ``feedback``, ``margin_db``, ``margin_hz`` and per
+        condition its :func:`twin_boundary` and ``<name>_minus_margin_db``.
+    """
+    conditions = conditions or CONDITIONS
+    rows = []
+    for axis, r in design["axes"].items():
+        for gain in gains:
+            margin = r["cascade_margins"][gain]
+            if margin["gain_margin_db"] is None:
+                continue  # no crossing bounds it: nothing to bisect
+            row: dict = {
+                "axis": axis,
+                "gain": gain,
+                "feedback": design["feedback"],
+                "margin_db": margin["gain_margin_db"],
+                "margin_hz": margin["gain_margin_hz"],
+            }
+            for name, condition in conditions.items():
+                found = twin_boundary(design, machine, axis, gain, condition)
+                row[name] = found
+                row[f"{name}_minus_margin_db"] = round(found["boundary_db"] - margin["gain_margin_db"], 3)
+            rows.append(row)
+    return rows
+
+
+def margin_table(rows: list[dict]) -> str:
+    """:func:`verify_margins`'s rows (each with its ``machine``) as a Markdown table: the
+    cascade margin and each condition's boundary, with the boundary less the margin (dB)."""
+    lines = [
+        "| machine | feedback | axis | gain | cascade margin | twin | without Coulomb | like for like |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        boundaries = "".join(
+            f" {r[name]['boundary_db']:.2f} ({r[f'{name}_minus_margin_db']:+.2f}) |" for name in CONDITIONS
+        )
+        lines.append(
+            f"| {r['machine']} | {r['feedback']} | {r['axis']} | {r['gain']} "
+            f"| {r['margin_db']:.2f} dB at {r['margin_hz']:.0f} Hz |{boundaries}"
+        )
+    return "\n".join(lines) + "\n"
