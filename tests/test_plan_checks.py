@@ -201,6 +201,9 @@ def test_warn_lists_each_lines_worst_excess_per_axis():
         rows[0]["message"] == "X -310.000 mm (machine coordinates) is outside the travel -300.000..300.000 mm of axis x"
     )
     assert rows[0]["text"] == "G0 X-310 Y-250" and check.warnings.total == 6
+    typed = [plan_warning(row) for row in rows]  # the typed records give each row back, key for key
+    assert {type(w).__name__ for w in typed} == {"TravelWarning"}
+    assert [json.dumps(w.to_json()) for w in typed] == [json.dumps(row) for row in rows]
 
 
 def _rigid_force(mass_kg, viscous, coulomb, velocity, acceleration):
@@ -223,6 +226,9 @@ def test_the_drive_force_of_a_rapid_on_choi_1999s_table():
     assert row["force_N"] == pytest.approx(worst, abs=1e-3)
     assert row["ratio"] == pytest.approx(worst / 982.0, abs=1e-6)
     assert row["message"] == f"axis x needs {worst:.1f} N, the drive saturates at 982.0 N (x{worst / 982.0:.3f})"
+    typed = plan_warning(row)
+    assert type(typed).__name__ == "DriveWarning"
+    assert json.dumps(typed.to_json()) == json.dumps(row)  # key for key, in order
     assert worst / 982.0 > 1.1
 
 

@@ -103,3 +103,20 @@ def test_every_feature_type_has_one_spec_and_one_measurement():
     specs = typing.get_args(typing.get_args(InspectSpec)[0])
     literals = {typing.get_args(spec.model_fields["type"].annotation)[0] for spec in specs}
     assert literals == {t.value for t in FeatureType} == set(MEASURES)
+
+
+@pytest.mark.parametrize(("listed", "total", "more"), [(25, 25, "them all"), (25, 40, "25")])
+def test_a_long_list_of_warnings_prints_the_first_and_counts_the_rest(capsys, listed, total, more):
+    from twin.cli import SHOWN_WARNINGS, _print_warnings
+    from twin.records import MachiningWarning
+
+    warnings = [
+        MachiningWarning(line=10 + i, text=f"G1 X{i}", kind="feed_per_tooth", value=0.2, unit="mm", message="m")
+        for i in range(listed)
+    ]
+    _print_warnings("machining warnings", warnings, total)
+    out = capsys.readouterr().out.splitlines()
+    assert out[0] == f"  machining warnings ({total}):"
+    assert out[1] == "    line     10  m  G1 X0"
+    assert len(out) == 1 + SHOWN_WARNINGS + 1
+    assert out[-1] == f"    ... {total - SHOWN_WARNINGS} more (--json lists {more})"
