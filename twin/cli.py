@@ -121,12 +121,9 @@ def _fail_on_warnings(title: str, warnings: Sequence[LineWarning], total: int) -
 def _print_chatter(records: RunRecords) -> None:
     """The run's chatter indicator and frequency, then the chatter warnings, a line each: by
     program line, or the run's."""
-    whole = records.chatter
-    if whole is None:
+    if records.chatter is None:
         return
-    verdict = f"over {whole['threshold']}: chatters" if whole["chatter"] else f"under {whole['threshold']}: stable"
-    hz = "" if whole["chatter_hz"] is None else f" at {whole['chatter_hz']:.1f} Hz"
-    typer.echo(f"  {'chatter':<28} indicator {whole['indicator']:.3f} {verdict}{hz}")
+    typer.echo(f"  {records.chatter.report_line()}")
     warnings = records.chatter_warnings
     _print_warnings("chatter warnings", warnings, len(warnings))
 

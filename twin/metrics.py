@@ -16,7 +16,7 @@ from numba import njit
 
 from twin.machining.chatter import CHATTER_THRESHOLD, ChatterReading, chatter_reading
 from twin.numba_cache import configure as configure_numba_cache
-from twin.records import ChatterWarning, LineRow, RunRecords
+from twin.records import ChatterCheck, ChatterWarning, LineRow, RunRecords
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
 
@@ -323,7 +323,7 @@ def tracking_summary(result, records: RunRecords | None = None) -> dict:
             out["inspection"] = [feature.to_json() for feature in records.inspection]
         out["lines"] = [row.to_json() for row in records.lines]
     if records.chatter is not None:
-        out["chatter"] = records.chatter
+        out["chatter"] = records.chatter.to_json()
         out["chatter_warnings"] = [warning.to_json() for warning in records.chatter_warnings]
     return out
 
@@ -367,9 +367,9 @@ def _chatter_of(result, rows: slice) -> ChatterReading | None:
     return chatter_reading(result.vibration_probe[rows], steps, result.control_period_s * every, dt)
 
 
-def chatter_check(result, lines: list[LineRow]) -> tuple[dict[str, Any] | None, list[LineRow], list[ChatterWarning]]:
+def chatter_check(result, lines: list[LineRow]) -> tuple[ChatterCheck | None, list[LineRow], list[ChatterWarning]]:
     """A milling run's chatter (:mod:`twin.machining.chatter`): the whole run's reading
-    (indicator, frequency and verdict, :meth:`~twin.machining.chatter.ChatterReading.as_dict`),
+    (indicator, frequency and verdict, :meth:`~twin.machining.chatter.ChatterReading.check`),
     the rows of ``lines`` each with its own reading, and the warnings (each program line that
     chatters, or the run); None, ``lines`` and none for a run that does not mill for a window's
     worth."""
@@ -385,14 +385,14 @@ def chatter_check(result, lines: list[LineRow]) -> tuple[dict[str, Any] | None, 
         for row, a, b in zip(lines, starts, ends):
             reading = _chatter_of(result, slice(a, b))
             if reading is not None:
-                row = replace(row, chatter=reading.as_dict())
+                row = replace(row, chatter=reading.check())
                 if reading.chatters:
                     warnings.append(ChatterWarning(line=row.line, message=_chatter_message(reading), text=row.text))
             checked.append(row)
         lines = checked
     elif whole.chatters:
         warnings.append(ChatterWarning(line=None, message=_chatter_message(whole), text=""))
-    return whole.as_dict(), lines, warnings
+    return whole.check(), lines, warnings
 
 
 def _chatter_message(reading: ChatterReading) -> str:

@@ -6,6 +6,7 @@ key, in that order), and the command line prints them through their attributes a
 - :class:`MachiningWarning` (``machining_warnings``), :class:`TravelWarning` and
   :class:`DriveWarning` (``plan_warnings``), :class:`ChatterWarning` (``chatter_warnings``):
   each with ``line`` (None: the whole run), ``message`` and the line's ``text``;
+- :class:`ChatterCheck`: a line's or the run's chatter (``chatter``);
 - :class:`CircleMeasured`, :class:`LineMeasured`, :class:`WidthMeasured` and
   :class:`FeatureNotFound` (``inspection``), of the feature types of :class:`FeatureType`.
 """
@@ -299,6 +300,47 @@ LineWarning = MachiningWarning | TravelWarning | DriveWarning | ChatterWarning
 
 
 @dataclass(frozen=True)
+class ChatterCheck:
+    """The chatter of a stretch of a run (a program line, or the whole run) as it is reported
+    (:meth:`twin.machining.chatter.ChatterReading.check`): the ``indicator`` (to 4 decimals),
+    whether it is over the ``threshold`` (``chatters``), the frequency (Hz, to 0.1; None where it
+    does not chatter) and the ``windows`` read."""
+
+    indicator: float
+    chatters: bool
+    chatter_hz: float | None
+    threshold: float
+    windows: int
+
+    def to_json(self) -> dict[str, Any]:
+        """``indicator``, ``chatter`` (the verdict), ``chatter_hz``, ``threshold``, ``windows``."""
+        return {
+            "indicator": self.indicator,
+            "chatter": self.chatters,
+            "chatter_hz": self.chatter_hz,
+            "threshold": self.threshold,
+            "windows": self.windows,
+        }
+
+    def to_columns(self) -> dict[str, Any]:
+        """The check as the per-line table's columns: ``chatter_indicator``, ``chatter``,
+        ``chatter_hz``, ``chatter_threshold``, ``chatter_windows``."""
+        return {
+            "chatter_indicator": self.indicator,
+            "chatter": self.chatters,
+            "chatter_hz": self.chatter_hz,
+            "chatter_threshold": self.threshold,
+            "chatter_windows": self.windows,
+        }
+
+    def report_line(self) -> str:
+        """The run's chatter line in the text summary: indicator, verdict, frequency."""
+        verdict = f"over {self.threshold}: chatters" if self.chatters else f"under {self.threshold}: stable"
+        hz = "" if self.chatter_hz is None else f" at {self.chatter_hz:.1f} Hz"
+        return f"{'chatter':<28} indicator {self.indicator:.3f} {verdict}{hz}"
+
+
+@dataclass(frozen=True)
 class LineRow:
     """A program line's row of the per-line table, over the recorded ticks the reference is on it.
 
@@ -320,8 +362,8 @@ class LineRow:
         With a stock: the largest wall error the line left (µm).
     stability : dict or None
         A cutting line's chatter check (:func:`twin.machining.program_stability.line_stability`).
-    chatter : dict or None
-        The line's chatter in the run (:meth:`twin.machining.chatter.ChatterReading.as_dict`).
+    chatter : ChatterCheck or None
+        The line's chatter in the run; None: the tool did not cut on it for a window.
     """
 
     line: int
@@ -336,7 +378,7 @@ class LineRow:
     axial_depth_mm: float | None = None
     max_wall_error_um: float | None = None
     stability: dict[str, Any] | None = None
-    chatter: dict[str, Any] | None = None
+    chatter: ChatterCheck | None = None
 
     def _plain(self) -> tuple[dict[str, Any], dict[str, Any]]:
         """The row's values before and after the tracking errors (those it has)."""
@@ -366,7 +408,7 @@ class LineRow:
         if self.stability is not None:
             out["stability"] = self.stability
         if self.chatter is not None:
-            out["chatter"] = self.chatter
+            out["chatter"] = self.chatter.to_json()
         return out
 
     def to_columns(self) -> dict[str, Any]:
@@ -384,7 +426,7 @@ class LineRow:
             out |= {f"stability_{key}": v for key, v in check.items()}
             out |= {"stability_stable_rpm_low": low, "stability_stable_rpm_high": high}
         if self.chatter is not None:
-            out |= {key if key.startswith("chatter") else f"chatter_{key}": v for key, v in self.chatter.items()}
+            out |= self.chatter.to_columns()
         return out
 
     @property
@@ -412,9 +454,8 @@ class RunRecords:
     inspection : tuple
         With a stock: each ``[[inspect]]`` feature, measured (:class:`CircleMeasured`,
         :class:`LineMeasured`, :class:`WidthMeasured`) or :class:`FeatureNotFound`.
-    chatter : dict or None
-        A milling run's chatter reading over the whole run
-        (:meth:`twin.machining.chatter.ChatterReading.as_dict`); None: it did not mill for a window.
+    chatter : ChatterCheck or None
+        A milling run's chatter over the whole run; None: it did not mill for a window.
     chatter_warnings : tuple of ChatterWarning
         Each line that chatters, or the run.
     """
@@ -425,5 +466,5 @@ class RunRecords:
     plan_warnings: tuple[PlanWarning, ...] = ()
     plan_warnings_total: int = 0
     inspection: tuple[Inspected, ...] = ()
-    chatter: dict[str, Any] | None = None
+    chatter: ChatterCheck | None = None
     chatter_warnings: tuple[ChatterWarning, ...] = ()
