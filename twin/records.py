@@ -13,6 +13,7 @@ key, in that order), and the command line prints them through their attributes a
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass
 from enum import StrEnum
@@ -74,7 +75,7 @@ class FeatureNotFound:
 
 
 @dataclass(frozen=True, kw_only=True)
-class _Measured:
+class _Measured(ABC):
     """What every measured feature has: its name, height (mm), deviation (µm, measured less
     nominal) and verdict (``passed``: within ``tolerance_um``; None: no tolerance)."""
 
@@ -84,9 +85,9 @@ class _Measured:
     deviation_um: float
     passed: bool | None
 
+    @abstractmethod
     def _sizes(self) -> dict[str, Any]:
         """The type's own measured values, as the JSON gives them."""
-        raise NotImplementedError
 
     def to_json(self) -> dict[str, Any]:
         """``name``, ``type``, ``z_mm``, the type's measured values, ``deviation_um``, ``pass``."""
@@ -99,9 +100,9 @@ class _Measured:
             "pass": self.passed,
         }
 
+    @abstractmethod
     def measured_text(self) -> str:
         """The measured size or position as the text report gives it."""
-        raise NotImplementedError
 
     @property
     def form_um(self) -> float | None:
