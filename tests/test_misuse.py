@@ -25,7 +25,7 @@ def _warnings(lines, tool=FLAT, spindle="M3 S10000"):
     program = ["G21 G90 G0 X-10 Y0 Z5", spindle, *lines, "G0 Z5", "M5"]
     planned = plan(Reader(program).moves(), LIMITS, PlannerSettings())
     cut = program_milling(planned, BLOCK, tool, [], 0)
-    return {(w["line"] - 2, w["kind"]): w for w in cut.warnings}, cut.warnings_total
+    return {(w.line - 2, w.kind): w for w in cut.warnings}, cut.warnings_total
 
 
 def test_a_clean_program_warns_of_nothing():
@@ -50,8 +50,8 @@ def test_a_clean_program_warns_of_nothing():
 def test_each_crash_or_misuse_is_a_warning_on_its_line_with_its_value(lines, tool, spindle, line, kind, value):
     found, total = _warnings(lines, ToolSpec(diameter_mm=6.0, n_flutes=2, **tool), spindle)
     assert (line, kind) in found, found
-    assert found[(line, kind)]["value"] == pytest.approx(value, rel=1e-3)
-    assert found[(line, kind)]["text"] == lines[line - 1]
+    assert found[(line, kind)].value == pytest.approx(value, rel=1e-3)
+    assert found[(line, kind)].text == lines[line - 1]
     assert total == len(found)
 
 
@@ -62,7 +62,7 @@ def test_a_shank_wider_than_the_cutter_rubs_on_the_walls_of_its_own_slot(shank_m
     10 mm shank meets the walls standing 4 - 2 = 2 mm above the flutes on the second pass."""
     tool = ToolSpec(diameter_mm=6.0, n_flutes=2, flute_length_mm=2.0, shank_diameter_mm=shank_mm)
     found, _ = _warnings(["G1 Z-2 F300", "G1 X30 F600", "G1 Z-4 F300", "G1 X-10 F600"], tool)
-    rubs = {line: w["value"] for (line, kind), w in found.items() if kind == "deeper_than_flutes"}
+    rubs = {line: w.value for (line, kind), w in found.items() if kind == "deeper_than_flutes"}
     if over_mm is None:
         assert rubs == {}
     else:

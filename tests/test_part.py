@@ -13,6 +13,7 @@ from twin.errors import TwinInputError
 from twin.machining.inspection import CircleFeature, LineFeature, WidthFeature, measure
 from twin.machining.part import machined_part, section, swept_radius_mm, wall_levels
 from twin.machining.sweep import Sweep
+from twin.records import CircleMeasured, FeatureNotFound, FeatureType, WidthMeasured
 
 STOCK = shapely.box(0.0, 0.0, 30.0, 20.0)
 R = 3.0  # a 6 mm flat end mill
@@ -56,26 +57,27 @@ def test_line_and_width_of_a_slot():
     width = measure(
         WidthFeature(type="width", name="slot", from_mm=(15, 5), to_mm=(15, 15), width_mm=6.0, z_mm=-1.0), actual
     )
-    assert width["width_mm"] == pytest.approx(6.0, abs=1e-5)
-    assert width["deviation_um"] == pytest.approx(0.0, abs=0.01)
+    assert width.width_mm == pytest.approx(6.0, abs=1e-5)
+    assert width.deviation_um == pytest.approx(0.0, abs=0.01)
     # the slot's upper wall (material above it) 3 µm further into the material: overcut
     upper = measure(
         LineFeature(type="line", name="upper", from_mm=(8, 13), to_mm=(22, 13), z_mm=-1.0, tolerance_um=2.0), actual
     )
-    assert upper["deviation_um"] == pytest.approx(-3.0, abs=0.01)
-    assert upper["pass"] is False
-    assert upper["position_mm"][1] == pytest.approx(13.003, abs=1e-5)
-    assert upper["straightness_um"] < 0.01
+    assert upper.deviation_um == pytest.approx(-3.0, abs=0.01)
+    assert upper.passed is False
+    assert upper.position_mm[1] == pytest.approx(13.003, abs=1e-5)
+    assert upper.straightness_um < 0.01
     lower = measure(LineFeature(type="line", name="lower", from_mm=(22, 7), to_mm=(8, 7), z_mm=-1.0), actual)
-    assert lower["deviation_um"] == pytest.approx(3.0, abs=0.01)
-    assert lower["pass"] is None
+    assert lower.deviation_um == pytest.approx(3.0, abs=0.01)
+    assert lower.passed is None
 
 
 def test_a_feature_not_on_the_part_says_so():
     part = machined_part(STOCK, slot(0.0), slot(0.0), 0.0, -10.0)
     row = measure(CircleFeature(type="circle", name="none", center_mm=(5, 5), diameter_mm=1.0, z_mm=-1.0), part)
-    assert row["found"] is False
-    assert row["pass"] is False
+    assert isinstance(row, FeatureNotFound)
+    assert row.to_json()["found"] is False
+    assert row.to_json()["pass"] is False
 
 
 def test_ball_radius_by_height_and_levels():
@@ -107,10 +109,11 @@ def test_bore_diameter_is_the_envelope_of_the_actual_motion(bore):
     along, across = rho * np.cos(angle - theta), rho * np.sin(angle - theta)
     reach = np.where(np.abs(across) < 5.0, along + np.sqrt(np.maximum(25.0 - across**2, 0.0)), -np.inf).max(axis=1)
     row = bore.inspection[0]
-    assert row["diameter_mm"] == pytest.approx(2 * reach.mean(), abs=1e-4)  # 0.1 µm
-    assert row["roundness_um"] == pytest.approx(np.ptp(reach) * 1e3, abs=1.5)
-    assert row["deviation_um"] == pytest.approx((row["diameter_mm"] - 66.0) * 1e3, abs=1e-3)
-    assert row["pass"] is (abs(row["deviation_um"]) <= 10)
+    assert isinstance(row, CircleMeasured)
+    assert row.diameter_mm == pytest.approx(2 * reach.mean(), abs=1e-4)  # 0.1 µm
+    assert row.roundness_um == pytest.approx(np.ptp(reach) * 1e3, abs=1.5)
+    assert row.deviation_um == pytest.approx((row.diameter_mm - 66.0) * 1e3, abs=1e-3)
+    assert row.passed is (abs(row.deviation_um) <= 10)
 
 
 def test_a_run_stopped_halfway_is_compared_with_what_the_program_had_cut_by_then(bore):
@@ -143,15 +146,17 @@ def test_bore_cut_by_the_perfect_loop_measures_its_size(bore):
     stock = bore.part.stock
     feature = CircleFeature(type="circle", name="bore", center_mm=(-28, 0), diameter_mm=66.0, z_mm=-1.5)
     row = measure(feature, machined_part(stock, loop, loop, 0.0, -10.0))
-    assert row["diameter_mm"] == pytest.approx(66.0, abs=5e-5)
-    assert row["roundness_um"] < 0.2
+    assert isinstance(row, CircleMeasured)
+    assert row.diameter_mm == pytest.approx(66.0, abs=5e-5)
+    assert row.roundness_um < 0.2
     # the planned reference runs inside the programmed circle (by its mean radius here): the
     # nominal part measures what it sweeps
     plan = bore.part.nominal
     on = plan.line == 12
     radius = np.hypot(plan.xy_mm[on, 0] + 28, plan.xy_mm[on, 1]).mean()
     row = measure(feature, machined_part(stock, plan, plan, 0.0, -10.0))
-    assert row["diameter_mm"] == pytest.approx(2 * (radius + 5.0), abs=1e-4)
+    assert isinstance(row, CircleMeasured)
+    assert row.diameter_mm == pytest.approx(2 * (radius + 5.0), abs=1e-4)
 
 
 def test_per_line_wall_error_is_the_run_s(bore):
@@ -238,12 +243,15 @@ def test_pocket_roughed_and_ball_finished(pocket):
     half = np.sqrt(np.maximum(radius**2 - (xy[:, 1] - 15.0) ** 2, 0.0))
     on = half > 0.0
     length = (xy[on, 0] + half[on]).max() - (xy[on, 0] - half[on]).min()
-    row = next(r for r in pocket.result.inspection if r["name"] == "length")
-    assert row["width_mm"] == pytest.approx(length, abs=1e-4)  # 0.1 µm
-    assert row["deviation_um"] == pytest.approx((length - 24.0) * 1e3, abs=0.1)
-    assert {r["name"]: r["pass"] for r in pocket.result.inspection} == {
-        r["name"]: abs(r["deviation_um"]) <= 20.0 if r["type"] == "width" else abs(r["deviation_um"]) <= 10.0
-        for r in pocket.result.inspection
+    row = next(r for r in pocket.result.inspection if r.name == "length")
+    assert isinstance(row, WidthMeasured)
+    assert row.width_mm == pytest.approx(length, abs=1e-4)  # 0.1 µm
+    assert row.deviation_um == pytest.approx((length - 24.0) * 1e3, abs=0.1)
+    measured = [r for r in pocket.result.inspection if not isinstance(r, FeatureNotFound)]
+    assert len(measured) == 3
+    assert {r.name: r.passed for r in measured} == {
+        r.name: abs(r.deviation_um) <= 20.0 if r.type == FeatureType.WIDTH else abs(r.deviation_um) <= 10.0
+        for r in measured
     }
 
 
@@ -289,11 +297,13 @@ def test_four_passes_and_a_through_cut(slot_passes):
     half = np.sqrt(np.maximum(25.0 - (xy[deep, 0] - 50.0) ** 2, 0.0))
     on = half > 0.0
     width = (xy[deep][on, 1] + half[on]).max() - (xy[deep][on, 1] - half[on]).min()
-    row = next(r for r in slot_passes.inspection if r["name"] == "through slot")
-    assert row["width_mm"] == pytest.approx(width, abs=1e-4)
+    row = next(r for r in slot_passes.inspection if r.name == "through slot")
+    assert isinstance(row, WidthMeasured)
+    assert row.width_mm == pytest.approx(width, abs=1e-4)
     # the pass stepped over widened the slot near the top only
-    stepped = next(r for r in slot_passes.inspection if r["name"] == "stepped slot")
-    assert stepped["width_mm"] == pytest.approx(15.0, abs=0.05)
+    stepped = next(r for r in slot_passes.inspection if r.name == "stepped slot")
+    assert isinstance(stepped, WidthMeasured)
+    assert stepped.width_mm == pytest.approx(15.0, abs=0.05)
     # every wall point lies on a wall the nominal tool formed: the slot's sides, Y 20 and 30/35
     walls = part.walls
     inside = (walls[:, 0] > 5.0) & (walls[:, 0] < 95.0)

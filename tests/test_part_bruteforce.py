@@ -26,6 +26,7 @@ import shapely
 from twin.machining.inspection import CircleFeature, WidthFeature, measure
 from twin.machining.part import machined_part
 from twin.machining.sweep import Sweep
+from twin.records import CircleMeasured, WidthMeasured
 
 UM = 1e-3  # mm
 TOL_UM = 0.01  # the wall error's agreement (µm)
@@ -432,7 +433,8 @@ def test_bore_diameter_and_slot_width_against_the_brute_force():
     # ray reach at 1440 angles (the actual samples densified 4x: the capsules' sides)
     theta = np.linspace(-np.pi, np.pi, 1440, endpoint=False)
     reach = ray_reach((0.0, 0.0), theta, densified(xy_a, 4), 5.0)
-    assert row["diameter_mm"] == pytest.approx(2 * reach.mean(), abs=1e-4)  # 0.1 µm: a mean, not a fit (0.013 µm)
+    assert isinstance(row, CircleMeasured)
+    assert row.diameter_mm == pytest.approx(2 * reach.mean(), abs=1e-4)  # 0.1 µm: a mean, not a fit (0.013 µm)
     # the least-squares circle through the brute-force boundary points nearest probes every
     # 0.02 mm on the nominal circle (the nearest capsule's side on the ray from its axis)
     phi = np.linspace(0.0, 2 * np.pi, int(2 * np.pi * 33 / 0.02), endpoint=False)
@@ -450,7 +452,7 @@ def test_bore_diameter_and_slot_width_against_the_brute_force():
         away = p - qb
         surface[i : i + 1000] = qb + away * (5.0 / np.hypot(away[:, 0], away[:, 1]))[:, None]
     centre, radius = fit_circle_ls(surface)
-    assert row["diameter_mm"] == pytest.approx(2 * radius, abs=1e-5)  # 0.01 µm (the fit: 0.0003 µm)
+    assert row.diameter_mm == pytest.approx(2 * radius, abs=1e-5)  # 0.01 µm (the fit: 0.0003 µm)
     assert np.hypot(*centre) < 2e-3
 
     # a slot's width across the line X 15 against the exact extent of the capsules along it
@@ -463,8 +465,9 @@ def test_bore_diameter_and_slot_width_against_the_brute_force():
         WidthFeature(type="width", name="w", from_mm=(15, 5), to_mm=(15, 15), width_mm=6.0, z_mm=-1.0), slot
     )
     lo, hi = line_gap(act_xy, 3.0, np.array([15.0, 5.0]), np.array([15.0, 15.0]))
-    assert width["width_mm"] == pytest.approx(hi - lo, abs=1e-5)
-    assert width["deviation_um"] == pytest.approx((hi - lo - 6.0) / UM, abs=0.1)
+    assert isinstance(width, WidthMeasured)
+    assert width.width_mm == pytest.approx(hi - lo, abs=1e-5)
+    assert width.deviation_um == pytest.approx((hi - lo - 6.0) / UM, abs=0.1)
 
 
 def line_gap(xy: np.ndarray, radius: float, start: np.ndarray, end: np.ndarray):

@@ -21,6 +21,7 @@ from twin.gcode.planner import Limits, PlannerSettings, PlanningError, plan
 from twin.gcode.reader import PLANES, Move, Reader, Settings
 from twin.machines import build
 from twin.machines.rigid_drive import rigid_drives, table_travel_m
+from twin.records import plan_warning
 from twin.references.gcode import planned_for
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -200,6 +201,9 @@ def test_warn_lists_each_lines_worst_excess_per_axis():
         rows[0]["message"] == "X -310.000 mm (machine coordinates) is outside the travel -300.000..300.000 mm of axis x"
     )
     assert rows[0]["text"] == "G0 X-310 Y-250" and check.warnings.total == 6
+    typed = [plan_warning(row) for row in rows]  # the typed records give each row back, key for key
+    assert {type(w).__name__ for w in typed} == {"TravelWarning"}
+    assert [json.dumps(w.to_json()) for w in typed] == [json.dumps(row) for row in rows]
 
 
 def _rigid_force(mass_kg, viscous, coulomb, velocity, acceleration):
@@ -222,6 +226,9 @@ def test_the_drive_force_of_a_rapid_on_choi_1999s_table():
     assert row["force_N"] == pytest.approx(worst, abs=1e-3)
     assert row["ratio"] == pytest.approx(worst / 982.0, abs=1e-6)
     assert row["message"] == f"axis x needs {worst:.1f} N, the drive saturates at 982.0 N (x{worst / 982.0:.3f})"
+    typed = plan_warning(row)
+    assert type(typed).__name__ == "DriveWarning"
+    assert json.dumps(typed.to_json()) == json.dumps(row)  # key for key, in order
     assert worst / 982.0 > 1.1
 
 
@@ -410,4 +417,4 @@ def test_a_streamed_program_gets_the_held_ones_drive_warnings(monkeypatch):
     for k0 in range(0, samples * 2, 700):  # the runner's chunks at a 0.5 ms period
         streamed.sample(np.arange(k0, k0 + 710) * 5e-4)
     assert len(whole.warnings.listed()) >= 5
-    assert streamed.plan_warnings == (whole.warnings.listed(), whole.warnings.total)
+    assert streamed.plan_warnings == ([plan_warning(row) for row in whole.warnings.listed()], whole.warnings.total)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import signal
 import sys
+from collections.abc import Sequence
 from functools import wraps
 from pathlib import Path
 
@@ -18,6 +19,7 @@ import typer
 
 from twin import exits
 from twin.errors import TwinInputError
+from twin.records import Inspected, LineRow, LineWarning, RunRecords, plan_warning
 from twin.reproductions import DEFAULT_SAMPLES, DEFAULT_SEED, DEFAULT_TWIN_SAMPLES
 
 app = typer.Typer(
@@ -73,98 +75,76 @@ def _check_folder(plots: Path | None, option: str = "--plots") -> None:
         raise TwinInputError(option, str(plots), "exists and is not a folder")
 
 
-def _print_worst_lines(rows: list[dict]) -> None:
+def _print_worst_lines(rows: Sequence[LineRow]) -> None:
     """The program's worst lines (contour error, else tracking error) with their text."""
     if not rows:
         return
-    key = "max_contour_error_um" if "max_contour_error_um" in rows[0] else None
-
-    def badness(row):
-        return row[key] if key else max(row["max_tracking_error_um"].values())
-
-    typer.echo(f"  worst lines ({'max contour' if key else 'max tracking'} error, um):")
-    for row in sorted(rows, key=badness, reverse=True)[:WORST_LINES]:
-        span = f"{row['t_start_s']:.3f}-{row['t_end_s']:.3f} s"
-        typer.echo(f"    {row['line']:>6}  {badness(row):>9.3f}  {span}  {row['text']}")
+    contour = rows[0].max_contour_error_um is not None
+    typer.echo(f"  worst lines ({'max contour' if contour else 'max tracking'} error, um):")
+    for row in sorted(rows, key=lambda row: row.worst_error_um, reverse=True)[:WORST_LINES]:
+        span = f"{row.t_start_s:.3f}-{row.t_end_s:.3f} s"
+        typer.echo(f"    {row.line:>6}  {row.worst_error_um:>9.3f}  {span}  {row.text}")
 
 
-#: Machining warnings the text summary prints (all are in --json).
+#: Warnings of each kind the text summary prints (all are in --json).
 SHOWN_WARNINGS = 20
 
 
-def _print_warnings(summary: dict) -> None:
-    """The machining warnings (crashes and misuse), a line each, by program line."""
-    rows = summary.get("machining_warnings", [])
-    if not rows:
+def _warning_line(warning: LineWarning) -> str:
+    """A warning as the text summary prints it: its line (or the run), message and the line's text."""
+    where = "   run" if warning.line is None else f"line {warning.line:>6}"
+    return f"{where}  {warning.message}  {warning.text}"
+
+
+def _print_warnings(title: str, warnings: Sequence[LineWarning], total: int, indent: str = "  ") -> None:
+    """A run's or a program's warnings of one kind under ``title``, a line each, the first
+    :data:`SHOWN_WARNINGS`; ``total`` counts them all (listed or not)."""
+    if not warnings:
         return
-    total = summary.get("machining_warnings_total", len(rows))
-    typer.echo(f"  machining warnings ({total}):")
-    for row in rows[:SHOWN_WARNINGS]:
-        typer.echo(f"    line {row['line']:>6}  {row['message']}  {row['text']}")
+    typer.echo(f"{indent}{title} ({total}):")
+    for warning in warnings[:SHOWN_WARNINGS]:
+        typer.echo(f"{indent}  {_warning_line(warning)}")
     if total > SHOWN_WARNINGS:
-        typer.echo(f"    ... {total - SHOWN_WARNINGS} more (--json lists {len(rows)})")
+        listed = "them all" if total == len(warnings) else str(len(warnings))
+        typer.echo(f"{indent}  ... {total - SHOWN_WARNINGS} more (--json lists {listed})")
 
 
-def _print_plan_warnings(rows: list[dict], total: int, indent: str = "  ") -> None:
-    """A program's warnings against the machine (travel, drives), a line each."""
-    if not rows:
-        return
-    typer.echo(f"{indent}warnings against the machine ({total}):")
-    for row in rows[:SHOWN_WARNINGS]:
-        typer.echo(f"{indent}  line {row['line']:>6}  {row['message']}  {row['text']}")
-    if total > SHOWN_WARNINGS:
-        typer.echo(f"{indent}  ... {total - SHOWN_WARNINGS} more (--json lists {len(rows)})")
-
-
-def _fail_on_plan_warnings(rows: list[dict], total: int) -> None:
-    """Under ``--strict``: the first warning against the machine as the error line, exit 4."""
-    if rows:
-        first = rows[0]
-        typer.echo(
-            f"error: {total} warning(s) against the machine under --strict; the first: line {first['line']}: "
-            f"{first['message']}",
-            err=True,
-        )
+def _fail_on_warnings(title: str, warnings: Sequence[LineWarning], total: int) -> None:
+    """Under ``--strict``: the first of ``warnings`` as the error line, exit 4."""
+    if warnings:
+        first = warnings[0]
+        where = "the run" if first.line is None else f"line {first.line}"
+        typer.echo(f"error: {total} {title} under --strict; the first: {where}: {first.message}", err=True)
         raise typer.Exit(exits.CHECK_FAILED)
 
 
-def _print_chatter(summary: dict) -> None:
+def _print_chatter(records: RunRecords) -> None:
     """The run's chatter indicator and frequency, then the chatter warnings, a line each: by
     program line, or the run's."""
-    whole = summary.get("chatter")
-    if whole is None:
+    if records.chatter is None:
         return
-    verdict = f"over {whole['threshold']}: chatters" if whole["chatter"] else f"under {whole['threshold']}: stable"
-    hz = "" if whole["chatter_hz"] is None else f" at {whole['chatter_hz']:.1f} Hz"
-    typer.echo(f"  {'chatter':<28} indicator {whole['indicator']:.3f} {verdict}{hz}")
-    rows = summary.get("chatter_warnings", [])
-    if not rows:
-        return
-    typer.echo(f"  chatter warnings ({len(rows)}):")
-    for row in rows[:SHOWN_WARNINGS]:
-        where = "   run" if row["line"] is None else f"line {row['line']:>6}"
-        typer.echo(f"    {where}  {row['message']}  {row['text']}")
-    if len(rows) > SHOWN_WARNINGS:
-        typer.echo(f"    ... {len(rows) - SHOWN_WARNINGS} more (--json lists them all)")
+    typer.echo(f"  {records.chatter.report_line()}")
+    warnings = records.chatter_warnings
+    _print_warnings("chatter warnings", warnings, len(warnings))
 
 
-def _print_chatter_check(rows: list[dict]) -> None:
+def _print_chatter_check(rows: Sequence[LineRow]) -> None:
     """The program's cutting lines over their critical depth (the tool's lobes), worst first."""
-    checked = [row for row in rows if "stability" in row]
+    checked = [row.stability for row in rows if row.stability is not None]
     if not checked:
         return
     over = sorted(
-        (row for row in checked if (row["stability"]["margin"] or float("inf")) < 1),
-        key=lambda row: row["stability"]["margin"],
+        (check for check in checked if (check["margin"] or float("inf")) < 1),
+        key=lambda check: check["margin"],
     )
     typer.echo(
         f"  chatter check (zero-order lobes): {len(checked)} cutting line(s), {len(over)} over their critical depth"
     )
-    for row in over[:WORST_LINES]:
-        typer.echo(f"    {row['stability']['text']}")
+    for check in over[:WORST_LINES]:
+        typer.echo(f"    {check['text']}")
 
 
-def _print_part(summary: dict) -> None:
+def _print_part(summary: dict, inspection: Sequence[Inspected]) -> None:
     """The virtual part's wall error and each inspected feature, a line each."""
     part = summary.get("part")
     if part is None:
@@ -185,19 +165,8 @@ def _print_part(summary: dict) -> None:
         typer.echo(
             f"  walls not read at Z {', '.join(f'{z:g}' for z in part['skipped_levels_mm'])} mm: {part['skipped_note']}"
         )
-    for row in summary.get("inspection", []):
-        if "deviation_um" not in row:
-            typer.echo(f"    {row['name']:<20} {row['type']:<7} not found: {row['message']}")
-            continue
-        size = {"circle": "diameter_mm", "width": "width_mm"}.get(row["type"])
-        measured = f"{row[size]:.4f} mm" if size else f"at {row['position_mm'][0]:.4f}, {row['position_mm'][1]:.4f} mm"
-        form = row.get("roundness_um", row.get("straightness_um"))
-        verdict = "" if row["pass"] is None else ("  pass" if row["pass"] else "  FAIL")
-        typer.echo(
-            f"    {row['name']:<20} {row['type']:<7} {measured}  deviation {row['deviation_um']:+.3f} µm"
-            + ("" if form is None else f"  form {form:.3f} µm")
-            + verdict
-        )
+    for feature in inspection:
+        typer.echo(f"    {feature.report_line()}")
 
 
 def _print_summary(name: str, summary: dict) -> None:
@@ -245,25 +214,12 @@ def _run(
     _report(done, rrd, as_json, plots, lines, part)  # a run that stopped early too: what it computed
     if done.stopped is not None:
         raise done.stopped
-    program = done.result.program  # what the report printed, not computed again
-    if strict and program is not None and program.machining_warnings:
-        first = program.machining_warnings[0]
-        total = program.machining_warnings_total
-        typer.echo(
-            f"error: {total} machining warning(s) under --strict; the first: line {first['line']}: {first['message']}",
-            err=True,
-        )
-        raise typer.Exit(exits.CHECK_FAILED)
-    if strict and program is not None:
-        _fail_on_plan_warnings(program.plan_warnings, program.plan_warnings_total)
-    chatter = done.summary.get("chatter_warnings", [])
-    if strict and chatter:
-        first = chatter[0]
-        where = "the run" if first["line"] is None else f"line {first['line']}"
-        typer.echo(
-            f"error: {len(chatter)} chatter warning(s) under --strict; the first: {where}: {first['message']}", err=True
-        )
-        raise typer.Exit(exits.CHECK_FAILED)
+    if strict:
+        records = done.records  # what the report printed, not computed again
+        _fail_on_warnings("machining warning(s)", records.machining_warnings, records.machining_warnings_total)
+        _fail_on_warnings("warning(s) against the machine", records.plan_warnings, records.plan_warnings_total)
+        chatter = records.chatter_warnings
+        _fail_on_warnings("chatter warning(s)", chatter, len(chatter))
 
 
 #: Lines of a program the text summary names, worst first.
@@ -299,13 +255,13 @@ def _report(
                 )
             },
         )
-        _print_worst_lines(summary.get("lines", []))
-        _print_chatter_check(summary.get("lines", []))
-        _print_warnings(summary)
-        rows = summary.get("plan_warnings", [])
-        _print_plan_warnings(rows, summary.get("plan_warnings_total", len(rows)))
-        _print_chatter(summary)
-        _print_part(summary)
+        records = done.records
+        _print_worst_lines(records.lines)
+        _print_chatter_check(records.lines)
+        _print_warnings("machining warnings", records.machining_warnings, records.machining_warnings_total)
+        _print_warnings("warnings against the machine", records.plan_warnings, records.plan_warnings_total)
+        _print_chatter(records)
+        _print_part(summary, records.inspection)
     if lines is not None:
         done.lines_to_parquet(lines)
         typer.echo(f"per-line table written to {lines}", err=as_json)
@@ -569,8 +525,8 @@ def gcode(
     planned = list_program(file, reader_settings, as_json, plan)
     if planned is None:
         return
-    rows = planned["warnings"]
-    total = planned.get("warnings_total", len(rows))
+    warnings = [plan_warning(row) for row in planned["warnings"]]
+    total = planned.get("warnings_total", len(warnings))
     if not as_json:
         typer.echo(f"planned for {machine}:")
         _print_summary(
@@ -592,9 +548,9 @@ def gcode(
                 f"a {top['acceleration_m_per_s2']:.4g}/{lim['acceleration_m_per_s2']:.4g} m/s^2, "
                 f"j {top['jerk_m_per_s3']:.4g}/{lim['jerk_m_per_s3']:.4g} m/s^3 (largest/limit)"
             )
-        _print_plan_warnings(rows, total)
+        _print_warnings("warnings against the machine", warnings, total)
     if strict:
-        _fail_on_plan_warnings(rows, total)
+        _fail_on_warnings("warning(s) against the machine", warnings, total)
 
 
 @app.command()

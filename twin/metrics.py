@@ -8,6 +8,7 @@ response reaches its final value), which some papers call rise time.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -15,6 +16,7 @@ from numba import njit
 
 from twin.machining.chatter import CHATTER_THRESHOLD, ChatterReading, chatter_reading
 from twin.numba_cache import configure as configure_numba_cache
+from twin.records import ChatterCheck, ChatterWarning, LineRow, RunRecords
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
 
@@ -283,10 +285,11 @@ def run_contour_error(result) -> np.ndarray | None:
     return tick_contour_error(actual, ref)
 
 
-def tracking_summary(result) -> dict:
+def tracking_summary(result, records: RunRecords | None = None) -> dict:
     """Max and RMS tracking error per axis (um) and the largest cutting force per axis (N,
     tick means, when there is one), all over every tick of the run; for 2-D paths, max and RMS
-    contour error (um) over the recorded ticks (none when only metrics were kept)."""
+    contour error (um) over the recorded ticks (none when only metrics were kept); a program's
+    and a milling run's ``records`` (:func:`run_records`, computed when not given) as JSON."""
     out: dict[str, Any] = {
         "max_tracking_error_um": dict(zip(result.axis_names, (result.error_max_m * 1e6).round(3).tolist())),
         "rmse_um": dict(zip(result.axis_names, (result.error_rms_m * 1e6).round(3).tolist())),
@@ -294,6 +297,7 @@ def tracking_summary(result) -> dict:
     if result.force_max_N.any():  # cutting: tick-mean force on the workpiece along each axis
         out["max_cutting_force_N"] = dict(zip(result.axis_names, result.force_max_N.round(1).tolist()))
     ce = run_contour_error(result)
+    records = run_records(result, ce) if records is None else records
     if ce is not None:  # a 2-D path
         out["max_contour_error_um"] = round(float(ce.max() * 1e6), 3)
         out["rms_contour_error_um"] = round(float(np.sqrt(np.mean(ce**2)) * 1e6), 3)
@@ -307,19 +311,51 @@ def tracking_summary(result) -> dict:
         if program.engagement.size:  # with a stock: the share of the recorded time the tool cuts
             cutting = (program.engagement[:, 0] > 0) & (program.engagement[:, 1] > 0)
             out["cutting_share"] = round(float(cutting.mean()), 4)
-            out["machining_warnings"] = program.machining_warnings
-            if program.machining_warnings_total > len(program.machining_warnings):
-                out["machining_warnings_total"] = program.machining_warnings_total
-        if program.plan_warnings:  # outside the travel, beyond the drives
-            out["plan_warnings"] = program.plan_warnings
-            if program.plan_warnings_total > len(program.plan_warnings):
-                out["plan_warnings_total"] = program.plan_warnings_total
+            out["machining_warnings"] = [warning.to_json() for warning in records.machining_warnings]
+            if records.machining_warnings_total > len(records.machining_warnings):
+                out["machining_warnings_total"] = records.machining_warnings_total
+        if records.plan_warnings:  # outside the travel, beyond the drives
+            out["plan_warnings"] = [warning.to_json() for warning in records.plan_warnings]
+            if records.plan_warnings_total > len(records.plan_warnings):
+                out["plan_warnings_total"] = records.plan_warnings_total
         if result.part is not None:
             out["part"] = result.part.summary()
-            out["inspection"] = result.inspection
-        out["lines"] = line_table(result, ce)
-    out.update(chatter_summary(result, out.get("lines", [])))
+            out["inspection"] = [feature.to_json() for feature in records.inspection]
+        out["lines"] = [row.to_json() for row in records.lines]
+    if records.chatter is not None:
+        out["chatter"] = records.chatter.to_json()
+        out["chatter_warnings"] = [warning.to_json() for warning in records.chatter_warnings]
     return out
+
+
+def run_records(result, contour_m: np.ndarray | None) -> RunRecords:
+    """A run's per-line rows (:func:`line_table`, each with its chatter), its machining
+    warnings (with a stock), its warnings against the machine, its part's inspection and its
+    chatter (:func:`chatter_check`).
+
+    Parameters
+    ----------
+    result : RunResult
+    contour_m : ndarray or None
+        The contour error at each recorded tick (m, :func:`run_contour_error`); None: the path
+        is not 2-D.
+    """
+    program = result.program
+    if program is None or program.lines.size == 0:
+        whole, _, chatter_warnings = chatter_check(result, [])
+        return RunRecords(chatter=whole, chatter_warnings=tuple(chatter_warnings))
+    whole, rows, chatter_warnings = chatter_check(result, line_table(result, contour_m))
+    stock = program.engagement.size > 0
+    return RunRecords(
+        lines=tuple(rows),
+        machining_warnings=tuple(program.machining_warnings) if stock else (),
+        machining_warnings_total=program.machining_warnings_total if stock else 0,
+        plan_warnings=tuple(program.plan_warnings),
+        plan_warnings_total=program.plan_warnings_total,
+        inspection=tuple(result.inspection) if result.part is not None else (),
+        chatter=whole,
+        chatter_warnings=tuple(chatter_warnings),
+    )
 
 
 def _chatter_of(result, rows: slice) -> ChatterReading | None:
@@ -331,29 +367,32 @@ def _chatter_of(result, rows: slice) -> ChatterReading | None:
     return chatter_reading(result.vibration_probe[rows], steps, result.control_period_s * every, dt)
 
 
-def chatter_summary(result, lines: list[dict]) -> dict:
-    """A milling run's chatter (:mod:`twin.machining.chatter`): ``chatter`` (the whole run's
-    indicator, frequency and verdict) and ``chatter_warnings`` (each program line that chatters,
-    or the run), and each line's own reading into its row of ``lines`` (in place); nothing for a
-    run that does not mill for a window's worth."""
+def chatter_check(result, lines: list[LineRow]) -> tuple[ChatterCheck | None, list[LineRow], list[ChatterWarning]]:
+    """A milling run's chatter (:mod:`twin.machining.chatter`): the whole run's reading
+    (indicator, frequency and verdict, :meth:`~twin.machining.chatter.ChatterReading.check`),
+    the rows of ``lines`` each with its own reading, and the warnings (each program line that
+    chatters, or the run); None, ``lines`` and none for a run that does not mill for a window's
+    worth."""
     whole = _chatter_of(result, slice(None))
     if whole is None:
-        return {}
+        return None, lines, []
     warnings = []
     program = result.program
     if lines and program is not None:
         starts = np.flatnonzero(np.concatenate([[True], program.lines[1:] != program.lines[:-1]]))
         ends = np.concatenate([starts[1:], [program.lines.size]])
+        checked = []
         for row, a, b in zip(lines, starts, ends):
             reading = _chatter_of(result, slice(a, b))
-            if reading is None:
-                continue
-            row["chatter"] = reading.as_dict()
-            if reading.chatters:
-                warnings.append({"line": row["line"], "message": _chatter_message(reading), "text": row["text"]})
+            if reading is not None:
+                row = replace(row, chatter=reading.check())
+                if reading.chatters:
+                    warnings.append(ChatterWarning(line=row.line, message=_chatter_message(reading), text=row.text))
+            checked.append(row)
+        lines = checked
     elif whole.chatters:
-        warnings.append({"line": None, "message": _chatter_message(whole), "text": ""})
-    return {"chatter": whole.as_dict(), "chatter_warnings": warnings}
+        warnings.append(ChatterWarning(line=None, message=_chatter_message(whole), text=""))
+    return whole.check(), lines, warnings
 
 
 def _chatter_message(reading: ChatterReading) -> str:
@@ -362,7 +401,7 @@ def _chatter_message(reading: ChatterReading) -> str:
     return f"chatter{hz}: indicator {reading.indicator:.2f} over {CHATTER_THRESHOLD}"
 
 
-def line_table(result, contour_m: np.ndarray | None) -> list[dict]:
+def line_table(result, contour_m: np.ndarray | None) -> list[LineRow]:
     """Per G-code line, over the recorded ticks the reference is on it: its text, time span,
     max and RMS contour error (um), max tracking error per axis (um), the largest cutting
     force (N, the XY magnitude) and, with a stock, the mean engaged angle (deg), the largest
@@ -397,23 +436,20 @@ def line_table(result, contour_m: np.ndarray | None) -> list[dict]:
     rows = []
     for i, (a, b) in enumerate(zip(starts, ends)):
         line = int(lines[a])
-        row: dict[str, Any] = {
-            "line": line,
-            "text": program.texts.get(line, ""),
-            "t_start_s": round(float(t[a]), 6),
-            "t_end_s": round(float(t[b - 1] + period), 6),
-        }
-        if contour_m is not None:
-            row["max_contour_error_um"] = round(float(ce_max[i]), 3)
-            row["rms_contour_error_um"] = round(float(ce_rms[i]), 3)
-        row["max_tracking_error_um"] = dict(zip(result.axis_names, err_max[i].round(3).tolist()))
-        row["max_cutting_force_N"] = round(float(force_max[i]), 1)
-        if program.engagement.size:
-            row["mean_engagement_deg"] = round(float(engaged[i]), 2)
-            row["axial_depth_mm"] = round(float(depth[i]), 4)
-        if line in wall_error:
-            row["max_wall_error_um"] = wall_error[line]
-        if line in program.line_stability:
-            row["stability"] = program.line_stability[line]
-        rows.append(row)
+        rows.append(
+            LineRow(
+                line=line,
+                text=program.texts.get(line, ""),
+                t_start_s=round(float(t[a]), 6),
+                t_end_s=round(float(t[b - 1] + period), 6),
+                max_tracking_error_um=dict(zip(result.axis_names, err_max[i].round(3).tolist())),
+                max_cutting_force_N=round(float(force_max[i]), 1),
+                max_contour_error_um=None if contour_m is None else round(float(ce_max[i]), 3),
+                rms_contour_error_um=None if contour_m is None else round(float(ce_rms[i]), 3),
+                mean_engagement_deg=round(float(engaged[i]), 2) if program.engagement.size else None,
+                axial_depth_mm=round(float(depth[i]), 4) if program.engagement.size else None,
+                max_wall_error_um=wall_error.get(line),
+                stability=program.line_stability.get(line),
+            )
+        )
     return rows

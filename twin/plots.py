@@ -165,12 +165,12 @@ def _program_plots(plt, result, directory: Path, name: str) -> list[Path]:
     path = LineCollection(list(segments), array=error_um[1:], cmap="turbo", linewidths=2.0)
     ax.add_collection(path)
     fig.colorbar(path, ax=ax, label="contour error (µm)")
-    rows = sorted(line_table(result, error_um * 1e-6), key=lambda r: r["max_contour_error_um"], reverse=True)
+    rows = sorted(line_table(result, error_um * 1e-6), key=lambda r: r.worst_error_um, reverse=True)
     # numbered markers on the path and the lines' texts in a key beside the plot: passes that
     # share XY put the worst lines on one spot, where labels would cover one another
     legend_rows = []
     for rank, row in enumerate(rows[:LABELLED_LINES], start=1):
-        inside = (result.t_s >= row["t_start_s"]) & (result.t_s < row["t_end_s"])
+        inside = (result.t_s >= row.t_start_s) & (result.t_s < row.t_end_s)
         where = act[inside][np.argmax(error_um[inside])] if inside.any() else act[0]
         angle = 2.0 * np.pi * rank / LABELLED_LINES
         ax.annotate(
@@ -184,7 +184,7 @@ def _program_plots(plt, result, directory: Path, name: str) -> list[Path]:
             arrowprops={"arrowstyle": "-", "linewidth": 0.6},
             bbox={"boxstyle": "circle,pad=0.2", "fc": "white", "alpha": 0.9},
         )
-        legend_rows.append(f"{rank}: line {row['line']}, {row['max_contour_error_um']:.1f} µm  {row['text'][:40]}")
+        legend_rows.append(f"{rank}: line {row.line}, {row.worst_error_um:.1f} µm  {row.text[:40]}")
     if legend_rows:
         ax.text(
             1.28,
@@ -250,15 +250,7 @@ def _wall_error_plot(plt, result, directory: Path, name: str) -> Path:
         walls[order, 0], walls[order, 1], c=walls[order, 3], s=8, cmap="coolwarm", vmin=-limit, vmax=limit
     )
     fig.colorbar(dots, ax=ax, label="wall error (µm): + material left, − overcut")
-    report = [
-        f"{row['name']}: "
-        + (
-            f"{row['deviation_um']:+.1f} µm" + ("" if row["pass"] is None else (" pass" if row["pass"] else " FAIL"))
-            if "deviation_um" in row
-            else "not found"
-        )
-        for row in result.inspection
-    ]
+    report = [feature.label() for feature in result.inspection]
     if report:
         ax.text(
             1.28,

@@ -9,6 +9,7 @@ tune``) and :class:`Fidelity` (``twin fidelity``).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -20,6 +21,7 @@ if TYPE_CHECKING:  # the heavy modules load on first use, not with `import twin`
 
     from twin.commissioning.frf import FrfSettings
     from twin.gcode.moves import Move
+    from twin.records import RunRecords
     from twin.sampling import Plan
     from twin.scenario import Scenario
     from twin.sim.runner import RunResult
@@ -64,16 +66,29 @@ class Run:
             "status": self.status,
             **({} if self.stopped is None else {"sim_time_s": self.stopped.sim_time_s}),
             "completed_ticks": done,
-            **(tracking_summary(self.result) if done else {}),
+            **(tracking_summary(self.result, self.records) if done else {}),
             "loop": self.result.info["loop"],
         }
 
+    @cached_property
+    def records(self) -> RunRecords:
+        """The run's per-line rows, warnings, inspected features and chatter, typed
+        (:func:`twin.metrics.run_records`; :attr:`summary` gives them as JSON); none for a run
+        that completed no tick."""
+        from twin.metrics import run_contour_error, run_records
+        from twin.records import RunRecords
+
+        if not self.result.info["completed_ticks"]:
+            return RunRecords()
+        return run_records(self.result, run_contour_error(self.result))
+
     def lines_to_parquet(self, path: str | Path) -> Path:
-        """Write the per-line table of a G-code run (``summary["lines"]``, the per-axis
-        tracking errors as columns ``max_tracking_error_um_<axis>``, a cutting line's chatter
-        check as ``stability_<key>`` with ``stability_stable_rpm_low`` and ``_high``, its chatter
-        in the run as ``chatter``, ``chatter_hz``, ``chatter_indicator``, ``chatter_threshold``
-        and ``chatter_windows``) to a Parquet file.
+        """Write the per-line table of a G-code run (:attr:`records`' ``lines``, each row's
+        columns :meth:`twin.records.LineRow.to_columns`: the per-axis tracking errors as
+        ``max_tracking_error_um_<axis>``, a cutting line's chatter check as ``stability_<key>``
+        with ``stability_stable_rpm_low`` and ``_high``, its chatter in the run as ``chatter``,
+        ``chatter_hz``, ``chatter_indicator``, ``chatter_threshold`` and ``chatter_windows``) to
+        a Parquet file.
 
         Raises
         ------
@@ -83,20 +98,10 @@ class Run:
         import pyarrow as pa
         import pyarrow.parquet as pq
 
-        rows = self.summary.get("lines")
+        rows = self.records.lines
         if not rows:
             raise TwinInputError("lines", str(path), "the run has no G-code reference: no per-line table")
-        flat = []
-        for row in rows:
-            per_axis = {f"max_tracking_error_um_{a}": v for a, v in row["max_tracking_error_um"].items()}
-            check = dict(row.get("stability", {}))
-            low, high = check.pop("stable_rpm", None) or (None, None)
-            stability = {f"stability_{k}": v for k, v in check.items()}
-            if "stability" in row:
-                stability.update(stability_stable_rpm_low=low, stability_stable_rpm_high=high)
-            chatter = {k if k.startswith("chatter") else f"chatter_{k}": v for k, v in row.get("chatter", {}).items()}
-            plain = {k: v for k, v in row.items() if k not in ("max_tracking_error_um", "stability", "chatter")}
-            flat.append({**plain, **per_axis, **stability, **chatter})
+        flat = [row.to_columns() for row in rows]
         columns = list(dict.fromkeys(key for row in flat for key in row))  # every row's, in order
         pq.write_table(pa.Table.from_pylist([{c: row.get(c) for c in columns} for row in flat]), Path(path))
         return Path(path)

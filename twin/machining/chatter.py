@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from twin.machining.cutting import PROBE_CROSS_U, PROBE_CROSS_W, PROBE_FEED2, PROBE_STEPS, PROBE_U2, PROBE_W2
+from twin.records import ChatterCheck
 
 #: Indicator over which a stretch of a run chatters: the vibration's once-per-tooth difference
 #: at a quarter of the feed per tooth (RMS).
@@ -61,15 +62,15 @@ class ChatterReading:
         """Whether the indicator is over :data:`CHATTER_THRESHOLD`."""
         return self.indicator > CHATTER_THRESHOLD
 
-    def as_dict(self) -> dict:
-        """The reading as the run's JSON gives it."""
-        return {
-            "indicator": round(self.indicator, 4),
-            "chatter": self.chatters,
-            "chatter_hz": None if self.chatter_hz is None else round(self.chatter_hz, 1),
-            "threshold": CHATTER_THRESHOLD,
-            "windows": self.windows,
-        }
+    def check(self) -> ChatterCheck:
+        """The reading as the run reports it (:class:`twin.records.ChatterCheck`)."""
+        return ChatterCheck(
+            indicator=round(self.indicator, 4),
+            chatters=self.chatters,
+            chatter_hz=None if self.chatter_hz is None else round(self.chatter_hz, 1),
+            threshold=CHATTER_THRESHOLD,
+            windows=self.windows,
+        )
 
 
 def windows(probe: np.ndarray, steps_per_row: int, rows_per_window: int) -> np.ndarray:

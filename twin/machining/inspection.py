@@ -22,7 +22,8 @@ the nominal feature are its measured points:
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal
+from collections.abc import Callable
+from typing import Annotated, Any, Literal
 
 import numpy as np
 import shapely
@@ -30,6 +31,7 @@ from pydantic import Field, PositiveFloat
 from scipy.optimize import least_squares
 
 from twin.machining.part import MachinedPart
+from twin.records import CircleMeasured, FeatureNotFound, FeatureType, Inspected, LineMeasured, WidthMeasured
 from twin.spec import MAX_MM, Millimetres, ReportName, StrictSpec
 
 #: Distance from a nominal feature (mm) within which the boundary counts as its points.
@@ -91,16 +93,9 @@ def _verdict(deviation_um: float, tolerance_um: float | None) -> bool | None:
     return None if tolerance_um is None else bool(abs(deviation_um) <= tolerance_um)
 
 
-def not_found(feature, message: str) -> dict:
-    """The row of a feature that could not be measured, with why."""
-    return {
-        "name": feature.name,
-        "type": feature.type,
-        "z_mm": feature.z_mm,
-        "found": False,
-        "message": message,
-        "pass": False,
-    }
+def not_found(feature: InspectSpec, message: str) -> FeatureNotFound:
+    """A feature that could not be measured, with why."""
+    return FeatureNotFound(name=feature.name, type=FeatureType(feature.type), z_mm=feature.z_mm, message=message)
 
 
 def _circle_hits(centre: np.ndarray, radius_mm: float, origin: np.ndarray, direction: np.ndarray) -> np.ndarray:
@@ -149,62 +144,91 @@ def _gap_ends(part: MachinedPart, z_mm: float, middle: np.ndarray, ends: tuple) 
     return out
 
 
-def measure(feature, part: MachinedPart) -> dict:
+def _measure_circle(feature: CircleFeature, part: MachinedPart) -> CircleMeasured | FeatureNotFound:
+    centre, r = np.asarray(feature.center_mm), feature.diameter_mm / 2
+    band = min(BAND_MM, r / 2)
+    turn = np.arange(0.0, 2 * math.pi, PROBE_STEP_MM / r)
+    found = part.probe(centre + r * np.column_stack([np.cos(turn), np.sin(turn)]), feature.z_mm, band)
+    near = np.abs(found.distance) < band
+    pts = found.surface()[near]
+    if len(pts) < MIN_POINTS:
+        return not_found(feature, f"no wall within {band} mm of the circle")
+    fitted, radius, residual = fit_circle(pts)
+    deviation = (2 * radius - feature.diameter_mm) * 1e3
+    return CircleMeasured(
+        **_measured(feature, deviation),
+        diameter_mm=round(2 * radius, 6),
+        center_mm=_point(fitted),
+        roundness_um=round(float(np.ptp(residual) * 1e3), 3),
+    )
+
+
+def _measure_line(feature: LineFeature, part: MachinedPart) -> LineMeasured | FeatureNotFound:
+    a, b = np.asarray(feature.from_mm), np.asarray(feature.to_mm)
+    if np.allclose(a, b):
+        return not_found(feature, "from_mm and to_mm are one point")
+    u = (b - a) / np.linalg.norm(b - a)
+    n = np.array([-u[1], u[0]])
+    along = np.arange(0.0, np.linalg.norm(b - a) + PROBE_STEP_MM / 2, PROBE_STEP_MM)
+    found = part.probe(a + along[:, None] * u, feature.z_mm, BAND_MM)
+    near = np.abs(found.distance) < BAND_MM
+    pts = found.surface()[near]
+    if len(pts) < MIN_POINTS:
+        return not_found(feature, f"no wall within {BAND_MM} mm of the line")
+    mean = pts.mean(axis=0)
+    direction = np.linalg.svd(pts - mean)[2][0]
+    normal = np.array([-direction[1], direction[0]])
+    residual = (pts - mean) @ normal
+    middle = 0.5 * (a + b)
+    on_fit = mean + direction * ((middle - mean) @ direction)  # the middle's foot on the fit
+    # the material's side: +1 where it lies along n (away from the tools' axes); material
+    # left moves the wall against it
+    side = 1.0 if float(np.mean((found.xy[near] - found.axis[near]) @ n)) > 0.0 else -1.0
+    deviation = -side * float((on_fit - middle) @ n) * 1e3
+    return LineMeasured(
+        **_measured(feature, deviation),
+        position_mm=_point(on_fit),
+        straightness_um=round(float(np.ptp(residual) * 1e3), 3),
+    )
+
+
+def _measure_width(feature: WidthFeature, part: MachinedPart) -> WidthMeasured | FeatureNotFound:
+    a, b = np.asarray(feature.from_mm), np.asarray(feature.to_mm)
+    middle = 0.5 * (a + b)
+    gap = None if np.allclose(a, b) else _gap_ends(part, feature.z_mm, middle, (a, b))
+    if gap is None:
+        return not_found(feature, "the line's middle is in material: no gap across it")
+    width = float(np.linalg.norm(gap[1] - gap[0]))
+    deviation = (width - feature.width_mm) * 1e3
+    return WidthMeasured(
+        **_measured(feature, deviation), width_mm=round(width, 6), center_mm=_point(0.5 * (gap[0] + gap[1]))
+    )
+
+
+def _point(xy: np.ndarray) -> tuple[float, float]:
+    """A measured point [x, y] (mm) to 6 decimals."""
+    return round(float(xy[0]), 6), round(float(xy[1]), 6)
+
+
+def _measured(feature, deviation_um: float) -> dict:
+    """What every measured feature reports: its name, height, deviation (µm) and verdict."""
+    return {
+        "name": feature.name,
+        "z_mm": feature.z_mm,
+        "deviation_um": round(deviation_um, 3),
+        "passed": _verdict(deviation_um, feature.tolerance_um),
+    }
+
+
+#: Each feature type's measurement: the one place the types are told apart.
+MEASURES: dict[FeatureType, Callable[[Any, MachinedPart], Inspected]] = {
+    FeatureType.CIRCLE: _measure_circle,
+    FeatureType.LINE: _measure_line,
+    FeatureType.WIDTH: _measure_width,
+}
+
+
+def measure(feature: InspectSpec, part: MachinedPart) -> Inspected:
     """One feature of ``inspection`` measured on the actual ``part`` at its height (see the
     module docstring): probes every :data:`PROBE_STEP_MM` along the nominal feature."""
-    row: dict = {"name": feature.name, "type": feature.type, "z_mm": feature.z_mm}
-    if feature.type == "circle":
-        centre, r = np.asarray(feature.center_mm), feature.diameter_mm / 2
-        band = min(BAND_MM, r / 2)
-        turn = np.arange(0.0, 2 * math.pi, PROBE_STEP_MM / r)
-        found = part.probe(centre + r * np.column_stack([np.cos(turn), np.sin(turn)]), feature.z_mm, band)
-        near = np.abs(found.distance) < band
-        pts = found.surface()[near]
-        if len(pts) < MIN_POINTS:
-            return not_found(feature, f"no wall within {band} mm of the circle")
-        fitted, radius, residual = fit_circle(pts)
-        deviation = (2 * radius - feature.diameter_mm) * 1e3
-        row |= {
-            "diameter_mm": round(2 * radius, 6),
-            "center_mm": [round(float(v), 6) for v in fitted],
-            "roundness_um": round(float(np.ptp(residual) * 1e3), 3),
-        }
-    elif feature.type == "line":
-        a, b = np.asarray(feature.from_mm), np.asarray(feature.to_mm)
-        if np.allclose(a, b):
-            return not_found(feature, "from_mm and to_mm are one point")
-        u = (b - a) / np.linalg.norm(b - a)
-        n = np.array([-u[1], u[0]])
-        along = np.arange(0.0, np.linalg.norm(b - a) + PROBE_STEP_MM / 2, PROBE_STEP_MM)
-        found = part.probe(a + along[:, None] * u, feature.z_mm, BAND_MM)
-        near = np.abs(found.distance) < BAND_MM
-        pts = found.surface()[near]
-        if len(pts) < MIN_POINTS:
-            return not_found(feature, f"no wall within {BAND_MM} mm of the line")
-        mean = pts.mean(axis=0)
-        direction = np.linalg.svd(pts - mean)[2][0]
-        normal = np.array([-direction[1], direction[0]])
-        residual = (pts - mean) @ normal
-        middle = 0.5 * (a + b)
-        on_fit = mean + direction * ((middle - mean) @ direction)  # the middle's foot on the fit
-        # the material's side: +1 where it lies along n (away from the tools' axes); material
-        # left moves the wall against it
-        side = 1.0 if float(np.mean((found.xy[near] - found.axis[near]) @ n)) > 0.0 else -1.0
-        deviation = -side * float((on_fit - middle) @ n) * 1e3
-        row |= {
-            "position_mm": [round(float(v), 6) for v in on_fit],
-            "straightness_um": round(float(np.ptp(residual) * 1e3), 3),
-        }
-    else:
-        a, b = np.asarray(feature.from_mm), np.asarray(feature.to_mm)
-        middle = 0.5 * (a + b)
-        gap = None if np.allclose(a, b) else _gap_ends(part, feature.z_mm, middle, (a, b))
-        if gap is None:
-            return not_found(feature, "the line's middle is in material: no gap across it")
-        width = float(np.linalg.norm(gap[1] - gap[0]))
-        deviation = (width - feature.width_mm) * 1e3
-        row |= {
-            "width_mm": round(width, 6),
-            "center_mm": [round(float(v), 6) for v in 0.5 * (gap[0] + gap[1])],
-        }
-    return {**row, "deviation_um": round(deviation, 3), "pass": _verdict(deviation, feature.tolerance_um)}
+    return MEASURES[FeatureType(feature.type)](feature, part)

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from twin.machining.engagement import COLUMNS, StockSpec, ToolSpec
+from twin.records import MachiningWarning
 
 #: Warnings kept (the first by line); the count of all is reported beside them.
 MAX_WARNINGS = 1000
@@ -53,8 +54,8 @@ def machining_warnings(
 
     Returns
     -------
-    warnings : list of dict
-        ``{line, text, kind, value, unit, message}``, by line, at most :data:`MAX_WARNINGS`.
+    warnings : list of twin.records.MachiningWarning
+        By line, at most :data:`MAX_WARNINGS`.
     total : int
         Every warning (over :data:`MAX_WARNINGS` some are not listed).
     """
@@ -96,14 +97,14 @@ def machining_warnings(
         unit, message = KINDS[kind]
         for line, worst in zip(lines[first].tolist(), values[first].tolist()):
             rows.append(
-                {
-                    "line": int(line),
-                    "text": plan.texts.get(int(line), ""),
-                    "kind": kind,
-                    "value": round(float(worst), 4),
-                    "unit": unit,
-                    "message": message.format(value=worst),
-                }
+                MachiningWarning(
+                    line=int(line),
+                    text=plan.texts.get(int(line), ""),
+                    kind=kind,
+                    value=round(float(worst), 4),
+                    unit=unit,
+                    message=message.format(value=worst),
+                )
             )
-    rows.sort(key=lambda row: (row["line"], row["kind"]))
+    rows.sort(key=lambda row: (row.line, row.kind))
     return rows[:MAX_WARNINGS], len(rows)

@@ -24,6 +24,7 @@ from twin.machining.cutting import (
 )
 from twin.machining.engagement import COLUMNS, MAP_MARGIN_MM, HeightMap, StockSpec, ToolSpec, engagement_table
 from twin.machining.misuse import machining_warnings
+from twin.records import MachiningWarning
 
 
 class ProgramMilling:
@@ -92,7 +93,7 @@ class ProgramCut:
         The engagement at each sample of the plan.
     height_map : HeightMap
         The stock as the program leaves it.
-    warnings : list of dict
+    warnings : list of twin.records.MachiningWarning
         Crashes and misuse by line (:func:`twin.machining.misuse.machining_warnings`).
     warnings_total : int
         Every warning, listed or not.
@@ -103,7 +104,7 @@ class ProgramCut:
     milling: ProgramMilling
     table: np.ndarray
     height_map: HeightMap
-    warnings: list[dict]
+    warnings: list[MachiningWarning]
     warnings_total: int
     radius_m: np.ndarray
     corner_m: np.ndarray

@@ -128,16 +128,10 @@ def log_part(rec, result, root: str) -> None:
     span = float(np.ptp(np.concatenate([walls[:, 1], *(ring[:, 1] for ring in outline)]))) if len(walls) else 1.0
     places: list[list[float]] = []
     labels: list[str] = []
-    for row in result.inspection:
-        verdict = "" if row["pass"] is None else (" pass" if row["pass"] else " FAIL")
-        text = (
-            f"{row['name']}: {row['deviation_um']:+.1f} µm{verdict}"
-            if "deviation_um" in row
-            else f"{row['name']}: not found"
-        )
-        place = row.get("center_mm") or row.get("position_mm")
+    for feature in result.inspection:
+        place = feature.place_mm
         if place is not None:  # each label a line lower than the last: features share centres
-            places.append([place[0], place[1] - LABEL_SPACING * span * len(places), row["z_mm"]])
-            labels.append(text)
+            places.append([place[0], place[1] - LABEL_SPACING * span * len(places), feature.z_mm])
+            labels.append(feature.label())
     if places:
         rec.log(f"{root}/inspection", rr.Points3D(places, labels=labels, radii=[-6.0]), static=True)

@@ -39,6 +39,7 @@ from twin.machines.rigid_drive import rigid_drives, table_travel_m
 from twin.machining.engagement import COLUMNS, engaged_degrees
 from twin.machining.program_cut import ProgramCut
 from twin.machining.program_stability import ProgramSamples, default_rpm_range, line_stability
+from twin.records import MachiningWarning, PlanWarning, plan_warning
 from twin.references.kinds import ReferenceContext, ReferenceSpecBase, register, two_axes
 from twin.settings import set_fields
 from twin.spec import Millimetres, StrictSpec, validation_error
@@ -166,7 +167,7 @@ class GcodeReference(_Samples):
         return GcodeReference(self.plan, self.axes, self.n_lines, cut, self.checks)
 
     @property
-    def warnings(self) -> list[dict]:
+    def warnings(self) -> list[MachiningWarning]:
         """With a stock: crashes and misuse by line (:func:`twin.machining.misuse.machining_warnings`)."""
         return [] if self.cut is None else self.cut.warnings
 
@@ -176,10 +177,10 @@ class GcodeReference(_Samples):
         return 0 if self.cut is None else self.cut.warnings_total
 
     @property
-    def plan_warnings(self) -> tuple[list[dict], int]:
+    def plan_warnings(self) -> tuple[list[PlanWarning], int]:
         """Moves outside the travel (under ``travel = "warn"``) and what the drives cannot
         deliver, by line (:func:`twin.gcode.checks.plan_warnings`), and how many in all."""
-        return plan_warnings(*self.checks)
+        return typed_plan_warnings(*self.checks)
 
     def program_samples(self) -> ProgramSamples | None:
         """With a stock: the engagement, speed, tool, line and XY velocity at each sample."""
@@ -323,7 +324,7 @@ class StreamedGcodeReference(_Samples):
         return {}
 
     @property
-    def warnings(self) -> list[dict]:
+    def warnings(self) -> list[MachiningWarning]:
         """No stock: no machining warnings."""
         return []
 
@@ -337,13 +338,20 @@ class StreamedGcodeReference(_Samples):
         return 0
 
     @property
-    def plan_warnings(self) -> tuple[list[dict], int]:
+    def plan_warnings(self) -> tuple[list[PlanWarning], int]:
         """As :attr:`GcodeReference.plan_warnings`, of the samples planned so far."""
-        return plan_warnings(*self.checks)
+        return typed_plan_warnings(*self.checks)
 
     @property
     def texts(self) -> dict[int, str]:
         return self.facts.texts
+
+
+def typed_plan_warnings(*checks: TravelCheck | DriveCheck | None) -> tuple[list[PlanWarning], int]:
+    """The warnings of ``checks`` by line (:func:`twin.gcode.checks.plan_warnings`), typed, and
+    how many in all."""
+    rows, total = plan_warnings(*checks)
+    return [plan_warning(row) for row in rows], total
 
 
 def _by_line(lines: np.ndarray, by_line: dict) -> np.ndarray:

@@ -9,6 +9,7 @@ from twin.machining.engagement import StockSpec
 from twin.machining.inspection import measure, not_found
 from twin.machining.part import MachinedPart, virtual_part
 from twin.machining.sweep import Sweep
+from twin.records import Inspected
 from twin.scenario.assembly import assemble
 from twin.scenario.schema import Scenario
 from twin.sim.runner import MAX_PHYSICS_STEPS, RunResult
@@ -31,7 +32,7 @@ def cut_part(result: RunResult, reference, scn: Scenario) -> None:
         result.inspection = [_inspect(f, result.part, scn.stock) for f in scn.inspect]
 
 
-def _inspect(feature, part: MachinedPart, stock: StockSpec) -> dict:
+def _inspect(feature, part: MachinedPart, stock: StockSpec) -> Inspected:
     """A feature measured on the actual part at its height, or why it cannot be."""
     if not stock.bottom_mm <= feature.z_mm <= stock.top_mm:
         return not_found(

@@ -11,6 +11,8 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from twin.records import MachiningWarning, PlanWarning
+
 
 @runtime_checkable
 class Reference(Protocol):
@@ -46,13 +48,13 @@ class ProgramReference(Reference, Protocol):
     def outlines(self) -> dict[str, list[np.ndarray]]: ...
 
     @property
-    def warnings(self) -> list[dict]: ...
+    def warnings(self) -> list[MachiningWarning]: ...
 
     @property
     def warnings_total(self) -> int: ...
 
     @property
-    def plan_warnings(self) -> tuple[list[dict], int]: ...
+    def plan_warnings(self) -> tuple[list[PlanWarning], int]: ...
 
     @property
     def line_stability(self) -> dict[int, dict]: ...

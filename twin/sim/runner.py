@@ -31,6 +31,7 @@ from controllers.blocks import Controller, Program, SignalError, preview_ticks_n
 from twin.errors import RunInterrupted, SimulationDiverged, TwinInputError
 from twin.machines import BuiltMachine
 from twin.machining.cutting import PROBE, ForceModels
+from twin.records import Inspected, MachiningWarning, PlanWarning
 from twin.sim import loop, mujoco_c
 from twin.sim.drive import MAX_VALUE, Drive, Encoder, substeps_per_tick
 from twin.sim.protocols import Disturbance, ForceModel, InputDisturbance, ProgramReference, Reference
@@ -80,12 +81,12 @@ class ProgramTrace:
         empty).
     outlines : dict of str to list of ndarray
         With a stock: ``stock`` and ``machined`` outlines (mm), as the program leaves them.
-    machining_warnings : list of dict
+    machining_warnings : list of twin.records.MachiningWarning
         With a stock: crashes and misuse by program line
         (:func:`twin.machining.misuse.machining_warnings`), the first ones.
     machining_warnings_total : int
         How many there are in all.
-    plan_warnings : list of dict
+    plan_warnings : list of twin.records.TravelWarning or twin.records.DriveWarning
         Moves outside the travel (under ``travel = "warn"``) and what the drives cannot deliver,
         by line (:func:`twin.gcode.checks.plan_warnings`).
     plan_warnings_total : int
@@ -102,9 +103,9 @@ class ProgramTrace:
     extra_axes: dict[str, np.ndarray]
     engagement: np.ndarray
     outlines: dict[str, list[np.ndarray]]
-    machining_warnings: list[dict]
+    machining_warnings: list[MachiningWarning]
     machining_warnings_total: int
-    plan_warnings: list[dict]
+    plan_warnings: list[PlanWarning]
     plan_warnings_total: int
     line_stability: dict[int, dict] = field(default_factory=dict)
 
@@ -147,7 +148,7 @@ class RunResult:
         For a part program's reference: its lines, feeds and engagement at the recorded ticks.
     part : twin.machining.part.MachinedPart or None
         With a stock: the part the actual motion cut, against the nominal one.
-    inspection : list of dict
+    inspection : list of twin.records.Inspected
         The ``[[inspect]]`` features measured on it (:func:`twin.machining.inspection.measure`).
     """
 
@@ -169,7 +170,7 @@ class RunResult:
     info: dict = field(default_factory=dict)
     program: ProgramTrace | None = None
     part: Any = None
-    inspection: list = field(default_factory=list)
+    inspection: list[Inspected] = field(default_factory=list)
 
     @property
     def axis_names(self) -> list[str]:
