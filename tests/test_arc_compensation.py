@@ -8,7 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from twin.gcode.planner import Limits, PlannerSettings, plan
+from twin.gcode.planned import Limits
+from twin.gcode.planner import PlannerSettings, plan
 from twin.gcode.reader import Reader
 from twin.machines import build
 

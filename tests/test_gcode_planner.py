@@ -12,7 +12,8 @@ from typer.testing import CliRunner
 
 from twin import api
 from twin.cli import app
-from twin.gcode.planner import MAX_SAMPLES, Limits, PlannerSettings, PlanningError, plan
+from twin.gcode.planned import Limits, PlanningError
+from twin.gcode.planner import MAX_SAMPLES, PlannerSettings, plan
 from twin.gcode.reader import Reader, Settings, read_program
 from twin.gcode.report import max_path_deviation_m
 from twin.machines import build

@@ -62,7 +62,8 @@ def _write(tmp_path, name):
 def test_mode_dispatch_gives_the_planner_plan_with_linuxcnc_positions(tmp_path):
     """``[planner] mode = "linuxcnc"`` through :func:`twin.gcode.planner.plan`: the same samples
     (m), at rest at both ends, LinuxCNC's jerk reported over the limits, not hidden."""
-    from twin.gcode.planner import Limits, PlannerSettings, plan
+    from twin.gcode.planned import Limits
+    from twin.gcode.planner import PlannerSettings, plan
     from twin.gcode.reader import read_program
 
     case = CASES["g61_square"]
@@ -101,7 +102,8 @@ def test_machine_file_planner_mode_and_the_scenario_over_it(tmp_path):
 
 
 def test_feed_override_refused_in_linuxcnc_mode(tmp_path):
-    from twin.gcode.planner import Limits, PlannerSettings, PlanningError, plan
+    from twin.gcode.planned import Limits, PlanningError
+    from twin.gcode.planner import PlannerSettings, plan
     from twin.gcode.reader import read_program
 
     limits = Limits((0.1, 0.1, 0.1), (1.0, 1.0, 1.0), (50.0, 50.0, 50.0))

@@ -11,7 +11,8 @@ import pytest
 
 from twin import api
 from twin.errors import TwinInputError
-from twin.gcode.planner import Limits, PlannerSettings, plan
+from twin.gcode.planned import Limits
+from twin.gcode.planner import PlannerSettings, plan
 from twin.gcode.reader import Reader
 from twin.machining.engagement import StockSpec, ToolSpec, engaged_degrees
 from twin.machining.program_cut import program_milling

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 from cli_process import twin as _twin
 
-from twin.gcode.planner import Limits, PlannerSettings, plan
+from twin.gcode.planned import Limits
+from twin.gcode.planner import PlannerSettings, plan
 from twin.gcode.reader import Reader
 from twin.machining.engagement import StockSpec, ToolSpec
 from twin.machining.program_cut import program_milling

@@ -8,7 +8,8 @@ import pytest
 from typer.testing import CliRunner
 
 from twin.cli import app
-from twin.gcode.planner import Limits, PlannerSettings, PlanningError, plan
+from twin.gcode.planned import Limits, PlanningError
+from twin.gcode.planner import PlannerSettings, plan
 from twin.gcode.reader import Reader
 
 LIMITS = Limits((0.5, 0.5, 0.2), (5.0, 5.0, 2.0), (100.0, 100.0, 200.0))

@@ -17,7 +17,8 @@ import pytest
 from tests.cli_process import twin
 from twin.gcode.checks import DriveCheck, TravelCheck, segment_extent
 from twin.gcode.path import move_segment
-from twin.gcode.planner import Limits, PlannerSettings, PlanningError, plan
+from twin.gcode.planned import Limits, PlanningError
+from twin.gcode.planner import PlannerSettings, plan
 from twin.gcode.reader import PLANES, Move, Reader, Settings
 from twin.machines import build
 from twin.machines.rigid_drive import rigid_drives, table_travel_m

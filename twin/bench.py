@@ -488,7 +488,8 @@ def planning_figures(scale: float = 1.0, file: str | None = None) -> dict:
     dict
         ``<program>.<limits>.{motion_s, plan_cpu_s, ratio, violations}``.
     """
-    from twin.gcode.planner import Limits, PlannerSettings, hold_or_count
+    from twin.gcode.planned import Limits
+    from twin.gcode.planner import PlannerSettings, hold_or_count
     from twin.gcode.reader import Reader
 
     machine = PlannerSettings().limits(build("linear_motor_xy").motion_limits)

@@ -5,7 +5,7 @@ force its drives can deliver.
   tool length included: the reader's offsets), an arc's and a helix's from the angles where it
   passes an axis's extreme (a spiral's by bisection between samples of its turns), against each
   axis's travel. Under ``[planner] travel = "refuse"`` (the default) the first move outside is
-  refused with its line (a :class:`~twin.gcode.planner.PlanningError`), under ``"warn"`` each
+  refused with its line (a :class:`~twin.gcode.planned.PlanningError`), under ``"warn"`` each
   line's worst excess per axis is a warning. The planned reference never leaves the
   programmed path's extent: its corner blends lie inside the corners, and the smoothing filter
   averages positions (a convex combination).
@@ -26,7 +26,7 @@ import numpy as np
 
 from twin.gcode.moves import Move, MoveKind
 from twin.gcode.path import Segment, SegmentKind, move_segment
-from twin.gcode.planner import PlanningError
+from twin.gcode.planned import PlanningError
 
 #: Warnings listed at most (each check); more are counted.
 MAX_WARNINGS = 100

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 from twin.gcode.linuxcnc_geometry import (
     TP_ANGLE_EPSILON,
@@ -30,13 +29,9 @@ from twin.gcode.linuxcnc_geometry import (
     sub,
     unit,
 )
+from twin.gcode.linuxcnc_tc import BLEND_ACC_RATIO_NORMAL, Segment
 
-if TYPE_CHECKING:
-    from twin.gcode.linuxcnc_tp import Segment
-
-#: blendmath.h: the share of the acceleration a curve spends along and across its path.
-BLEND_ACC_RATIO_TANGENTIAL = 0.5
-BLEND_ACC_RATIO_NORMAL = math.sqrt(1.0 - BLEND_ACC_RATIO_TANGENTIAL**2)
+#: blendmath.h
 BLEND_KINK_FACTOR = 0.25
 #: tc_types.h: the share of a segment a blend may take.
 BLEND_DIST_FRACTION = 0.5

@@ -2,7 +2,8 @@
 # A translation of LinuxCNC's trajectory planner (GPL Version 2): this file is under the GPL-2.0
 # (twin/gcode/COPYING.linuxcnc), not the MIT licence of the rest of the twin.
 """The LinuxCNC planning mode (``[planner] mode = "linuxcnc"``): a program's moves planned as
-LinuxCNC 2.9 plans them, sampled every servo period.
+LinuxCNC 2.9 plans them, sampled every servo period (LinuxCNC's 1 ms, the jerk-limited planner's
+sample period :data:`twin.gcode.planned.SAMPLE_PERIOD_S`).
 
 The chain, as in LinuxCNC:
 
@@ -35,13 +36,20 @@ from typing import NamedTuple
 import numpy as np
 
 from twin.gcode.linuxcnc_geometry import Vec
-from twin.gcode.linuxcnc_tp import EXACT, PARABOLIC, STOP, Config, Planner
-from twin.gcode.reader import PLANES, Move
+from twin.gcode.linuxcnc_tc import EXACT, PARABOLIC, STOP
+from twin.gcode.linuxcnc_tp import Config, Planner
+from twin.gcode.moves import PLANES, Move
+from twin.gcode.path import move_segment
+from twin.gcode.planned import (
+    LIMIT_SLACK,
+    SAMPLE_PERIOD_S,
+    PlanChunk,
+    PlanningError,
+    ProgramFacts,
+    Violation,
+    limit_ratios,
+)
 
-#: The servo period (s): the jerk-limited planner's sample period, LinuxCNC's 1 ms.
-SAMPLE_PERIOD_S = 1e-3
-#: A sampled value counts as over its limit beyond this ratio (as the jerk-limited planner).
-LIMIT_SLACK = 1.0 + 1e-6
 #: Servo periods between the end of the motion before a queue sync and the first motion after
 #: it, by what the task waited for (LinuxCNC 2.9's milltask, measured on the real planner; a
 #: dwell adds its own time; "no time": a dwell of 0 s, ``G4 P0``).
@@ -421,16 +429,14 @@ class _NoFilter(NamedTuple):
 
 class LinuxcncStream:
     """The LinuxCNC mode behind :func:`twin.gcode.planner.plan_stream` and
-    :func:`~twin.gcode.planner.hold_or_count`: the same :class:`~twin.gcode.planner.Chunk` s
+    :func:`~twin.gcode.planner.hold_or_count`: the same :class:`~twin.gcode.planned.PlanChunk` s
     (machine m, m/s, m/s^2 by central differences, as the jerk-limited planner gives them) and
-    :class:`~twin.gcode.planner.ProgramFacts`, with each axis's velocity, acceleration and jerk
+    :class:`~twin.gcode.planned.ProgramFacts`, with each axis's velocity, acceleration and jerk
     over the machine's limits recorded as violations (LinuxCNC has no jerk limit: its jerk is
     reported, not lowered).
     """
 
     def __init__(self, moves, limits, settings, keep_programmed: bool):
-        from twin.gcode.planner import PlanningError, ProgramFacts
-
         if settings.feed_override != 1.0:
             raise PlanningError(
                 f"planner.feed_override = {settings.feed_override}: the LinuxCNC mode runs at 100 % (the override's "
@@ -446,8 +452,6 @@ class LinuxcncStream:
     def _recorded(self, moves) -> Iterator[Move]:
         """The moves, their facts and programmed segments recorded as they pass; G64 P replaced by
         ``[planner] tolerance_mm`` where it is set."""
-        from twin.gcode.path import move_segment
-
         position = None
         for move in moves:
             if position is None:
@@ -465,10 +469,8 @@ class LinuxcncStream:
             yield move
 
     def chunks(self):
-        """The reference in :class:`~twin.gcode.planner.Chunk` s, at rest one sample before and
+        """The reference in :class:`~twin.gcode.planned.PlanChunk` s, at rest one sample before and
         two after the motion."""
-        from twin.gcode.planner import Chunk, Violation, _excess
-
         limits = AxisLimits(
             tuple(v * 1e3 for v in self.limits.velocity_m_per_s),
             tuple(a * 1e3 for a in self.limits.acceleration_m_per_s2),
@@ -497,7 +499,7 @@ class LinuxcncStream:
             velocity = (p[2:] - p[:-2]) / (2 * dt)
             acceleration = (p[2:] - 2 * p[1:-1] + p[:-2]) / (dt * dt)
             sample_lines = lines[1:-1]
-            ratios = _excess(velocity, acceleration, previous_acceleration, self.limits)
+            ratios = limit_ratios(velocity, acceleration, previous_acceleration, self.limits)
             for quantity, r in zip(("velocity", "acceleration", "jerk"), ratios):
                 for axis in range(3):
                     k = int(np.argmax(r[:, axis]))
@@ -506,7 +508,7 @@ class LinuxcncStream:
                         worst[key] = (float(r[k, axis]), int(sample_lines[k]))
             previous_acceleration = acceleration[-1]
             tolerance = np.array([self.tolerance.get(int(n), 0.0) for n in sample_lines])
-            yield Chunk(first, p[1:-1], velocity, acceleration, sample_lines, tolerance)
+            yield PlanChunk(first, p[1:-1], velocity, acceleration, sample_lines, tolerance)
             first += len(velocity)
             held, held_line = p[-2:], lines[-2:]
         for (axis, quantity), (ratio, line_number) in sorted(worst.items()):

@@ -15,24 +15,34 @@ rigid tapping), pause, abort, reverse run, feed override changes while running, 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from twin.gcode import linuxcnc_blend as bm
 from twin.gcode.linuxcnc_geometry import (
-    DOUBLE_FUZZ,
     Circle,
     Line,
     SphericalArc,
     SpiralFit,
     Vec,
     abs_max,
+    add,
     anti_parallel,
     scale,
     sub,
 )
+from twin.gcode.linuxcnc_tc import (
+    BLEND_ACC_RATIO_TANGENTIAL,
+    EXACT,
+    PARABOLIC,
+    STOP,
+    TANGENT,
+    TC_OPTIM_AT_MAX,
+    Segment,
+    remove_kink,
+    set_kink,
+    set_term_cond,
+)
 
-#: Terminal conditions (tc_types.h).
-STOP, EXACT, PARABOLIC, TANGENT = 0, 1, 2, 3
 #: tp_types.h
 TP_MIN_SEGMENT_CYCLES = 1.02
 TP_OPTIMIZATION_CUTOFF = 4
@@ -40,7 +50,6 @@ TP_VEL_EPSILON = 1e-8
 TP_POS_EPSILON = 1e-12
 TP_TIME_EPSILON = 1e-12
 TP_MIN_ARC_ANGLE = 1e-3
-TC_OPTIM_UNTOUCHED, TC_OPTIM_AT_MAX = 0, 1
 
 
 @dataclass(frozen=True)
@@ -71,172 +80,6 @@ class Config:
     gap_cycles: int = 4
     ramp_freq: float = 100.0
     kink_ratio: float = 0.1
-
-
-@dataclass(eq=False)
-class Segment:
-    """``TC_STRUCT``: one segment of the queue and its motion state."""
-
-    kind: str  # "line", "circle", "arc" (a spherical blend arc)
-    traverse: bool
-    line_number: int
-    cycle_time: float
-    maxaccel: float = 0.0
-    maxvel: float = 0.0
-    reqvel: float = 0.0
-    target_vel: float = 0.0
-    finalvel: float = 0.0
-    target: float = 0.0
-    nominal_length: float = 0.0
-    progress: float = 0.0
-    currentvel: float = 0.0
-    term_cond: int = PARABOLIC
-    tolerance: float = 0.0
-    kink_vel: float = -1.0
-    kink_accel_reduce: float = 0.0
-    kink_accel_reduce_prev: float = 0.0
-    blend_prev: bool = False
-    acc_ratio_tan: float = bm.BLEND_ACC_RATIO_TANGENTIAL
-    finalized: bool = False
-    active: bool = False
-    remove: bool = False
-    splitting: bool = False
-    term_vel: float = 0.0
-    blending_next: bool = False
-    is_blending: bool = False
-    on_final_decel: bool = False
-    vel_at_blend_start: float = 0.0
-    blend_vel: float = 0.0
-    accel_ramp: bool = False
-    optimization_state: int = TC_OPTIM_UNTOUCHED
-    atspeed: bool = False
-    active_depth: int = 1
-    line: Line = field(default=None, repr=False)  # type: ignore[assignment]
-    circle: Circle = field(default=None, repr=False)  # type: ignore[assignment]
-    fit: SpiralFit = field(default=None, repr=False)  # type: ignore[assignment]
-    arc: SphericalArc = field(default=None, repr=False)  # type: ignore[assignment]
-
-    # --- tc.c ---------------------------------------------------------------------------
-
-    def max_target_vel(self, max_scale: float) -> float:
-        """``tcGetMaxTargetVel``."""
-        return min(self.reqvel * max_scale, self.maxvel)
-
-    def overall_max_accel(self) -> float:
-        """``tcGetOverallMaxAccel``: halved under a parabolic blend."""
-        a_scale = 1.0 - max(self.kink_accel_reduce, self.kink_accel_reduce_prev)
-        if self.blend_prev or self.term_cond == PARABOLIC:
-            a_scale *= 0.5
-        return self.maxaccel * a_scale
-
-    def tangential_max_accel(self) -> float:
-        """``tcGetTangentialMaxAccel``: on a curve, the share left beside the normal one."""
-        a = self.overall_max_accel()
-        if self.kind != "line":
-            a *= self.acc_ratio_tan
-        return a
-
-    def position(self, progress: float) -> Vec:
-        """``tcGetPosReal``: the point ``progress`` (mm) along the segment."""
-        if self.kind == "line":
-            return self.line.point(progress * self.line.tmag / self.target)
-        if self.kind == "circle":
-            return self.circle.point(self.fit.angle_at(self.circle, progress))
-        return self.arc.point(progress)
-
-    def end_point(self) -> Vec:
-        return self.position(self.target)
-
-    def start_tangent(self) -> Vec:
-        """``tcGetStartTangentUnitVector``."""
-        if self.kind == "line":
-            return self.line.u_vec
-        return self.circle.tangent(0.0)
-
-    def end_tangent(self) -> Vec:
-        """``tcGetEndTangentUnitVector``."""
-        if self.kind == "line":
-            return self.line.u_vec
-        return self.circle.tangent(self.circle.angle)
-
-    def start_accel_unit(self) -> Vec:
-        """``tcGetStartAccelUnitVector`` (a blend arc has none: LinuxCNC leaves the vector unset,
-        and only a parabolic blend, which never follows an arc, would use it)."""
-        if self.kind == "line":
-            return self.line.u_vec
-        if self.kind == "arc":
-            return (0.0, 0.0, 0.0)
-        c = self.circle
-        start = c.point(0.0)
-        tan = bm.unit(bm.cross(c.normal, sub(start, c.center)))
-        perp = bm.unit(sub(c.center, start))
-        tan = scale(tan, self.overall_max_accel())
-        perp = scale(perp, (0.5 * self.reqvel) ** 2 / c.radius)
-        return bm.unit(bm.add(tan, perp))
-
-    def end_accel_unit(self) -> Vec:
-        """``tcGetEndAccelUnitVector`` (a blend arc has none, as at the start)."""
-        if self.kind == "line":
-            return self.line.u_vec
-        if self.kind == "arc":
-            return (0.0, 0.0, 0.0)
-        c = self.circle
-        end = c.point(c.angle)
-        return bm.unit(bm.cross(c.normal, sub(end, c.center)))
-
-    def set_circle(self, circle: Circle) -> None:
-        """``tcSetCircleXYZ``."""
-        self.circle = circle
-        self.fit = SpiralFit.of(circle)
-        self.target = self.fit.length(circle)
-
-    def set_line(self, line: Line) -> None:
-        """``tcSetLineXYZ``."""
-        self.line = line
-        self.target = line.tmag
-
-    def clamp_velocity_by_length(self) -> None:
-        """``tcClampVelocityByLength``."""
-        self.maxvel = min(self.maxvel, self.target / self.cycle_time)
-
-    def finalize_length(self) -> None:
-        """``tcFinalizeLength``: length fixed; a circle's speed and tangential share set."""
-        if self.finalized:
-            return
-        self.clamp_velocity_by_length()
-        if self.kind == "circle":
-            a_max = self.overall_max_accel()
-            a_n_max_cutoff = bm.BLEND_ACC_RATIO_NORMAL * a_max
-            eff_radius = self.circle.effective_min_radius()
-            a_n_vmax = self.maxvel * self.maxvel / max(eff_radius, DOUBLE_FUZZ)
-            if a_n_vmax > a_n_max_cutoff:
-                self.maxvel = math.sqrt(a_n_max_cutoff * eff_radius)
-                self.acc_ratio_tan = bm.BLEND_ACC_RATIO_TANGENTIAL
-            else:
-                self.acc_ratio_tan = math.sqrt(1.0 - (a_n_vmax / a_max) ** 2)
-        self.finalized = True
-
-
-def set_term_cond(prev: Segment | None, seg: Segment | None, term_cond: int) -> None:
-    """``tcSetTermCond``."""
-    if seg is not None:
-        seg.blend_prev = term_cond == PARABOLIC
-    if prev is not None:
-        prev.term_cond = term_cond
-
-
-def set_kink(prev: Segment, seg: Segment, kink_vel: float, reduction: float) -> None:
-    """``tcSetKinkProperties``."""
-    prev.kink_vel = kink_vel
-    prev.kink_accel_reduce = max(reduction, prev.kink_accel_reduce)
-    seg.kink_accel_reduce_prev = max(reduction, seg.kink_accel_reduce_prev)
-
-
-def remove_kink(prev: Segment, seg: Segment) -> None:
-    """``tcRemoveKinkProperties``."""
-    prev.kink_vel = -1.0
-    prev.kink_accel_reduce = 0.0
-    seg.kink_accel_reduce_prev = 0.0
 
 
 def find_v_peak(acc: float, length: float) -> float:
@@ -348,7 +191,7 @@ class Planner:
         acc_scale = tuple(abs(acc_diff[i] / bound[i]) if bound[i] != 0 else 0.0 for i in range(3))
         acc_scale_max = abs_max(acc_scale)  # type: ignore[arg-type]
         if prev.kind == "circle" or seg.kind == "circle":
-            acc_scale_max /= bm.BLEND_ACC_RATIO_TANGENTIAL
+            acc_scale_max /= BLEND_ACC_RATIO_TANGENTIAL
         kink_ratio = max(min(self.config.kink_ratio, 0.7071), 0.001)
         if acc_scale_max < kink_ratio:
             set_term_cond(prev, seg, TANGENT)
@@ -682,7 +525,7 @@ class Planner:
 
     def _move_to(self, seg: Segment, before: Vec) -> None:
         after = seg.position(seg.progress)
-        self.current_pos = bm.add(self.current_pos, sub(after, before))
+        self.current_pos = add(self.current_pos, sub(after, before))
 
     def _update_cycle(self, seg: Segment, nxt: Segment | None) -> None:
         """``tpUpdateCycle``."""

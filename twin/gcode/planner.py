@@ -50,15 +50,24 @@ import numba
 import numpy as np
 from pydantic import Field, field_validator
 
+from twin.gcode.linuxcnc_planner import LinuxcncStream
 from twin.gcode.moves import Move
 from twin.gcode.path import TANGENT_TOLERANCE_RAD, Segment, SegmentKind, blend, move_segment, turn_angle
+from twin.gcode.planned import (
+    LIMIT_SLACK,
+    SAMPLE_PERIOD_S,
+    Limits,
+    PlanChunk,
+    PlanningError,
+    ProgramFacts,
+    Violation,
+    limit_ratios,
+)
 from twin.numba_cache import configure as configure_numba_cache
 from twin.spec import StrictSpec
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
 
-#: Planning and sampling period of the reference (s): positions are Hermite-interpolated between.
-SAMPLE_PERIOD_S = 1e-3
 #: Most samples a reference held whole may have (``plan()``; about 33 minutes at 1 ms). A run
 #: without a stock streams its reference and has no such limit.
 MAX_SAMPLES = 2_000_000
@@ -102,38 +111,6 @@ MAX_FILTER_TURN_RAD = 2.0
 JERK_SHARE = 0.97
 #: Tries at planning a window again slower where its sampled reference exceeds a limit.
 MAX_REPAIRS = 8
-#: A sampled value counts as over its limit beyond this ratio (floating-point noise of the
-#: differences below it).
-LIMIT_SLACK = 1.0 + 1e-6
-
-
-@dataclass(frozen=True)
-class Limits:
-    """Per-axis kinematic limits (x, y, z), SI units."""
-
-    velocity_m_per_s: tuple[float, ...]
-    acceleration_m_per_s2: tuple[float, ...]
-    jerk_m_per_s3: tuple[float, ...]
-
-    def as_dict(self) -> dict:
-        """Per axis, as ``twin gcode --json`` prints them."""
-        return {
-            axis: {
-                "velocity_m_per_s": self.velocity_m_per_s[i],
-                "acceleration_m_per_s2": self.acceleration_m_per_s2[i],
-                "jerk_m_per_s3": self.jerk_m_per_s3[i],
-            }
-            for i, axis in enumerate("xyz")
-        }
-
-    def scaled(self, factor: float) -> Limits:
-        """The limits a stretch of time ``factor`` (> 1: slower) keeps: velocity / k,
-        acceleration / k^2, jerk / k^3."""
-        return Limits(
-            tuple(v / factor for v in self.velocity_m_per_s),
-            tuple(a / factor**2 for a in self.acceleration_m_per_s2),
-            tuple(j / factor**3 for j in self.jerk_m_per_s3),
-        )
 
 
 class _Context(NamedTuple):
@@ -199,47 +176,6 @@ class PlannerSettings(StrictSpec):
         if self.tolerance_mm is not None:
             return self.tolerance_mm * 1e-3
         return (move.tolerance_mm if move.tolerance_mm is not None else DEFAULT_TOLERANCE_MM) * 1e-3
-
-
-class PlanningError(ValueError):
-    """A program the planner cannot turn into a bounded reference."""
-
-
-class Violation(NamedTuple):
-    """A limit the sampled reference exceeds after every repair: the program line, the axis,
-    the quantity (``velocity``, ``acceleration``, ``jerk``) and how far over (ratio)."""
-
-    line: int
-    axis: str
-    quantity: str
-    ratio: float
-
-    def as_dict(self) -> dict:
-        return {"line": self.line, "axis": self.axis, "quantity": self.quantity, "ratio": round(self.ratio, 6)}
-
-
-class Chunk(NamedTuple):
-    """A stretch of the planned reference, every ``period_s`` from sample ``first``.
-
-    Attributes
-    ----------
-    first : int
-        Index of its first sample in the whole reference.
-    position, velocity, acceleration : ndarray (n, 3)
-        Machine axes x, y, z (m, m/s, m/s^2).
-    line : ndarray (n,) of int
-        The program line of each sample (before the filter's delay of half its window, which
-        the reference leads by).
-    tolerance_m : ndarray (n,)
-        The tolerance in force at each sample (m; 0 under G61 / G61.1).
-    """
-
-    first: int
-    position: np.ndarray
-    velocity: np.ndarray
-    acceleration: np.ndarray
-    line: np.ndarray
-    tolerance_m: np.ndarray
 
 
 @dataclass
@@ -320,40 +256,6 @@ class Plan:
                 "jerk_m_per_s3": float(np.abs(jerk[:, i]).max()),
             }
         return out
-
-
-class ProgramFacts:
-    """What the stream learns of the program as it goes (line texts, feeds, spindle, tools,
-    the programmed segments, the feed-only time), gathered from the moves as they pass."""
-
-    def __init__(self, limits: Limits):
-        self.limits = limits
-        self.texts: dict[int, str] = {}
-        self.spindle_rpm: dict[int, float] = {}
-        self.tools: dict[int, int] = {}
-        self.feeds: dict[int, float] = {}
-        self.feed_only_time_s = 0.0
-        self.violations: list[Violation] = []
-        self.notes: list[str] = []
-        self.time_scale = 1.0
-
-    def record(self, move: Move, seg: Segment | None) -> None:
-        self.texts[move.line] = move.text
-        self.spindle_rpm[move.line] = move.spindle_rpm if move.spindle != "off" else 0.0
-        self.tools[move.line] = move.tool
-        self.feeds[move.line] = move.feed_mm_per_min
-        if seg is not None:
-            self.feed_only_time_s += _feed_only_time(seg, self.limits)
-
-
-def _feed_only_time(seg: Segment, limits: Limits) -> float:
-    """The time (s) of a segment at its programmed feed alone (rapids at the axis limits)."""
-    if seg.kind == SegmentKind.DWELL:
-        return seg.dwell_s
-    if seg.rapid:
-        share = seg.axis_share()
-        return seg.length / min(v / s for v, s in zip(limits.velocity_m_per_s, share) if s > 1e-12)
-    return seg.length / seg.feed_m_per_s
 
 
 def _filter_length(limits: Limits) -> tuple[float, int]:
@@ -962,17 +864,6 @@ class _Smoother:
             self.held = held
 
 
-def _excess(velocity: np.ndarray, acceleration: np.ndarray, previous_acceleration: np.ndarray, limits: Limits):
-    """Per sample and axis, the ratio of each quantity to its limit: (velocity, acceleration,
-    jerk) arrays (n, 3); jerk from the acceleration before the first sample."""
-    jerk = np.diff(np.concatenate([previous_acceleration[None, :], acceleration]), axis=0) / SAMPLE_PERIOD_S
-    return (
-        np.abs(velocity) / np.array(limits.velocity_m_per_s),
-        np.abs(acceleration) / np.array(limits.acceleration_m_per_s2),
-        np.abs(jerk) / np.array(limits.jerk_m_per_s3),
-    )
-
-
 class _Stream:
     """The planner over a stream of moves (:func:`plan_stream`)."""
 
@@ -1010,7 +901,7 @@ class _Stream:
                 yield piece
             yield seg
 
-    def chunks(self) -> Iterator[Chunk]:
+    def chunks(self) -> Iterator[PlanChunk]:
         buffer: list[Segment] = []
         junctions: list[float] = []  # the speed through each junction of the buffer's segments
         points = 0
@@ -1052,7 +943,7 @@ class _Stream:
         if self.smoother is not None:
             yield from self._finish()
 
-    def _rest(self, position: np.ndarray, line: int, count: int, tolerance: float) -> Iterator[Chunk]:
+    def _rest(self, position: np.ndarray, line: int, count: int, tolerance: float) -> Iterator[PlanChunk]:
         """``count`` raw samples at rest (a dwell, the ends), in pieces of at most a window's time."""
         piece = round(WINDOW_TIME_S / SAMPLE_PERIOD_S)
         for start in range(0, count, piece):
@@ -1060,7 +951,7 @@ class _Stream:
             raw = _Raw(np.repeat(position[None, :], n, axis=0), np.full(n, line), np.full(n, tolerance))
             yield from self._emit(raw)
 
-    def _stretch(self, segments, junctions, v_start, v_end, phase, to_end) -> Generator[Chunk, None, float]:
+    def _stretch(self, segments, junctions, v_start, v_end, phase, to_end) -> Generator[PlanChunk, None, float]:
         """Plan, sample, check (and repair) and emit one stretch of the path; return the phase
         of the next one. A stretch that ends at rest is followed by the filter's window of rest."""
         ctx = self.ctx
@@ -1094,7 +985,7 @@ class _Stream:
         yield from self._emit(raw)
         return next_phase
 
-    def _hand_on(self, buffer, junctions, v_start, phase, full: bool) -> Generator[Chunk, None, tuple | None]:
+    def _hand_on(self, buffer, junctions, v_start, phase, full: bool) -> Generator[PlanChunk, None, tuple | None]:
         """Plan the window; hand on what is final up to a cruise and return the rest (its
         segments, junctions, start speed and phase), or None to read more of the path first.
         ``full``: the window may grow no more: with no cruise it is planned to rest (a stop the
@@ -1154,7 +1045,7 @@ class _Stream:
         _positions, velocity, acceleration = self.smoother.differences(filtered[0], last=False)
         if len(velocity) == 0:
             return []
-        ratios = _excess(velocity, acceleration, self.smoother.previous_acceleration, self.limits)
+        ratios = limit_ratios(velocity, acceleration, self.smoother.previous_acceleration, self.limits)
         over = np.nonzero(np.maximum.reduce([r.max(axis=1) for r in ratios]) > LIMIT_SLACK)[0]
         if over.size == 0:
             return []
@@ -1175,7 +1066,7 @@ class _Stream:
             for sample in over
         ]
 
-    def _emit(self, raw: _Raw) -> Iterator[Chunk]:
+    def _emit(self, raw: _Raw) -> Iterator[PlanChunk]:
         """Filter ``raw`` and hand on the samples it completes."""
         assert self.smoother is not None
         filtered, tail = self.smoother.smooth(raw)
@@ -1186,17 +1077,17 @@ class _Stream:
             self.smoother.previous_acceleration = acceleration[-1]
         self.smoother.accept(tail, filtered)
         if len(velocity):
-            yield Chunk(self.first, positions, velocity, acceleration, lines, tolerance)
+            yield PlanChunk(self.first, positions, velocity, acceleration, lines, tolerance)
             self.first += len(velocity)
 
-    def _finish(self) -> Iterator[Chunk]:
+    def _finish(self) -> Iterator[PlanChunk]:
         """Two samples at rest after the last, and the last held sample's differences."""
         assert self.smoother is not None
         yield from self._rest(
             self.smoother.held[-1], int(self.smoother.held_line[-1]), 2, float(self.smoother.held_tolerance[-1])
         )
         positions, velocity, acceleration = self.smoother.differences(np.zeros((0, 3)), last=True)
-        yield Chunk(
+        yield PlanChunk(
             self.first, positions, velocity, acceleration, self.smoother.held_line[1:], self.smoother.held_tolerance[1:]
         )
         self.first += len(velocity)
@@ -1209,20 +1100,18 @@ def _grid_points(seg: Segment) -> int:
 def _stream(moves, limits: Limits, settings: PlannerSettings, keep_programmed: bool, most_s=math.inf, limit=""):
     """The planner of ``settings.mode`` over a stream of moves."""
     if settings.mode == "linuxcnc":
-        from twin.gcode.linuxcnc_planner import LinuxcncStream  # it builds on this module
-
         return LinuxcncStream(moves, limits, settings, keep_programmed)
     return _Stream(moves, limits, settings, keep_programmed, most_s, limit)
 
 
 def plan_stream(moves: Iterable[Move], limits: Limits, settings: PlannerSettings | None = None):
-    """The planned reference of a program as it is read, in :class:`Chunk` s, and the facts
+    """The planned reference of a program as it is read, in :class:`PlanChunk` s, and the facts
     gathered on the way (complete once the chunks are exhausted): memory stays bounded for any
     program length.
 
     Returns
     -------
-    chunks : iterator of Chunk
+    chunks : iterator of PlanChunk
     facts : ProgramFacts
     """
     stream = _stream(moves, limits, settings or PlannerSettings(), keep_programmed=False)
@@ -1284,7 +1173,7 @@ def hold_or_count(
     if limit is not None and isinstance(moves, Sequence):
         refuse_long(moves, limits, settings, most_s, limit)
     stream = _stream(moves, limits, settings, keep_programmed=True, most_s=most_s, limit=limit or "")
-    parts: list[Chunk] | None = []
+    parts: list[PlanChunk] | None = []
     total = 0
     for chunk in stream.chunks():
         total += len(chunk.position)

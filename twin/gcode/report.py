@@ -8,7 +8,8 @@ from __future__ import annotations
 import numpy as np
 
 from twin.gcode.path import SegmentKind
-from twin.gcode.planner import Limits, Plan
+from twin.gcode.planned import Limits
+from twin.gcode.planner import Plan
 
 #: Spacing (m) of the points of the programmed path that find each sample's nearest segments.
 PATH_SPACING_M = 2e-4

@@ -18,14 +18,13 @@ from pydantic import Field, PositiveFloat
 
 from twin.errors import TwinInputError, input_file
 from twin.gcode.checks import DriveCheck, TravelCheck, plan_warnings
+from twin.gcode.planned import SAMPLE_PERIOD_S, PlanningError
 from twin.gcode.planner import (
     MAX_PROGRAM_SAMPLES,
     MAX_SAMPLES,
     PROGRAM_LIMIT,
-    SAMPLE_PERIOD_S,
     Plan,
     PlannerSettings,
-    PlanningError,
     hold_or_count,
     plan,
     plan_stream,
@@ -467,7 +466,7 @@ register("gcode", GcodeRef, build)
 
 @contextmanager
 def planning_errors(field: str, file) -> Iterator[None]:
-    """A program's planning error (:class:`~twin.gcode.planner.PlanningError`) as the twin's input
+    """A program's planning error (:class:`~twin.gcode.planned.PlanningError`) as the twin's input
     error under ``field``, naming the program ``file``: the one translation of every door that
     plans a program (a run's reference, ``twin gcode --machine``, ``twin.program``)."""
     try:
