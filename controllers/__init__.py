@@ -5,7 +5,7 @@ Importing it registers every controller and observer kind (:mod:`controllers.kin
 """
 
 import controllers.kinds  # noqa: F401 (registers the kinds)
-from controllers.blocks import Controller, Program, error_feedback, open_loop
+from controllers.blocks import BlockProgram, Controller, error_feedback, open_loop
 from controllers.registry import CONTROLLERS, OBSERVERS, make_controller
 
-__all__ = ["CONTROLLERS", "OBSERVERS", "Controller", "Program", "error_feedback", "make_controller", "open_loop"]
+__all__ = ["CONTROLLERS", "OBSERVERS", "BlockProgram", "Controller", "error_feedback", "make_controller", "open_loop"]

@@ -1,6 +1,6 @@
 """The numba kernels every control block runs on, in the compiled loop and in the Python loop.
 
-A controller is compiled (:class:`controllers.blocks.program.Program`) into flat arrays:
+A controller is compiled (:class:`controllers.blocks.program.BlockProgram`) into flat arrays:
 
 - ``ops``, int64 (n_blocks, 8): per block ``kind, in_start, n_in, out_start, n_out, par_start,
   state_start, n_state`` (for :data:`SEQUENCE` the last column is the sequence length);

@@ -4,7 +4,7 @@ import control
 import numpy as np
 import pytest
 
-from controllers import CONTROLLERS, Program, error_feedback, make_controller, open_loop
+from controllers import CONTROLLERS, BlockProgram, error_feedback, make_controller, open_loop
 from controllers.blocks import (
     Controller,
     Linear,
@@ -48,7 +48,7 @@ def test_linear_block_matches_python_control(method):
     dt, n = 1e-3, 2000
     ctrl = error_feedback(yadav2020.HINF, dt, method=method)
     e = np.sin(np.arange(n) * dt * 7.0)
-    u = _drive(Program([ctrl], standard_signals("x")), {"error.x": e}, n, ["u.x"])[:, 0]
+    u = _drive(BlockProgram([ctrl], standard_signals("x")), {"error.x": e}, n, ["u.x"])[:, 0]
     ref = control.forced_response(
         control.c2d(control.ss(yadav2020.HINF.to_control()), dt, method), T=np.arange(n) * dt, U=e
     ).outputs
@@ -59,7 +59,7 @@ def test_mimo_linear_block_steady_state():
     c = control.tf([[[2.0], [1.0]], [[0.0], [3.0]]], [[[1.0, 1.0], [1.0]], [[1.0], [1.0, 2.0]]])
     ctrl = error_feedback(c, 1e-3, axes=("x", "y"))
     u = _drive(
-        Program([ctrl], standard_signals("xy")),
+        BlockProgram([ctrl], standard_signals("xy")),
         {"error.x": np.ones(20000), "error.y": np.ones(20000)},
         20000,
         ["u.x", "u.y"],
@@ -69,7 +69,7 @@ def test_mimo_linear_block_steady_state():
 
 def test_feedforward_adds_velocity_and_acceleration():
     ctrl = make_controller("tf", 1e-3, {"num": [0.0], "den": [1.0]}, velocity_ff=2.0, acceleration_ff=0.5)
-    u = _drive(Program([ctrl], standard_signals("x")), {"ref_vel.x": [3.0], "ref_acc.x": [4.0]}, 1, ["u.x"])
+    u = _drive(BlockProgram([ctrl], standard_signals("x")), {"ref_vel.x": [3.0], "ref_acc.x": [4.0]}, 1, ["u.x"])
     assert u[0, 0] == 2.0 * 3.0 + 0.5 * 4.0
 
 
@@ -80,7 +80,7 @@ def test_static_nonlinearities():
         ("dead_zone", (0.5,), np.where(np.abs(v) <= 0.5, 0.0, v - 0.5 * np.sign(v))),
         ("cosh_gain", (6.0, 0.3), np.cosh(6.0 * np.clip(v, -0.3, 0.3)) * v),
     ]:
-        prog = Program([_controller([Static(name, settings, ("error.x",), ("u.x",))])], standard_signals("x"))
+        prog = BlockProgram([_controller([Static(name, settings, ("error.x",), ("u.x",))])], standard_signals("x"))
         out = _drive(prog, {"error.x": v}, len(v), ["u.x"])[:, 0]
         np.testing.assert_allclose(out, expected, rtol=1e-15, atol=0)
     with pytest.raises(ValueError, match="cosh_gain takes k, e_max"):
@@ -92,7 +92,7 @@ def test_npid_is_the_pid_of_the_shaped_error():
     dt, n = 1e-4, 3000
     e = 0.5e-3 * np.sin(np.arange(n) * dt * 40.0)  # +-0.5 mm: the clip at 0.3 mm is active
     npid = make_controller("anang2017_npid", dt)
-    u = _drive(Program([npid], standard_signals("x")), {"error.x": e}, n, ["u.x"])[:, 0]
+    u = _drive(BlockProgram([npid], standard_signals("x")), {"error.x": e}, n, ["u.x"])[:, 0]
     shaped = np.cosh(6e3 * np.clip(e, -0.3e-3, 0.3e-3)) * e
     from controllers.papers import anang2017
 
@@ -110,7 +110,7 @@ def test_cascade_is_the_two_loop_law():
     rng = np.random.default_rng(1)
     e, rv, vel = rng.normal(size=(3, n))
     ctrl = make_controller("cascade", dt, {"kp_pos": 40.0, "kp_vel": 2.0, "ki_vel": 30.0, "velocity_ref_ff": 1.0})
-    u = _drive(Program([ctrl], standard_signals("x")), {"error.x": e, "ref_vel.x": rv, "vel.x": vel}, n, ["u.x"])
+    u = _drive(BlockProgram([ctrl], standard_signals("x")), {"error.x": e, "ref_vel.x": rv, "vel.x": vel}, n, ["u.x"])
     v_err = 40.0 * e + rv - vel
     pi = control.c2d(control.ss(pid_tf(2.0, 30.0).to_control()), dt, "tustin")
     ref = control.forced_response(pi, T=np.arange(n) * dt, U=v_err).outputs
@@ -126,7 +126,7 @@ def test_inverse_model_observer_recovers_an_input_disturbance():
     d = np.where(np.arange(n) * dt > 0.5, 0.05, 0.0)
     y = control.forced_response(control.c2d(plant.to_control(), dt, "zoh"), T=np.arange(n) * dt, U=u + d).outputs
     u_prev = np.concatenate([[0.0], u[:-1]])
-    prog = Program([_controller([obs], dt)], standard_signals("x"))
+    prog = BlockProgram([_controller([obs], dt)], standard_signals("x"))
     d_hat = _drive(prog, {"pos.x": y, "u_prev.x": u_prev}, n, ["dob:d_hat.x"])[:, 0]
     settled = np.arange(n) * dt > 1.0
     assert np.abs(d_hat[settled] - d[settled]).max() < 0.01 * 0.05 + 0.01 * 0.2
@@ -139,7 +139,7 @@ def test_observer_add_on_subtracts_the_estimate():
         "inverse_model", {"cutoff_hz": 20.0, "order": 2}, Context(dt, ("x",), plants={"x": SisoTf([1.0], [1.0, 1.0])})
     )
     ctrl = with_correction(base, obs)
-    prog = Program([ctrl], standard_signals("x"))
+    prog = BlockProgram([ctrl], standard_signals("x"))
     out = _drive(prog, {"error.x": [0.3] * 5, "pos.x": [0.1] * 5}, 5, ["u.x", "observer.x:d_hat.x"])
     np.testing.assert_allclose(out[:, 0], 0.3 - out[:, 1], rtol=0, atol=1e-15)
     assert np.abs(out[:, 1]).max() > 0
@@ -154,22 +154,22 @@ def test_preview_signals_and_sum():
     ff = _controller([Linear(np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), [[2.0]], ["preview.x.3"], ["u.x"])])
     names = standard_signals("x", 3)
     assert names[-3:] == ["preview.x.1", "preview.x.2", "preview.x.3"]
-    out = _drive(Program([ff], names), {"preview.x.3": [1.0, 5.0]}, 2, ["u.x"])
+    out = _drive(BlockProgram([ff], names), {"preview.x.3": [1.0, 5.0]}, 2, ["u.x"])
     assert out[:, 0].tolist() == [2.0, 10.0]
     total = make_controller(
         "sum", 1e-3, parts=[make_controller("pid", 1e-3, {"kp": 2.0}), make_controller("pid", 1e-3, {"kp": 3.0})]
     )
-    assert _drive(Program([total], standard_signals("x")), {"error.x": [1.0]}, 1, ["u.x"])[0, 0] == 5.0
+    assert _drive(BlockProgram([total], standard_signals("x")), {"error.x": [1.0]}, 1, ["u.x"])[0, 0] == 5.0
 
 
 def test_missing_signal_names_block_and_signal():
     ctrl = make_controller("linear", 1e-3, {"inputs": ["vel.z"], "D": [[1.0]]})
     with pytest.raises(SignalError) as err:
-        Program([ctrl], standard_signals("xy"))
+        BlockProgram([ctrl], standard_signals("xy"))
     assert err.value.signal == "vel.z"
     assert "linear" in err.value.block
     with pytest.raises(SignalError, match="already written"):
-        Program([_controller([Sum((1.0,), ("error.x",), "pos.x")])], standard_signals("x"))
+        BlockProgram([_controller([Sum((1.0,), ("error.x",), "pos.x")])], standard_signals("x"))
 
 
 @pytest.mark.parametrize(
@@ -218,17 +218,17 @@ def test_registry_rejects_unknown_parameters_and_builds_every_kind():
         )
         assert sorted(ctrl.drives) == ["x", "y"], name
         preview = preview_ticks_needed(s for b in ctrl.blocks for s in b.inputs)
-        Program([ctrl], standard_signals("xy", preview))  # every signal it reads exists
+        BlockProgram([ctrl], standard_signals("xy", preview))  # every signal it reads exists
 
 
 def test_open_loop_block_plays_sequence():
-    out = _drive(Program([open_loop(np.array([[1.0], [2.0]]), 1e-3)], standard_signals("x")), {}, 3, ["u.x"])
+    out = _drive(BlockProgram([open_loop(np.array([[1.0], [2.0]]), 1e-3)], standard_signals("x")), {}, 3, ["u.x"])
     assert out[:, 0].tolist() == [1.0, 2.0, 0.0]
 
 
 def test_lure_block_is_nonlinearity_then_linear():
     ctrl = lure(control.tf([3.0], [1.0]), "saturation", (0.5,), 1e-3)
-    out = _drive(Program([ctrl], standard_signals("x")), {"error.x": [0.2, 2.0, -2.0]}, 3, ["u.x"])
+    out = _drive(BlockProgram([ctrl], standard_signals("x")), {"error.x": [0.2, 2.0, -2.0]}, 3, ["u.x"])
     np.testing.assert_allclose(out[:, 0], [0.6, 1.5, -1.5], rtol=1e-15)
     assert cascade(control.tf(1, 1), control.tf(1, 1), 1e-3, "y").drives == ["y"]
 

@@ -12,17 +12,17 @@ from twin import api
 from twin.errors import TwinInputError
 from twin.machining.inspection import CircleFeature, LineFeature, WidthFeature, measure
 from twin.machining.part import machined_part, section, swept_radius_mm, wall_levels
-from twin.machining.sweep import Sweep
+from twin.machining.sweep import ToolSweep
 from twin.records import CircleMeasured, FeatureNotFound, FeatureType, WidthMeasured
 
 STOCK = shapely.box(0.0, 0.0, 30.0, 20.0)
 R = 3.0  # a 6 mm flat end mill
 
 
-def slot(offset_y_mm: float, n: int = 400) -> Sweep:
+def slot(offset_y_mm: float, n: int = 400) -> ToolSweep:
     """A slot 2 mm deep along X at Y 10 (+ offset) from X 5 to X 25."""
     x = np.linspace(5.0, 25.0, n)
-    return Sweep(
+    return ToolSweep(
         np.column_stack([x, np.full(n, 10.0 + offset_y_mm)]),
         np.full(n, -2.0),
         np.full(n, R),
@@ -136,7 +136,7 @@ def test_bore_cut_by_the_perfect_loop_measures_its_size(bore):
     # an exact circle of radius 28 mm with the 5 mm tool: a 66 mm bore
     turn = np.linspace(0.0, 2 * np.pi, 20_001)
     n = len(turn)
-    loop = Sweep(
+    loop = ToolSweep(
         np.column_stack([28 * np.cos(turn) - 28, 28 * np.sin(turn)]),
         np.full(n, -3.0),
         np.full(n, 5.0),
@@ -264,7 +264,7 @@ def test_a_level_the_tool_ramps_through_is_skipped_not_swept_disc_by_disc(monkey
     monkeypatch.setattr(part_module, "MAX_SECTION_RUNS", 20)
     n = 400
     x = np.linspace(5.0, 25.0, n)
-    ramp = Sweep(
+    ramp = ToolSweep(
         np.column_stack([x, np.full(n, 10.0)]),
         np.concatenate([np.full(100, -1.0), np.linspace(-1.0, -3.0, 200), np.full(100, -3.0)]),
         np.full(n, 3.0),

@@ -25,7 +25,7 @@ import shapely
 
 from twin.machining.inspection import CircleFeature, WidthFeature, measure
 from twin.machining.part import machined_part
-from twin.machining.sweep import Sweep
+from twin.machining.sweep import ToolSweep
 from twin.records import CircleMeasured, WidthMeasured
 
 UM = 1e-3  # mm
@@ -46,7 +46,7 @@ def tool_radius(tip, radius, corner, z):
     return np.where(h <= 0.0, 0.0, np.where(h >= corner, radius, within))
 
 
-def capsules(sweep: Sweep, z: float, pieces: int = 64):
+def capsules(sweep: ToolSweep, z: float, pieces: int = 64):
     """The segments the tool sweeps at height z: starts (k, 2), ends (k, 2), radius lower and
     upper bounds (k,), the line of the segment's first sample, or -1 where its two samples'
     lines differ (k,). A segment whose tip changes is cut into ``pieces`` with the tip
@@ -91,7 +91,7 @@ def segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray):
     return np.hypot(p[:, None, 0] - q[..., 0], p[:, None, 1] - q[..., 1]), q
 
 
-def brute_walls(points: np.ndarray, sweep: Sweep, pieces: int = 64, budget: int = 2_000_000):
+def brute_walls(points: np.ndarray, sweep: ToolSweep, pieces: int = 64, budget: int = 2_000_000):
     """For wall points (m, 3): the signed distance (µm) to the actual cut at each point's z,
     bracketed: with each piece at its larger radius (the smaller distance) and at its smaller
     (m,) each; the line credited, and the margin (µm) to the nearest segment of another line."""
@@ -143,14 +143,14 @@ def ray_reach(centre, angles: np.ndarray, xy: np.ndarray, radius: float) -> np.n
     return out
 
 
-def sweep(xy, tip, radius, corner=0.0, line=1) -> Sweep:
+def sweep(xy, tip, radius, corner=0.0, line=1) -> ToolSweep:
     xy = np.asarray(xy, float)
     n = len(xy)
 
     def full(v):
         return np.broadcast_to(np.asarray(v, float), (n,)).copy()
 
-    return Sweep(xy, full(tip), full(radius), full(corner), np.broadcast_to(np.asarray(line), (n,)).astype(int))
+    return ToolSweep(xy, full(tip), full(radius), full(corner), np.broadcast_to(np.asarray(line), (n,)).astype(int))
 
 
 def check(part, pieces: int = 64, tol_um: float = TOL_UM, min_points: int = 50):
@@ -253,14 +253,14 @@ def plunge_and_pass(corner: float, noise_um: float):
     )
     tip = np.concatenate([plunge, np.full(len(x), -2.0), [5.0, 5.0], np.full(len(x2), -0.6)])
     line = np.concatenate([np.full(len(plunge), 3), np.full(len(x), 4), [5, 5], np.full(len(x2), 5)])
-    nominal = Sweep(xy, tip, np.full(len(xy), 3.0), np.full(len(xy), corner), line)
+    nominal = ToolSweep(xy, tip, np.full(len(xy), 3.0), np.full(len(xy), corner), line)
     xy_a = xy + np.random.default_rng(3).normal(0.0, noise_um * UM, xy.shape) + [0.0, 3.0 * UM]
     # the retract and the plunge straight up and down (a segment whose tip moves while it
     # moves in XY is swept otherwise: test_a_segment_along_which_the_tip_moves)
     up = len(plunge) + len(x)
     xy_a[up] = xy_a[up - 1]
     xy_a[up + 1] = xy_a[up + 2]
-    actual = Sweep(xy_a, tip - 2.0 * UM, nominal.radius_mm, nominal.corner_mm, line)
+    actual = ToolSweep(xy_a, tip - 2.0 * UM, nominal.radius_mm, nominal.corner_mm, line)
     return shapely.box(0.0, 0.0, 40.0, 20.0), nominal, actual
 
 
@@ -356,8 +356,8 @@ def test_five_passes_the_deepest_forms_the_wall_and_a_stock_with_a_hole():
         tips += [[5.0], np.full(n, -2.0), [5.0]]
         lines += [np.full(n + 2, 10 + k)]
     xy, xy_a, tip, line = np.vstack(nom), np.vstack(act), np.concatenate(tips), np.concatenate(lines)
-    nominal = Sweep(xy, tip, np.full(len(xy), 3.0), np.zeros(len(xy)), line)
-    actual = Sweep(xy_a, tip, np.full(len(xy), 3.0), np.zeros(len(xy)), line)
+    nominal = ToolSweep(xy, tip, np.full(len(xy), 3.0), np.zeros(len(xy)), line)
+    actual = ToolSweep(xy_a, tip, np.full(len(xy), 3.0), np.zeros(len(xy)), line)
     part = machined_part(stock, nominal, actual, 0.0, -10.0)
     walls = check(part, min_points=500)
     # no wall on the hole's own outline
@@ -393,9 +393,11 @@ def test_a_half_millimetre_tool_round_a_corner():
     leg2 = np.column_stack([np.full(601, 8.0), np.linspace(1.5, 4.5, 601)])[1:]
     xy = np.vstack([leg1, leg2])
     line = np.concatenate([np.full(1401, 1), np.full(600, 2)])
-    nominal = Sweep(xy, np.full(len(xy), -0.5), np.full(len(xy), 0.25), np.zeros(len(xy)), line)
+    nominal = ToolSweep(xy, np.full(len(xy), -0.5), np.full(len(xy), 0.25), np.zeros(len(xy)), line)
     rng = np.random.default_rng(6)
-    actual = Sweep(xy + rng.normal(0.0, 1.0 * UM, xy.shape), nominal.tip_mm, nominal.radius_mm, nominal.corner_mm, line)
+    actual = ToolSweep(
+        xy + rng.normal(0.0, 1.0 * UM, xy.shape), nominal.tip_mm, nominal.radius_mm, nominal.corner_mm, line
+    )
     part = machined_part(stock, nominal, actual, 0.0, -10.0)
     check(part, min_points=300)
 

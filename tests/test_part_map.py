@@ -12,17 +12,19 @@ import trimesh
 import twin.machining.part_map as part_map_module
 from twin.machining.engagement import StockSpec
 from twin.machining.part_map import part_map
-from twin.machining.sweep import Sweep
+from twin.machining.sweep import ToolSweep
 
 RES = 0.05
 STOCK = StockSpec(corners_mm=[[0.0, 0.0], [30.0, 20.0]], top_mm=0.0, bottom_mm=-10.0, resolution_mm=RES)
 BLOCK_MM3 = 30.0 * 20.0 * 10.0
 
 
-def slot(y_mm: float, depth_mm: float = 2.0, corner_mm: float = 0.0, n: int = 2000, radius_mm: float = 3.0) -> Sweep:
+def slot(
+    y_mm: float, depth_mm: float = 2.0, corner_mm: float = 0.0, n: int = 2000, radius_mm: float = 3.0
+) -> ToolSweep:
     """A tool (6 mm unless told) along X right across the stock (from X -5 to X 35) at Y ``y_mm``."""
     x = np.linspace(-5.0, 35.0, n)
-    return Sweep(
+    return ToolSweep(
         np.column_stack([x, np.full(n, y_mm)]),
         np.full(n, -depth_mm),
         np.full(n, radius_mm),
@@ -86,7 +88,7 @@ def test_ball_scallop_between_two_passes():
     # ball's circle, z = tip + R - sqrt(R^2 - dy^2) from the nearer pass, at each cell centre
     r, tip = 3.0, -0.2
     first, second = slot(10.0, 0.2, r), slot(11.6, 0.2, r)
-    both = Sweep(**{k: np.concatenate([getattr(first, k), getattr(second, k)]) for k in vars(first)})
+    both = ToolSweep(**{k: np.concatenate([getattr(first, k), getattr(second, k)]) for k in vars(first)})
     maps = part_map(STOCK, both, both)
     hm = maps.actual
     ys = (hm.y0_m + (np.arange(hm.heights.shape[1]) + 0.5) * hm.res_m) * 1e3
@@ -113,7 +115,7 @@ def test_floor_error_leaves_walls_out_and_reads_scallops_moved():
 
     def passes(shift):
         first, second = slot(10.0 + shift, 0.2, r), slot(11.6 + shift, 0.2, r)
-        return Sweep(**{k: np.concatenate([getattr(first, k), getattr(second, k)]) for k in vars(first)})
+        return ToolSweep(**{k: np.concatenate([getattr(first, k), getattr(second, k)]) for k in vars(first)})
 
     def floor(y, shift):
         dy = np.minimum(np.abs(y - 10.0 - shift), np.abs(y - 11.6 - shift))

@@ -16,7 +16,7 @@ from cli_process import twin as twin_cli
 
 from twin.errors import TwinInputError
 from twin.machines import get_machine
-from twin.sampling import Plan, parse_variation
+from twin.sampling import SamplePlan, parse_variation
 from twin.sweeps import prepare_sweep
 from twin.sweeps.run import make_client, read_sweep, run_sweep
 from twin.sweeps.summary import certificates, summarize
@@ -25,7 +25,7 @@ LM = get_machine("linear_motor_xy").parameters
 
 
 def _plan(*specs, samples=10, seed=0, lhs=False, params=LM):
-    return Plan([parse_variation(s, params) for s in specs], samples, seed, lhs)
+    return SamplePlan([parse_variation(s, params) for s in specs], samples, seed, lhs)
 
 
 def test_box_draws_stay_in_the_documented_range():

@@ -343,7 +343,7 @@ def finish_figures(lines: int) -> dict:
     from twin.machining.engagement import StockSpec, ToolSpec
     from twin.machining.part import virtual_part
     from twin.machining.program_cut import program_milling
-    from twin.machining.sweep import Sweep
+    from twin.machining.sweep import ToolSweep
 
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "finish.ngc"
@@ -362,10 +362,10 @@ def finish_figures(lines: int) -> dict:
         plan_peak = tracemalloc.get_traced_memory()[1] / 1e6
         tracemalloc.reset_peak()
         held = tracemalloc.get_traced_memory()[0] / 1e6
-        nominal = Sweep.planned(planned, cut)
+        nominal = ToolSweep.planned(planned, cut)
         # a stand-in for a run's actual path: the plan with seeded 1 µm noise in XY
         noise = np.random.default_rng(0).normal(0.0, 1e-3, nominal.xy_mm.shape)
-        actual = Sweep(nominal.xy_mm + noise, nominal.tip_mm, nominal.radius_mm, nominal.corner_mm, nominal.line)
+        actual = ToolSweep(nominal.xy_mm + noise, nominal.tip_mm, nominal.radius_mm, nominal.corner_mm, nominal.line)
         t0 = time.perf_counter()
         part = virtual_part(stock, nominal, actual)
         part_s = time.perf_counter() - t0

@@ -22,7 +22,7 @@ if TYPE_CHECKING:  # the heavy modules load on first use, not with `import twin`
     from twin.commissioning.frf import FrfSettings
     from twin.gcode.moves import Move
     from twin.records import RunRecords
-    from twin.sampling import Plan
+    from twin.sampling import SamplePlan
     from twin.scenario import Scenario
     from twin.sim.runner import RunResult
 
@@ -167,7 +167,7 @@ class Sweep:
         The Parquet dataset folder, one row per sample.
     table : pyarrow.Table
         Its rows, as read back.
-    plan : twin.sampling.Plan
+    plan : twin.sampling.SamplePlan
         The samples' plan.
     axes : tuple of str
         The machine's axes.
@@ -178,7 +178,7 @@ class Sweep:
     summary: dict
     out: Path
     table: pa.Table
-    plan: Plan
+    plan: SamplePlan
     axes: tuple[str, ...]
     interrupted: bool = False
 

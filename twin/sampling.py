@@ -155,7 +155,7 @@ def parse_variation(text: str, parameters: dict) -> Variation:
 
 
 @dataclass
-class Plan:
+class SamplePlan:
     """The samples of a sweep: ``variations``, ``samples`` random draws per structured
     combination, the sweep ``seed`` and the ``latin_hypercube`` option."""
 

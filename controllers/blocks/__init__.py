@@ -17,15 +17,15 @@ from controllers.blocks.compose import (
     with_feedforward,
 )
 from controllers.blocks.core import NONLINEARITIES, Controller, Linear, PythonBlock, Sequence, Static, Sum
-from controllers.blocks.program import Program, SignalError
+from controllers.blocks.program import BlockProgram, SignalError
 from controllers.blocks.signals import AXIS_SIGNALS, preview_ticks_needed, standard_signals
 
 __all__ = [
     "AXIS_SIGNALS",
     "NONLINEARITIES",
+    "BlockProgram",
     "Controller",
     "Linear",
-    "Program",
     "PythonBlock",
     "Sequence",
     "SignalError",

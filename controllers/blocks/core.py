@@ -4,7 +4,7 @@ Each block names the bus signals it reads (``inputs``) and writes (``outputs``);
 :mod:`controllers.blocks.signals` for the loop's signals.  The arithmetic of every kind is a
 numba kernel in :mod:`controllers.kernels`, which the compiled loop and the Python loop both
 call.  A block holds no run state: the state lives in the controller's compiled
-:class:`~controllers.blocks.program.Program`, so a run (or a batch of runs) owns it.
+:class:`~controllers.blocks.program.BlockProgram`, so a run (or a batch of runs) owns it.
 """
 
 from __future__ import annotations

@@ -23,7 +23,7 @@ class SignalError(ValueError):
         super().__init__(f"block {block!r}, signal {signal!r}: {reason}")
 
 
-class Program:
+class BlockProgram:
     """Controllers compiled onto one bus: the arrays the loops hand to the kernels.
 
     Parameters

@@ -50,7 +50,7 @@ from numba import njit
 
 from twin.machining.engagement import StockSpec
 from twin.machining.part_map import PartMap, part_map
-from twin.machining.sweep import Sweep
+from twin.machining.sweep import ToolSweep
 from twin.numba_cache import configure as configure_numba_cache
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
@@ -133,7 +133,7 @@ def _swept(shapes: list, radius: float) -> shapely.Geometry:
     return shapely.union_all(shapely.buffer(np.array(shapes, dtype=object), radius, quad_segs=quad_segs(radius)))
 
 
-def section(stock: shapely.Geometry, sweep: Sweep, z_mm: float) -> shapely.Geometry:
+def section(stock: shapely.Geometry, sweep: ToolSweep, z_mm: float) -> shapely.Geometry:
     """The material a smooth path (the plan; an actual path is probed, :func:`nearest_cuts`)
     leaves at height ``z_mm``: ``stock`` less the tool's sweep
     there, inside it by at most :func:`_section_slack_mm`: each run of samples at one radius (a
@@ -145,7 +145,7 @@ def section(stock: shapely.Geometry, sweep: Sweep, z_mm: float) -> shapely.Geome
     ----------
     stock : shapely geometry
         The stock's outline less its islands (mm).
-    sweep : Sweep
+    sweep : ToolSweep
         The tool's axis in time order, its tip height, radius and corner radius at each sample (mm).
     z_mm : float
 
@@ -491,7 +491,7 @@ def _stream(probes, level_of, bins, levels, path, window):  # pragma: no cover -
 
 
 class _Path(NamedTuple):
-    """A :class:`Sweep`'s arrays as the compiled stream reads them."""
+    """A :class:`ToolSweep`'s arrays as the compiled stream reads them."""
 
     xy: np.ndarray
     tip: np.ndarray
@@ -500,7 +500,7 @@ class _Path(NamedTuple):
     line: np.ndarray
 
 
-def nearest_cuts(xy_mm: np.ndarray, z_mm: np.ndarray, sweep: Sweep, window_mm: float = WALL_WINDOW_MM) -> Probes:
+def nearest_cuts(xy_mm: np.ndarray, z_mm: np.ndarray, sweep: ToolSweep, window_mm: float = WALL_WINDOW_MM) -> Probes:
     """Probe points against the capsules a path sweeps: for each point, the nearest capsule at
     its height within ``window_mm`` (:class:`Probes`), the path's samples streamed once.
 
@@ -511,7 +511,7 @@ def nearest_cuts(xy_mm: np.ndarray, z_mm: np.ndarray, sweep: Sweep, window_mm: f
     z_mm : ndarray (m,)
         Their heights (mm): a few distinct values (the wall levels, at most
         :data:`MAX_WALL_LEVELS` and the inspected features').
-    sweep : Sweep
+    sweep : ToolSweep
         The path (its samples in time order).
     window_mm : float
         Capsules further than this from a probe are not looked at (mm).
@@ -549,7 +549,7 @@ class MachinedPart:
     ----------
     stock : shapely geometry
         The stock's outline less its islands (mm).
-    nominal, actual : Sweep
+    nominal, actual : ToolSweep
         The planned and the measured tool paths.
     levels_mm : list of float
         The heights the walls were read at (:func:`wall_levels`).
@@ -565,8 +565,8 @@ class MachinedPart:
     """
 
     stock: shapely.Geometry
-    nominal: Sweep
-    actual: Sweep
+    nominal: ToolSweep
+    actual: ToolSweep
     levels_mm: list[float]
     walls: np.ndarray
     skipped_levels_mm: list[float] = field(default_factory=list)
@@ -615,7 +615,7 @@ class MachinedPart:
         return out
 
 
-def wall_points(stock, nominal: Sweep, levels_mm: list[float]) -> tuple[np.ndarray, list[float]]:
+def wall_points(stock, nominal: ToolSweep, levels_mm: list[float]) -> tuple[np.ndarray, list[float]]:
     """Points every :data:`WALL_STEP_MM` (more where there would be over
     :data:`MAX_WALL_POINTS`) along the nominal part's machined boundary at each of ``levels_mm``,
     shape (m, 3): x, y, z (mm); and the levels not read (:class:`SectionTooComplex`)."""
@@ -635,7 +635,7 @@ def wall_points(stock, nominal: Sweep, levels_mm: list[float]) -> tuple[np.ndarr
     return (np.concatenate(rows) if rows else np.zeros((0, 3))), skipped
 
 
-def _section_slack_mm(sweep: Sweep, levels_mm: list[float]) -> float:
+def _section_slack_mm(sweep: ToolSweep, levels_mm: list[float]) -> float:
     """How far inside the exact sweep a section's boundary may lie (mm, :func:`section`): the
     largest change of the swept radius between two samples at any of ``levels_mm`` (a run is
     swept at its smallest), its rounding and the polygons' tolerance, with room; at most
@@ -648,7 +648,7 @@ def _section_slack_mm(sweep: Sweep, levels_mm: list[float]) -> float:
     return min(step + 2 * SAME_RADIUS_MM + 10 * CIRCLE_TOLERANCE_MM, WALL_WINDOW_MM)
 
 
-def _onto_sweep(points: np.ndarray, sweep: Sweep, slack_mm: float) -> None:
+def _onto_sweep(points: np.ndarray, sweep: ToolSweep, slack_mm: float) -> None:
     """Move ``points`` (m, 3: x, y, z in mm; in place), which lie on a section's boundary within
     ``slack_mm`` inside the exact sweep, onto the sweep's boundary: each onto the side of the
     capsule it lies deepest in, again while that side lies in another (a ramp's pieces), at most
@@ -664,7 +664,7 @@ def _onto_sweep(points: np.ndarray, sweep: Sweep, slack_mm: float) -> None:
         active = active[step > PROJECTED_MM]
 
 
-def machined_part(stock, nominal: Sweep, actual: Sweep, top_mm: float, bottom_mm: float) -> MachinedPart:
+def machined_part(stock, nominal: ToolSweep, actual: ToolSweep, top_mm: float, bottom_mm: float) -> MachinedPart:
     """The virtual part of a run: the walls of the nominal sweep's part (exact sections at
     :func:`wall_levels` of the nominal path) probed against the actual sweep's capsules."""
     step = np.diff(nominal.xy_mm, axis=0, prepend=nominal.xy_mm[:1])
@@ -677,7 +677,7 @@ def machined_part(stock, nominal: Sweep, actual: Sweep, top_mm: float, bottom_mm
     return MachinedPart(stock, nominal, actual, [z for z in levels if z not in skipped], walls, skipped)
 
 
-def virtual_part(stock: StockSpec, nominal: Sweep, actual: Sweep) -> MachinedPart:
+def virtual_part(stock: StockSpec, nominal: ToolSweep, actual: ToolSweep) -> MachinedPart:
     """The part ``actual`` cut against the one ``nominal`` cuts: the walls
     (:func:`machined_part`) with both height maps (:func:`~twin.machining.part_map.part_map`)
     and their floor error."""

@@ -3,7 +3,7 @@ actual part on the stock's grid (Parquet) and a closed triangle mesh of the actu
 
 Both maps are the stock's :class:`~twin.machining.engagement.HeightMap` cut by
 :func:`~twin.machining.engagement.cut_path` (the engagement's own cut) along a
-:class:`~twin.machining.sweep.Sweep`: the nominal one along the plan, the actual one where the
+:class:`~twin.machining.sweep.ToolSweep`: the nominal one along the plan, the actual one where the
 twin moved the tool.  A cell's height is the material's top at its centre, so a wall is placed
 to the cell (``stock.resolution_mm``); the walls to a micrometre are
 :class:`~twin.machining.part.MachinedPart`'s exact sections.  What the map adds is the floors and
@@ -27,7 +27,7 @@ from typing import NamedTuple
 import numpy as np
 
 from twin.machining.engagement import MAP_MARGIN_MM, HeightMap, StockSpec, cut_path
-from twin.machining.sweep import Sweep
+from twin.machining.sweep import ToolSweep
 
 #: Cells the mesh takes at most (every k-th cell each way beyond it): about a million
 #: triangles, a 50 MB binary STL.
@@ -42,7 +42,7 @@ MAX_FLOOR_SLOPE = 1.0
 MAP_COLUMNS = ("x_mm", "y_mm", "nominal_mm", "actual_mm", "error_um")
 
 
-def cut_height_map(stock: StockSpec, sweep: Sweep, margin_mm: float) -> HeightMap:
+def cut_height_map(stock: StockSpec, sweep: ToolSweep, margin_mm: float) -> HeightMap:
     """The stock's height map, ``margin_mm`` around it, cut along ``sweep`` (mm)."""
     height_map = HeightMap(stock, margin_mm)
     tips = np.column_stack([sweep.xy_mm, sweep.tip_mm]) * 1e-3
@@ -195,7 +195,7 @@ class PartMap:
         return Path(path)
 
 
-def part_map(stock: StockSpec, nominal: Sweep, actual: Sweep) -> PartMap:
+def part_map(stock: StockSpec, nominal: ToolSweep, actual: ToolSweep) -> PartMap:
     """The nominal and the actual part's height maps: ``stock`` cut along each sweep, on one
     grid with the engagement's margin (:data:`~twin.machining.engagement.MAP_MARGIN_MM`) rounded up
     to whole cells, so that the cells' edges fall on the stock's corner."""

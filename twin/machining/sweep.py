@@ -9,7 +9,7 @@ import numpy as np
 
 
 @dataclass
-class Sweep:
+class ToolSweep:
     """A tool path through the stock, all in mm.
 
     Attributes
@@ -29,7 +29,7 @@ class Sweep:
     line: np.ndarray
 
     @classmethod
-    def planned(cls, plan, cut) -> Sweep:
+    def planned(cls, plan, cut) -> ToolSweep:
         """The planned path of a program through its stock: a
         :class:`twin.gcode.planner.Plan`'s tips with the tool of each sample of its
         :class:`twin.machining.program_cut.ProgramCut`."""

@@ -8,7 +8,7 @@ import numpy as np
 from twin.machining.engagement import StockSpec
 from twin.machining.inspection import measure, not_found
 from twin.machining.part import MachinedPart, virtual_part
-from twin.machining.sweep import Sweep
+from twin.machining.sweep import ToolSweep
 from twin.records import Inspected
 from twin.scenario.assembly import assemble
 from twin.scenario.schema import Scenario
@@ -48,13 +48,13 @@ def _machined_part(result: RunResult, lines: np.ndarray, reference, stock: Stock
     (a run stopped before the program's end, by its duration or a divergence, is compared with
     what the program had cut by then, not with material it never reached)."""
     plan = reference.plan
-    full = Sweep.planned(plan, reference.cut)
+    full = ToolSweep.planned(plan, reference.cut)
     k = np.clip(np.rint(result.t_s / plan.period_s).astype(int), 0, len(full.line) - 1)
     reached = slice(0, int(k[-1]) + 1 if k.size else 0)
-    nominal = Sweep(
+    nominal = ToolSweep(
         full.xy_mm[reached], full.tip_mm[reached], full.radius_mm[reached], full.corner_mm[reached], full.line[reached]
     )
-    actual = Sweep(
+    actual = ToolSweep(
         result.table_position_m()[:, :2] * 1e3,
         nominal.tip_mm[k],
         nominal.radius_mm[k],

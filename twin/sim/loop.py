@@ -103,7 +103,7 @@ class DriveState(NamedTuple):
 
 
 class ProgramArrays(NamedTuple):
-    """The compiled controllers (:class:`controllers.blocks.Program`)."""
+    """The compiled controllers (:class:`controllers.blocks.BlockProgram`)."""
 
     ops: np.ndarray
     io: np.ndarray

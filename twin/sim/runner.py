@@ -27,7 +27,7 @@ import mujoco
 import numpy as np
 from tqdm import tqdm
 
-from controllers.blocks import Controller, Program, SignalError, preview_ticks_needed, standard_signals
+from controllers.blocks import BlockProgram, Controller, SignalError, preview_ticks_needed, standard_signals
 from twin.errors import RunInterrupted, SimulationDiverged, TwinInputError
 from twin.machines import BuiltMachine
 from twin.machining.cutting import PROBE, ForceModels
@@ -190,7 +190,9 @@ class RunResult:
         return self.ref[:, :, 0] - self.table_position_m()
 
 
-def _program(machine: BuiltMachine, controllers: Sequence[Controller], control_period_s: float) -> tuple[Program, int]:
+def _program(
+    machine: BuiltMachine, controllers: Sequence[Controller], control_period_s: float
+) -> tuple[BlockProgram, int]:
     """The controllers compiled onto the machine's bus, and the preview length (ticks) they read;
     checks that they drive each axis once."""
     names = [a.name for a in machine.axes]
@@ -207,7 +209,7 @@ def _program(machine: BuiltMachine, controllers: Sequence[Controller], control_p
         )
     try:
         preview = preview_ticks_needed(s for c in controllers for s in c.inputs)
-        return Program(controllers, standard_signals(names, preview)), preview
+        return BlockProgram(controllers, standard_signals(names, preview)), preview
     except SignalError as exc:
         raise TwinInputError(f"controller block {exc.block}", exc.signal, exc.reason) from None
     except ValueError as exc:
@@ -226,7 +228,7 @@ class RunPlan:
         The control period and the physics step (s).
     record_every : int
         Record every Nth tick (0: none).
-    program : controllers.blocks.Program
+    program : controllers.blocks.BlockProgram
         The controllers on the machine's bus.
     preview : int
         Reference preview the controllers read (ticks).
@@ -243,7 +245,7 @@ class RunPlan:
     control_period_s: float
     timestep_s: float
     record_every: int
-    program: Program
+    program: BlockProgram
     preview: int
     compiled: bool
     drive: Drive

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from controllers.blocks import Program, preview_ticks_needed, standard_signals
+from controllers.blocks import BlockProgram, preview_ticks_needed, standard_signals
 from controllers.kernels import run_blocks
 from controllers.lti import SisoTf, discretize, tf_to_ss
 from twin.numba_cache import configure as configure_numba_cache
@@ -124,7 +124,7 @@ def tf_loop(
     if Bd.shape[1] != len(axes) or Cd.shape[0] != len(axes):
         raise ValueError(f"the plant has {Bd.shape[1]} inputs and {Cd.shape[0]} outputs for axes {list(axes)}")
     preview = preview_ticks_needed(controller.inputs)
-    program = Program([controller], standard_signals(axes, preview))
+    program = BlockProgram([controller], standard_signals(axes, preview))
     if not program.compiled:
         raise ValueError(
             f"controller {controller.name!r} has Python blocks: the transfer-function loop runs compiled blocks only"

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from twin.errors import input_file
-from twin.sampling import Plan, parse_variation
+from twin.sampling import SamplePlan, parse_variation
 from twin.spec import validation_error
 
 
@@ -58,21 +58,21 @@ def sweep_spec(target: str) -> SweepFile:
 
 
 @dataclass
-class Sweep:
+class SweepSpec:
     """Everything a sweep needs: the scenario as a dict, its name, machine and controller type,
-    the machine's axes and the :class:`Plan`."""
+    the machine's axes and the :class:`SamplePlan`."""
 
     scenario: dict
     name: str
     machine: str
     controller: str | None
     axes: tuple[str, ...]
-    plan: Plan
+    plan: SamplePlan
 
 
 def prepare_sweep(
     scenario: str, settings: dict, vary: list[str], samples: int, seed: int, latin_hypercube: bool
-) -> Sweep:
+) -> SweepSpec:
     """Load and check the scenario with ``settings`` (``{dotted path: value}``, once, before any
     sample runs) and build the plan.
 
@@ -90,9 +90,11 @@ def prepare_sweep(
 
     data = set_fields(read_scenario_data(scenario), settings, "--set ")
     scn = scenario_from_dict(data)
-    plan = Plan([parse_variation(v, get_machine(scn.machine).parameters) for v in vary], samples, seed, latin_hypercube)
+    plan = SamplePlan(
+        [parse_variation(v, get_machine(scn.machine).parameters) for v in vary], samples, seed, latin_hypercube
+    )
     checked = assemble(scn)
     # the varied paths lead into the scenario (a value the scenario rejects is that sample's error row)
     set_fields(data, {p: scenario_value(v) for p, v in plan.values(0).items()}, "--vary ")
     controller = scn.controller.type if scn.controller is not None else None
-    return Sweep(data, scn.name, scn.machine, controller, tuple(a.name for a in checked.machine.axes), plan)
+    return SweepSpec(data, scn.name, scn.machine, controller, tuple(a.name for a in checked.machine.axes), plan)

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from twin.errors import SimulationDiverged, TwinInputError
-from twin.sampling import Plan
+from twin.sampling import SamplePlan
 
 STATUSES = ("ok", "diverged", "error")
 
@@ -115,7 +115,7 @@ def run_batch(base: dict, items: list, axes) -> list[dict]:
     return [run_sample(base, i, values, seed, axes) for i, values, seed in items]
 
 
-def _schema(plan: Plan, axes, program: bool):
+def _schema(plan: SamplePlan, axes, program: bool):
     import pyarrow as pa
 
     fields = [pa.field("index", pa.int64()), pa.field("seed", pa.int64())]
@@ -210,7 +210,7 @@ def make_client(workers: int | None = None, scheduler: str | None = None):
 
 def run_sweep(
     base: dict,
-    plan: Plan,
+    plan: SamplePlan,
     axes,
     out: Path,
     client,

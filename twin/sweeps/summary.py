@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from twin.sampling import Plan
+from twin.sampling import SamplePlan
 from twin.sweeps.run import metric_columns
 
 #: The metric the worst case is chosen by: the largest max tracking error over the axes.
@@ -25,7 +25,7 @@ def _worst_axis(table, axes) -> np.ndarray:
     return np.max([_column(table, f"{WORST_BY}_{a}") for a in axes], axis=0)
 
 
-def summarize(table, plan: Plan, axes) -> dict:
+def summarize(table, plan: SamplePlan, axes) -> dict:
     """Counts by status, bands (min, 5 %, median, 95 %, max) of each metric over the ``ok``
     rows, and the worst sample by :data:`WORST_BY` (over the axes) with its values."""
     status = np.array(table.column("status").to_pylist())
@@ -59,7 +59,7 @@ def summarize(table, plan: Plan, axes) -> dict:
     return out
 
 
-def certificates(machine: str, controller: str | None, plan: Plan) -> list[dict]:
+def certificates(machine: str, controller: str | None, plan: SamplePlan) -> list[dict]:
     """The robustness certificates of ``controller`` on ``machine`` over a box containing the
     sweep's, from every reproduction that offers one (:func:`twin.reproductions.certificates`):
     Yadav 2020's Kharitonov verdict over Table 1's box, Choi 1999's mu upper bounds.  Empty when
@@ -109,7 +109,7 @@ def format_summary(summary: dict, certs: list[dict], axes) -> str:
     return "\n".join(out)
 
 
-def write_sweep_plots(table, plan: Plan, axes, folder) -> list:
+def write_sweep_plots(table, plan: SamplePlan, axes, folder) -> list:
     """Histograms of each metric and the worst-axis max tracking error against each varied
     parameter (``ok`` samples)."""
     from twin.plots import plot_folder

@@ -420,11 +420,11 @@ def twin_step(controller, params: dict[str, float]) -> dict:
 
 
 def _box_plan(spec: str, samples: int, seed: int = 0):
-    """A :class:`twin.sampling.Plan` varying K1, K2, m and Im of cncmt by ``spec``."""
-    from twin.sampling import Plan, parse_variation
+    """A :class:`twin.sampling.SamplePlan` varying K1, K2, m and Im of cncmt by ``spec``."""
+    from twin.sampling import SamplePlan, parse_variation
 
     params = get_machine("cncmt").parameters
-    return Plan([parse_variation(f"overrides.{s}={spec}", params) for s in BOX_SYMBOLS], samples, seed)
+    return SamplePlan([parse_variation(f"overrides.{s}={spec}", params) for s in BOX_SYMBOLS], samples, seed)
 
 
 def _plan_points(plan) -> list[dict[str, float]]:
