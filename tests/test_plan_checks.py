@@ -399,7 +399,8 @@ def test_a_streamed_program_gets_the_held_ones_drive_warnings(monkeypatch):
     """A program too long to hold is checked as the run draws its samples: once drawn to the end
     its warnings are those of the same program held whole."""
     import twin.gcode.planner as planner
-    from twin.references.gcode import StreamedGcodeReference, typed_plan_warnings
+    from twin.gcode.checks import typed_plan_warnings
+    from twin.references.gcode import StreamedGcodeReference
 
     monkeypatch.setattr(planner, "WINDOW_POINTS", 3000)
     monkeypatch.setattr(planner, "PIECE_POINTS", 500)

@@ -16,7 +16,7 @@ from functools import cached_property
 import numpy as np
 
 from twin.errors import RunInterrupted, SimulationDiverged
-from twin.gcode.checks import DriveCheck, TravelCheck
+from twin.gcode.checks import DriveCheck, TravelCheck, typed_plan_warnings
 from twin.gcode.planner import Plan
 from twin.machining.engagement import StockSpec
 from twin.machining.inspection import InspectSpec, inspect
@@ -25,7 +25,6 @@ from twin.machining.program_cut import ProgramCut
 from twin.machining.program_stability import default_rpm_range, line_stability
 from twin.machining.sweep import ToolSweep
 from twin.records import Inspected, MachiningWarning, PlanWarning
-from twin.references.gcode import typed_plan_warnings
 from twin.sim.runner import RunResult
 
 

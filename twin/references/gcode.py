@@ -36,7 +36,6 @@ from twin.machines import build as build_machine
 from twin.machines.rigid_drive import rigid_drives, table_travel_m
 from twin.machining.engagement import COLUMNS, engaged_degrees
 from twin.machining.program_cut import ProgramCut
-from twin.records import PlanWarning, plan_warning
 from twin.references.kinds import ReferenceContext, ReferenceSpecBase, register, two_axes
 from twin.settings import set_fields
 from twin.spec import Millimetres, StrictSpec, validation_error
@@ -272,13 +271,6 @@ class StreamedGcodeReference(_Samples):
     @property
     def texts(self) -> dict[int, str]:
         return self.facts.texts
-
-
-def typed_plan_warnings(*checks: TravelCheck | DriveCheck | None) -> tuple[list[PlanWarning], int]:
-    """The warnings of ``checks`` by line (:func:`twin.gcode.checks.plan_warnings`), typed, and
-    how many in all."""
-    rows, total = plan_warnings(*checks)
-    return [plan_warning(row) for row in rows], total
 
 
 def _by_line(lines: np.ndarray, by_line: dict) -> np.ndarray:
