@@ -19,7 +19,7 @@ import typer
 
 from twin import exits
 from twin.errors import TwinInputError
-from twin.records import Inspected, LineRow, LineWarning, RunRecords, plan_warning
+from twin.records import Inspected, LineRow, LineWarning, RunRecords
 from twin.reproductions import DEFAULT_SAMPLES, DEFAULT_SEED, DEFAULT_TWIN_SAMPLES
 
 app = typer.Typer(
@@ -133,15 +133,12 @@ def _print_chatter_check(rows: Sequence[LineRow]) -> None:
     checked = [row.stability for row in rows if row.stability is not None]
     if not checked:
         return
-    over = sorted(
-        (check for check in checked if (check["margin"] or float("inf")) < 1),
-        key=lambda check: check["margin"],
-    )
+    over = sorted((check for check in checked if check.over_critical), key=lambda check: check.margin or 0.0)
     typer.echo(
         f"  chatter check (zero-order lobes): {len(checked)} cutting line(s), {len(over)} over their critical depth"
     )
     for check in over[:WORST_LINES]:
-        typer.echo(f"    {check['text']}")
+        typer.echo(f"    {check.text}")
 
 
 def _print_part(summary: dict, inspection: Sequence[Inspected]) -> None:
@@ -525,29 +522,16 @@ def gcode(
     planned = list_program(file, reader_settings, as_json, plan)
     if planned is None:
         return
-    warnings = [plan_warning(row) for row in planned["warnings"]]
-    total = planned.get("warnings_total", len(warnings))
+    warnings, total = planned.warnings, planned.warnings_total
     if not as_json:
         typer.echo(f"planned for {machine}:")
-        _print_summary(
-            "",
-            {
-                k: v
-                for k, v in planned.items()
-                if k not in ("limits", "max", "violations", "notes", "warnings", "warnings_total")
-            },
-        )
-        for over in planned["violations"]:
-            typer.echo(f"  over a limit: line {over['line']}, {over['axis']} {over['quantity']} x{over['ratio']:.4f}")
-        for note in planned["notes"]:
+        _print_summary("", planned.headline())
+        for over in planned.violations:
+            typer.echo(f"  over a limit: {over.report_line()}")
+        for note in planned.notes:
             typer.echo(f"  note: {note}")
         for axis in "xyz":
-            lim, top = planned["limits"][axis], planned["max"][axis]
-            typer.echo(
-                f"  {axis}: v {top['velocity_m_per_s']:.4g}/{lim['velocity_m_per_s']:.4g} m/s, "
-                f"a {top['acceleration_m_per_s2']:.4g}/{lim['acceleration_m_per_s2']:.4g} m/s^2, "
-                f"j {top['jerk_m_per_s3']:.4g}/{lim['jerk_m_per_s3']:.4g} m/s^3 (largest/limit)"
-            )
+            typer.echo(f"  {planned.axis_line(axis)}")
         _print_warnings("warnings against the machine", warnings, total)
     if strict:
         _fail_on_warnings("warning(s) against the machine", warnings, total)

@@ -188,7 +188,9 @@ def lobes(scn: Scenario, settings: LobesSettings) -> dict:
     if samples is not None:
         checked = line_stability(samples, (float(speeds.min()), float(speeds.max())))
         texts = program.texts
-        summary["lines"] = [{"line": n, "text": texts.get(n, ""), "stability": row} for n, row in checked.items()]
+        summary["lines"] = [
+            {"line": n, "text": texts.get(n, ""), "stability": check.to_json()} for n, check in checked.items()
+        ]
     return summary
 
 

@@ -31,14 +31,14 @@ from twin.gcode.planner import (
     refuse_long,
 )
 from twin.gcode.reader import Reader, Settings
-from twin.gcode.report import planned_summary
+from twin.gcode.report import PlannedSummary, planned_summary
 from twin.machines import BuiltMachine
 from twin.machines import build as build_machine
 from twin.machines.rigid_drive import rigid_drives, table_travel_m
 from twin.machining.engagement import COLUMNS, engaged_degrees
 from twin.machining.program_cut import ProgramCut
 from twin.machining.program_stability import ProgramSamples, default_rpm_range, line_stability
-from twin.records import MachiningWarning, PlanWarning, plan_warning
+from twin.records import LineStability, MachiningWarning, PlanWarning
 from twin.references.kinds import ReferenceContext, ReferenceSpecBase, register, two_axes
 from twin.settings import set_fields
 from twin.spec import Millimetres, StrictSpec, validation_error
@@ -179,7 +179,7 @@ class GcodeReference(_Samples):
     def plan_warnings(self) -> tuple[list[PlanWarning], int]:
         """Moves outside the travel (under ``travel = "warn"``) and what the drives cannot
         deliver, by line (:func:`twin.gcode.checks.plan_warnings`), and how many in all."""
-        return typed_plan_warnings(*self.checks)
+        return plan_warnings(*self.checks)
 
     def program_samples(self) -> ProgramSamples | None:
         """With a stock: the engagement, speed, tool, line and XY velocity at each sample."""
@@ -196,7 +196,7 @@ class GcodeReference(_Samples):
         )
 
     @cached_property
-    def line_stability(self) -> dict[int, dict]:
+    def line_stability(self) -> dict[int, LineStability]:
         """With a stock and tools with ``dynamics``: each cutting line's chatter check
         (:func:`twin.machining.program_stability.line_stability`, stable speeds searched over
         :func:`~twin.machining.program_stability.default_rpm_range`); else empty."""
@@ -328,7 +328,7 @@ class StreamedGcodeReference(_Samples):
         return []
 
     @property
-    def line_stability(self) -> dict[int, dict]:
+    def line_stability(self) -> dict[int, LineStability]:
         """No stock: no engagement to check."""
         return {}
 
@@ -339,18 +339,11 @@ class StreamedGcodeReference(_Samples):
     @property
     def plan_warnings(self) -> tuple[list[PlanWarning], int]:
         """As :attr:`GcodeReference.plan_warnings`, of the samples planned so far."""
-        return typed_plan_warnings(*self.checks)
+        return plan_warnings(*self.checks)
 
     @property
     def texts(self) -> dict[int, str]:
         return self.facts.texts
-
-
-def typed_plan_warnings(*checks: TravelCheck | DriveCheck | None) -> tuple[list[PlanWarning], int]:
-    """The warnings of ``checks`` by line (:func:`twin.gcode.checks.plan_warnings`), typed, and
-    how many in all."""
-    rows, total = plan_warnings(*checks)
-    return [plan_warning(row) for row in rows], total
 
 
 def _by_line(lines: np.ndarray, by_line: dict) -> np.ndarray:
@@ -495,10 +488,12 @@ def program_checks(
     return travel, DriveCheck({"xyz".index(a): d for a, d in rigid_drives(machine).items()}, saturation_V)
 
 
-def planned_for(file, moves: list, machine: str, planner: PlannerSettings, saturation_V: float | None = None) -> dict:
+def planned_for(
+    file, moves: list, machine: str, planner: PlannerSettings, saturation_V: float | None = None
+) -> PlannedSummary:
     """The ``planned`` table of ``twin gcode --machine``: the ``moves`` of ``file`` planned for
     ``machine`` (:func:`twin.gcode.report.planned_summary`), checked against its travel and, with
-    ``saturation_V`` (V), its drives: ``warnings`` (and ``warnings_total`` where more than listed).
+    ``saturation_V`` (V), its drives (its ``warnings``).
 
     Raises
     ------
@@ -515,12 +510,8 @@ def planned_for(file, moves: list, machine: str, planner: PlannerSettings, satur
         planned = plan(moves, limits, planner)
     if drive is not None:
         drive.add(planned.position, planned.velocity, planned.acceleration, planned.line, planned.texts)
-    summary = planned_summary(planned, limits)
-    rows, total = plan_warnings(travel, drive)
-    summary["warnings"] = rows
-    if total > len(rows):
-        summary["warnings_total"] = total
-    return summary
+    warnings, total = plan_warnings(travel, drive)
+    return planned_summary(planned, limits, warnings=warnings, warnings_total=total)
 
 
 class ProgramDrive(StrictSpec):

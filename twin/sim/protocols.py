@@ -11,7 +11,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from twin.records import MachiningWarning, PlanWarning
+from twin.records import LineStability, MachiningWarning, PlanWarning
 
 
 @runtime_checkable
@@ -57,7 +57,7 @@ class ProgramReference(Reference, Protocol):
     def plan_warnings(self) -> tuple[list[PlanWarning], int]: ...
 
     @property
-    def line_stability(self) -> dict[int, dict]: ...
+    def line_stability(self) -> dict[int, LineStability]: ...
 
     def line_at(self, t: float) -> int: ...
 

@@ -31,7 +31,7 @@ from controllers.blocks import BlockProgram, Controller, SignalError, preview_ti
 from twin.errors import RunInterrupted, SimulationDiverged, TwinInputError
 from twin.machines import BuiltMachine
 from twin.machining.cutting import PROBE, ForceModels
-from twin.records import Inspected, MachiningWarning, PlanWarning
+from twin.records import Inspected, LineStability, MachiningWarning, PlanWarning
 from twin.sim import loop, mujoco_c
 from twin.sim.drive import MAX_VALUE, Drive, Encoder, substeps_per_tick
 from twin.sim.protocols import Disturbance, ForceModel, InputDisturbance, ProgramReference, Reference
@@ -91,7 +91,7 @@ class ProgramTrace:
         by line (:func:`twin.gcode.checks.plan_warnings`).
     plan_warnings_total : int
         How many there are in all.
-    line_stability : dict of int to dict
+    line_stability : dict of int to twin.records.LineStability
         With a stock and a tool with ``dynamics``: each cutting line's chatter check
         (:func:`twin.machining.program_stability.line_stability`).
     """
@@ -107,7 +107,7 @@ class ProgramTrace:
     machining_warnings_total: int
     plan_warnings: list[PlanWarning]
     plan_warnings_total: int
-    line_stability: dict[int, dict] = field(default_factory=dict)
+    line_stability: dict[int, LineStability] = field(default_factory=dict)
 
 
 @dataclass
