@@ -7,7 +7,7 @@ import importlib
 from pathlib import Path
 from types import ModuleType
 
-from registries import Registry
+from controllers.registries import Registry
 
 
 class Reproduction:
