@@ -296,6 +296,11 @@ class StabilityLobes:
             frames.append(frame.add_prefix(f"{method}_"))
         return pd.concat(frames, axis=1)
 
+    @property
+    def stability_checks(self) -> list[dict]:
+        """With a program: each cutting line's chatter check, in program order (empty without)."""
+        return [row["stability"] for row in self.summary.get("lines", [])]
+
     def write_png(self, path: str | Path) -> Path:
         """The lobes, the program's lines on them and the chatter frequency beneath (PNG)."""
         from twin.commissioning.lobes import write_lobes_png

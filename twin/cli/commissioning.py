@@ -194,7 +194,7 @@ def lobes(
                 else (f"lowest critical depth {low['critical_depth_mm']:.3f} mm at {low['spindle_rpm']:.0f} rpm")
             )
             typer.echo(f"  {name}: {where} over {span}, {summary['seconds'][name]:.2f} s")
-        _print_chatter_check(summary.get("lines", []))
+        _print_chatter_check(found.stability_checks)
     if plots is not None:
         plots.mkdir(parents=True, exist_ok=True)
         path = found.write_png(plots / f"lobes_{Path(scenario).stem}.png")

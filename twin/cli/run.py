@@ -96,7 +96,7 @@ def _report(
         )
         records = done.records
         _print_worst_lines(records.lines)
-        _print_chatter_check(records.lines)
+        _print_chatter_check(records.stability_checks)
         _print_warnings("machining warnings", records.machining_warnings, records.machining_warnings_total)
         _print_warnings("warnings against the machine", records.plan_warnings, records.plan_warnings_total)
         _print_chatter(records)
