@@ -359,31 +359,15 @@ def tune(
         for a, v in result.get("verification", {}).items():
             typer.echo(f"  verified on the twin, {a}: " + ", ".join(f"{k} {x:.4g}" for k, x in v.items()))
         if check_margins:
-            from twin.commissioning.boundary import CONDITIONS, MAX_WIDENINGS
+            from twin.commissioning.boundary import CONDITIONS
 
             typer.echo(
                 "  the twin's bisected boundary, dB (less the cascade margin): "
                 + ", ".join(CONDITIONS)
                 + ", zero step (the linear boundary extrapolated to a zero physics step)"
             )
-
-            def found(boundary: float | None, less: float | None) -> str:
-                return f"none within {MAX_WIDENINGS} dB" if boundary is None else f"{boundary:6.2f} ({less:+.2f})"
-
-            for row in result["margin_check"]:
-                typer.echo(
-                    f"  {row['axis']} {row['gain']:<7} margin {row['margin_db']:6.2f} dB: "
-                    + ", ".join(
-                        found(row[name] and row[name]["boundary_db"], row[name + "_minus_margin_db"])
-                        for name in CONDITIONS
-                    )
-                    + ", "
-                    + (
-                        "-"
-                        if row.get("zero_step_db") is None
-                        else found(row["zero_step_db"], row["zero_step_minus_margin_db"])
-                    )
-                )
+            for row in tuned.margin_check:
+                typer.echo(f"  {row.report_line()}")
     if out is not None:
         out.write_text(tuned.scenario_text(), encoding="utf-8")
         typer.echo(f"scenario written to {out} (run it: twin run {out})", err=as_json)
