@@ -32,6 +32,7 @@ def _timestep_and_sets(sets: list[str], option: str = "--set timestep_s") -> tup
 
 @_guard
 def frf(
+    *,
     machine: str = typer.Argument(..., help="A machine (twin list) or a machine file (FILE.toml)"),
     axis: str = typer.Option("x", "--axis", help="The axis to excite"),
     loop: str = typer.Option("velocity", "--loop", help="open | velocity | position"),
@@ -145,6 +146,7 @@ def _parse_rpm(text: str | None) -> tuple[float, float, int] | None:
 
 @_guard
 def lobes(
+    *,
     scenario: str = typer.Argument(..., help="Scenario TOML file, or a bundled scenario name"),
     method: str = typer.Option("both", "--method", help="zoa | sd | both"),
     rpm: str = typer.Option(None, "--rpm", help="Spindle speeds MIN:MAX:N (default: from the scenario's)"),
@@ -203,6 +205,7 @@ def lobes(
 
 @_guard
 def calibrate(
+    *,
     machine: str = typer.Argument(..., help="A machine (twin list) or a machine file (FILE.toml)"),
     trace: Path = typer.Option(..., "--trace", help="Measured time trace or FRF, .csv or .parquet"),
     fit: str = typer.Option(..., "--fit", help="Parameters to fit, SYM,SYM"),
@@ -269,6 +272,7 @@ def calibrate(
 
 @_guard
 def excite(
+    *,
     machine: str = typer.Argument(..., help="A machine (twin list) or a machine file (FILE.toml)"),
     out: Path = typer.Option(..., "--out", help="The trace to write, .csv or .parquet"),
     axis: str = typer.Option("x", "--axis", help="The axis to excite"),
@@ -299,6 +303,7 @@ def excite(
 
 @_guard
 def tune(
+    *,
     machine: str = typer.Argument(..., help="A machine (twin list) or a machine file (FILE.toml)"),
     sets: list[str] = typer.Option(None, "--set", help="Parameter override SYMBOL=VALUE"),
     control_period: float = typer.Option(None, "--control-period", help="Control period, s (default about 0.1 ms)"),

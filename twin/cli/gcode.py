@@ -13,6 +13,7 @@ from twin.records import plan_warning
 
 @_guard
 def gcode(
+    *,
     file: Path = typer.Argument(..., help="The part program (RS-274/NGC, LinuxCNC's dialect)"),
     machine: str = typer.Option(None, "--machine", help="Plan the program for this machine (twin list)"),
     as_json: bool = typer.Option(False, "--json", help="Print the moves (and the plan) as JSON"),
