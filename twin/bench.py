@@ -411,6 +411,7 @@ def startup(repeats: int = 5) -> dict:
 
 def run_bench(
     seconds: float = 2.0,
+    *,
     repeats: int = 5,
     gcode_lines: int = 1_000_000,
     gcode_moves: int = 10_000,

@@ -524,3 +524,8 @@ class RunRecords:
     inspection: tuple[Inspected, ...] = ()
     chatter: ChatterCheck | None = None
     chatter_warnings: tuple[ChatterWarning, ...] = ()
+
+    @property
+    def stability_checks(self) -> list[dict[str, Any]]:
+        """The cutting lines' chatter checks (:attr:`LineRow.stability`), in program order."""
+        return [row.stability for row in self.lines if row.stability is not None]
