@@ -42,7 +42,9 @@ def test_riccati_solutions_solve_their_equations():
 def test_gamma_min_matches_sb10ad_on_the_ncf_generalized_plant():
     A, B, C = _shaped()
     ours = gamma_min(A, B, C)
-    independent = gamma_iteration(ncf_generalized_plant(A, B, C), 100.0, 1.0 + 1e-6, 1e-6, 2, 2).gamma
+    independent = gamma_iteration(
+        ncf_generalized_plant(A, B, C), gamma_max=100.0, gamma_min=1.0 + 1e-6, tol=1e-6, ncon=2, nmeas=2
+    ).gamma
     assert abs(ours - independent) < 0.01 * independent
     assert 1.0 < ours < 4.0  # a sensible loop shape (Skogestad: gamma_min < 4)
 
@@ -51,7 +53,7 @@ def test_central_controller_achieves_its_gamma_and_not_below_gamma_min():
     A, B, C = _shaped()
     g_min = gamma_min(A, B, C)
     K = central_controller(A, B, C, 1.1 * g_min)
-    achieved = ncf_robustness_norm(A, B, C, K, np.logspace(-1, 5, 800))
+    achieved = ncf_robustness_norm(A, B, C, K, omega=np.logspace(-1, 5, 800))
     assert g_min * 0.999 < achieved <= 1.1 * g_min * 1.001
     with pytest.raises(ValueError, match="must exceed gamma_min"):
         central_controller(A, B, C, 0.99 * g_min)

@@ -164,7 +164,9 @@ def test_imbdo_reduces_a_harmonic_input_disturbance_as_predicted(f_hz):
     for name, observe in (("cascade", False), ("imbdo", True)):
         ctrl = make_controller("cascade", dt, _cascade_gains())
         if observe:
-            ctrl = with_correction(ctrl, [inverse_model_observer(bm.plant[0][0], 100.0, 2, dt, delay_s=bm.delay_s)])
+            ctrl = with_correction(
+                ctrl, [inverse_model_observer(bm.plant[0][0], cutoff_hz=100.0, order=2, dt=dt, delay_s=bm.delay_s)]
+            )
         pos, _ = tf_loop(bm.plant[0][0], ctrl, np.zeros((n, 3)), dt, bm.delay_s, u_dist_V=d)
         e = -pos[int(2.0 / dt) :]
         window = np.hanning(len(e))

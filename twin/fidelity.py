@@ -177,7 +177,7 @@ def frequency_response_errors(
     for k in range(n_axes):
         amp = tone_amplitude_m(channels[k], crossover_hz)
         ref = SumOfSines((amp,) * len(bins), tuple(freqs), tuple(phases), n_axes=n_axes, axes=(k,))
-        ctrls = [error_feedback(designs[i][0], dt, (a.name,), name=f"P.{a.name}") for i, a in enumerate(bm.axes)]
+        ctrls = [error_feedback(designs[i][0], dt, axes=(a.name,), name=f"P.{a.name}") for i, a in enumerate(bm.axes)]
         res = simulate(
             bm, ctrls, ref, (settle + 1) * period_s, dt, disturbances=disturbances, progress=False, record_every=every
         )

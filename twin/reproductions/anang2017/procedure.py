@@ -150,8 +150,8 @@ def continuous_loop(delay: str = "exact", tf_s: float = 0.0):
 def sampled_loop(dt: float = DT_S, tf_s: float = TF_S):
     """L(w) of the twin's sampled loop: Tustin controller, ZOH plant, delay in whole ticks."""
     bm = machine()
-    A, B, C, D = discretize(*tf_to_ss(pid_mm(tf_s)), dt, "tustin")
-    Ag, Bg, Cg, Dg = discretize(*tf_to_ss(plant_mm()), dt, "zoh")
+    A, B, C, D = discretize(*tf_to_ss(pid_mm(tf_s)), dt=dt, method="tustin")
+    Ag, Bg, Cg, Dg = discretize(*tf_to_ss(plant_mm()), dt=dt, method="zoh")
     n = round(bm.delay_s / dt)
 
     def response(A, B, C, D, z):
@@ -216,7 +216,7 @@ def ke(ko_per_mm: float = anang2017.KO_PER_MM, e_max_mm: float = anang2017.E_MAX
 
 def _scaled_pid(gain: float, axis: str = "x"):
     c = anang2017.pid(TF_S)
-    return error_feedback(SisoTf(np.asarray(c.num) * gain, c.den), DT_S, (axis,), name=f"K PID.{axis}")
+    return error_feedback(SisoTf(np.asarray(c.num) * gain, c.den), DT_S, axes=(axis,), name=f"K PID.{axis}")
 
 
 def _grows(error: np.ndarray, dt: float) -> bool:

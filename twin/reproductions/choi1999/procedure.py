@@ -68,7 +68,9 @@ def design() -> dict:
     d = s4.mimo_design()
     lsd = d["design"]
     A, B, C = lsd.shaped.A, lsd.shaped.B, lsd.shaped.C
-    independent = gamma_iteration(ncf_generalized_plant(A, B, C), 100.0, 1.0 + 1e-6, 1e-7, 2, 2).gamma
+    independent = gamma_iteration(
+        ncf_generalized_plant(A, B, C), gamma_max=100.0, gamma_min=1.0 + 1e-6, tol=1e-7, ncon=2, nmeas=2
+    ).gamma
     full, reduced = d["full"], d["reduced"]
     w = np.logspace(0, 4, 200)
     F, R = frequency_response(full, w), frequency_response(reduced, w)
@@ -92,7 +94,7 @@ def design() -> dict:
         "gamma": lsd.gamma,
         "gamma_factor": s4.GAMMA_FACTOR,
         "margin": lsd.margin,
-        "achieved_norm": ncf_robustness_norm(A, B, C, lsd.K_inf, np.logspace(-1, 5, 600)),
+        "achieved_norm": ncf_robustness_norm(A, B, C, lsd.K_inf, omega=np.logspace(-1, 5, 600)),
         "shaped_order": int(lsd.shaped.nstates),
         "k_inf_order": int(lsd.K_inf.nstates),
         "order": loops["full"]["order"],

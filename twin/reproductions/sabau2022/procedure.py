@@ -521,7 +521,12 @@ def abc_part(seed: int, twin: bool) -> dict:
             return cost(m) if np.isfinite(m["settling_time_s"]) else math.inf
 
         res = bee_colony_minimize(
-            evaluate, [ABC_LOG10_BOUNDS[0]] * 2, [ABC_LOG10_BOUNDS[1]] * 2, ABC_ITERATIONS, seed, ABC_POPULATION
+            evaluate,
+            [ABC_LOG10_BOUNDS[0]] * 2,
+            [ABC_LOG10_BOUNDS[1]] * 2,
+            iterations=ABC_ITERATIONS,
+            seed=seed,
+            population=ABC_POPULATION,
         )
         best = lqr_step_metrics("x", res.x)
         history = [lqr_step_metrics("x", x) for x in res.best_x]
@@ -545,7 +550,7 @@ def _abc_controller(metrics: dict) -> Controller:
     from controllers.design.pid import pid_tf
 
     kp, kv = metrics["k_theta"] / metrics["k_omega"], metrics["k_omega"] * s1.MM_PER_M
-    x = cascade(pid_tf(kp), pid_tf(kv), DT, "x", name="abc.x")
+    x = cascade(pid_tf(kp), pid_tf(kv), DT, axis="x", name="abc.x")
     y = controller("pole_placement", ("y",))
     return Controller(x.blocks + y.blocks, DT, "abc")
 
