@@ -138,6 +138,7 @@ def multisine_bins(period_s: float, f_min_hz: float, f_max_hz: float, n_tones: i
 def frequency_response_errors(
     bm,
     reference,
+    *,
     period_s: float = 10.0,
     f_max_hz: float = 50.0,
     n_tones: int = 40,
@@ -306,7 +307,9 @@ def fidelity(case: str, overrides: dict | None = None, *, frf_period_s: float = 
         "tf": _tf_listing(bm, reference),
         "time_nrmse": time_response_nrmse(bm, reference, disturbances=disturbances),
     }
-    out.update(frequency_response_errors(bm, reference, frf_period_s, n_tones=frf_tones, disturbances=disturbances))
+    out.update(
+        frequency_response_errors(bm, reference, period_s=frf_period_s, n_tones=frf_tones, disturbances=disturbances)
+    )
     out["coupling_slip_um"] = coupling_slip_um(bm)
     out["targets"] = TARGETS
     out["pass"] = all(out[k] <= v for k, v in TARGETS.items())

@@ -33,7 +33,7 @@ def plot_folder(folder):
     return plt, save, written
 
 
-def _axes_plot(plt, t, series: dict, ylabel: str, title: str, path: Path) -> Path:
+def _axes_plot(plt, t, series: dict, *, ylabel: str, title: str, path: Path) -> Path:
     """One panel: a curve per name."""
     fig, ax = plt.subplots(figsize=(8, 3.5))
     for label, values in series.items():
@@ -70,17 +70,17 @@ def write_plots(result, directory: Path, name: str = "run") -> list[Path]:
             plt,
             t,
             {f"{a}": error_um[:, i] for i, a in enumerate(axes)},
-            "reference - actual (µm)",
-            f"{name}: tracking error",
-            directory / f"{name}_tracking_error.png",
+            ylabel="reference - actual (µm)",
+            title=f"{name}: tracking error",
+            path=directory / f"{name}_tracking_error.png",
         ),
         _axes_plot(
             plt,
             t,
             {f"{a}": result.u_V[:, i] for i, a in enumerate(axes)},
-            "control input (V)",
-            f"{name}: control input",
-            directory / f"{name}_control.png",
+            ylabel="control input (V)",
+            title=f"{name}: control input",
+            path=directory / f"{name}_control.png",
         ),
     ]
     quantity, unit = machine.drive_quantity(machine.axes[0])
@@ -114,9 +114,9 @@ def write_plots(result, directory: Path, name: str = "run") -> list[Path]:
                 plt,
                 t,
                 {"indicator (20 ms)": indicator, "threshold": np.full(len(t), CHATTER_THRESHOLD)},
-                "once-per-tooth vibration / feed per tooth (1)",
-                f"{name}: chatter indicator",
-                directory / f"{name}_chatter.png",
+                ylabel="once-per-tooth vibration / feed per tooth (1)",
+                title=f"{name}: chatter indicator",
+                path=directory / f"{name}_chatter.png",
             )
         )
     if len(axes) == 2:
