@@ -146,8 +146,8 @@ def test_zpetc_inverts_a_well_damped_zero_near_one_and_not_one_near_minus_one():
 
 def test_zpetc_reduces_the_air_cut_tracking_error():
     kw = dict(radius_mm=20.0, feed=2400.0, duration_s=0.6)
-    with_ff = r.tf_circle("mimo", True, **kw)["max_tracking_settled_um"]
-    without = r.tf_circle("mimo", False, **kw)["max_tracking_settled_um"]
+    with_ff = r.tf_circle("mimo", zpetc=True, **kw)["max_tracking_settled_um"]
+    without = r.tf_circle("mimo", zpetc=False, **kw)["max_tracking_settled_um"]
     assert max(with_ff) < 0.2 * max(without)
 
 
@@ -159,7 +159,13 @@ def test_twin_matches_transfer_function_loop_within_2_percent():
     data.pop("sensors")
     twin = r.twin_errors(r.run_twin(data))
     tf = r.tf_circle(
-        "mimo", True, 28.0, 4800.0, 0.6, r.AVERAGE_FORCE["k_il_N_s_per_m"], r.AVERAGE_FORCE["k_c_N_s_per_m"]
+        "mimo",
+        zpetc=True,
+        radius_mm=28.0,
+        feed=4800.0,
+        duration_s=0.6,
+        k_il=r.AVERAGE_FORCE["k_il_N_s_per_m"],
+        k_c=r.AVERAGE_FORCE["k_c_N_s_per_m"],
     )
     for key in ("max_tracking_settled_um", "max_contour_path_um"):
         np.testing.assert_allclose(twin[key], tf[key], rtol=0.02)

@@ -81,6 +81,7 @@ def tf_loop(
     plant,
     controller,
     ref: np.ndarray,
+    *,
     dt: float,
     delay_s: float = 0.0,
     u_dist_V: np.ndarray | None = None,

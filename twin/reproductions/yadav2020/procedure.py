@@ -370,10 +370,10 @@ def tf_step_series(controller, params: dict[str, float], delay_s: float = 0.0) -
     if delay_s > 0.0 and np.abs(np.linalg.eigvals(ss.A)).max() >= 1.0:
         return None
     t = np.arange(round(horizon / dt)) * dt
-    return t, sampled_step_response(ss.A, ss.B, ss.C, ss.D, len(t))
+    return t, sampled_step_response(ss.A, ss.B, ss.C, ss.D, n=len(t))
 
 
-def sampled_step_response(A, B, C, D, n: int, block: int = 1024) -> np.ndarray:
+def sampled_step_response(A, B, C, D, *, n: int, block: int = 1024) -> np.ndarray:
     """Unit-step response of ``x[k+1] = A x[k] + B u[k], y = C x + D u`` (SISO), ``n`` samples
     from rest, in state space: the powers ``A^m`` of one block (``m < block``, by doubling) give
     its free response ``C A^m`` and its forced one ``C sum_{j<m} A^j B + D``; each block then
