@@ -399,6 +399,7 @@ def test_a_streamed_program_gets_the_held_ones_drive_warnings(monkeypatch):
     """A program too long to hold is checked as the run draws its samples: once drawn to the end
     its warnings are those of the same program held whole."""
     import twin.gcode.planner as planner
+    from twin.gcode.checks import typed_plan_warnings
     from twin.references.gcode import StreamedGcodeReference
 
     monkeypatch.setattr(planner, "WINDOW_POINTS", 3000)
@@ -418,4 +419,7 @@ def test_a_streamed_program_gets_the_held_ones_drive_warnings(monkeypatch):
     for k0 in range(0, samples * 2, 700):  # the runner's chunks at a 0.5 ms period
         streamed.sample(np.arange(k0, k0 + 710) * 5e-4)
     assert len(whole.warnings.listed()) >= 5
-    assert streamed.plan_warnings == ([plan_warning(row) for row in whole.warnings.listed()], whole.warnings.total)
+    assert typed_plan_warnings(streamed_check) == (
+        [plan_warning(row) for row in whole.warnings.listed()],
+        whole.warnings.total,
+    )

@@ -21,6 +21,7 @@ if TYPE_CHECKING:  # the heavy modules load on first use, not with `import twin`
 
     from twin.commissioning.frf import FrfSettings
     from twin.gcode.moves import Move
+    from twin.outcome import RunOutcome
     from twin.records import RunRecords
     from twin.sampling import SamplePlan
     from twin.scenario import Scenario
@@ -34,16 +35,24 @@ class Run:
     Attributes
     ----------
     scenario : twin.scenario.Scenario
-    result : twin.sim.runner.RunResult
-        The raw arrays (SI units) at the recorded ticks, and metrics over every tick.
-    stopped : SimulationDiverged or RunInterrupted or None
-        What stopped a run early (see :func:`twin.api.run`'s ``keep_partial``); None for a run
-        that went to its end.
+    outcome : twin.outcome.RunOutcome
+        The run and what was computed from its motion: with a part program its warnings, with
+        a stock the part it cut and its inspection.
     """
 
     scenario: Scenario
-    result: RunResult
-    stopped: SimulationDiverged | RunInterrupted | None = None
+    outcome: RunOutcome
+
+    @property
+    def result(self) -> RunResult:
+        """The raw arrays (SI units) at the recorded ticks, and metrics over every tick."""
+        return self.outcome.run
+
+    @property
+    def stopped(self) -> SimulationDiverged | RunInterrupted | None:
+        """What stopped a run early (see :func:`twin.api.run`'s ``keep_partial``); None for a
+        run that went to its end."""
+        return self.outcome.stopped
 
     @property
     def status(self) -> str:
@@ -66,7 +75,7 @@ class Run:
             "status": self.status,
             **({} if self.stopped is None else {"sim_time_s": self.stopped.sim_time_s}),
             "completed_ticks": done,
-            **(tracking_summary(self.result, self.records) if done else {}),
+            **(tracking_summary(self.outcome, self.records) if done else {}),
             "loop": self.result.info["loop"],
         }
 
@@ -80,7 +89,7 @@ class Run:
 
         if not self.result.info["completed_ticks"]:
             return RunRecords()
-        return run_records(self.result, run_contour_error(self.result))
+        return run_records(self.outcome, run_contour_error(self.result))
 
     def lines_to_parquet(self, path: str | Path) -> Path:
         """Write the per-line table of a G-code run (:attr:`records`' ``lines``, each row's
@@ -123,7 +132,7 @@ class Run:
         from twin.recording import record
 
         path = Path(path)
-        record(self.result, path)
+        record(self.outcome, path)
         return path
 
     def write_part(self, folder: str | Path) -> list[Path]:
@@ -137,7 +146,7 @@ class Run:
         TwinInputError
             The run has no virtual part (no stock, or it stopped early).
         """
-        part = self.result.part
+        part = self.outcome.part
         if part is None or part.maps is None:
             raise TwinInputError("part", str(folder), "the run has no virtual part: give [stock] and run to the end")
         folder = Path(folder)
@@ -152,7 +161,7 @@ class Run:
         """Write the PNG plots of ``twin run --plots`` into ``folder``; their paths."""
         from twin.plots import write_plots
 
-        return write_plots(self.result, Path(folder), self.scenario.name)
+        return write_plots(self.outcome, Path(folder), self.scenario.name)
 
 
 @dataclass

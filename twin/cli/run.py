@@ -110,7 +110,7 @@ def _report(
     if plots is not None and len(done.result.t_s):
         for path in done.plots(plots):  # matplotlib is imported only when plots are asked for
             typer.echo(f"plot written to {path}", err=as_json)
-    if part is not None and done.result.part is not None:
+    if part is not None and done.outcome.part is not None:
         for path in done.write_part(part):
             typer.echo(f"part written to {path}", err=as_json)
 

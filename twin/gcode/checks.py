@@ -27,6 +27,7 @@ import numpy as np
 from twin.gcode.moves import Move, MoveKind
 from twin.gcode.path import Segment, SegmentKind, move_segment
 from twin.gcode.planned import PlanningError
+from twin.records import PlanWarning, plan_warning
 
 #: Warnings listed at most (each check); more are counted.
 MAX_WARNINGS = 100
@@ -270,3 +271,9 @@ def plan_warnings(*checks: TravelCheck | DriveCheck | None) -> tuple[list[dict],
     done = [c.warnings for c in checks if c is not None]
     rows = sorted((row for w in done for row in w.listed()), key=lambda row: (row["line"], row["check"], row["axis"]))
     return rows, sum(w.total for w in done)
+
+
+def typed_plan_warnings(*checks: TravelCheck | DriveCheck | None) -> tuple[list[PlanWarning], int]:
+    """The warnings of ``checks`` by line (:func:`plan_warnings`), typed, and how many in all."""
+    rows, total = plan_warnings(*checks)
+    return [plan_warning(row) for row in rows], total

@@ -22,7 +22,7 @@ the nominal feature are its measured points:
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Annotated, Any, Literal
 
 import numpy as np
@@ -30,6 +30,7 @@ import shapely
 from pydantic import Field, PositiveFloat
 from scipy.optimize import least_squares
 
+from twin.machining.engagement import StockSpec
 from twin.machining.part import MachinedPart
 from twin.records import CircleMeasured, FeatureNotFound, FeatureType, Inspected, LineMeasured, WidthMeasured
 from twin.spec import MAX_MM, Millimetres, ReportName, StrictSpec
@@ -232,3 +233,16 @@ def measure(feature: InspectSpec, part: MachinedPart) -> Inspected:
     """One feature of ``inspection`` measured on the actual ``part`` at its height (see the
     module docstring): probes every :data:`PROBE_STEP_MM` along the nominal feature."""
     return MEASURES[FeatureType(feature.type)](feature, part)
+
+
+def inspect(features: Sequence[InspectSpec], part: MachinedPart, stock: StockSpec) -> tuple[Inspected, ...]:
+    """Each of ``features`` measured on the actual ``part`` at its height (:func:`measure`), or
+    why it cannot be: a height outside the ``stock``."""
+    return tuple(
+        measure(feature, part)
+        if stock.bottom_mm <= feature.z_mm <= stock.top_mm
+        else not_found(
+            feature, f"z_mm {feature.z_mm:g} is outside the stock (Z {stock.bottom_mm:g} to {stock.top_mm:g} mm)"
+        )
+        for feature in features
+    )

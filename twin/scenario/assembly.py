@@ -1,6 +1,7 @@
 """A scenario assembled into what a run takes: the machine built, the controllers designed, the
-reference planned, the drive, the encoders, the disturbances and, with a stock, the program's cut;
-every cross-field constraint checked, each error naming its field."""
+reference planned, the drive, the encoders, the disturbances and, for a part program, the program
+as planned before the run (with a stock its cut); every cross-field constraint checked, each
+error naming its field."""
 
 from __future__ import annotations
 
@@ -17,7 +18,9 @@ from twin.disturbances import DISTURBANCES
 from twin.errors import TwinInputError
 from twin.machines import BuiltMachine, build
 from twin.machining.program_cut import program_milling
+from twin.outcome import PlannedProgram, planned_program
 from twin.references import REFERENCES, ReferenceContext
+from twin.references.gcode import GcodeReference, StreamedGcodeReference
 from twin.scenario.schema import ControllerSpec, Scenario
 from twin.sim.drive import Drive, Encoder, substeps_per_tick
 from twin.sim.protocols import Disturbance, Reference
@@ -100,7 +103,9 @@ def _disturbance(spec, index: int, axis_names: list[str], seed: int):
 @dataclass
 class RunInputs:
     """Everything :func:`twin.sim.runner.simulate` takes, assembled from a scenario (see its
-    parameters); with a stock, the reference is the program cutting it."""
+    parameters); with a stock, the reference is the program cutting it.  For a part program,
+    ``program`` is the program as planned before the run, what :func:`twin.outcome.finish`
+    reads after it (None for other references)."""
 
     machine: BuiltMachine
     controllers: list[Controller]
@@ -111,6 +116,7 @@ class RunInputs:
     encoder: Encoder
     record_every: int | None
     disturbances: list[Disturbance]
+    program: PlannedProgram | None = None
 
     def simulate(
         self,
@@ -201,15 +207,20 @@ def assemble(scn: Scenario) -> RunInputs:
     disturbances = [_disturbance(d, i, names, scn.seed) for i, d in enumerate(scn.disturbances)]
     if scn.inspect and scn.stock is None:
         raise TwinInputError("inspect", scn.inspect[0].name, "features are measured on a part: give [stock]")
-    if scn.stock is not None:
-        if scn.reference.type != "gcode":
-            raise TwinInputError(
-                "stock", "...", f"a stock is cut by a G-code program, not a {scn.reference.type} reference"
-            )
+    program = None
+    if scn.stock is not None and not isinstance(reference, GcodeReference):
+        raise TwinInputError(
+            "stock", "...", f"a stock is cut by a G-code program, not a {scn.reference.type} reference"
+        )
+    if isinstance(reference, GcodeReference) and scn.stock is not None:
         cut = program_milling(reference.plan, scn.stock, scn.tool, scn.tools, scn.seed)
         reference = reference.cutting(cut)
-        reference.line_stability  # noqa: B018 - each line's chatter check, its bad input caught before the run
         disturbances.append(cut.milling)
+        program = planned_program(reference.checks, reference.plan, cut, scn.stock, tuple(scn.inspect))
+    elif isinstance(reference, GcodeReference):
+        program = planned_program(reference.checks, reference.plan)
+    elif isinstance(reference, StreamedGcodeReference):
+        program = planned_program(reference.checks, None)
     return RunInputs(
         machine=machine,
         controllers=ctrls,
@@ -220,4 +231,5 @@ def assemble(scn: Scenario) -> RunInputs:
         encoder=encoder,
         record_every=scn.record_every_ticks,
         disturbances=disturbances,
+        program=program,
     )
