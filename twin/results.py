@@ -21,6 +21,7 @@ if TYPE_CHECKING:  # the heavy modules load on first use, not with `import twin`
 
     from twin.commissioning.frf import FrfSettings
     from twin.gcode.moves import Move
+    from twin.gcode.report import PlannedSummary
     from twin.outcome import RunOutcome
     from twin.records import RunRecords
     from twin.sampling import SamplePlan
@@ -211,14 +212,15 @@ class Program:
     file : str
     moves : list of twin.gcode.reader.Move
         The moves as LinuxCNC reads them.
-    planned : dict or None
+    planned : twin.gcode.report.PlannedSummary or None
         With a machine: the plan's cycle time (s), feed-only time, limits and largest values per
-        axis and path deviation (:func:`twin.gcode.report.planned_summary`).
+        axis, path deviation and warnings against the machine
+        (:func:`twin.gcode.report.planned_summary`).
     """
 
     file: str
     moves: list[Move]
-    planned: dict | None = None
+    planned: PlannedSummary | None = None
 
     @property
     def summary(self) -> dict:
@@ -226,7 +228,7 @@ class Program:
         center_mm and turns, feed, spindle) and, with a machine, ``planned``."""
         out: dict[str, Any] = {"file": self.file, "moves": [m.as_dict() for m in self.moves]}
         if self.planned is not None:
-            out["planned"] = self.planned
+            out["planned"] = self.planned.to_json()
         return out
 
 

@@ -193,7 +193,9 @@ def lobes(scn: Scenario, settings: LobesSettings) -> dict:
     if planned is not None:
         samples, texts = planned
         checked = line_stability(samples, (float(speeds.min()), float(speeds.max())))
-        summary["lines"] = [{"line": n, "text": texts.get(n, ""), "stability": row} for n, row in checked.items()]
+        summary["lines"] = [
+            {"line": n, "text": texts.get(n, ""), "stability": check.to_json()} for n, check in checked.items()
+        ]
     return summary
 
 
