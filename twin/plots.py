@@ -140,7 +140,7 @@ def write_plots(outcome: RunOutcome, directory: Path, name: str = "run") -> list
         fig.savefig(written[-1], dpi=120, bbox_inches="tight")
         plt.close(fig)
     if result.program is not None and result.program.lines.size and len(axes) == 2:
-        written += _program_plots(plt, outcome, result.program, directory, name)
+        written += _program_plots(plt, outcome, program=result.program, directory=directory, name=name)
     return written
 
 
@@ -151,7 +151,7 @@ LABELLED_LINES = 5
 FEED_FILTER_S = 0.01
 
 
-def _program_plots(plt, outcome: RunOutcome, program: ProgramTrace, directory: Path, name: str) -> list[Path]:
+def _program_plots(plt, outcome: RunOutcome, *, program: ProgramTrace, directory: Path, name: str) -> list[Path]:
     """A program's part seen from above (stock and machined outlines, the path coloured by its
     contour error, the worst lines labelled) and its feed profile (programmed, planned, actual)."""
     result = outcome.run
@@ -237,11 +237,11 @@ def _program_plots(plt, outcome: RunOutcome, program: ProgramTrace, directory: P
     fig.savefig(written[-1], dpi=120, bbox_inches="tight")
     plt.close(fig)
     if outcome.part is not None and len(outcome.part.walls):
-        written.append(_wall_error_plot(plt, outcome, outcome.part, directory, name))
+        written.append(_wall_error_plot(plt, outcome, part=outcome.part, directory=directory, name=name))
     return written
 
 
-def _wall_error_plot(plt, outcome: RunOutcome, part: MachinedPart, directory: Path, name: str) -> Path:
+def _wall_error_plot(plt, outcome: RunOutcome, *, part: MachinedPart, directory: Path, name: str) -> Path:
     """The virtual part from above: its walls coloured by their signed error (µm, material left
     red, overcut blue, one scale either side of zero), the inspected features' results beside."""
     walls = part.walls
