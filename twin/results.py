@@ -24,7 +24,7 @@ if TYPE_CHECKING:  # the heavy modules load on first use, not with `import twin`
     from twin.gcode.moves import Move
     from twin.gcode.report import PlannedSummary
     from twin.outcome import RunOutcome
-    from twin.records import RunRecords
+    from twin.records import LineStability, RunRecords
     from twin.sampling import SamplePlan
     from twin.scenario import Scenario
     from twin.sim.runner import RunResult
@@ -309,9 +309,11 @@ class StabilityLobes:
         return pd.concat(frames, axis=1)
 
     @property
-    def stability_checks(self) -> list[dict]:
+    def stability_checks(self) -> list[LineStability]:
         """With a program: each cutting line's chatter check, in program order (empty without)."""
-        return [row["stability"] for row in self.summary.get("lines", [])]
+        from twin.records import LineStability
+
+        return [LineStability.from_json(row["stability"]) for row in self.summary.get("lines", [])]
 
     def write_png(self, path: str | Path) -> Path:
         """The lobes, the program's lines on them and the chatter frequency beneath (PNG)."""

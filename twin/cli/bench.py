@@ -190,7 +190,7 @@ def _bench_sweep(as_json: bool, samples: int, memory_samples: int, repeats: int)
     for option, value in (("--samples", samples), ("--memory-samples", memory_samples)):
         if not 1 <= value <= 100_000:
             raise TwinInputError(option, value, "must be in 1..100000")
-    f = run_sweep_bench(samples, repeats=repeats, memory_samples=memory_samples, progress=not as_json)
+    f = run_sweep_bench(samples=samples, repeats=repeats, memory_samples=memory_samples, progress=not as_json)
     if as_json:
         _echo_json({"sweep": f}, 2)
         return

@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
 
 import typer
 
 from twin import exits
-from twin.records import Inspected, LineRow, LineWarning, RunRecords
+from twin.records import Inspected, LineRow, LineStability, LineWarning, RunRecords
 
 #: Lines of a program the text summary names, worst first.
 WORST_LINES = 5
@@ -67,7 +66,7 @@ def _print_chatter(records: RunRecords) -> None:
     _print_warnings("chatter warnings", warnings, len(warnings))
 
 
-def _print_chatter_check(checked: Sequence[dict[str, Any]]) -> None:
+def _print_chatter_check(checked: Sequence[LineStability]) -> None:
     """The program's cutting lines over their critical depth (the tool's lobes), worst first:
     ``checked`` holds each cutting line's chatter check
     (:func:`twin.machining.program_stability.line_stability`)."""

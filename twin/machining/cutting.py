@@ -138,7 +138,13 @@ def flute_force_integral(k, axial_depth_mm, du, dw, phi):  # pragma: no cover - 
 
 
 def mean_tool_forces_N(
-    k: CuttingCoefficients, n_flutes: int, axial_depth_mm: float, feed_per_tooth_mm: float, phi_st: float, phi_ex: float
+    k: CuttingCoefficients,
+    *,
+    n_flutes: int,
+    axial_depth_mm: float,
+    feed_per_tooth_mm: float,
+    phi_st: float,
+    phi_ex: float,
 ) -> np.ndarray:
     """Closed-form average force on the tool over a tooth period, feed frame (N), shape (3,).
 
