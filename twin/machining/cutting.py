@@ -172,22 +172,36 @@ def flute_force_double_integral(k, du, dw, phi):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _clipped_double_integral(k, du, dw, phi_st, phi_ex, u):  # pragma: no cover - compiled
+def _arc_ends(k, du, dw, phi_st, phi_ex, u_lo, u_hi):  # pragma: no cover - compiled
+    """The primitives :func:`_clipped_double_integral` takes at the arc's ends for every ``u``
+    in ``[u_lo, u_hi]``: ``Q(phi_st)`` (unit depth) where some ``u <= phi_st``, ``R(phi_st)``
+    where some ``u > phi_st``, ``R(phi_ex)`` and ``Q(phi_ex)`` where some ``u >= phi_ex``; zeros
+    for those no ``u`` there needs (each is evaluated once per flute and step, not once per
+    ``u``)."""
+    zero = (0.0, 0.0, 0.0)
+    q_st = flute_force_integral(k, 1.0, du, dw, phi_st) if u_lo <= phi_st else zero
+    r_st = flute_force_double_integral(k, du, dw, phi_st) if u_hi > phi_st else zero
+    past_end = u_hi >= phi_ex
+    r_ex = flute_force_double_integral(k, du, dw, phi_ex) if past_end else zero
+    q_ex = flute_force_integral(k, 1.0, du, dw, phi_ex) if past_end else zero
+    return q_st, r_st, r_ex, q_ex
+
+
+@njit(cache=True)
+def _clipped_double_integral(k, du, dw, phi_st, phi_ex, ends, u):  # pragma: no cover - compiled
     """``G(u)``: the integral up to ``u`` of ``Q(clip(psi, phi_st, phi_ex))`` at unit depth,
     zero at ``phi_st`` (N rad^2/mm): ``Q(phi_st) (u - phi_st)`` below the arc, ``R(u) - R(phi_st)``
-    on it, ``R(phi_ex) - R(phi_st) + Q(phi_ex) (u - phi_ex)`` above it."""
+    on it, ``R(phi_ex) - R(phi_st) + Q(phi_ex) (u - phi_ex)`` above it; ``ends`` the primitives
+    at the arc's ends (:func:`_arc_ends`)."""
+    q_st, r0, r_ex, q_ex = ends
     if u <= phi_st:
-        q = flute_force_integral(k, 1.0, du, dw, phi_st)
         d = u - phi_st
-        return q[0] * d, q[1] * d, q[2] * d
-    r0 = flute_force_double_integral(k, du, dw, phi_st)
+        return q_st[0] * d, q_st[1] * d, q_st[2] * d
     if u < phi_ex:
         r = flute_force_double_integral(k, du, dw, u)
         return r[0] - r0[0], r[1] - r0[1], r[2] - r0[2]
-    r = flute_force_double_integral(k, du, dw, phi_ex)
-    q = flute_force_integral(k, 1.0, du, dw, phi_ex)
     d = u - phi_ex
-    return r[0] - r0[0] + q[0] * d, r[1] - r0[1] + q[1] * d, r[2] - r0[2] + q[2] * d
+    return r_ex[0] - r0[0] + q_ex[0] * d, r_ex[1] - r0[1] + q_ex[1] * d, r_ex[2] - r0[2] + q_ex[2] * d
 
 
 @njit(cache=True)
@@ -258,14 +272,18 @@ def step_tool_forces_N(
         if rest <= 0.0:
             continue
         # the arc's copies one revolution apart that the swept angles [start - rest, start + step] meet
-        for m in range(
-            math.floor((start - rest - ex) / two_pi), math.floor((start + step_angle_rad - st) / two_pi) + 1
-        ):
+        first, last = math.floor((start - rest - ex) / two_pi), math.floor((start + step_angle_rad - st) / two_pi)
+        if last < first:
+            continue
+        # the u below are within [u_lo, u_hi]: the latest copy's u - rest, the earliest's u + step
+        u_lo, u_hi = (start - last * two_pi) - rest, (start - first * two_pi) + step_angle_rad
+        ends = _arc_ends(k, du, dw, st, ex, u_lo, u_hi)
+        for m in range(first, last + 1):
             u = start - m * two_pi
-            g1 = _clipped_double_integral(k, du, dw, st, ex, u + step_angle_rad)
-            g0 = _clipped_double_integral(k, du, dw, st, ex, u)
-            h1 = _clipped_double_integral(k, du, dw, st, ex, u + step_angle_rad - rest)
-            h0 = _clipped_double_integral(k, du, dw, st, ex, u - rest)
+            g1 = _clipped_double_integral(k, du, dw, st, ex, ends, u + step_angle_rad)
+            g0 = _clipped_double_integral(k, du, dw, st, ex, ends, u)
+            h1 = _clipped_double_integral(k, du, dw, st, ex, ends, u + step_angle_rad - rest)
+            h0 = _clipped_double_integral(k, du, dw, st, ex, ends, u - rest)
             fx += scale * (g1[0] - g0[0] - h1[0] + h0[0])
             fy += scale * (g1[1] - g0[1] - h1[1] + h0[1])
             fz += scale * (g1[2] - g0[2] - h1[2] + h0[2])
