@@ -423,7 +423,7 @@ class EndMilling:
             },
             jacobian,
         )
-        state = chip_state(n_hist, (1.0, 0.0), len(modes))  # feed direction +x until the reference first moves
+        state = chip_state(n_hist, (1.0, 0.0), len(modes), self.n_flutes)  # feed direction +x until the reference first moves
         return END_MILLING, np.concatenate([params, modes.ravel()]), state
 
 
@@ -545,8 +545,9 @@ PM_ANGLE, PM_TOOL = PM_COLUMNS.index("angle"), PM_COLUMNS.index("tool")
 #: Columns from one engaged arc's to the next's (phi_st1 to phi_st2).
 PM_ARC_STRIDE = PM_COLUMNS.index("phi_st2") - PM_PHI_ST1
 #: A milling kernel's state: the step count, the feed direction held through stops and the last
-#: once-per-tooth difference of the vibration (feed frame, mm; :func:`_probe`), then the ring
-#: buffer of the tool's XY position relative to the workpiece (:func:`_record_position`).
+#: once-per-tooth difference of the vibration (feed frame, mm; :func:`_probe`), then each tool
+#: mode's displacement and velocity, the step's scratch (:func:`_scratch`) and the ring buffer of
+#: the tool's XY position relative to the workpiece (:func:`_record_position`).
 CHIP_STATE = ("steps", "feed_x", "feed_y", "vib_u", "vib_w")
 CHIP_STEPS, CHIP_FEED_X, CHIP_FEED_Y, CHIP_VIB_U, CHIP_VIB_W = (CHIP_STATE.index(name) for name in CHIP_STATE)
 CHIP_HISTORY = len(CHIP_STATE)
@@ -662,13 +663,26 @@ def _advance_modes(modes, mstate, tool, fx, fy):  # pragma: no cover - compiled
             mstate[2 * r + 1] = modes[r, MODE_PHI_VQ] * q + modes[r, MODE_PHI_VV] * v + modes[r, MODE_GAMMA_V] * f
 
 
-def chip_state(n_hist: int, feed_direction: tuple[float, float], n_modes: int = 0) -> np.ndarray:
+def chip_state(n_hist: int, feed_direction: tuple[float, float], n_modes: int = 0, n_flutes: int = 1) -> np.ndarray:
     """A milling kernel's initial state (:data:`CHIP_STATE`, each tool mode's displacement and
-    velocity at rest, then a ring buffer of ``n_hist`` XY positions), with the feed direction
-    held until the reference first moves (a unit vector, or zero: no force until then)."""
-    state = np.zeros(CHIP_HISTORY + 2 * n_modes + 2 * n_hist)
+    velocity at rest, the scratch of a step of up to ``n_flutes`` flutes (:func:`_scratch`), then
+    a ring buffer of ``n_hist`` XY positions), with the feed direction held until the reference
+    first moves (a unit vector, or zero: no force until then)."""
+    state = np.zeros(CHIP_HISTORY + 2 * n_modes + 2 * REGENERATIONS + 2 * n_flutes + 2 * n_hist)
     state[CHIP_FEED_X], state[CHIP_FEED_Y] = feed_direction
     return state
+
+
+@njit(cache=True)
+def _scratch(state, n_modes, n_flutes):  # pragma: no cover - compiled
+    """The scratch of one step in a milling kernel's ``state`` (:func:`chip_state`), which no
+    step reads before it writes it (kept in the state so that the kernels allocate nothing):
+    each earlier tooth pass's chip vector (:data:`REGENERATIONS`, 2) and the flutes' chip
+    vectors, along and across the feed (``n_flutes`` each) (:func:`_chips`)."""
+    first = CHIP_HISTORY + 2 * n_modes
+    passes = state[first : first + 2 * REGENERATIONS].reshape((REGENERATIONS, 2))
+    chips = first + 2 * REGENERATIONS
+    return passes, state[chips : chips + n_flutes], state[chips + n_flutes : chips + 2 * n_flutes]
 
 
 _EM = {name: i for i, name in enumerate(END_MILLING_SLOTS)}
@@ -742,31 +756,33 @@ def _past(hist, i, n, lag):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _chips(hist, i, n, lag_steps, ux, uy, angle, n_flutes, chip_u, chip_w):  # pragma: no cover - compiled
+def _chips(hist, i, n, lag_steps, ux, uy, angle, n_flutes, passes_uw, chip_u, chip_w):  # pragma: no cover - compiled
     """Each flute's chip vector (feed frame, mm) into ``chip_u``, ``chip_w``: where the tool is
     now less where it was when the last earlier tooth to cut at this flute's angle ``angle - 2 pi
     j/N`` (rad) passed it, ``m`` tooth periods (``lag_steps`` physics steps each) ago, ``m``
     from 1 to :data:`REGENERATIONS` (those the buffer of ``n`` rows holds) the one that leaves
     the thinnest chip there (multiple
     regeneration: a tooth that left the cut left the surface before it).  Its projection on the
-    edge's normal is the chip thickness (:func:`step_tool_forces_N`).  Returns the tool's motion
-    over the last tooth period, feed frame (mm)."""
+    edge's normal is the chip thickness (:func:`step_tool_forces_N`).  The tool's motion over
+    each of the ``m`` tooth periods, the same for every flute, goes into ``passes_uw`` (rows
+    ``m - 1``).  Returns the tool's motion over the last tooth period, feed frame (mm)."""
     px, py = hist[i % n, 0], hist[i % n, 1]
     pitch = 2.0 * math.pi / n_flutes
     passes = max(1, min(REGENERATIONS, int((n - 2) / lag_steps)))  # those the buffer holds
+    for m in range(1, passes + 1):
+        qx, qy = _past(hist, i, n, m * lag_steps)
+        dx, dy = (px - qx) * 1e3, (py - qy) * 1e3
+        passes_uw[m - 1, 0] = dx * ux + dy * uy  # along the feed
+        passes_uw[m - 1, 1] = dy * ux - dx * uy  # along z x feed
     for j in range(n_flutes):
         s, c = math.sin(angle - j * pitch), math.cos(angle - j * pitch)
         best = math.inf
-        for m in range(1, passes + 1):
-            qx, qy = _past(hist, i, n, m * lag_steps)
-            dx, dy = (px - qx) * 1e3, (py - qy) * 1e3
-            du, dw = dx * ux + dy * uy, dy * ux - dx * uy  # along the feed and along z x feed
+        for m in range(passes):
+            du, dw = passes_uw[m, 0], passes_uw[m, 1]
             h = du * s + dw * c
             if h < best:
                 best, chip_u[j], chip_w[j] = h, du, dw
-    qx, qy = _past(hist, i, n, lag_steps)
-    dx, dy = (px - qx) * 1e3, (py - qy) * 1e3
-    return dx * ux + dy * uy, dy * ux - dx * uy
+    return passes_uw[0, 0], passes_uw[0, 1]
 
 
 @njit(cache=True)
@@ -804,9 +820,9 @@ def _end_milling(par, state, qpos, qvel, feed_velocity, t, out, probe):  # pragm
     if lo <= t < hi:
         feed_mm = speed * lag_steps * dt * 1e3
         angle = phase0 + omega * t
-        chip_u, chip_w = np.empty(n_flutes), np.empty(n_flutes)
+        passes_uw, chip_u, chip_w = _scratch(state, n_modes, n_flutes)
         mid = angle + 0.5 * omega * dt - 0.5 * lag
-        du, dw = _chips(hist, i, n, lag_steps, ux, uy, mid, n_flutes, chip_u, chip_w)
+        du, dw = _chips(hist, i, n, lag_steps, ux, uy, mid, n_flutes, passes_uw, chip_u, chip_w)
         _probe(state, du, dw, feed_mm, probe)
         k = kienzle_coefficients(k, feed_mm, phi_st, phi_ex)
         fx, fy, fz = step_tool_forces_N(k, n_flutes, a, chip_u, chip_w, phi_st, phi_ex, angle, omega * dt, lag)
@@ -852,10 +868,10 @@ def _program_milling(par, state, qpos, qvel, feed_velocity, t, out, probe):  # p
     lag_steps = 2.0 * math.pi / (omega * n_flutes) / dt
     feed_mm = speed * lag_steps * dt * 1e3
     angle = table[row, PM_ANGLE] + omega * (t - row * period)
-    chip_u, chip_w = np.empty(n_flutes), np.empty(n_flutes)
+    passes_uw, chip_u, chip_w = _scratch(state, n_modes, n_flutes)
     depth = max(table[row, PM_DEPTH1], table[row, PM_DEPTH2])
     mid = angle + 0.5 * omega * dt - 0.5 * depth * lag_per_mm
-    du, dw = _chips(hist, i, n, lag_steps, ux, uy, mid, n_flutes, chip_u, chip_w)
+    du, dw = _chips(hist, i, n, lag_steps, ux, uy, mid, n_flutes, passes_uw, chip_u, chip_w)
     _probe(state, du, dw, feed_mm, probe)
     fx = fy = fz = 0.0
     for arc in range(2):
