@@ -92,7 +92,7 @@ def immersion_angles(radial_depth_mm: float, diameter_mm: float, mode: str) -> t
     raise TwinInputError("mode", mode, "must be 'up' or 'down'")
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def kienzle_coefficients(k, feed_per_tooth_mm, phi_st, phi_ex):  # pragma: no cover - compiled
     """``k`` (:meth:`CuttingCoefficients.as_array`) itself if its ``mc`` (``k[6]``) is 0, else a
     copy with the cutting coefficients times ``h_m^-mc``: the Kienzle form linearised about the
@@ -638,7 +638,7 @@ def mode_rows(dynamics, timestep_s: float) -> np.ndarray:
     return np.array(rows, float).reshape(-1, MODE_WIDTH)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _tool_deflection(modes, mstate, tool, dt):  # pragma: no cover - compiled
     """The tool tip's deflection (m, machine X/Y) at the middle of the step: the modes of
     ``tool`` at ``q + v dt/2`` (``mstate``: each mode's ``q``, ``v``)."""
@@ -651,7 +651,7 @@ def _tool_deflection(modes, mstate, tool, dt):  # pragma: no cover - compiled
     return dx, dy
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _advance_modes(modes, mstate, tool, fx, fy):  # pragma: no cover - compiled
     """Advance the modes of ``tool`` over the step under the force ``(fx, fy)`` on the tool
     (N, machine X/Y, held over the step): the exact discretization of :func:`mode_rows`."""
@@ -673,7 +673,7 @@ def chip_state(n_hist: int, feed_direction: tuple[float, float], n_modes: int = 
     return state
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _scratch(state, n_modes, n_flutes):  # pragma: no cover - compiled
     """The scratch of one step in a milling kernel's ``state`` (:func:`chip_state`), which no
     step reads before it writes it (kept in the state so that the kernels allocate nothing):
@@ -712,7 +712,7 @@ def pack_slots(slots: tuple[str, ...], values: dict[str, float], jacobian: np.nd
     return np.concatenate([[float(values[name]) for name in slots], np.asarray(jacobian, float).ravel()])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _record_position(jac, qpos, qvel, dt, state, n, tool_xy):  # pragma: no cover - compiled
     """Step count (``state``'s :data:`CHIP_STEPS`) on by one and the tool's XY position
     relative to the workpiece at the middle of the step, ``tool_xy - jac @ (qpos + qvel dt/2)``
@@ -733,7 +733,7 @@ def _record_position(jac, qpos, qvel, dt, state, n, tool_xy):  # pragma: no cove
     return i, hist
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _feed_frame(feed_velocity, state):  # pragma: no cover - compiled
     """The planned feed: the tool's speed relative to the workpiece (m/s, the reference's:
     ``-feed_velocity``, the workpiece's planned velocity) and its direction, held in ``state``
@@ -745,7 +745,7 @@ def _feed_frame(feed_velocity, state):  # pragma: no cover - compiled
     return speed, state[CHIP_FEED_X], state[CHIP_FEED_Y]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _past(hist, i, n, lag):  # pragma: no cover - compiled
     """The buffer's position ``lag`` (> 0, fractional) steps before step ``i`` (linear
     interpolation; the first recorded position before it)."""
@@ -755,7 +755,7 @@ def _past(hist, i, n, lag):  # pragma: no cover - compiled
     return (1.0 - frac) * hist[p0, 0] + frac * hist[p1, 0], (1.0 - frac) * hist[p0, 1] + frac * hist[p1, 1]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _chips(hist, i, n, lag_steps, ux, uy, angle, n_flutes, passes_uw, chip_u, chip_w):  # pragma: no cover - compiled
     """Each flute's chip vector (feed frame, mm) into ``chip_u``, ``chip_w``: where the tool is
     now less where it was when the last earlier tooth to cut at this flute's angle ``angle - 2 pi
@@ -785,7 +785,7 @@ def _chips(hist, i, n, lag_steps, ux, uy, angle, n_flutes, passes_uw, chip_u, ch
     return passes_uw[0, 0], passes_uw[0, 1]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _probe(state, du, dw, feed_mm, probe):  # pragma: no cover - compiled
     """Add one cutting step to ``probe`` (:data:`PROBE`): the once-per-tooth difference of the
     vibration, ``(du - feed_mm, dw)`` (mm: the chip vector one tooth period back less the planned
@@ -801,7 +801,7 @@ def _probe(state, du, dw, feed_mm, probe):  # pragma: no cover - compiled
     state[CHIP_VIB_U], state[CHIP_VIB_W] = vu, vw
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _end_milling(par, state, qpos, qvel, feed_velocity, t, out, probe):  # pragma: no cover - compiled
     """Add one step's mechanistic milling force on the workpiece (world frame, N) to ``out``
     and the step's vibration to ``probe``; advance the tool's modes under its reaction."""
@@ -829,7 +829,7 @@ def _end_milling(par, state, qpos, qvel, feed_velocity, t, out, probe):  # pragm
     _apply(fx, fy, fz, ux, uy, modes, mstate, 0, out)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _apply(fx, fy, fz, ux, uy, modes, mstate, tool, out):  # pragma: no cover - compiled
     """The step's force on the tool (feed frame, N): its reaction onto the workpiece (``out``,
     world frame), the force itself onto the modes of ``tool``."""
@@ -840,7 +840,7 @@ def _apply(fx, fy, fz, ux, uy, modes, mstate, tool, out):  # pragma: no cover - 
     _advance_modes(modes, mstate, tool, wx, wy)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _program_milling(par, state, qpos, qvel, feed_velocity, t, out, probe):  # pragma: no cover - compiled
     """Add one step's milling force of a part program on the workpiece (world frame, N) to
     ``out`` and its vibration to ``probe``: the engagement, spindle and tool by time from the
@@ -885,7 +885,7 @@ def _program_milling(par, state, qpos, qvel, feed_velocity, t, out, probe):  # p
     _apply(fx, fy, fz, ux, uy, modes, mstate, tool, out)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _average_force(par, qvel, t, out):  # pragma: no cover - compiled
     """Add Choi 1999's average cutting force on the workpiece (N) to ``out``."""
     k_il, k_c, r, w = par[AF_K_IL], par[AF_K_C], par[AF_R], par[AF_OMEGA]
