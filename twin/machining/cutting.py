@@ -423,7 +423,9 @@ class EndMilling:
             },
             jacobian,
         )
-        state = chip_state(n_hist, (1.0, 0.0), len(modes), self.n_flutes)  # feed direction +x until the reference first moves
+        state = chip_state(
+            n_hist, (1.0, 0.0), len(modes), self.n_flutes
+        )  # feed direction +x until the reference first moves
         return END_MILLING, np.concatenate([params, modes.ravel()]), state
 
 
@@ -641,26 +643,34 @@ def mode_rows(dynamics, timestep_s: float) -> np.ndarray:
 @njit(cache=True, inline="always")
 def _tool_deflection(modes, mstate, tool, dt):  # pragma: no cover - compiled
     """The tool tip's deflection (m, machine X/Y) at the middle of the step: the modes of
-    ``tool`` at ``q + v dt/2`` (``mstate``: each mode's ``q``, ``v``)."""
+    ``tool`` at ``q + v dt/2`` (``modes``: :data:`MODE_COLUMNS` row after row, flat; ``mstate``:
+    each mode's ``q``, ``v``)."""
     dx = dy = 0.0
-    for r in range(modes.shape[0]):
-        if int(modes[r, MODE_TOOL]) == tool:
+    for r in range(modes.shape[0] // MODE_WIDTH):
+        mode = r * MODE_WIDTH
+        if int(modes[mode + MODE_TOOL]) == tool:
             q = mstate[2 * r] + 0.5 * dt * mstate[2 * r + 1]
-            dx += modes[r, MODE_DIR_X] * q
-            dy += modes[r, MODE_DIR_Y] * q
+            dx += modes[mode + MODE_DIR_X] * q
+            dy += modes[mode + MODE_DIR_Y] * q
     return dx, dy
 
 
 @njit(cache=True, inline="always")
 def _advance_modes(modes, mstate, tool, fx, fy):  # pragma: no cover - compiled
     """Advance the modes of ``tool`` over the step under the force ``(fx, fy)`` on the tool
-    (N, machine X/Y, held over the step): the exact discretization of :func:`mode_rows`."""
-    for r in range(modes.shape[0]):
-        if int(modes[r, MODE_TOOL]) == tool:
-            f = fx * modes[r, MODE_DIR_X] + fy * modes[r, MODE_DIR_Y]
+    (N, machine X/Y, held over the step): the exact discretization of :func:`mode_rows` (``modes``
+    flat, as :func:`_tool_deflection`'s)."""
+    for r in range(modes.shape[0] // MODE_WIDTH):
+        mode = r * MODE_WIDTH
+        if int(modes[mode + MODE_TOOL]) == tool:
+            f = fx * modes[mode + MODE_DIR_X] + fy * modes[mode + MODE_DIR_Y]
             q, v = mstate[2 * r], mstate[2 * r + 1]
-            mstate[2 * r] = modes[r, MODE_PHI_QQ] * q + modes[r, MODE_PHI_QV] * v + modes[r, MODE_GAMMA_Q] * f
-            mstate[2 * r + 1] = modes[r, MODE_PHI_VQ] * q + modes[r, MODE_PHI_VV] * v + modes[r, MODE_GAMMA_V] * f
+            mstate[2 * r] = (
+                modes[mode + MODE_PHI_QQ] * q + modes[mode + MODE_PHI_QV] * v + modes[mode + MODE_GAMMA_Q] * f
+            )
+            mstate[2 * r + 1] = (
+                modes[mode + MODE_PHI_VQ] * q + modes[mode + MODE_PHI_VV] * v + modes[mode + MODE_GAMMA_V] * f
+            )
 
 
 def chip_state(n_hist: int, feed_direction: tuple[float, float], n_modes: int = 0, n_flutes: int = 1) -> np.ndarray:
@@ -677,10 +687,11 @@ def chip_state(n_hist: int, feed_direction: tuple[float, float], n_modes: int = 
 def _scratch(state, n_modes, n_flutes):  # pragma: no cover - compiled
     """The scratch of one step in a milling kernel's ``state`` (:func:`chip_state`), which no
     step reads before it writes it (kept in the state so that the kernels allocate nothing):
-    each earlier tooth pass's chip vector (:data:`REGENERATIONS`, 2) and the flutes' chip
-    vectors, along and across the feed (``n_flutes`` each) (:func:`_chips`)."""
+    each earlier tooth pass's chip vector (:data:`REGENERATIONS` pairs, flat) and the flutes' chip
+    vectors, along and across the feed (``n_flutes`` each) (:func:`_chips`).  The kernels index
+    their arrays flat (no ``reshape``, which costs a call into numba's C helpers a step)."""
     first = CHIP_HISTORY + 2 * n_modes
-    passes = state[first : first + 2 * REGENERATIONS].reshape((REGENERATIONS, 2))
+    passes = state[first : first + 2 * REGENERATIONS]
     chips = first + 2 * REGENERATIONS
     return passes, state[chips : chips + n_flutes], state[chips + n_flutes : chips + 2 * n_flutes]
 
@@ -717,19 +728,21 @@ def _record_position(jac, qpos, qvel, dt, state, n, tool_xy):  # pragma: no cove
     """Step count (``state``'s :data:`CHIP_STEPS`) on by one and the tool's XY position
     relative to the workpiece at the middle of the step, ``tool_xy - jac @ (qpos + qvel dt/2)``
     (m; the spindle stands still in the world, its tip deflected by ``tool_xy``), into the ring
-    buffer of the last ``2 n`` entries of ``state`` (filled with it at the first step); returns
-    the step index and the buffer."""
-    hist = state[state.shape[0] - 2 * n :].reshape((n, 2))
+    buffer of the last ``2 n`` entries of ``state`` (filled with it at the first step; position
+    ``m`` at ``2 m``, ``2 m + 1``); ``jac`` is flat, row by row.  Returns the step index and the
+    buffer."""
+    hist = state[state.shape[0] - 2 * n :]
     i = int(state[CHIP_STEPS])
     state[CHIP_STEPS] = i + 1
+    cols = jac.shape[0] // 2
     for r in range(2):
         acc = tool_xy[r]
-        for j in range(jac.shape[1]):
-            acc -= jac[r, j] * (qpos[j] + 0.5 * dt * qvel[j])
-        hist[i % n, r] = acc
+        for j in range(cols):
+            acc -= jac[r * cols + j] * (qpos[j] + 0.5 * dt * qvel[j])
+        hist[2 * (i % n) + r] = acc
     if i == 0:
         for m in range(1, n):
-            hist[m, 0], hist[m, 1] = hist[0, 0], hist[0, 1]
+            hist[2 * m], hist[2 * m + 1] = hist[0], hist[1]
     return i, hist
 
 
@@ -751,8 +764,8 @@ def _past(hist, i, n, lag):  # pragma: no cover - compiled
     interpolation; the first recorded position before it)."""
     lo = int(lag)
     frac = lag - lo
-    p0, p1 = max(i - lo, 0) % n, max(i - lo - 1, 0) % n
-    return (1.0 - frac) * hist[p0, 0] + frac * hist[p1, 0], (1.0 - frac) * hist[p0, 1] + frac * hist[p1, 1]
+    p0, p1 = 2 * (max(i - lo, 0) % n), 2 * (max(i - lo - 1, 0) % n)
+    return (1.0 - frac) * hist[p0] + frac * hist[p1], (1.0 - frac) * hist[p0 + 1] + frac * hist[p1 + 1]
 
 
 @njit(cache=True, inline="always")
@@ -761,28 +774,29 @@ def _chips(hist, i, n, lag_steps, ux, uy, angle, n_flutes, passes_uw, chip_u, ch
     now less where it was when the last earlier tooth to cut at this flute's angle ``angle - 2 pi
     j/N`` (rad) passed it, ``m`` tooth periods (``lag_steps`` physics steps each) ago, ``m``
     from 1 to :data:`REGENERATIONS` (those the buffer of ``n`` rows holds) the one that leaves
-    the thinnest chip there (multiple
-    regeneration: a tooth that left the cut left the surface before it).  Its projection on the
-    edge's normal is the chip thickness (:func:`step_tool_forces_N`).  The tool's motion over
-    each of the ``m`` tooth periods, the same for every flute, goes into ``passes_uw`` (rows
-    ``m - 1``).  Returns the tool's motion over the last tooth period, feed frame (mm)."""
-    px, py = hist[i % n, 0], hist[i % n, 1]
+    the thinnest chip there (multiple regeneration: a tooth that left the cut left the surface
+    before it).  Its projection on the edge's normal is the chip thickness
+    (:func:`step_tool_forces_N`).  The tool's motion over each of the ``m`` tooth periods, the
+    same for every flute, goes into ``passes_uw`` (at ``2 (m - 1)``, ``2 m - 1``; ``hist`` flat as
+    :func:`_record_position`'s).  Returns the tool's motion over the last tooth period, feed
+    frame (mm)."""
+    px, py = hist[2 * (i % n)], hist[2 * (i % n) + 1]
     pitch = 2.0 * math.pi / n_flutes
     passes = max(1, min(REGENERATIONS, int((n - 2) / lag_steps)))  # those the buffer holds
     for m in range(1, passes + 1):
         qx, qy = _past(hist, i, n, m * lag_steps)
         dx, dy = (px - qx) * 1e3, (py - qy) * 1e3
-        passes_uw[m - 1, 0] = dx * ux + dy * uy  # along the feed
-        passes_uw[m - 1, 1] = dy * ux - dx * uy  # along z x feed
+        passes_uw[2 * m - 2] = dx * ux + dy * uy  # along the feed
+        passes_uw[2 * m - 1] = dy * ux - dx * uy  # along z x feed
     for j in range(n_flutes):
         s, c = math.sin(angle - j * pitch), math.cos(angle - j * pitch)
         best = math.inf
         for m in range(passes):
-            du, dw = passes_uw[m, 0], passes_uw[m, 1]
+            du, dw = passes_uw[2 * m], passes_uw[2 * m + 1]
             h = du * s + dw * c
             if h < best:
                 best, chip_u[j], chip_w[j] = h, du, dw
-    return passes_uw[0, 0], passes_uw[0, 1]
+    return passes_uw[0], passes_uw[1]
 
 
 @njit(cache=True, inline="always")
@@ -809,12 +823,10 @@ def _end_milling(par, state, qpos, qvel, feed_velocity, t, out, probe):  # pragm
     n_flutes, a, lag, phi_st, phi_ex = int(par[EM_N_FLUTES]), par[EM_DEPTH], par[EM_LAG], par[EM_PHI_ST], par[EM_PHI_EX]
     omega, phase0, dt, lag_steps = par[EM_OMEGA], par[EM_PHASE0], par[EM_DT], par[EM_LAG_STEPS]
     lo, hi, n, n_jac, n_modes = par[EM_LO], par[EM_HI], int(par[EM_N_HIST]), int(par[EM_N_JAC]), int(par[EM_N_MODES])
-    modes = par[EM_JACOBIAN + n_jac :].reshape((n_modes, MODE_WIDTH))
+    modes = par[EM_JACOBIAN + n_jac :]
     mstate = state[CHIP_HISTORY : CHIP_HISTORY + 2 * n_modes]
     tool_xy = _tool_deflection(modes, mstate, 0, dt)
-    i, hist = _record_position(
-        par[EM_JACOBIAN : EM_JACOBIAN + n_jac].reshape((2, -1)), qpos, qvel, dt, state, n, tool_xy
-    )
+    i, hist = _record_position(par[EM_JACOBIAN : EM_JACOBIAN + n_jac], qpos, qvel, dt, state, n, tool_xy)
     speed, ux, uy = _feed_frame(feed_velocity, state)
     fx = fy = fz = 0.0
     if lo <= t < hi:
@@ -848,36 +860,37 @@ def _program_milling(par, state, qpos, qvel, feed_velocity, t, out, probe):  # p
     :func:`_end_milling`)."""
     n_tools, period, n_table = int(par[PM_N_TOOLS]), par[PM_PERIOD], int(par[PM_N_TABLE])
     dt, n, n_jac, n_modes = par[PM_DT], int(par[PM_N_HIST]), int(par[PM_N_JAC]), int(par[PM_N_MODES])
-    jac = par[PM_JACOBIAN : PM_JACOBIAN + n_jac].reshape((2, -1))
-    tools_end = PM_JACOBIAN + n_jac + PM_TOOL_WIDTH * n_tools
-    tools = par[PM_JACOBIAN + n_jac : tools_end].reshape((n_tools, PM_TOOL_WIDTH))
+    jac = par[PM_JACOBIAN : PM_JACOBIAN + n_jac]
+    tools_start = PM_JACOBIAN + n_jac
+    tools_end = tools_start + PM_TOOL_WIDTH * n_tools
     modes_end = tools_end + MODE_WIDTH * n_modes
-    modes = par[tools_end:modes_end].reshape((n_modes, MODE_WIDTH))
-    table = par[modes_end:].reshape((n_table, PM_WIDTH))
+    modes = par[tools_end:modes_end]
     mstate = state[CHIP_HISTORY : CHIP_HISTORY + 2 * n_modes]
     row = min(max(int(t / period), 0), n_table - 1)
-    tool = int(table[row, PM_TOOL])
+    entry = par[modes_end + row * PM_WIDTH : modes_end + (row + 1) * PM_WIDTH]  # the table's row
+    tool = int(entry[PM_TOOL])
     i, hist = _record_position(jac, qpos, qvel, dt, state, n, _tool_deflection(modes, mstate, tool, dt))
     speed, ux, uy = _feed_frame(feed_velocity, state)
-    omega = table[row, PM_OMEGA]
-    if (table[row, PM_DEPTH1] <= 0.0 and table[row, PM_DEPTH2] <= 0.0) or omega <= 0.0 or ux == uy == 0.0:
+    omega = entry[PM_OMEGA]
+    if (entry[PM_DEPTH1] <= 0.0 and entry[PM_DEPTH2] <= 0.0) or omega <= 0.0 or ux == uy == 0.0:
         _advance_modes(modes, mstate, tool, 0.0, 0.0)
         return
-    k = tools[tool, PM_TOOL_K_FIRST:PM_TOOL_K_END]
-    n_flutes, lag_per_mm = int(tools[tool, PM_TOOL_FLUTES]), tools[tool, PM_TOOL_LAG]
+    values = par[tools_start + PM_TOOL_WIDTH * tool : tools_start + PM_TOOL_WIDTH * (tool + 1)]  # the tool's
+    k = values[PM_TOOL_K_FIRST:PM_TOOL_K_END]
+    n_flutes, lag_per_mm = int(values[PM_TOOL_FLUTES]), values[PM_TOOL_LAG]
     lag_steps = 2.0 * math.pi / (omega * n_flutes) / dt
     feed_mm = speed * lag_steps * dt * 1e3
-    angle = table[row, PM_ANGLE] + omega * (t - row * period)
+    angle = entry[PM_ANGLE] + omega * (t - row * period)
     passes_uw, chip_u, chip_w = _scratch(state, n_modes, n_flutes)
-    depth = max(table[row, PM_DEPTH1], table[row, PM_DEPTH2])
+    depth = max(entry[PM_DEPTH1], entry[PM_DEPTH2])
     mid = angle + 0.5 * omega * dt - 0.5 * depth * lag_per_mm
     du, dw = _chips(hist, i, n, lag_steps, ux, uy, mid, n_flutes, passes_uw, chip_u, chip_w)
     _probe(state, du, dw, feed_mm, probe)
     fx = fy = fz = 0.0
     for arc in range(2):
         first = PM_ARC_STRIDE * arc
-        st, ex = table[row, PM_PHI_ST1 + first], table[row, PM_PHI_EX1 + first]
-        a = table[row, PM_DEPTH1 + first]
+        st, ex = entry[PM_PHI_ST1 + first], entry[PM_PHI_EX1 + first]
+        a = entry[PM_DEPTH1 + first]
         if ex > st and a > 0.0:
             ka = kienzle_coefficients(k, feed_mm, st, ex)
             gx, gy, gz = step_tool_forces_N(ka, n_flutes, a, chip_u, chip_w, st, ex, angle, omega * dt, a * lag_per_mm)
@@ -892,11 +905,12 @@ def _average_force(par, qvel, t, out):  # pragma: no cover - compiled
     phase, lo, hi = par[AF_PHASE], par[AF_LO], par[AF_HI]
     if not (lo <= t < hi):
         return
-    jac = par[AF_JACOBIAN:].reshape((2, -1))
+    jac = par[AF_JACOBIAN:]  # row by row
+    cols = jac.shape[0] // 2
     vx = vy = 0.0
-    for j in range(jac.shape[1]):
-        vx += jac[0, j] * qvel[j]
-        vy += jac[1, j] * qvel[j]
+    for j in range(cols):
+        vx += jac[j] * qvel[j]
+        vy += jac[cols + j] * qvel[j]
     gain = 1.0 + r * math.sin(w * t + phase) if r else 1.0
     out[0] += gain * (k_il * vx - k_c * vy)
     out[1] += gain * (k_il * vy + k_c * vx)
