@@ -923,7 +923,8 @@ def workpiece_forces(fops, fpar, fstate, qpos, qvel, feed_velocity, t, xfrc, bod
     ``feed_velocity`` (2,) is the workpiece's planned XY velocity (m/s, the reference's), which
     sets the feed frame; the milling models add the step's vibration to ``probe``
     (:data:`PROBE`).  ``fops`` rows: :data:`FORCE_OP_COLUMNS`."""
-    out = np.zeros(3)
+    out = xfrc[body, :3]  # the models add into it (a view: no array allocated a step)
+    out[:] = 0.0
     for m in range(fops.shape[0]):
         kind, p0, pn = fops[m, FORCE_KIND], fops[m, FORCE_PAR_START], fops[m, FORCE_PAR_LEN]
         s0, sn = fops[m, FORCE_STATE_START], fops[m, FORCE_STATE_LEN]
@@ -934,7 +935,6 @@ def workpiece_forces(fops, fpar, fstate, qpos, qvel, feed_velocity, t, xfrc, bod
         else:
             _average_force(fpar[p0 : p0 + pn], qvel, t, out)
     for i in range(3):
-        xfrc[body, i] = out[i]
         f_sum[i] += out[i]
 
 
