@@ -8,7 +8,7 @@ tune``) and :class:`Fidelity` (``twin fidelity``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -19,8 +19,11 @@ if TYPE_CHECKING:  # the heavy modules load on first use, not with `import twin`
     import pandas as pd
     import pyarrow as pa
 
+    from twin.commissioning.boundary import MarginCheck
     from twin.commissioning.frf import FrfSettings
     from twin.gcode.moves import Move
+    from twin.gcode.report import PlannedSummary
+    from twin.outcome import RunOutcome
     from twin.records import RunRecords
     from twin.sampling import SamplePlan
     from twin.scenario import Scenario
@@ -34,16 +37,24 @@ class Run:
     Attributes
     ----------
     scenario : twin.scenario.Scenario
-    result : twin.sim.runner.RunResult
-        The raw arrays (SI units) at the recorded ticks, and metrics over every tick.
-    stopped : SimulationDiverged or RunInterrupted or None
-        What stopped a run early (see :func:`twin.api.run`'s ``keep_partial``); None for a run
-        that went to its end.
+    outcome : twin.outcome.RunOutcome
+        The run and what was computed from its motion: with a part program its warnings, with
+        a stock the part it cut and its inspection.
     """
 
     scenario: Scenario
-    result: RunResult
-    stopped: SimulationDiverged | RunInterrupted | None = None
+    outcome: RunOutcome
+
+    @property
+    def result(self) -> RunResult:
+        """The raw arrays (SI units) at the recorded ticks, and metrics over every tick."""
+        return self.outcome.run
+
+    @property
+    def stopped(self) -> SimulationDiverged | RunInterrupted | None:
+        """What stopped a run early (see :func:`twin.api.run`'s ``keep_partial``); None for a
+        run that went to its end."""
+        return self.outcome.stopped
 
     @property
     def status(self) -> str:
@@ -66,7 +77,7 @@ class Run:
             "status": self.status,
             **({} if self.stopped is None else {"sim_time_s": self.stopped.sim_time_s}),
             "completed_ticks": done,
-            **(tracking_summary(self.result, self.records) if done else {}),
+            **(tracking_summary(self.outcome, self.records) if done else {}),
             "loop": self.result.info["loop"],
         }
 
@@ -80,7 +91,7 @@ class Run:
 
         if not self.result.info["completed_ticks"]:
             return RunRecords()
-        return run_records(self.result, run_contour_error(self.result))
+        return run_records(self.outcome, run_contour_error(self.result))
 
     def lines_to_parquet(self, path: str | Path) -> Path:
         """Write the per-line table of a G-code run (:attr:`records`' ``lines``, each row's
@@ -123,7 +134,7 @@ class Run:
         from twin.recording import record
 
         path = Path(path)
-        record(self.result, path)
+        record(self.outcome, path)
         return path
 
     def write_part(self, folder: str | Path) -> list[Path]:
@@ -137,7 +148,7 @@ class Run:
         TwinInputError
             The run has no virtual part (no stock, or it stopped early).
         """
-        part = self.result.part
+        part = self.outcome.part
         if part is None or part.maps is None:
             raise TwinInputError("part", str(folder), "the run has no virtual part: give [stock] and run to the end")
         folder = Path(folder)
@@ -152,7 +163,7 @@ class Run:
         """Write the PNG plots of ``twin run --plots`` into ``folder``; their paths."""
         from twin.plots import write_plots
 
-        return write_plots(self.result, Path(folder), self.scenario.name)
+        return write_plots(self.outcome, Path(folder), self.scenario.name)
 
 
 @dataclass
@@ -202,14 +213,15 @@ class Program:
     file : str
     moves : list of twin.gcode.reader.Move
         The moves as LinuxCNC reads them.
-    planned : dict or None
+    planned : twin.gcode.report.PlannedSummary or None
         With a machine: the plan's cycle time (s), feed-only time, limits and largest values per
-        axis and path deviation (:func:`twin.gcode.report.planned_summary`).
+        axis, path deviation and warnings against the machine
+        (:func:`twin.gcode.report.planned_summary`).
     """
 
     file: str
     moves: list[Move]
-    planned: dict | None = None
+    planned: PlannedSummary | None = None
 
     @property
     def summary(self) -> dict:
@@ -217,7 +229,7 @@ class Program:
         center_mm and turns, feed, spindle) and, with a machine, ``planned``."""
         out: dict[str, Any] = {"file": self.file, "moves": [m.as_dict() for m in self.moves]}
         if self.planned is not None:
-            out["planned"] = self.planned
+            out["planned"] = self.planned.to_json()
         return out
 
 
@@ -295,6 +307,11 @@ class StabilityLobes:
             frame = pd.DataFrame(rows).set_index("spindle_rpm")
             frames.append(frame.add_prefix(f"{method}_"))
         return pd.concat(frames, axis=1)
+
+    @property
+    def stability_checks(self) -> list[dict]:
+        """With a program: each cutting line's chatter check, in program order (empty without)."""
+        return [row["stability"] for row in self.summary.get("lines", [])]
 
     def write_png(self, path: str | Path) -> Path:
         """The lobes, the program's lines on them and the chatter frequency beneath (PNG)."""
@@ -375,10 +392,14 @@ class Tuning:
     summary : dict
         What ``twin tune --json`` prints: the control period, the feedback, per axis the gains,
         the margins and bandwidths; ``verification`` once :meth:`verify` has run.
+    margin_check : list of MarginCheck
+        Each gain's cascade margin beside the twin's boundaries once :meth:`verify_margins` has
+        run (empty before).
     """
 
     machine: str
     summary: dict
+    margin_check: list[MarginCheck] = field(default_factory=list)
 
     def verify(self) -> dict:
         """Run the tuned cascade on the twin (a 1 mm step, a circle) and add what it measured to
@@ -395,17 +416,18 @@ class Tuning:
         self,
         gains: tuple[str, ...] = ("kp_pos", "kp_vel", "ki_vel"),
         conditions: tuple[str, ...] | None = None,
-    ) -> list[dict]:
+    ) -> list[MarginCheck]:
         """Each axis's cascade margins beside the twin's own stability boundaries, bisected for
         each of ``gains`` (:func:`twin.commissioning.boundary.verify_margins`) under the named
         conditions (default all of :data:`twin.commissioning.boundary.CONDITIONS`: ``twin`` as
-        run, ``without_coulomb``, ``like_for_like``, the linear model's assumptions); adds them
-        to :attr:`summary` as ``margin_check`` and returns them."""
+        run, ``without_coulomb``, ``like_for_like``, the linear model's assumptions); keeps them
+        as :attr:`margin_check`, adds them to :attr:`summary` as ``margin_check`` and returns them."""
         from twin.commissioning.boundary import CONDITIONS, verify_margins
 
         chosen = {name: CONDITIONS[name] for name in (conditions or CONDITIONS)}
-        self.summary["margin_check"] = verify_margins(self.summary, self.machine, gains, chosen)
-        return self.summary["margin_check"]
+        self.margin_check = verify_margins(self.summary, self.machine, gains, chosen)
+        self.summary["margin_check"] = [row.to_json() for row in self.margin_check]
+        return self.margin_check
 
     def scenario_text(self, reference: str = "circle") -> str:
         """The tuned cascade as a scenario (TOML) on a 10 mm circle (or a 1 mm ``step``)."""

@@ -34,7 +34,12 @@ def _rss_mb() -> float:
 
 
 def run_sweep_bench(
-    samples: int = 1000, repeats: int = 1, memory_samples: int = 10_000, loop_samples: int = 10, progress: bool = True
+    samples: int = 1000,
+    *,
+    repeats: int = 1,
+    memory_samples: int = 10_000,
+    loop_samples: int = 10,
+    progress: bool = True,
 ) -> dict:
     """The figures of ``twin bench --sweep`` (see the module docstring)."""
     from twin.sweeps import prepare_sweep
