@@ -79,7 +79,9 @@ class ProgramMilling:
         params = np.concatenate(
             [[float(head[name]) for name in PROGRAM_MILLING_SLOTS], jacobian, *tools, modes.ravel(), rows.ravel()]
         )
-        return PROGRAM_MILLING, params, chip_state(n_hist, (0.0, 0.0), len(modes))  # no force before the first move
+        most_flutes = max((t.n_flutes for t in self.tools), default=1)
+        state = chip_state(n_hist, (0.0, 0.0), len(modes), most_flutes)  # no force before the first move
+        return PROGRAM_MILLING, params, state
 
 
 @dataclass
