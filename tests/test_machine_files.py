@@ -327,7 +327,7 @@ def test_calibration_fits_the_velocity_where_the_positions_cost_is_rugged(tmp_pa
     r = calibrate(MID, path, list(hidden))
     for name, value in hidden.items():
         assert r.fitted[name] == pytest.approx(value, rel=1e-6)
-    assert r.solver.against_noise.at_noise_floor
+    assert r.solver.against_noise is not None and r.solver.against_noise.at_noise_floor
     assert r.not_excited == {}
     assert r.excited_band_hz == pytest.approx(0.908 * 1e4 / 8, abs=20)  # the PRBS's main lobe, 2 lines
 
@@ -343,10 +343,11 @@ def test_a_fit_above_the_traces_noise_says_so(tmp_path):
     path = tmp_path / "trace.parquet"
     pq.write_table(pa.table({"time_s": np.arange(n) * dt, "u_x_V": u[:, 0], "pos_x_m": y}), path)
     r = calibrate(MID, path, ["x_table_mass_kg"])
-    assert r.solver.against_noise.noise_floor_m == pytest.approx(2e-7, rel=0.1)
-    assert r.solver.against_noise.residual_rms_m > 1.2 * r.solver.against_noise.noise_floor_m
-    assert not r.solver.against_noise.at_noise_floor
-    assert "a parameter not fitted" in r.solver.against_noise.note
+    noise = r.solver.against_noise
+    assert noise is not None and noise.noise_floor_m == pytest.approx(2e-7, rel=0.1)
+    assert noise.residual_rms_m > 1.2 * noise.noise_floor_m
+    assert not noise.at_noise_floor
+    assert "a parameter not fitted" in noise.note
 
 
 def test_the_noise_floor_of_a_trace():

@@ -692,6 +692,11 @@ def calibrate(
     ``timestep_s`` replaces the machine's physics step (a finer one: the model's own error),
     ``progress`` shows a bar of the evaluations.
 
+    Returns
+    -------
+    CalibrationReport
+        Its :meth:`CalibrationReport.to_json` is what ``twin calibrate --json`` prints.
+
     Raises
     ------
     TwinInputError
