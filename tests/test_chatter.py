@@ -128,7 +128,7 @@ def _benchmark(depth_mm, rpm, duration_s=0.6, timestep_s=2e-5, radial_depth_mm=1
         reference=dict(type="ramp", rate_m_per_s=feed_m_per_s, axes=["x"]),
         disturbances=[cut],
     )
-    result = run_scenario(scenario_from_dict(scenario))
+    result = run_scenario(scenario_from_dict(scenario)).run
     steps = round(result.control_period_s / timestep_s) * result.info["record_every"]
     return result, windows(result.vibration_probe, steps, WINDOW_ROWS)
 
@@ -315,12 +315,13 @@ def test_issue_47s_deep_slot_runs_to_its_end_with_the_closed_form_force():
     from twin.metrics import tracking_summary
     from twin.scenario import load_scenario
 
-    result = run_scenario(load_scenario("gcode_deep_slot"))
+    outcome = run_scenario(load_scenario("gcode_deep_slot"))
+    result = outcome.run
     steady = (result.t_s > 4.0) & (result.t_s < 12.0)
     closed = mean_tool_forces_N(K, 2, 16.0, 0.03, 0.0, math.pi)[:2]  # the workpiece's, feed along -X
     np.testing.assert_allclose(result.workpiece_force_N[steady, :2].mean(axis=0), closed, rtol=0.04)
     assert np.abs(result.workpiece_force_N[:, :2]).max() < 3 * np.abs(closed).max()
-    summary = tracking_summary(result)
+    summary = tracking_summary(outcome)
     assert CHATTER_THRESHOLD < summary["chatter"]["indicator"] < 1.0
 
 

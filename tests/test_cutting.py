@@ -161,7 +161,7 @@ def test_helix_keeps_the_mean_and_cuts_the_peak():
 
 
 def test_slot_mean_forces_match_closed_form_and_spectrum_peaks_at_tooth_frequency():
-    res = run_scenario(_slot_scenario())
+    res = run_scenario(_slot_scenario()).run
     mean = _mean_workpiece_force(res)
     expected = _expected_workpiece_force(2.0, D_MM, "up")
     np.testing.assert_allclose(mean, expected, rtol=0.02)
@@ -183,15 +183,15 @@ def test_slot_mean_forces_match_closed_form_and_spectrum_peaks_at_tooth_frequenc
 
 
 def test_doubling_axial_depth_doubles_mean_force():
-    f1 = _mean_workpiece_force(run_scenario(_slot_scenario(axial_mm=1.5)))
-    f2 = _mean_workpiece_force(run_scenario(_slot_scenario(axial_mm=3.0)))
+    f1 = _mean_workpiece_force(run_scenario(_slot_scenario(axial_mm=1.5)).run)
+    f2 = _mean_workpiece_force(run_scenario(_slot_scenario(axial_mm=3.0)).run)
     np.testing.assert_allclose(f2, 2 * f1, rtol=0.02)
 
 
 def test_up_and_down_milling_mirror_the_force_signs():
     """At 10 % radial immersion both the feed and the feed-normal mean forces change sign."""
-    up = _mean_workpiece_force(run_scenario(_slot_scenario(radial_mm=1.0, mode="up")))
-    down = _mean_workpiece_force(run_scenario(_slot_scenario(radial_mm=1.0, mode="down")))
+    up = _mean_workpiece_force(run_scenario(_slot_scenario(radial_mm=1.0, mode="up")).run)
+    down = _mean_workpiece_force(run_scenario(_slot_scenario(radial_mm=1.0, mode="down")).run)
     np.testing.assert_allclose(up, _expected_workpiece_force(2.0, 1.0, "up"), rtol=0.02)
     np.testing.assert_allclose(down, _expected_workpiece_force(2.0, 1.0, "down"), rtol=0.02)
     assert np.sign(up[0]) == -np.sign(down[0])
@@ -199,7 +199,7 @@ def test_up_and_down_milling_mirror_the_force_signs():
 
 
 def test_cutting_force_is_off_outside_its_window():
-    res = run_scenario(_slot_scenario(start_s=0.1, stop_s=0.3, duration_s=0.4))
+    res = run_scenario(_slot_scenario(start_s=0.1, stop_s=0.3, duration_s=0.4)).run
     force = np.abs(res.workpiece_force_N).max(axis=1)
     assert force[res.t_s < 0.1 - 1e-9].max() == 0.0
     assert force[res.t_s >= 0.3].max() == 0.0

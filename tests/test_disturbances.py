@@ -47,13 +47,13 @@ def _series(res):
 
 @pytest.mark.parametrize("option", list(OPTIONS))
 def test_disturbance_is_bit_identical_for_a_seed(option):
-    a = _series(run_scenario(_scenario(7, **OPTIONS[option])))
-    b = _series(run_scenario(_scenario(7, **OPTIONS[option])))
+    a = _series(run_scenario(_scenario(7, **OPTIONS[option])).run)
+    b = _series(run_scenario(_scenario(7, **OPTIONS[option])).run)
     assert np.array_equal(a, b)
-    quiet = _series(run_scenario(_scenario(7)))
+    quiet = _series(run_scenario(_scenario(7)).run)
     assert not np.array_equal(a, quiet)  # the option does act
     # each option draws something from the seed (spindle or harmonic phases, noise)
-    assert not np.array_equal(a, _series(run_scenario(_scenario(8, **OPTIONS[option]))))
+    assert not np.array_equal(a, _series(run_scenario(_scenario(8, **OPTIONS[option])).run))
 
 
 def test_harmonic_input_is_the_sum_of_sines():
@@ -66,7 +66,9 @@ def test_harmonic_input_is_the_sum_of_sines():
 
 def test_disturbance_own_seed_overrides_scenario_seed():
     own = dict(disturbances=[{**CUT, "seed": 3}])
-    assert np.array_equal(_series(run_scenario(_scenario(1, **own))), _series(run_scenario(_scenario(2, **own))))
+    assert np.array_equal(
+        _series(run_scenario(_scenario(1, **own)).run), _series(run_scenario(_scenario(2, **own)).run)
+    )
 
 
 @pytest.mark.parametrize(

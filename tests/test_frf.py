@@ -88,7 +88,7 @@ def test_a_semi_closed_loop_reads_the_motor_encoder_in_table_travel():
                     "sensors": sensors,
                 }
             )
-        )
+        ).run
 
     ideal = {"encoder_resolution_m": 0.0, "motor_encoder_resolution_m": 0.0}
     run = step({"feedback": "motor", **ideal})

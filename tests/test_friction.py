@@ -73,7 +73,7 @@ def _circle_with_pid(friction_N):
                 reference=dict(type="circle", radius_mm=20.0, feed_mm_per_min=2400.0),
             )
         )
-    )
+    ).run
 
 
 def test_quadrant_glitches_at_reversals_grow_with_friction():

@@ -164,13 +164,15 @@ def test_the_part_is_recorded_and_plotted(tmp_path):
     assert "/contour/actual" not in counts
     written = {p.name for p in run.plots(tmp_path / "plots")}
     assert {"gcode_test_piece_part.png", "gcode_test_piece_feed.png"} <= written
-    outlines = run.result.program.outlines
+    outlines = run.outcome.outlines
     stock = outlines["stock"][0]
     assert stock[:, 0].min() == pytest.approx(-5.0)
     assert stock[:, 1].max() == pytest.approx(43.0)
     # the program leaves the part's top standing and cuts the pocket (1.5 mm), the slot (1 mm)
     # and the band around the contour (2 mm): the height map as the engagement left it
-    heights = assemble(scenario_from_dict(read_scenario_data("gcode_test_piece"))).reference.cut.height_map
+    program = assemble(scenario_from_dict(read_scenario_data("gcode_test_piece"))).program
+    assert program is not None and program.cut is not None
+    heights = program.cut.height_map
 
     def height_mm(x_mm, y_mm):
         i = int((x_mm * 1e-3 - heights.x0_m) / heights.res_m)

@@ -95,15 +95,15 @@ def bore():
     features = [
         CircleFeature(type="circle", name="bore", center_mm=(-28, 0), diameter_mm=66.0, z_mm=-1.5, tolerance_um=10)
     ]
-    return api.run(scn.model_copy(update={"inspect": features})).result
+    return api.run(scn.model_copy(update={"inspect": features})).outcome
 
 
 def test_bore_diameter_is_the_envelope_of_the_actual_motion(bore):
     # independent of the polygons: the wall's radius at each angle is the furthest reach of the
     # tool's discs (radius 5 mm) along that ray from the centre, over the actual path cut below
     # Z -1.5; the diameter twice its mean over 1440 angles
-    xy = bore.table_position_m() * 1e3 - [-28.0, 0.0]
-    cut = bore.program.extra_axes["z"] * 1e3 < -1.5
+    xy = bore.run.table_position_m() * 1e3 - [-28.0, 0.0]
+    cut = bore.run.program.extra_axes["z"] * 1e3 < -1.5
     rho, angle = np.hypot(*xy[cut].T), np.arctan2(xy[cut, 1], xy[cut, 0])
     theta = np.linspace(-np.pi, np.pi, 1440, endpoint=False)[:, None]
     along, across = rho * np.cos(angle - theta), rho * np.sin(angle - theta)
@@ -124,7 +124,7 @@ def test_a_run_stopped_halfway_is_compared_with_what_the_program_had_cut_by_then
     the half of the bore never reached as material left (3 mm)."""
     run = api.run("gcode_choi1999_circle_stock", duration_s=1.5)
     moved = run.result.table_position_m()
-    assert np.array_equal(moved, bore.table_position_m()[: len(moved)])
+    assert np.array_equal(moved, bore.run.table_position_m()[: len(moved)])
     lag_um = float(np.hypot(*run.result.error_m()[-1])) * 1e6
     half = run.summary["part"]["surface_error_um"]
     whole = bore.part.summary()["surface_error_um"]
@@ -233,7 +233,7 @@ def pocket():
 def test_pocket_roughed_and_ball_finished(pocket):
     # the program's floors: Z -2 and -4 (flat end mill), -4.2 (the ball's raster): walls are
     # read in the middle of each band under the top
-    part = pocket.result.part
+    part = pocket.outcome.part
     assert part.levels_mm == [-1.0, -3.0, -4.1]
     # the pocket's length at Y 15, Z -0.5 from the actual motion alone: the furthest reach of the
     # tool's discs (the ball's radius at that height over its tip) along the line Y 15, each way
@@ -243,11 +243,11 @@ def test_pocket_roughed_and_ball_finished(pocket):
     half = np.sqrt(np.maximum(radius**2 - (xy[:, 1] - 15.0) ** 2, 0.0))
     on = half > 0.0
     length = (xy[on, 0] + half[on]).max() - (xy[on, 0] - half[on]).min()
-    row = next(r for r in pocket.result.inspection if r.name == "length")
+    row = next(r for r in pocket.outcome.inspection if r.name == "length")
     assert isinstance(row, WidthMeasured)
     assert row.width_mm == pytest.approx(length, abs=1e-4)  # 0.1 µm
     assert row.deviation_um == pytest.approx((length - 24.0) * 1e3, abs=0.1)
-    measured = [r for r in pocket.result.inspection if not isinstance(r, FeatureNotFound)]
+    measured = [r for r in pocket.outcome.inspection if not isinstance(r, FeatureNotFound)]
     assert len(measured) == 3
     assert {r.name: r.passed for r in measured} == {
         r.name: abs(r.deviation_um) <= 20.0 if r.type == FeatureType.WIDTH else abs(r.deviation_um) <= 10.0
@@ -283,7 +283,7 @@ def test_a_level_the_tool_ramps_through_is_skipped_not_swept_disc_by_disc(monkey
 
 @pytest.fixture(scope="module")
 def slot_passes():
-    return api.run("gcode_slot_passes").result
+    return api.run("gcode_slot_passes").outcome
 
 
 def test_four_passes_and_a_through_cut(slot_passes):
@@ -292,7 +292,7 @@ def test_four_passes_and_a_through_cut(slot_passes):
     # furthest reach of the 5 mm discs along X 50 each way, over the samples cutting below Z -10
     part = slot_passes.part
     assert part.levels_mm == [-1.0, -3.0, -12.0]
-    xy = slot_passes.table_position_m() * 1e3
+    xy = slot_passes.run.table_position_m() * 1e3
     deep = part.actual.tip_mm < -10.0
     half = np.sqrt(np.maximum(25.0 - (xy[deep, 0] - 50.0) ** 2, 0.0))
     on = half > 0.0

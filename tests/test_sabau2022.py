@@ -255,7 +255,7 @@ def test_bundled_relay_scenario_is_the_reproductions_and_runs_as_a_scenario():
 
     data = r.scenario_data("sabau2022_relay")
     assert data["drive"]["delay_s"] == s1.RELAY_DELAY_S
-    res = run_scenario(load_scenario("sabau2022_relay", {"duration_s": 1.5}), progress=False)
+    res = run_scenario(load_scenario("sabau2022_relay", {"duration_s": 1.5}), progress=False).run
     t, x = res.t_s, res.table_position_m()[:, 0] * 1e3
     cycle = limit_cycle(t[t >= 0.5], x[t >= 0.5])
     assert cycle.period_s == pytest.approx(s1.ultimate_point("x", s1.RELAY_DELAY_S, 1e-4)[1], rel=0.1)

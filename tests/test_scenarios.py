@@ -9,6 +9,7 @@ import pytest
 
 from twin.errors import TwinInputError
 from twin.metrics import tracking_summary
+from twin.outcome import finish
 from twin.scenario import assemble, bundled_scenarios, load_scenario, run_scenario, scenario_from_dict
 from twin.settings import parse_settings
 
@@ -26,7 +27,7 @@ def test_bundled_scenario_runs_compiled_and_equals_the_python_loop(name):
     assert slow.info["loop"] == "python"
     for key in SERIES:
         assert np.array_equal(getattr(fast, key), getattr(slow, key)), key
-    summary = tracking_summary(fast)
+    summary = tracking_summary(finish(fast, inputs.program))
     assert all(math.isfinite(v) for v in summary["max_tracking_error_um"].values())
     # a milling force where the table moves (the chip is the tool's motion relative to the part:
     # gcode_choi1999_circle only plunges along Z in its first 0.2 s)
@@ -38,8 +39,8 @@ def test_bundled_scenario_runs_compiled_and_equals_the_python_loop(name):
 def test_choi1999_air_cut_contour_error_is_micrometres():
     """Choi 1999 reports max tracking errors of 6/7 um (its MIMO controller + ZPETC) on this
     circle; the twin's PID + model feedforward with catalogue friction stays under 10 um contour error."""
-    res = run_scenario(load_scenario("choi1999_air_cut_circle"))
-    assert tracking_summary(res)["max_contour_error_um"] < 10.0
+    outcome = run_scenario(load_scenario("choi1999_air_cut_circle"))
+    assert tracking_summary(outcome)["max_contour_error_um"] < 10.0
 
 
 BASE = {
@@ -52,7 +53,7 @@ BASE = {
 
 
 def _run(controller: dict, **extra):
-    return run_scenario(scenario_from_dict({**BASE, "controller": controller, **extra}))
+    return run_scenario(scenario_from_dict({**BASE, "controller": controller, **extra})).run
 
 
 def test_every_block_kind_from_a_scenario_file_tracks():
@@ -154,7 +155,7 @@ def test_inverse_model_observer_removes_a_step_input_disturbance_on_the_twin():
         "disturbances": [{"type": "voltage_step", "amplitude_V": 0.05, "start_s": 0.2, "axes": ["x"]}],
     }
     cascade = {"type": "cascade", "params": {"kp_pos": 200.0, "kp_vel": 7.0}}
-    plain = run_scenario(scenario_from_dict({**spec, "controller": cascade}))
+    plain = run_scenario(scenario_from_dict({**spec, "controller": cascade})).run
     observed = run_scenario(
         scenario_from_dict(
             {
@@ -165,7 +166,7 @@ def test_inverse_model_observer_removes_a_step_input_disturbance_on_the_twin():
                 },
             }
         )
-    )
+    ).run
     # independent: at rest u = kp_vel kp_pos e and y = G(0) (u + d), G(0) = 78.02/193.3 m/V (eq. 1)
     g0 = 78.02 / 193.3
     offset = g0 * 0.05 / (1 + g0 * 7.0 * 200.0)

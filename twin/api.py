@@ -77,7 +77,6 @@ def run(
     SimulationDiverged, RunInterrupted
         Unless ``keep_partial``.
     """
-    from twin.errors import RunInterrupted, SimulationDiverged
     from twin.scenario import Scenario, run_scenario
     from twin.sim.runner import MAX_PHYSICS_STEPS
 
@@ -85,13 +84,8 @@ def run(
         scn = load_from_model(scenario, settings) if settings else scenario
     else:
         scn = load(scenario, **settings)
-    try:
-        result = run_scenario(scn, progress=progress, max_physics_steps=max_physics_steps or MAX_PHYSICS_STEPS)
-    except (SimulationDiverged, RunInterrupted) as exc:
-        if not keep_partial or exc.result is None:
-            raise
-        return Run(scn, exc.result, exc)
-    return Run(scn, result)
+    most = max_physics_steps or MAX_PHYSICS_STEPS
+    return Run(scn, run_scenario(scn, progress=progress, max_physics_steps=most, keep_partial=keep_partial))
 
 
 def load_from_model(scenario: Scenario, settings: dict) -> Scenario:

@@ -64,6 +64,7 @@ from controllers.blocks import with_correction
 from controllers.registry import Context, make_observers
 from twin.bench_worker import time_case
 from twin.machines import build
+from twin.outcome import RunOutcome, finish
 from twin.references import Step, SumOfSines
 from twin.scenario import assemble, load_scenario, run_scenario
 from twin.sim.runner import simulate
@@ -245,30 +246,26 @@ def finish_program(n_lines: int, side_mm: float = 100.0) -> Iterator[str]:
     yield "%"
 
 
-def _run_and_part(scenario) -> tuple[float, float, Any]:
+def _run_and_part(scenario) -> tuple[float, float, RunOutcome]:
     """One closed-loop run of a scenario with a stock and then its virtual part: the two wall
-    times (s) and the run's result (its part computed)."""
-    from twin.scenario.running import cut_part
-
+    times (s) and the run's outcome (its part computed)."""
     inputs = assemble(scenario)
     t0 = time.perf_counter()
     result = inputs.simulate(progress=False)
     run_s = time.perf_counter() - t0
     t0 = time.perf_counter()
-    cut_part(result, inputs.reference, scenario)
-    return run_s, time.perf_counter() - t0, result
+    outcome = finish(result, inputs.program)
+    return run_s, time.perf_counter() - t0, outcome
 
 
 def _part_peak_mb(scenario) -> float:
     """tracemalloc's peak while a run's virtual part is computed, less what the run holds (MB)."""
     import tracemalloc
 
-    from twin.scenario.running import cut_part
-
     inputs = assemble(scenario)
     result = inputs.simulate(progress=False)
     tracemalloc.start()
-    cut_part(result, inputs.reference, scenario)
+    finish(result, inputs.program)
     peak = tracemalloc.get_traced_memory()[1] / 1e6
     tracemalloc.stop()
     return peak
@@ -314,16 +311,16 @@ def part_figures(repeats: int = 3, finish_lines: int = 17_000) -> dict:
             _run_and_part(scenario)  # warm-up: compiled kernels loaded
             runs, parts = [], []
             for _ in range(repeats):
-                run_s, part_s, result = _run_and_part(scenario)
+                run_s, part_s, outcome = _run_and_part(scenario)
                 runs.append(run_s)
                 parts.append(part_s)
             out["cases"][name] = {
-                "ticks": len(result.t_s),
+                "ticks": len(outcome.run.t_s),
                 "run_s": statistics.median(runs),
                 "part_s": statistics.median(parts),
                 "part_over_run": statistics.median(p / r for p, r in zip(parts, runs)),
                 "part_peak_mb": _part_peak_mb(scenario),
-                "wall_points": len(result.part.walls),
+                "wall_points": len(outcome.part.walls) if outcome.part is not None else 0,
             }
     out["finish"] = finish_figures(finish_lines)
     return out

@@ -16,7 +16,9 @@ from numba import njit
 
 from twin.machining.chatter import CHATTER_THRESHOLD, ChatterReading, chatter_reading
 from twin.numba_cache import configure as configure_numba_cache
+from twin.outcome import RunOutcome
 from twin.records import ChatterCheck, ChatterWarning, LineRow, RunRecords
+from twin.sim.runner import RunResult
 
 configure_numba_cache()  # before the first @njit(cache=True): see twin.numba_cache
 
@@ -268,7 +270,7 @@ def _tick_walk(p, ref, reach, out):  # pragma: no cover - compiled
         out[i] = best
 
 
-def run_contour_error(result) -> np.ndarray | None:
+def run_contour_error(result: RunResult) -> np.ndarray | None:
     """The contour error (m) of a run with a 2-D path at each recorded tick
     (:func:`tick_contour_error`), in the move's own axes: a part program's planned axes the
     machine has not (its z) are added to the tool's point and to the reference, so that a
@@ -285,11 +287,12 @@ def run_contour_error(result) -> np.ndarray | None:
     return tick_contour_error(actual, ref)
 
 
-def tracking_summary(result, records: RunRecords | None = None) -> dict:
+def tracking_summary(outcome: RunOutcome, records: RunRecords | None = None) -> dict:
     """Max and RMS tracking error per axis (um) and the largest cutting force per axis (N,
     tick means, when there is one), all over every tick of the run; for 2-D paths, max and RMS
     contour error (um) over the recorded ticks (none when only metrics were kept); a program's
     and a milling run's ``records`` (:func:`run_records`, computed when not given) as JSON."""
+    result = outcome.run
     out: dict[str, Any] = {
         "max_tracking_error_um": dict(zip(result.axis_names, (result.error_max_m * 1e6).round(3).tolist())),
         "rmse_um": dict(zip(result.axis_names, (result.error_rms_m * 1e6).round(3).tolist())),
@@ -297,7 +300,7 @@ def tracking_summary(result, records: RunRecords | None = None) -> dict:
     if result.force_max_N.any():  # cutting: tick-mean force on the workpiece along each axis
         out["max_cutting_force_N"] = dict(zip(result.axis_names, result.force_max_N.round(1).tolist()))
     ce = run_contour_error(result)
-    records = run_records(result, ce) if records is None else records
+    records = run_records(outcome, ce) if records is None else records
     if ce is not None:  # a 2-D path
         out["max_contour_error_um"] = round(float(ce.max() * 1e6), 3)
         out["rms_contour_error_um"] = round(float(np.sqrt(np.mean(ce**2)) * 1e6), 3)
@@ -318,8 +321,8 @@ def tracking_summary(result, records: RunRecords | None = None) -> dict:
             out["plan_warnings"] = [warning.to_json() for warning in records.plan_warnings]
             if records.plan_warnings_total > len(records.plan_warnings):
                 out["plan_warnings_total"] = records.plan_warnings_total
-        if result.part is not None:
-            out["part"] = result.part.summary()
+        if outcome.part is not None:
+            out["part"] = outcome.part.summary()
             out["inspection"] = [feature.to_json() for feature in records.inspection]
         out["lines"] = [row.to_json() for row in records.lines]
     if records.chatter is not None:
@@ -328,37 +331,37 @@ def tracking_summary(result, records: RunRecords | None = None) -> dict:
     return out
 
 
-def run_records(result, contour_m: np.ndarray | None) -> RunRecords:
+def run_records(outcome: RunOutcome, contour_m: np.ndarray | None) -> RunRecords:
     """A run's per-line rows (:func:`line_table`, each with its chatter), its machining
     warnings (with a stock), its warnings against the machine, its part's inspection and its
     chatter (:func:`chatter_check`).
 
     Parameters
     ----------
-    result : RunResult
+    outcome : RunOutcome
     contour_m : ndarray or None
         The contour error at each recorded tick (m, :func:`run_contour_error`); None: the path
         is not 2-D.
     """
+    result = outcome.run
     program = result.program
     if program is None or program.lines.size == 0:
         whole, _, chatter_warnings = chatter_check(result, [])
         return RunRecords(chatter=whole, chatter_warnings=tuple(chatter_warnings))
-    whole, rows, chatter_warnings = chatter_check(result, line_table(result, contour_m))
-    stock = program.engagement.size > 0
+    whole, rows, chatter_warnings = chatter_check(result, line_table(outcome, contour_m))
     return RunRecords(
         lines=tuple(rows),
-        machining_warnings=tuple(program.machining_warnings) if stock else (),
-        machining_warnings_total=program.machining_warnings_total if stock else 0,
-        plan_warnings=tuple(program.plan_warnings),
-        plan_warnings_total=program.plan_warnings_total,
-        inspection=tuple(result.inspection) if result.part is not None else (),
+        machining_warnings=outcome.machining_warnings,
+        machining_warnings_total=outcome.machining_warnings_total,
+        plan_warnings=outcome.plan_warnings,
+        plan_warnings_total=outcome.plan_warnings_total,
+        inspection=outcome.inspection,
         chatter=whole,
         chatter_warnings=tuple(chatter_warnings),
     )
 
 
-def _chatter_of(result, rows: slice) -> ChatterReading | None:
+def _chatter_of(result: RunResult, rows: slice) -> ChatterReading | None:
     """The chatter reading (:func:`twin.machining.chatter.chatter_reading`) of the recorded rows
     ``rows`` of a run; None where the tool did not cut for a window's worth."""
     every = max(result.info.get("record_every", 1), 1)
@@ -367,7 +370,9 @@ def _chatter_of(result, rows: slice) -> ChatterReading | None:
     return chatter_reading(result.vibration_probe[rows], steps, result.control_period_s * every, dt)
 
 
-def chatter_check(result, lines: list[LineRow]) -> tuple[ChatterCheck | None, list[LineRow], list[ChatterWarning]]:
+def chatter_check(
+    result: RunResult, lines: list[LineRow]
+) -> tuple[ChatterCheck | None, list[LineRow], list[ChatterWarning]]:
     """A milling run's chatter (:mod:`twin.machining.chatter`): the whole run's reading
     (indicator, frequency and verdict, :meth:`~twin.machining.chatter.ChatterReading.check`),
     the rows of ``lines`` each with its own reading, and the warnings (each program line that
@@ -401,7 +406,7 @@ def _chatter_message(reading: ChatterReading) -> str:
     return f"chatter{hz}: indicator {reading.indicator:.2f} over {CHATTER_THRESHOLD}"
 
 
-def line_table(result, contour_m: np.ndarray | None) -> list[LineRow]:
+def line_table(outcome: RunOutcome, contour_m: np.ndarray | None) -> list[LineRow]:
     """Per G-code line, over the recorded ticks the reference is on it: its text, time span,
     max and RMS contour error (um), max tracking error per axis (um), the largest cutting
     force (N, the XY magnitude) and, with a stock, the mean engaged angle (deg), the largest
@@ -410,11 +415,13 @@ def line_table(result, contour_m: np.ndarray | None) -> list[LineRow]:
 
     Parameters
     ----------
-    result : RunResult
-        A run of a G-code reference (its :class:`~twin.sim.runner.ProgramTrace`).
+    outcome : RunOutcome
+        A run of a G-code reference (its :class:`~twin.sim.runner.ProgramTrace`), with its
+        program's line checks and part.
     contour_m : ndarray or None
         The contour error at each recorded tick (m); None: the path is not 2-D.
     """
+    result = outcome.run
     program = result.program
     if program is None or program.lines.size == 0:
         return []
@@ -432,7 +439,7 @@ def line_table(result, contour_m: np.ndarray | None) -> list[LineRow]:
     if program.engagement.size:
         engaged = np.add.reduceat(program.engagement[:, 0], starts) / (ends - starts)
         depth = np.maximum.reduceat(program.engagement[:, 1], starts)
-    wall_error = result.part.line_errors() if result.part is not None else {}
+    wall_error = outcome.part.line_errors() if outcome.part is not None else {}
     rows = []
     for i, (a, b) in enumerate(zip(starts, ends)):
         line = int(lines[a])
@@ -449,7 +456,7 @@ def line_table(result, contour_m: np.ndarray | None) -> list[LineRow]:
                 mean_engagement_deg=round(float(engaged[i]), 2) if program.engagement.size else None,
                 axial_depth_mm=round(float(depth[i]), 4) if program.engagement.size else None,
                 max_wall_error_um=wall_error.get(line),
-                stability=program.line_stability.get(line),
+                stability=outcome.line_stability.get(line),
             )
         )
     return rows

@@ -9,7 +9,10 @@ from pathlib import Path
 import numpy as np
 
 from twin.machining.chatter import CHATTER_THRESHOLD, rolling_indicator
+from twin.machining.part import MachinedPart
+from twin.outcome import RunOutcome
 from twin.scales import contour_gain
+from twin.sim.runner import ProgramTrace
 
 
 def plot_folder(folder):
@@ -46,10 +49,10 @@ def _axes_plot(plt, t, series: dict, ylabel: str, title: str, path: Path) -> Pat
     return path
 
 
-def write_plots(result, directory: Path, name: str = "run") -> list[Path]:
+def write_plots(outcome: RunOutcome, directory: Path, name: str = "run") -> list[Path]:
     """Write ``<name>_tracking_error.png``, ``<name>_control.png``, ``<name>_forces.png``, with
     milling ``<name>_chatter.png`` and, for two axes, ``<name>_contour.png`` into ``directory``
-    (created if missing).
+    (created if missing); for a program, its part and feed plots (:func:`_program_plots`).
 
     Returns
     -------
@@ -62,6 +65,7 @@ def write_plots(result, directory: Path, name: str = "run") -> list[Path]:
     import matplotlib.pyplot as plt
 
     directory.mkdir(parents=True, exist_ok=True)
+    result = outcome.run
     machine, t = result.machine, result.t_s
     axes = result.axis_names
     error_um = result.error_m() * 1e6
@@ -136,7 +140,7 @@ def write_plots(result, directory: Path, name: str = "run") -> list[Path]:
         fig.savefig(written[-1], dpi=120, bbox_inches="tight")
         plt.close(fig)
     if result.program is not None and result.program.lines.size and len(axes) == 2:
-        written += _program_plots(plt, result, directory, name)
+        written += _program_plots(plt, outcome, result.program, directory, name)
     return written
 
 
@@ -147,9 +151,10 @@ LABELLED_LINES = 5
 FEED_FILTER_S = 0.01
 
 
-def _program_plots(plt, result, directory: Path, name: str) -> list[Path]:
+def _program_plots(plt, outcome: RunOutcome, program: ProgramTrace, directory: Path, name: str) -> list[Path]:
     """A program's part seen from above (stock and machined outlines, the path coloured by its
     contour error, the worst lines labelled) and its feed profile (programmed, planned, actual)."""
+    result = outcome.run
     from matplotlib.collections import LineCollection
 
     from twin.metrics import contour_error, line_table, run_contour_error
@@ -159,13 +164,13 @@ def _program_plots(plt, result, directory: Path, name: str) -> list[Path]:
     error_um = (contour_error(act * 1e-3, ref * 1e-3) if ce is None else ce) * 1e6
     fig, ax = plt.subplots(figsize=(8, 7))
     for key, color, label in (("stock", "0.55", "stock"), ("machined", "k", "machined outline")):
-        for i, ring in enumerate(result.program.outlines.get(key, [])):
+        for i, ring in enumerate(outcome.outlines.get(key, [])):
             ax.plot(ring[:, 0], ring[:, 1], color=color, linewidth=1.0, label=label if i == 0 else None)
     segments = np.stack([act[:-1], act[1:]], axis=1)
     path = LineCollection(list(segments), array=error_um[1:], cmap="turbo", linewidths=2.0)
     ax.add_collection(path)
     fig.colorbar(path, ax=ax, label="contour error (µm)")
-    rows = sorted(line_table(result, error_um * 1e-6), key=lambda r: r.worst_error_um, reverse=True)
+    rows = sorted(line_table(outcome, error_um * 1e-6), key=lambda r: r.worst_error_um, reverse=True)
     # numbered markers on the path and the lines' texts in a key beside the plot: passes that
     # share XY put the worst lines on one spot, where labels would cover one another
     legend_rows = []
@@ -203,7 +208,7 @@ def _program_plots(plt, result, directory: Path, name: str) -> list[Path]:
     )
     ax.set_aspect("equal", adjustable="datalim")
     ax.grid(True, alpha=0.3)
-    if result.program.outlines:
+    if outcome.outlines:
         ax.legend(loc="lower right", fontsize=8)
     written = [directory / f"{name}_part.png"]
     fig.savefig(written[-1], dpi=120, bbox_inches="tight")
@@ -216,13 +221,13 @@ def _program_plots(plt, result, directory: Path, name: str) -> list[Path]:
     # each axis's velocity averaged over FEED_FILTER_S, centred, before the magnitude
     width = max(1, round(FEED_FILTER_S / (t[1] - t[0]))) if len(t) > 1 else 1
     smooth = np.stack([np.convolve(v, np.ones(width) / width, mode="same") for v in velocity.T], axis=1)
-    ax.plot(t, result.program.feed_mm_per_min, color="0.5", linewidth=1.2, label="programmed F (0: rapid)")
+    ax.plot(t, program.feed_mm_per_min, color="0.5", linewidth=1.2, label="programmed F (0: rapid)")
     ax.plot(t, planned, color="tab:blue", linewidth=1.0, label="planned (reference)")
     actual = np.hypot(smooth[:, 0], smooth[:, 1]) * 60e3
     ax.plot(
         t, actual, color="tab:red", linewidth=0.7, label=f"actual (table), {FEED_FILTER_S * 1e3:g} ms moving average"
     )
-    top_feed = float(result.program.feed_mm_per_min.max())
+    top_feed = float(program.feed_mm_per_min.max())
     if top_feed > 0:  # the feeds in view; rapids run off the top
         ax.set_ylim(0.0, 1.3 * top_feed)
     ax.set(xlabel="time (s)", ylabel="XY feed (mm/min)", title=f"{name}: feed profile (rapids above the view)")
@@ -231,18 +236,17 @@ def _program_plots(plt, result, directory: Path, name: str) -> list[Path]:
     written.append(directory / f"{name}_feed.png")
     fig.savefig(written[-1], dpi=120, bbox_inches="tight")
     plt.close(fig)
-    if result.part is not None and len(result.part.walls):
-        written.append(_wall_error_plot(plt, result, directory, name))
+    if outcome.part is not None and len(outcome.part.walls):
+        written.append(_wall_error_plot(plt, outcome, outcome.part, directory, name))
     return written
 
 
-def _wall_error_plot(plt, result, directory: Path, name: str) -> Path:
+def _wall_error_plot(plt, outcome: RunOutcome, part: MachinedPart, directory: Path, name: str) -> Path:
     """The virtual part from above: its walls coloured by their signed error (µm, material left
     red, overcut blue, one scale either side of zero), the inspected features' results beside."""
-    part = result.part
     walls = part.walls
     fig, ax = plt.subplots(figsize=(8, 7))
-    for i, ring in enumerate(result.program.outlines.get("stock", [])):
+    for i, ring in enumerate(outcome.outlines.get("stock", [])):
         ax.plot(ring[:, 0], ring[:, 1], color="0.55", linewidth=1.0, label="stock" if i == 0 else None)
     order = np.argsort(np.abs(walls[:, 3]))  # the largest errors drawn last, on top
     limit = max(float(np.abs(walls[:, 3]).max()), 1e-3)
@@ -250,7 +254,7 @@ def _wall_error_plot(plt, result, directory: Path, name: str) -> Path:
         walls[order, 0], walls[order, 1], c=walls[order, 3], s=8, cmap="coolwarm", vmin=-limit, vmax=limit
     )
     fig.colorbar(dots, ax=ax, label="wall error (µm): + material left, − overcut")
-    report = [feature.label() for feature in result.inspection]
+    report = [feature.label() for feature in outcome.inspection]
     if report:
         ax.text(
             1.28,

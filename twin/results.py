@@ -22,6 +22,8 @@ if TYPE_CHECKING:  # the heavy modules load on first use, not with `import twin`
     from twin.commissioning.calibration import CalibrationReport
     from twin.commissioning.frf import FrfMeasurement, FrfSettings
     from twin.gcode.moves import Move
+    from twin.gcode.report import PlannedSummary
+    from twin.outcome import RunOutcome
     from twin.records import RunRecords
     from twin.sampling import SamplePlan
     from twin.scenario import Scenario
@@ -35,16 +37,24 @@ class Run:
     Attributes
     ----------
     scenario : twin.scenario.Scenario
-    result : twin.sim.runner.RunResult
-        The raw arrays (SI units) at the recorded ticks, and metrics over every tick.
-    stopped : SimulationDiverged or RunInterrupted or None
-        What stopped a run early (see :func:`twin.api.run`'s ``keep_partial``); None for a run
-        that went to its end.
+    outcome : twin.outcome.RunOutcome
+        The run and what was computed from its motion: with a part program its warnings, with
+        a stock the part it cut and its inspection.
     """
 
     scenario: Scenario
-    result: RunResult
-    stopped: SimulationDiverged | RunInterrupted | None = None
+    outcome: RunOutcome
+
+    @property
+    def result(self) -> RunResult:
+        """The raw arrays (SI units) at the recorded ticks, and metrics over every tick."""
+        return self.outcome.run
+
+    @property
+    def stopped(self) -> SimulationDiverged | RunInterrupted | None:
+        """What stopped a run early (see :func:`twin.api.run`'s ``keep_partial``); None for a
+        run that went to its end."""
+        return self.outcome.stopped
 
     @property
     def status(self) -> str:
@@ -67,7 +77,7 @@ class Run:
             "status": self.status,
             **({} if self.stopped is None else {"sim_time_s": self.stopped.sim_time_s}),
             "completed_ticks": done,
-            **(tracking_summary(self.result, self.records) if done else {}),
+            **(tracking_summary(self.outcome, self.records) if done else {}),
             "loop": self.result.info["loop"],
         }
 
@@ -81,7 +91,7 @@ class Run:
 
         if not self.result.info["completed_ticks"]:
             return RunRecords()
-        return run_records(self.result, run_contour_error(self.result))
+        return run_records(self.outcome, run_contour_error(self.result))
 
     def lines_to_parquet(self, path: str | Path) -> Path:
         """Write the per-line table of a G-code run (:attr:`records`' ``lines``, each row's
@@ -124,7 +134,7 @@ class Run:
         from twin.recording import record
 
         path = Path(path)
-        record(self.result, path)
+        record(self.outcome, path)
         return path
 
     def write_part(self, folder: str | Path) -> list[Path]:
@@ -138,7 +148,7 @@ class Run:
         TwinInputError
             The run has no virtual part (no stock, or it stopped early).
         """
-        part = self.result.part
+        part = self.outcome.part
         if part is None or part.maps is None:
             raise TwinInputError("part", str(folder), "the run has no virtual part: give [stock] and run to the end")
         folder = Path(folder)
@@ -153,7 +163,7 @@ class Run:
         """Write the PNG plots of ``twin run --plots`` into ``folder``; their paths."""
         from twin.plots import write_plots
 
-        return write_plots(self.result, Path(folder), self.scenario.name)
+        return write_plots(self.outcome, Path(folder), self.scenario.name)
 
 
 @dataclass
@@ -203,14 +213,15 @@ class Program:
     file : str
     moves : list of twin.gcode.reader.Move
         The moves as LinuxCNC reads them.
-    planned : dict or None
+    planned : twin.gcode.report.PlannedSummary or None
         With a machine: the plan's cycle time (s), feed-only time, limits and largest values per
-        axis and path deviation (:func:`twin.gcode.report.planned_summary`).
+        axis, path deviation and warnings against the machine
+        (:func:`twin.gcode.report.planned_summary`).
     """
 
     file: str
     moves: list[Move]
-    planned: dict | None = None
+    planned: PlannedSummary | None = None
 
     @property
     def summary(self) -> dict:
@@ -218,7 +229,7 @@ class Program:
         center_mm and turns, feed, spindle) and, with a machine, ``planned``."""
         out: dict[str, Any] = {"file": self.file, "moves": [m.as_dict() for m in self.moves]}
         if self.planned is not None:
-            out["planned"] = self.planned
+            out["planned"] = self.planned.to_json()
         return out
 
 

@@ -71,15 +71,12 @@ def _print_chatter_check(rows: Sequence[LineRow]) -> None:
     checked = [row.stability for row in rows if row.stability is not None]
     if not checked:
         return
-    over = sorted(
-        (check for check in checked if (check["margin"] or float("inf")) < 1),
-        key=lambda check: check["margin"],
-    )
+    over = sorted((check for check in checked if check.over_critical), key=lambda check: check.margin or 0.0)
     typer.echo(
         f"  chatter check (zero-order lobes): {len(checked)} cutting line(s), {len(over)} over their critical depth"
     )
     for check in over[:WORST_LINES]:
-        typer.echo(f"    {check['text']}")
+        typer.echo(f"    {check.text}")
 
 
 def _print_part(summary: dict, inspection: Sequence[Inspected]) -> None:

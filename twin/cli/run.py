@@ -110,7 +110,7 @@ def _report(
     if plots is not None and len(done.result.t_s):
         for path in done.plots(plots):  # matplotlib is imported only when plots are asked for
             typer.echo(f"plot written to {path}", err=as_json)
-    if part is not None and done.result.part is not None:
+    if part is not None and done.outcome.part is not None:
         for path in done.write_part(part):
             typer.echo(f"part written to {path}", err=as_json)
 
@@ -313,53 +313,9 @@ def mjcf(
 
 
 def list_things():
-    """Machines, controller kinds, observers, disturbances, materials, references, bundled
-    scenarios and reproducible papers."""
-    from controllers import CONTROLLERS, OBSERVERS
-    from twin.disturbances import DISTURBANCES
-    from twin.machines import MACHINES
-    from twin.machining.materials import KIENZLE_AXIAL_RATIO, KIENZLE_RADIAL_RATIO, MATERIALS
-    from twin.references import REFERENCES
-    from twin.reproductions.registry import REPRODUCTIONS
-    from twin.scenario import bundled_scenarios, load_scenario
+    """Machines, controller kinds, observers, disturbances, materials, references, inspection
+    features, bundled scenarios and reproducible papers (the catalogue, :mod:`twin.catalogue`)."""
+    from twin.catalogue import list_lines
 
-    def params(kind):
-        names = list(kind.params.model_fields)
-        return f" [params: {', '.join(names)}]" if names else ""
-
-    typer.echo("machines (or a machine file of datasheet values, FILE.toml: examples/machines/):")
-    for name, m in MACHINES.items():
-        typer.echo(f"  {name:<22} {m.summary}")
-    typer.echo("controllers (type = ...):")
-    for name, kind in CONTROLLERS.items():
-        typer.echo(f"  {name:<22} {kind.doc}{params(kind)}")
-    typer.echo("observers ([controller.observer] type = ...):")
-    for name, kind in OBSERVERS.items():
-        typer.echo(f"  {name:<22} {kind.doc}{params(kind)}")
-    typer.echo("disturbances ([[disturbances]] type = ...):")
-    for name, kind in DISTURBANCES.items():
-        typer.echo(f"  {name:<22} {kind.doc.removeprefix(name + ': ')}")
-    typer.echo(
-        "materials ([tool] / [[tools]] / end_milling material = ...): linear K_tc K_rc K_ac N/mm^2, K_te K_re K_ae"
-        f" N/mm; Kienzle kc1 N/mm^2 and mc (kc = kc1 h^-mc), radial and axial {KIENZLE_RADIAL_RATIO:g} and"
-        f" {KIENZLE_AXIAL_RATIO:g} of the tangential (our ratios, no source)"
-    )
-    for name, material in MATERIALS.items():
-        k = material.coefficients
-        if k.mc:
-            values = f"kc1 {k.K_tc:.0f}, mc {k.mc:.3f}"
-        else:
-            values = f"{k.K_tc:g} {k.K_rc:g} {k.K_ac:g}, {k.K_te:g} {k.K_re:g} {k.K_ae:g}"
-        typer.echo(
-            f"  {name:<24} {material.model}: {material.alloy}, {material.cutter}, {material.lubrication}: {values}"
-            f" ({material.source})"
-        )
-    typer.echo("references ([reference] type = ...):")
-    for name, kind in REFERENCES.items():
-        typer.echo(f"  {name:<22} {kind.doc.removeprefix(name + ': ')}")
-    typer.echo("scenarios:")
-    for name in sorted(bundled_scenarios()):
-        typer.echo(f"  {name:<30} {load_scenario(name).description}")
-    typer.echo("reproductions (twin reproduce ...):")
-    for name, paper in REPRODUCTIONS.items():
-        typer.echo(f"  {name:<22} {paper.doc}")
+    for line in list_lines():
+        typer.echo(line)

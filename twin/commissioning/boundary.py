@@ -121,7 +121,7 @@ def growth_ratio(design: dict, machine: str, axis: str, gain: str, db: float, co
     if conditions.ideal_sensors:
         scenario["sensors"].update(encoder_resolution_m=0.0, motor_encoder_resolution_m=0.0)
     try:
-        result = run_scenario(scenario_from_dict(scenario))
+        result = run_scenario(scenario_from_dict(scenario)).run
     except SimulationDiverged:
         return math.inf
     y = result.table_position_m()[:, list(design["axes"]).index(axis)]

@@ -25,7 +25,7 @@ from twin.disturbances.cutting_forces import EndMillingSpec
 from twin.errors import TwinInputError
 from twin.machining.cutting import immersion_angles
 from twin.machining.materials import CuttingCoefficients
-from twin.machining.program_stability import default_rpm_range, line_stability, milling_cut
+from twin.machining.program_stability import ProgramSamples, default_rpm_range, line_stability, milling_cut
 from twin.machining.stability import Lobes, sd_critical_depths, zoa_critical_depths
 from twin.machining.tool_dynamics import ToolDynamicsSpec
 from twin.scenario import Scenario
@@ -112,14 +112,17 @@ def scenario_tool(scn: Scenario, number: int | None) -> LobesTool:
     return found[0]
 
 
-def _program(scn: Scenario):
-    """With a stock and a program: the planned program through it (a
-    :class:`~twin.references.gcode.GcodeReference` with its cut); else None."""
+def _program_samples(scn: Scenario) -> tuple[ProgramSamples, dict[int, str]] | None:
+    """With a stock and a program: what the planned program does at each sample through it
+    (:meth:`twin.machining.program_cut.ProgramCut.samples`) and its lines' texts; else None."""
     if scn.stock is None or scn.reference.type != "gcode":
         return None
     from twin.scenario.assembly import assemble
 
-    return assemble(scn).reference
+    program = assemble(scn).program
+    if program is None or program.cut is None or program.plan is None:
+        return None
+    return program.cut.samples(program.plan), program.plan.texts
 
 
 def lobes(scn: Scenario, settings: LobesSettings) -> dict:
@@ -143,8 +146,8 @@ def lobes(scn: Scenario, settings: LobesSettings) -> dict:
         raise TwinInputError("--feed-per-tooth", settings.feed_per_tooth_mm, "must be positive (mm)")
     phi_st, phi_ex = immersion_angles(immersion * tool.diameter_mm, tool.diameter_mm, mode)
     cut = milling_cut(tool.coefficients, tool.n_flutes, ((phi_st, phi_ex, 1.0),), 0.0, settings.feed_per_tooth_mm)
-    program = _program(scn)
-    samples = program.program_samples() if program is not None else None
+    planned = _program_samples(scn)
+    samples = None if planned is None else planned[0]
     speeds = _speeds(settings.rpm, tool, samples)
     methods = ["zoa", "sd"] if settings.method == "both" else [settings.method]
     if "sd" in methods and tool.dynamics.measured is not None:
@@ -185,10 +188,12 @@ def lobes(scn: Scenario, settings: LobesSettings) -> dict:
         "lowest": {name: _lowest(result) for name, result in found.items()},
         "seconds": {name: round(seconds[name], 3) for name in found},
     }
-    if samples is not None:
+    if planned is not None:
+        samples, texts = planned
         checked = line_stability(samples, (float(speeds.min()), float(speeds.max())))
-        texts = program.texts
-        summary["lines"] = [{"line": n, "text": texts.get(n, ""), "stability": row} for n, row in checked.items()]
+        summary["lines"] = [
+            {"line": n, "text": texts.get(n, ""), "stability": check.to_json()} for n, check in checked.items()
+        ]
     return summary
 
 

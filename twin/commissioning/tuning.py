@@ -339,7 +339,8 @@ def verify(result: dict, machine_path: str, folder: Path) -> dict:
     for reference in ("step", "circle"):
         path = folder / f"tuned_{reference}.toml"
         path.write_text(scenario_text(result, machine_path, reference), encoding="utf-8")
-        run = run_scenario(load_scenario(path))
+        outcome = run_scenario(load_scenario(path))
+        run = outcome.run
         if reference == "step":
             y = run.table_position_m()
             t = run.t_s
@@ -350,7 +351,7 @@ def verify(result: dict, machine_path: str, folder: Path) -> dict:
                 out.setdefault(a, {})["step_overshoot_pct"] = float(max(over, 0.0))
                 out[a]["step_settling_s"] = float(t[outside[-1]] - 0.01) if outside.size else 0.0
         else:
-            summary = tracking_summary(run)  # a one-axis machine's projection has no contour
+            summary = tracking_summary(outcome)  # a one-axis machine's projection has no contour
             contour = ("max_contour_error_um", "rms_contour_error_um")
             out["circle"] = {
                 **{key: summary[key] for key in contour if key in summary},

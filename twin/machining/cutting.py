@@ -343,7 +343,7 @@ class EndMilling:
     axial_depth_mm: float
     radial_depth_mm: float
     mode: str = "up"
-    coefficients: CuttingCoefficients = MATERIALS[DEFAULT_MATERIAL].coefficients
+    coefficients: CuttingCoefficients = MATERIALS[DEFAULT_MATERIAL].value.coefficients
     start_s: float = 0.0
     stop_s: float | None = None
     spindle_phase_rad: float | None = None
@@ -972,7 +972,7 @@ class CoefficientsSpec(StrictSpec):
         ones given here in their place; a Kienzle form given replaces the material's whole."""
         given = self.model_dump(exclude_none=True)
         kc1 = given.pop("kc1_N_per_mm2", None)
-        base = MATERIALS[material].coefficients if kc1 is None else kienzle(kc1, given.pop("mc"))
+        base = MATERIALS[material].value.coefficients if kc1 is None else kienzle(kc1, given.pop("mc"))
         return replace(base, **given)
 
 

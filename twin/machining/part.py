@@ -685,3 +685,46 @@ def virtual_part(stock: StockSpec, nominal: ToolSweep, actual: ToolSweep) -> Mac
     part.maps = part_map(stock, nominal, actual)
     part.floor_error_um = part.maps.floor_error()
     return part
+
+
+def part_cut_by_motion(
+    stock: StockSpec,
+    planned: ToolSweep,
+    *,
+    period_s: float,
+    t_s: np.ndarray,
+    table_xy_mm: np.ndarray,
+    lines: np.ndarray,
+) -> MachinedPart:
+    """The part a run's actual motion cut (:func:`virtual_part`), against the nominal part of
+    the program as far as the run went (a run stopped before the program's end, by its duration
+    or a divergence, is compared with what the program had cut by then, not with material it
+    never reached).
+
+    Parameters
+    ----------
+    stock : StockSpec
+    planned : ToolSweep
+        The program's planned path through the stock, one sample every ``period_s`` (s)
+        (:meth:`~twin.machining.sweep.ToolSweep.planned`).
+    period_s : float
+        The plan's sample period (s).
+    t_s : ndarray (n,)
+        The run's recorded times (s).
+    table_xy_mm : ndarray (n, 2)
+        The table's measured XY path at those times (mm): the tool's actual axis; its tip
+        height and tool are those of the planned sample at each time.
+    lines : ndarray (n,) of int
+        The program line at each recorded time.
+    """
+    k = np.clip(np.rint(t_s / period_s).astype(int), 0, len(planned.line) - 1)
+    reached = slice(0, int(k[-1]) + 1 if k.size else 0)
+    nominal = ToolSweep(
+        planned.xy_mm[reached],
+        planned.tip_mm[reached],
+        planned.radius_mm[reached],
+        planned.corner_mm[reached],
+        planned.line[reached],
+    )
+    actual = ToolSweep(table_xy_mm, nominal.tip_mm[k], nominal.radius_mm[k], nominal.corner_mm[k], lines)
+    return virtual_part(stock, nominal, actual)

@@ -24,6 +24,7 @@ from twin.machining.cutting import (
 )
 from twin.machining.engagement import COLUMNS, MAP_MARGIN_MM, HeightMap, StockSpec, ToolSpec, engagement_table
 from twin.machining.misuse import machining_warnings
+from twin.machining.program_stability import ProgramSamples
 from twin.records import MachiningWarning
 
 
@@ -108,6 +109,15 @@ class ProgramCut:
     warnings_total: int
     radius_m: np.ndarray
     corner_m: np.ndarray
+
+    def samples(self, plan) -> ProgramSamples:
+        """The engagement, spindle speed, tool, line and XY velocity at each sample of ``plan``
+        (the :class:`twin.gcode.planner.Plan` this cut was made from), for the chatter check
+        (:func:`twin.machining.program_stability.line_stability`)."""
+        milling = self.milling
+        return ProgramSamples(
+            self.table, milling.spindle_rpm, milling.tool_index, milling.tools, plan.line, plan.velocity[:, :2]
+        )
 
 
 def program_milling(plan, stock: StockSpec, tool: ToolSpec | None, tools: list[ToolSpec], seed: int) -> ProgramCut:

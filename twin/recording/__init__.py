@@ -31,21 +31,29 @@ from pathlib import Path
 import numpy as np
 import rerun as rr
 
+from twin.outcome import RunOutcome
 from twin.recording.contour import log_contour
 from twin.recording.layout import blueprint
 from twin.recording.machine3d import arrow_scale_N_per_mm, log_cutting_force, log_geometry, log_poses
 from twin.recording.series import log_series
 from twin.scales import contour_gain
+from twin.sim.runner import RunResult
 
 __all__ = ["read_back", "record", "record_runs"]
 
 
-def record(result, path: str | Path, max_points: int = 20_000, application_id: str = "cnc_feed_drive_twin") -> Path:
+def record(
+    result: RunOutcome | RunResult,
+    path: str | Path,
+    max_points: int = 20_000,
+    application_id: str = "cnc_feed_drive_twin",
+) -> Path:
     """Write a run to a ``.rrd`` file.
 
     Parameters
     ----------
-    result : twin.sim.runner.RunResult
+    result : twin.outcome.RunOutcome or twin.sim.runner.RunResult
+        The run, with what was computed from its motion (a program's part) where it has any.
     path : str or Path
         Output file.
     max_points : int
@@ -60,9 +68,14 @@ def record(result, path: str | Path, max_points: int = 20_000, application_id: s
 
 
 def record_runs(
-    results: dict, path: str | Path, max_points: int = 20_000, application_id: str = "cnc_feed_drive_twin"
+    runs: dict[str, RunOutcome | RunResult],
+    path: str | Path,
+    max_points: int = 20_000,
+    application_id: str = "cnc_feed_drive_twin",
 ) -> Path:
-    """Write several runs to one ``.rrd`` file, each under its name (``<name>/machine/...``).
+    """Write several runs (:class:`~twin.outcome.RunOutcome` or bare
+    :class:`~twin.sim.runner.RunResult`) to one ``.rrd`` file, each under its name
+    (``<name>/machine/...``).
 
     A single run under the name ``""`` keeps the plain entity paths of the module docstring.
 
@@ -71,6 +84,8 @@ def record_runs(
     ValueError
         A run that recorded no series (``record_every = 0``, metrics only).
     """
+    outcomes = {name: r if isinstance(r, RunOutcome) else RunOutcome(r) for name, r in runs.items()}
+    results = {name: outcome.run for name, outcome in outcomes.items()}
     empty = [name for name, r in results.items() if len(r.t_s) == 0]
     if empty:
         raise ValueError(f"run {empty[0]!r} kept metrics only (record_every = 0): nothing to record")
@@ -82,17 +97,18 @@ def record_runs(
         name: arrow_scale_N_per_mm(r.workpiece_force_N) if r.has_workpiece_force else None
         for name, r in results.items()
     }
-    rec.send_blueprint(blueprint(results, gains, scales))
-    for name, result in results.items():
-        _log_run(rec, result, f"{name}/" if name else "", max_points, gains[name], scales[name])
+    rec.send_blueprint(blueprint(outcomes, gains, scales))
+    for name, outcome in outcomes.items():
+        _log_run(rec, outcome, f"{name}/" if name else "", max_points, gains[name], scales[name])
     rec.flush()
     rec.disconnect()
     return path
 
 
-def _log_run(rec, result, prefix: str, max_points: int, gain: int | None, n_per_mm: float | None) -> None:
+def _log_run(rec, outcome: RunOutcome, prefix: str, max_points: int, gain: int | None, n_per_mm: float | None) -> None:
     """Send one run under ``prefix``: series, machine, the force arrow when ``n_per_mm`` is
     given and the contour when ``gain`` is."""
+    result = outcome.run
     rows = slice(None, None, max(1, int(np.ceil(len(result.t_s) / max_points))))
     model = result.machine.model
     log_series(rec, result, prefix, rows)
@@ -101,7 +117,7 @@ def _log_run(rec, result, prefix: str, max_points: int, gain: int | None, n_per_
     if n_per_mm is not None:
         log_cutting_force(rec, model, result.t_s[rows], result.workpiece_force_N[rows], n_per_mm, prefix)
     if gain is not None:
-        log_contour(rec, result, prefix, rows, gain)
+        log_contour(rec, outcome, prefix, rows, gain)
 
 
 def read_back(path: str | Path) -> dict[str, int]:

@@ -7,6 +7,9 @@ from __future__ import annotations
 import numpy as np
 import rerun as rr
 
+from twin.machining.part import MachinedPart
+from twin.outcome import RunOutcome
+
 #: Colours: reference grey, actual blue, magnified error red, tool yellow.
 REFERENCE_COLOR, ACTUAL_COLOR, ERROR_COLOR, TOOL_COLOR = (150, 150, 150), (30, 140, 255), (230, 60, 60), (255, 220, 0)
 #: Colours of a program's stock outline (light grey) and machined outline (white).
@@ -47,10 +50,11 @@ def _xyz(xy_mm: np.ndarray) -> np.ndarray:
     return np.column_stack([xy_mm, np.zeros(len(xy_mm))])
 
 
-def log_contour(rec, result, prefix: str, rows: slice, gain: int) -> None:
+def log_contour(rec, outcome: RunOutcome, prefix: str, rows: slice, gain: int) -> None:
     """``contour/reference``, ``contour/actual`` (a program's: ``contour/path_by_contour_error``,
     see :func:`log_program`), ``contour/error_x<gain>`` (static line strips) and ``contour/tool``
     (a point over time), all in mm."""
+    result = outcome.run
     ref = result.ref[rows, :, 0] * 1e3
     act = result.table_position_m()[rows] * 1e3
     root = f"{prefix}contour"
@@ -65,7 +69,7 @@ def log_contour(rec, result, prefix: str, rows: slice, gain: int) -> None:
         static=True,
     )
     if is_program:
-        log_program(rec, result, root, rows, ref, act)
+        log_program(rec, outcome, root, rows, ref, act)
     rec.log(f"{root}/tool", rr.Points3D.from_fields(colors=[TOOL_COLOR], radii=[-8.0]), static=True)
     rec.send_columns(
         f"{root}/tool",
@@ -74,13 +78,14 @@ def log_contour(rec, result, prefix: str, rows: slice, gain: int) -> None:
     )
 
 
-def log_program(rec, result, root: str, rows: slice, ref: np.ndarray, act: np.ndarray) -> None:
+def log_program(rec, outcome: RunOutcome, root: str, rows: slice, ref: np.ndarray, act: np.ndarray) -> None:
     """A program's part: the stock and machined outlines, the path coloured by its contour error
     (``path_by_contour_error``) and the colour scale beside it with its ends labelled (µm)."""
+    result = outcome.run
     from twin.metrics import contour_error, run_contour_error
 
     for name, color in (("stock", STOCK_COLOR), ("machined", MACHINED_COLOR)):
-        rings = result.program.outlines.get(name, [])
+        rings = outcome.outlines.get(name, [])
         if rings:
             rec.log(
                 f"{root}/{name}", rr.LineStrips3D([_xyz(r) for r in rings], colors=[color], radii=[-1.0]), static=True
@@ -94,9 +99,9 @@ def log_program(rec, result, root: str, rows: slice, ref: np.ndarray, act: np.nd
         rr.LineStrips3D(segments, colors=scale_colors(error_um[1:], top), radii=[-4.0]),
         static=True,
     )
-    if result.part is not None and len(result.part.walls):
-        log_part(rec, result, root)
-    every = [*(r for rings in result.program.outlines.values() for r in rings), act]  # the scale right of all
+    if outcome.part is not None and len(outcome.part.walls):
+        log_part(rec, outcome, outcome.part, root)
+    every = [*(r for rings in outcome.outlines.values() for r in rings), act]  # the scale right of all
     x_max, y_min, y_max = (
         max(r[:, 0].max() for r in every),
         min(r[:, 1].min() for r in every),
@@ -114,21 +119,21 @@ def log_program(rec, result, root: str, rows: slice, ref: np.ndarray, act: np.nd
     )
 
 
-def log_part(rec, result, root: str) -> None:
+def log_part(rec, outcome: RunOutcome, part: MachinedPart, root: str) -> None:
     """The virtual part: its wall points at their heights coloured by the signed wall error
     (``part_walls``, mm, :func:`wall_colors`) and each measured feature's result as a label
     at its measured centre or position (``inspection``)."""
-    walls = result.part.walls
+    walls = part.walls
     rec.log(
         f"{root}/part_walls",
         rr.Points3D(walls[:, :3], colors=wall_colors(walls[:, 3]), radii=[-3.0]),
         static=True,
     )
-    outline = [ring for rings in result.program.outlines.values() for ring in rings]
+    outline = [ring for rings in outcome.outlines.values() for ring in rings]
     span = float(np.ptp(np.concatenate([walls[:, 1], *(ring[:, 1] for ring in outline)]))) if len(walls) else 1.0
     places: list[list[float]] = []
     labels: list[str] = []
-    for feature in result.inspection:
+    for feature in outcome.inspection:
         place = feature.place_mm
         if place is not None:  # each label a line lower than the last: features share centres
             places.append([place[0], place[1] - LABEL_SPACING * span * len(places), feature.z_mm])

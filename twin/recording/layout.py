@@ -9,6 +9,8 @@ import mujoco
 import numpy as np
 import rerun.blueprint as rrb
 
+from twin.outcome import RunOutcome
+
 
 def _machine_view(model, prefix: str, n_per_mm: float | None) -> rrb.Spatial3DView:
     """3-D view aimed at the workpiece from the front right, above the table; the name states
@@ -30,8 +32,9 @@ def _machine_view(model, prefix: str, n_per_mm: float | None) -> rrb.Spatial3DVi
     )
 
 
-def _contour_view(result, prefix: str, gain: int) -> rrb.Spatial3DView:
+def _contour_view(outcome: RunOutcome, prefix: str, gain: int) -> rrb.Spatial3DView:
     """The contour from straight above: +x right, +y up, the whole path in view."""
+    result = outcome.run
     ref = result.ref[:, :, 0] * 1e3
     centre = (ref.min(axis=0) + ref.max(axis=0)) / 2
     height = 1.35 * max(float(np.ptp(ref, axis=0).max()), 1e-3)
@@ -41,7 +44,7 @@ def _contour_view(result, prefix: str, gain: int) -> rrb.Spatial3DView:
             f"part (mm, seen from above): path coloured by contour error (scale right), error x{gain} red, "
             "stock grey, machined outline white, tool yellow"
         )
-        if result.part is not None:
+        if outcome.part is not None:
             name += "; the virtual part's walls red where material is left, blue where overcut"
     return rrb.Spatial3DView(
         name=name,
@@ -133,12 +136,13 @@ def series_views(result, prefix: str = "") -> list:
 
 
 def run_layout(
-    result, prefix: str, gain: int | None, n_per_mm: float | None, name: str | None = None
+    outcome: RunOutcome, prefix: str, gain: int | None, n_per_mm: float | None, name: str | None = None
 ) -> rrb.Horizontal:
     """One run: series left; machine (and the contour when ``gain`` is given) right."""
+    result = outcome.run
     right = [_machine_view(result.machine.model, prefix, n_per_mm)]
     if gain is not None:
-        right.append(_contour_view(result, prefix, gain))
+        right.append(_contour_view(outcome, prefix, gain))
     # two columns of series: panels tall enough for Rerun to label their grid lines
     return rrb.Horizontal(
         rrb.Grid(*series_views(result, prefix), grid_columns=2),
@@ -148,7 +152,7 @@ def run_layout(
     )
 
 
-def blueprint(results: dict, gains: dict, arrow_scales: dict) -> rrb.Blueprint:
+def blueprint(results: dict[str, RunOutcome], gains: dict, arrow_scales: dict) -> rrb.Blueprint:
     """One run fills the window; several get a tab each (named as the runs).  ``gains`` and
     ``arrow_scales`` per run name: contour error magnification and N per mm of force arrow
     (None where there is no contour or no cutting force)."""

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
-from functools import cached_property
 from typing import ClassVar, Literal
 
 import numpy as np
@@ -31,14 +30,12 @@ from twin.gcode.planner import (
     refuse_long,
 )
 from twin.gcode.reader import Reader, Settings
-from twin.gcode.report import planned_summary
+from twin.gcode.report import PlannedSummary, planned_summary
 from twin.machines import BuiltMachine
 from twin.machines import build as build_machine
 from twin.machines.rigid_drive import rigid_drives, table_travel_m
 from twin.machining.engagement import COLUMNS, engaged_degrees
 from twin.machining.program_cut import ProgramCut
-from twin.machining.program_stability import ProgramSamples, default_rpm_range, line_stability
-from twin.records import MachiningWarning, PlanWarning, plan_warning
 from twin.references.kinds import ReferenceContext, ReferenceSpecBase, register, two_axes
 from twin.settings import set_fields
 from twin.spec import Millimetres, StrictSpec, validation_error
@@ -142,10 +139,10 @@ class GcodeReference(_Samples):
     n_lines : int
         The program's lines read, to its end (M2, M30, the second %) (for the progress bar).
     cut : twin.machining.program_cut.ProgramCut or None
-        With a stock: the program through it (engagement at each sample, the stock as the program
-        leaves it, machining warnings).
+        With a stock: the program through it (the engagement at each sample).
     checks : tuple of TravelCheck, DriveCheck or None
-        The checks of the program against the machine (:mod:`twin.gcode.checks`), done.
+        The checks of the program against the machine (:mod:`twin.gcode.checks`), done; their
+        warnings are read with the program's (:class:`twin.outcome.PlannedProgram`), not here.
     """
 
     def __init__(
@@ -164,46 +161,6 @@ class GcodeReference(_Samples):
     def cutting(self, cut: ProgramCut) -> GcodeReference:
         """The same program cutting a stock (``cut``, :func:`twin.machining.program_cut.program_milling`)."""
         return GcodeReference(self.plan, self.axes, self.n_lines, cut, self.checks)
-
-    @property
-    def warnings(self) -> list[MachiningWarning]:
-        """With a stock: crashes and misuse by line (:func:`twin.machining.misuse.machining_warnings`)."""
-        return [] if self.cut is None else self.cut.warnings
-
-    @property
-    def warnings_total(self) -> int:
-        """Every warning, listed or not."""
-        return 0 if self.cut is None else self.cut.warnings_total
-
-    @property
-    def plan_warnings(self) -> tuple[list[PlanWarning], int]:
-        """Moves outside the travel (under ``travel = "warn"``) and what the drives cannot
-        deliver, by line (:func:`twin.gcode.checks.plan_warnings`), and how many in all."""
-        return typed_plan_warnings(*self.checks)
-
-    def program_samples(self) -> ProgramSamples | None:
-        """With a stock: the engagement, speed, tool, line and XY velocity at each sample."""
-        if self.cut is None:
-            return None
-        milling = self.cut.milling
-        return ProgramSamples(
-            self.cut.table,
-            milling.spindle_rpm,
-            milling.tool_index,
-            milling.tools,
-            self.plan.line,
-            self.plan.velocity[:, :2],
-        )
-
-    @cached_property
-    def line_stability(self) -> dict[int, dict]:
-        """With a stock and tools with ``dynamics``: each cutting line's chatter check
-        (:func:`twin.machining.program_stability.line_stability`, stable speeds searched over
-        :func:`~twin.machining.program_stability.default_rpm_range`); else empty."""
-        samples = self.program_samples()
-        if samples is None:
-            return {}
-        return line_stability(samples, default_rpm_range(samples.spindle_rpm))
 
     def _window(self, t):
         return 0, self.plan.position, self.plan.velocity, self.plan.acceleration, self.plan.line
@@ -226,12 +183,6 @@ class GcodeReference(_Samples):
     def feeds_at(self, t) -> np.ndarray:
         """The programmed feed (mm/min; 0 on rapids and dwells) at times ``t`` (s)."""
         return _by_line(self.lines_at(t), self.plan.feeds)
-
-    @cached_property
-    def outlines(self) -> dict[str, list[np.ndarray]]:
-        """With a stock: its outline and the machined one (mm, see
-        :meth:`twin.machining.engagement.HeightMap.outlines`, computed once); else empty."""
-        return {} if self.cut is None else self.cut.height_map.outlines()
 
     @property
     def texts(self) -> dict[int, str]:
@@ -318,39 +269,8 @@ class StreamedGcodeReference(_Samples):
         return _by_line(self.lines_at(t), self.facts.feeds)
 
     @property
-    def outlines(self) -> dict[str, list[np.ndarray]]:
-        """No stock is cut by a streamed program: none."""
-        return {}
-
-    @property
-    def warnings(self) -> list[MachiningWarning]:
-        """No stock: no machining warnings."""
-        return []
-
-    @property
-    def line_stability(self) -> dict[int, dict]:
-        """No stock: no engagement to check."""
-        return {}
-
-    @property
-    def warnings_total(self) -> int:
-        return 0
-
-    @property
-    def plan_warnings(self) -> tuple[list[PlanWarning], int]:
-        """As :attr:`GcodeReference.plan_warnings`, of the samples planned so far."""
-        return typed_plan_warnings(*self.checks)
-
-    @property
     def texts(self) -> dict[int, str]:
         return self.facts.texts
-
-
-def typed_plan_warnings(*checks: TravelCheck | DriveCheck | None) -> tuple[list[PlanWarning], int]:
-    """The warnings of ``checks`` by line (:func:`twin.gcode.checks.plan_warnings`), typed, and
-    how many in all."""
-    rows, total = plan_warnings(*checks)
-    return [plan_warning(row) for row in rows], total
 
 
 def _by_line(lines: np.ndarray, by_line: dict) -> np.ndarray:
@@ -495,10 +415,12 @@ def program_checks(
     return travel, DriveCheck({"xyz".index(a): d for a, d in rigid_drives(machine).items()}, saturation_V)
 
 
-def planned_for(file, moves: list, machine: str, planner: PlannerSettings, saturation_V: float | None = None) -> dict:
+def planned_for(
+    file, moves: list, machine: str, planner: PlannerSettings, saturation_V: float | None = None
+) -> PlannedSummary:
     """The ``planned`` table of ``twin gcode --machine``: the ``moves`` of ``file`` planned for
     ``machine`` (:func:`twin.gcode.report.planned_summary`), checked against its travel and, with
-    ``saturation_V`` (V), its drives: ``warnings`` (and ``warnings_total`` where more than listed).
+    ``saturation_V`` (V), its drives (its ``warnings``).
 
     Raises
     ------
@@ -515,12 +437,8 @@ def planned_for(file, moves: list, machine: str, planner: PlannerSettings, satur
         planned = plan(moves, limits, planner)
     if drive is not None:
         drive.add(planned.position, planned.velocity, planned.acceleration, planned.line, planned.texts)
-    summary = planned_summary(planned, limits)
-    rows, total = plan_warnings(travel, drive)
-    summary["warnings"] = rows
-    if total > len(rows):
-        summary["warnings_total"] = total
-    return summary
+    warnings, total = plan_warnings(travel, drive)
+    return planned_summary(planned, limits, warnings=warnings, warnings_total=total)
 
 
 class ProgramDrive(StrictSpec):

@@ -6,8 +6,9 @@ the README for the format; bundled scenarios live in ``twin/scenarios/``.
 
 The package in four modules: :mod:`~twin.scenario.schema` (the fields),
 :mod:`~twin.scenario.files` (reading and validating a file, with settings),
-:mod:`~twin.scenario.assembly` (the run's inputs built from it) and
-:mod:`~twin.scenario.running` (the run, and the part it cut).
+:mod:`~twin.scenario.assembly` (the run's inputs built from it, a part program planned and cut
+before the run) and :mod:`~twin.scenario.running` (the run and its outcome,
+:class:`twin.outcome.RunOutcome`).
 """
 
 from twin.scenario.assembly import RunInputs, assemble

@@ -1,6 +1,7 @@
 """A scenario assembled into what a run takes: the machine built, the controllers designed, the
-reference planned, the drive, the encoders, the disturbances and, with a stock, the program's cut;
-every cross-field constraint checked, each error naming its field."""
+reference planned, the drive, the encoders, the disturbances and, for a part program, the program
+as planned before the run (with a stock its cut); every cross-field constraint checked, each
+error naming its field."""
 
 from __future__ import annotations
 
@@ -17,7 +18,9 @@ from twin.disturbances import DISTURBANCES
 from twin.errors import TwinInputError
 from twin.machines import BuiltMachine, build
 from twin.machining.program_cut import program_milling
+from twin.outcome import PlannedProgram, planned_program
 from twin.references import REFERENCES, ReferenceContext
+from twin.references.gcode import GcodeReference, StreamedGcodeReference
 from twin.scenario.schema import ControllerSpec, Scenario
 from twin.sim.drive import Drive, Encoder, substeps_per_tick
 from twin.sim.protocols import Disturbance, Reference
@@ -51,8 +54,7 @@ def _design_failure(exc: Exception) -> str:
 def _controller(spec: ControllerSpec, field: str, base: Context) -> Controller:
     """Build one controller entry for the axes of ``base`` (period, plants, delay); errors name
     ``<field>.<what>``."""
-    if spec.type not in CONTROLLERS:
-        raise TwinInputError(f"{field}.type", spec.type, f"unknown controller (known: {', '.join(CONTROLLERS)})")
+    CONTROLLERS.lookup(spec.type, field=f"{field}.type", error=TwinInputError)
     if (spec.type == "sum") != (spec.parts is not None):
         raise TwinInputError(
             f"{field}.parts", [p.type for p in spec.parts or []], "give parts for type 'sum', and only there"
@@ -70,10 +72,7 @@ def _controller(spec: ControllerSpec, field: str, base: Context) -> Controller:
         raise TwinInputError(f"{field}.params", spec.params, _design_failure(exc)) from None
     if spec.observer is None:
         return ctrl
-    if spec.observer.type not in OBSERVERS:
-        raise TwinInputError(
-            f"{field}.observer.type", spec.observer.type, f"unknown observer (known: {', '.join(OBSERVERS)})"
-        )
+    OBSERVERS.lookup(spec.observer.type, field=f"{field}.observer.type", error=TwinInputError)
     try:
         with _design_warnings_as_errors():
             observers = make_observers(spec.observer.type, spec.observer.params, ctx)
@@ -89,7 +88,7 @@ def _disturbance(spec, index: int, axis_names: list[str], seed: int):
     field = f"disturbances.{index}"
     seed = seed if getattr(spec, "seed", None) is None else spec.seed
     try:
-        return DISTURBANCES[spec.type].build(spec, axis_names, seed, field)
+        return DISTURBANCES[spec.type].value(spec, axis_names, seed, field)
     except TwinInputError as exc:
         name = exc.field.removeprefix("disturbance.")
         if name.startswith(field):
@@ -100,7 +99,9 @@ def _disturbance(spec, index: int, axis_names: list[str], seed: int):
 @dataclass
 class RunInputs:
     """Everything :func:`twin.sim.runner.simulate` takes, assembled from a scenario (see its
-    parameters); with a stock, the reference is the program cutting it."""
+    parameters); with a stock, the reference is the program cutting it.  For a part program,
+    ``program`` is the program as planned before the run, what :func:`twin.outcome.finish`
+    reads after it (None for other references)."""
 
     machine: BuiltMachine
     controllers: list[Controller]
@@ -111,6 +112,7 @@ class RunInputs:
     encoder: Encoder
     record_every: int | None
     disturbances: list[Disturbance]
+    program: PlannedProgram | None = None
 
     def simulate(
         self,
@@ -167,7 +169,7 @@ def assemble(scn: Scenario) -> RunInputs:
         ctrls = [_controller(scn.controller, "controller", base)]
     numbers = frozenset(t.number for t in scn.tools if t.number is not None) if scn.tools else None
     diameters = {t.number: t.diameter_mm for t in scn.tools if t.number is not None}
-    reference = REFERENCES[scn.reference.type].build(
+    reference = REFERENCES[scn.reference.type].value(
         scn.reference,
         ReferenceContext(
             names,
@@ -201,15 +203,20 @@ def assemble(scn: Scenario) -> RunInputs:
     disturbances = [_disturbance(d, i, names, scn.seed) for i, d in enumerate(scn.disturbances)]
     if scn.inspect and scn.stock is None:
         raise TwinInputError("inspect", scn.inspect[0].name, "features are measured on a part: give [stock]")
-    if scn.stock is not None:
-        if scn.reference.type != "gcode":
-            raise TwinInputError(
-                "stock", "...", f"a stock is cut by a G-code program, not a {scn.reference.type} reference"
-            )
+    program = None
+    if scn.stock is not None and not isinstance(reference, GcodeReference):
+        raise TwinInputError(
+            "stock", "...", f"a stock is cut by a G-code program, not a {scn.reference.type} reference"
+        )
+    if isinstance(reference, GcodeReference) and scn.stock is not None:
         cut = program_milling(reference.plan, scn.stock, scn.tool, scn.tools, scn.seed)
         reference = reference.cutting(cut)
-        reference.line_stability  # noqa: B018 - each line's chatter check, its bad input caught before the run
         disturbances.append(cut.milling)
+        program = planned_program(reference.checks, reference.plan, cut, scn.stock, tuple(scn.inspect))
+    elif isinstance(reference, GcodeReference):
+        program = planned_program(reference.checks, reference.plan)
+    elif isinstance(reference, StreamedGcodeReference):
+        program = planned_program(reference.checks, None)
     return RunInputs(
         machine=machine,
         controllers=ctrls,
@@ -220,4 +227,5 @@ def assemble(scn: Scenario) -> RunInputs:
         encoder=encoder,
         record_every=scn.record_every_ticks,
         disturbances=disturbances,
+        program=program,
     )

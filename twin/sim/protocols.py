@@ -11,8 +11,6 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from twin.records import MachiningWarning, PlanWarning
-
 
 @runtime_checkable
 class Reference(Protocol):
@@ -32,9 +30,9 @@ class ProgramReference(Reference, Protocol):
     """A planned part program (:mod:`twin.references.gcode`): besides the samples, what it says of
     any time ``t`` (s): the program line, the programmed feed (mm/min), the tool's engagement
     with a stock (engaged angle in deg and axial depth in mm; empty without one) and the planned
-    axes the machine has not (m); and, for the whole program, its lines read, cycle time (s),
-    line texts, its warnings against the machine (travel, drives), and with a stock its outlines
-    (mm), machining warnings and each line's chatter check."""
+    axes the machine has not (m); and its lines read (for the progress bar), cycle time (s) and
+    line texts.  What is said of the whole program (its warnings, a stock's outlines, each
+    line's chatter check) is not the reference's: see :class:`twin.outcome.PlannedProgram`."""
 
     n_lines: int
 
@@ -43,21 +41,6 @@ class ProgramReference(Reference, Protocol):
 
     @property
     def texts(self) -> dict[int, str]: ...
-
-    @property
-    def outlines(self) -> dict[str, list[np.ndarray]]: ...
-
-    @property
-    def warnings(self) -> list[MachiningWarning]: ...
-
-    @property
-    def warnings_total(self) -> int: ...
-
-    @property
-    def plan_warnings(self) -> tuple[list[PlanWarning], int]: ...
-
-    @property
-    def line_stability(self) -> dict[int, dict]: ...
 
     def line_at(self, t: float) -> int: ...
 

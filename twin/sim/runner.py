@@ -21,7 +21,6 @@ import math
 from collections.abc import Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Any
 
 import mujoco
 import numpy as np
@@ -31,7 +30,6 @@ from controllers.blocks import BlockProgram, Controller, SignalError, preview_ti
 from twin.errors import RunInterrupted, SimulationDiverged, TwinInputError
 from twin.machines import BuiltMachine
 from twin.machining.cutting import PROBE, ForceModels
-from twin.records import Inspected, MachiningWarning, PlanWarning
 from twin.sim import loop, mujoco_c
 from twin.sim.drive import MAX_VALUE, Drive, Encoder, substeps_per_tick
 from twin.sim.protocols import Disturbance, ForceModel, InputDisturbance, ProgramReference, Reference
@@ -79,21 +77,9 @@ class ProgramTrace:
     engagement : ndarray, shape (n, 2)
         With a stock: the engaged angle (deg) and axial depth (mm) at each recorded tick (else
         empty).
-    outlines : dict of str to list of ndarray
-        With a stock: ``stock`` and ``machined`` outlines (mm), as the program leaves them.
-    machining_warnings : list of twin.records.MachiningWarning
-        With a stock: crashes and misuse by program line
-        (:func:`twin.machining.misuse.machining_warnings`), the first ones.
-    machining_warnings_total : int
-        How many there are in all.
-    plan_warnings : list of twin.records.TravelWarning or twin.records.DriveWarning
-        Moves outside the travel (under ``travel = "warn"``) and what the drives cannot deliver,
-        by line (:func:`twin.gcode.checks.plan_warnings`).
-    plan_warnings_total : int
-        How many there are in all.
-    line_stability : dict of int to dict
-        With a stock and a tool with ``dynamics``: each cutting line's chatter check
-        (:func:`twin.machining.program_stability.line_stability`).
+
+    What is said of the whole program (its warnings, a stock's outlines, the part cut) is
+    computed outside the run: :class:`twin.outcome.RunOutcome`.
     """
 
     lines: np.ndarray
@@ -102,12 +88,6 @@ class ProgramTrace:
     cycle_time_s: float
     extra_axes: dict[str, np.ndarray]
     engagement: np.ndarray
-    outlines: dict[str, list[np.ndarray]]
-    machining_warnings: list[MachiningWarning]
-    machining_warnings_total: int
-    plan_warnings: list[PlanWarning]
-    plan_warnings_total: int
-    line_stability: dict[int, dict] = field(default_factory=dict)
 
 
 @dataclass
@@ -146,10 +126,6 @@ class RunResult:
         ``completed_ticks`` (all of them, unless the run diverged or was interrupted).
     program : ProgramTrace or None
         For a part program's reference: its lines, feeds and engagement at the recorded ticks.
-    part : twin.machining.part.MachinedPart or None
-        With a stock: the part the actual motion cut, against the nominal one.
-    inspection : list of twin.records.Inspected
-        The ``[[inspect]]`` features measured on it (:func:`twin.machining.inspection.measure`).
     """
 
     machine: BuiltMachine
@@ -169,8 +145,6 @@ class RunResult:
     force_max_N: np.ndarray
     info: dict = field(default_factory=dict)
     program: ProgramTrace | None = None
-    part: Any = None
-    inspection: list[Inspected] = field(default_factory=list)
 
     @property
     def axis_names(self) -> list[str]:
@@ -461,12 +435,6 @@ class _ProgramSeries:
             if extra
             else {},
             engagement=self._gathered("engagement", rows, np.zeros((0, 2))),
-            outlines=self.reference.outlines,
-            machining_warnings=self.reference.warnings,
-            machining_warnings_total=self.reference.warnings_total,
-            plan_warnings=self.reference.plan_warnings[0],
-            plan_warnings_total=self.reference.plan_warnings[1],
-            line_stability=self.reference.line_stability,
         )
 
 

@@ -83,7 +83,8 @@ def run_sample(base: dict, index: int, values: dict, seed: int, axes) -> dict:
         # a program's samples record (every tick up to 100 000, the runner's default) for the
         # contour error; others keep metrics only
         data["seed"], data["record_every_ticks"] = seed, None if program else 0
-        result = run_scenario(scenario_from_dict(data), progress=False)
+        outcome = run_scenario(scenario_from_dict(data), progress=False)
+        result = outcome.run
         row["sim_time_s"] = result.info["completed_ticks"] * result.control_period_s
     except SimulationDiverged as exc:
         row.update(status="diverged", error=str(exc), sim_time_s=exc.sim_time_s)
@@ -101,7 +102,7 @@ def run_sample(base: dict, index: int, values: dict, seed: int, axes) -> dict:
         if is_program(base) and len(result.t_s) > 1 and len(axes) == 2:
             from twin.metrics import tracking_summary
 
-            summary = tracking_summary(result)
+            summary = tracking_summary(outcome)
             for column in CONTOUR_COLUMNS:
                 row[column] = float(summary.get(column, math.nan))
     elif result is not None:

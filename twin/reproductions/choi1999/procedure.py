@@ -292,7 +292,7 @@ def scenario_data(name: str) -> dict:
 def run_twin(data: dict):
     from twin.scenario import run_scenario, scenario_from_dict
 
-    return run_scenario(scenario_from_dict(data), progress=False)
+    return run_scenario(scenario_from_dict(data), progress=False).run
 
 
 @lru_cache(maxsize=2)

@@ -196,7 +196,7 @@ def relay_test(delay_s: float, twin: bool) -> dict:
     zero = np.zeros((round(duration / dt), 2, 3))
     runs: dict[str, Any] = {"tf": tf_run(inputs.controllers[0], duration, ref=zero, delay_s=delay_s)[:2]}
     if twin:
-        res = run_scenario(scenario_from_dict(data), progress=False)
+        res = run_scenario(scenario_from_dict(data), progress=False).run
         runs["twin"] = (res.t_s, res.table_position_m())
     out: dict[str, Any] = {
         "delay_s": delay_s,
@@ -591,7 +591,7 @@ def trajectory_run(path: str, experiment: int):
     """The twin's run of one Table 2 cell (cached: tables, plots and recording share it)."""
     from twin.scenario import run_scenario, scenario_from_dict
 
-    return run_scenario(scenario_from_dict(trajectory_scenario(path, experiment)), progress=False)
+    return run_scenario(scenario_from_dict(trajectory_scenario(path, experiment)), progress=False).run
 
 
 def trajectory_tf(path: str, experiment: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
