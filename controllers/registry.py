@@ -2,7 +2,7 @@
 
 Each kind is declared once, in a module of :mod:`controllers.kinds`: its parameters as a
 pydantic model (names, units in the field descriptions, defaults and limits), its builder, and
-its docs line (the builder's docstring), as an entry of a :class:`registries.Registry`.  ``twin
+its docs line (the builder's docstring), as an entry of a :class:`controllers.registries.Registry`.  ``twin
 list``, the scenario's error lines and the docs site read :data:`CONTROLLERS` and
 :data:`OBSERVERS` (through :mod:`twin.catalogue`); adding a kind is one decorated builder.
 """
@@ -16,7 +16,7 @@ from typing import Any
 from pydantic import BaseModel, ConfigDict, ValidationError
 
 from controllers.blocks import Controller, with_feedforward
-from registries import Registry
+from controllers.registries import Registry
 
 
 @dataclass
@@ -190,3 +190,7 @@ def make_observers(name: str, params: dict | None, ctx: Context) -> list:
     """
     kind = OBSERVERS[name]
     return kind.value(validate_params(name, kind.settings, params), ctx)
+
+
+# Last, so the kinds (which import this module) find it whole: importing the registry gives every kind.
+import controllers.kinds  # noqa: E402, F401

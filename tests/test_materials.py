@@ -107,7 +107,9 @@ def test_the_kienzle_mean_force_is_kc_at_the_mean_chip_thickness():
     h_m = 2 * c / math.pi  # a slot's mean chip thickness
     linear = CuttingCoefficients(k.K_tc * h_m**-k.mc, k.K_rc * h_m**-k.mc, k.K_ac * h_m**-k.mc, 0.0, 0.0, 0.0)
     np.testing.assert_allclose(
-        mean_tool_forces_N(k, 4, a, c, 0.0, math.pi), mean_tool_forces_N(linear, 4, a, c, 0.0, math.pi), rtol=1e-12
+        mean_tool_forces_N(k, n_flutes=4, axial_depth_mm=a, feed_per_tooth_mm=c, phi_st=0.0, phi_ex=math.pi),
+        mean_tool_forces_N(linear, n_flutes=4, axial_depth_mm=a, feed_per_tooth_mm=c, phi_st=0.0, phi_ex=math.pi),
+        rtol=1e-12,
     )
 
 

@@ -409,7 +409,7 @@ def test_a_streamed_program_gets_the_held_ones_drive_warnings(monkeypatch):
     held = plan(Reader(lines).moves(), limits)
     whole = DriveCheck(drives, 10.0)
     whole.add(held.position, held.velocity, held.acceleration, held.line, held.texts)
-    _none, facts, samples = planner.hold_or_count(Reader(lines).moves(), limits, PlannerSettings(), 0)
+    _none, facts, samples = planner.hold_or_count(Reader(lines).moves(), limits, PlannerSettings(), most=0)
     streamed_check = DriveCheck(drives, 10.0)
     streamed = StreamedGcodeReference(
         lambda: Reader(lines).moves(), limits, PlannerSettings(), facts, samples, (0, 1), len(lines), (streamed_check,)

@@ -1,6 +1,6 @@
 """Kinds that register themselves: every reference, disturbance, controller, observer, machine,
 material, inspection feature and reproduction is declared once, in a registry of one type
-(:mod:`registries`), and the scenario schema, ``twin list``, the docs and the runs all read the
+(:mod:`controllers.registries`), and the scenario schema, ``twin list``, the docs and the runs all read the
 same registries through one catalogue (:mod:`twin.catalogue`)."""
 
 from pathlib import Path
@@ -12,8 +12,8 @@ from typer.testing import CliRunner
 from controllers import CONTROLLERS, OBSERVERS, make_controller
 from controllers.design.pid import pid_tf
 from controllers.kinds.generic import error_feedback_each_axis
+from controllers.registries import Entry, Registry, UnknownName
 from controllers.registry import ParameterError, Params, controller_kind
-from registries import Entry, Registry, UnknownName
 from twin import api
 from twin.catalogue import REGISTRIES, registry, sections
 from twin.cli import app

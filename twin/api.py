@@ -157,11 +157,11 @@ def sweep(
     sets = {**parse_settings(spec.set), **_paths(settings)}
     sw = prepare_sweep(
         spec.scenario,
-        sets,
-        variations,
-        spec.samples if samples is None else samples,
-        spec.seed if seed is None else seed,
-        spec.latin_hypercube if lhs is None else lhs,
+        settings=sets,
+        vary=variations,
+        samples=spec.samples if samples is None else samples,
+        seed=spec.seed if seed is None else seed,
+        latin_hypercube=spec.latin_hypercube if lhs is None else lhs,
     )
     out = Path(out or spec.out or f"{sw.name}_sweep.parquet")
     if not out.parent.is_dir():
@@ -173,11 +173,11 @@ def sweep(
         done = run_sweep(
             sw.scenario,
             sw.plan,
-            sw.axes,
-            out,
-            client,
-            batch_size,
-            resume,
+            axes=sw.axes,
+            out=out,
+            client=client,
+            batch_size=batch_size,
+            resume=resume,
             progress=progress,
         )
     finally:

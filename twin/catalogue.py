@@ -1,6 +1,6 @@
 """The one catalogue of everything the twin knows by name: machines, controller and observer
 kinds, disturbances, materials, references, inspection features, bundled scenarios and
-reproducible papers, each a :class:`registries.Registry`.
+reproducible papers, each a :class:`controllers.registries.Registry`.
 
 ``twin list`` prints its sections in order and the docs site's generated reference
 (:mod:`twin.kinds_doc`) reads its registries, so the command line and the docs cannot list
@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from functools import cache
 
 from controllers import CONTROLLERS, OBSERVERS
-from registries import Entry, Registry
+from controllers.registries import Entry, Registry
 from twin.disturbances import DISTURBANCES
 from twin.machines import MACHINES
 from twin.machining.inspection import FEATURES

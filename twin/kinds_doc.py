@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from pydantic import BaseModel
 
-from registries import Registry
+from controllers.registries import Registry
 from twin.catalogue import registry
 
 #: What a ``<!-- kinds: NAME -->`` marker may name: a section of the catalogue.

@@ -386,6 +386,12 @@ class LineStability:
         stable = None if self.stable_rpm is None else list(self.stable_rpm)
         return {**self._values(), "stable_rpm": stable, "text": self.text}
 
+    @classmethod
+    def from_json(cls, values: dict[str, Any]) -> LineStability:
+        """The check from its :meth:`to_json` (``twin lobes``' summary holds it so)."""
+        stable = values["stable_rpm"]
+        return cls(**{**values, "stable_rpm": None if stable is None else tuple(stable)})
+
     def to_columns(self) -> dict[str, Any]:
         """The check as the per-line table's columns: ``stability_<attribute>``, ``stable_rpm``
         as ``stability_stable_rpm_low`` and ``_high`` (None: no stable speed) after ``text``."""
@@ -524,3 +530,8 @@ class RunRecords:
     inspection: tuple[Inspected, ...] = ()
     chatter: ChatterCheck | None = None
     chatter_warnings: tuple[ChatterWarning, ...] = ()
+
+    @property
+    def stability_checks(self) -> list[LineStability]:
+        """The cutting lines' chatter checks (:attr:`LineRow.stability`), in program order."""
+        return [row.stability for row in self.lines if row.stability is not None]

@@ -8,7 +8,7 @@ tune``) and :class:`Fidelity` (``twin fidelity``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -19,12 +19,13 @@ if TYPE_CHECKING:  # the heavy modules load on first use, not with `import twin`
     import pandas as pd
     import pyarrow as pa
 
+    from twin.commissioning.boundary import MarginCheck
     from twin.commissioning.calibration import CalibrationReport
     from twin.commissioning.frf import FrfMeasurement, FrfSettings
     from twin.gcode.moves import Move
     from twin.gcode.report import PlannedSummary
     from twin.outcome import RunOutcome
-    from twin.records import RunRecords
+    from twin.records import LineStability, RunRecords
     from twin.sampling import SamplePlan
     from twin.scenario import Scenario
     from twin.sim.runner import RunResult
@@ -328,6 +329,13 @@ class StabilityLobes:
             frames.append(frame.add_prefix(f"{method}_"))
         return pd.concat(frames, axis=1)
 
+    @property
+    def stability_checks(self) -> list[LineStability]:
+        """With a program: each cutting line's chatter check, in program order (empty without)."""
+        from twin.records import LineStability
+
+        return [LineStability.from_json(row["stability"]) for row in self.summary.get("lines", [])]
+
     def write_png(self, path: str | Path) -> Path:
         """The lobes, the program's lines on them and the chatter frequency beneath (PNG)."""
         from twin.commissioning.lobes import write_lobes_png
@@ -417,10 +425,14 @@ class Tuning:
     summary : dict
         What ``twin tune --json`` prints: the control period, the feedback, per axis the gains,
         the margins and bandwidths; ``verification`` once :meth:`verify` has run.
+    margin_check : list of MarginCheck
+        Each gain's cascade margin beside the twin's boundaries once :meth:`verify_margins` has
+        run (empty before).
     """
 
     machine: str
     summary: dict
+    margin_check: list[MarginCheck] = field(default_factory=list)
 
     def verify(self) -> dict:
         """Run the tuned cascade on the twin (a 1 mm step, a circle) and add what it measured to
@@ -437,17 +449,18 @@ class Tuning:
         self,
         gains: tuple[str, ...] = ("kp_pos", "kp_vel", "ki_vel"),
         conditions: tuple[str, ...] | None = None,
-    ) -> list[dict]:
+    ) -> list[MarginCheck]:
         """Each axis's cascade margins beside the twin's own stability boundaries, bisected for
         each of ``gains`` (:func:`twin.commissioning.boundary.verify_margins`) under the named
         conditions (default all of :data:`twin.commissioning.boundary.CONDITIONS`: ``twin`` as
-        run, ``without_coulomb``, ``like_for_like``, the linear model's assumptions); adds them
-        to :attr:`summary` as ``margin_check`` and returns them."""
+        run, ``without_coulomb``, ``like_for_like``, the linear model's assumptions); keeps them
+        as :attr:`margin_check`, adds them to :attr:`summary` as ``margin_check`` and returns them."""
         from twin.commissioning.boundary import CONDITIONS, verify_margins
 
         chosen = {name: CONDITIONS[name] for name in (conditions or CONDITIONS)}
-        self.summary["margin_check"] = verify_margins(self.summary, self.machine, gains, chosen)
-        return self.summary["margin_check"]
+        self.margin_check = verify_margins(self.summary, self.machine, gains, chosen)
+        self.summary["margin_check"] = [row.to_json() for row in self.margin_check]
+        return self.margin_check
 
     def scenario_text(self, reference: str = "circle") -> str:
         """The tuned cascade as a scenario (TOML) on a 10 mm circle (or a 1 mm ``step``)."""

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Annotated, Union, overload
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, field_validator
 
-from registries import Entry, Registry
+from controllers.registries import Entry, Registry
 
 if TYPE_CHECKING:
     from twin.errors import TwinInputError

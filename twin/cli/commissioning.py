@@ -32,6 +32,7 @@ def _timestep_and_sets(sets: list[str], option: str = "--set timestep_s") -> tup
 
 @_guard
 def frf(
+    *,
     machine: str = typer.Argument(..., help="A machine (twin list) or a machine file (FILE.toml)"),
     axis: str = typer.Option("x", "--axis", help="The axis to excite"),
     loop: str = typer.Option("velocity", "--loop", help="open | velocity | position"),
@@ -143,6 +144,7 @@ def _parse_rpm(text: str | None) -> tuple[float, float, int] | None:
 
 @_guard
 def lobes(
+    *,
     scenario: str = typer.Argument(..., help="Scenario TOML file, or a bundled scenario name"),
     method: str = typer.Option("both", "--method", help="zoa | sd | both"),
     rpm: str = typer.Option(None, "--rpm", help="Spindle speeds MIN:MAX:N (default: from the scenario's)"),
@@ -192,7 +194,7 @@ def lobes(
                 else (f"lowest critical depth {low['critical_depth_mm']:.3f} mm at {low['spindle_rpm']:.0f} rpm")
             )
             typer.echo(f"  {name}: {where} over {span}, {summary['seconds'][name]:.2f} s")
-        _print_chatter_check(summary.get("lines", []))
+        _print_chatter_check(found.stability_checks)
     if plots is not None:
         plots.mkdir(parents=True, exist_ok=True)
         path = found.write_png(plots / f"lobes_{Path(scenario).stem}.png")
@@ -201,6 +203,7 @@ def lobes(
 
 @_guard
 def calibrate(
+    *,
     machine: str = typer.Argument(..., help="A machine (twin list) or a machine file (FILE.toml)"),
     trace: Path = typer.Option(..., "--trace", help="Measured time trace or FRF, .csv or .parquet"),
     fit: str = typer.Option(..., "--fit", help="Parameters to fit, SYM,SYM"),
@@ -274,6 +277,7 @@ def calibrate(
 
 @_guard
 def excite(
+    *,
     machine: str = typer.Argument(..., help="A machine (twin list) or a machine file (FILE.toml)"),
     out: Path = typer.Option(..., "--out", help="The trace to write, .csv or .parquet"),
     axis: str = typer.Option("x", "--axis", help="The axis to excite"),
@@ -304,6 +308,7 @@ def excite(
 
 @_guard
 def tune(
+    *,
     machine: str = typer.Argument(..., help="A machine (twin list) or a machine file (FILE.toml)"),
     sets: list[str] = typer.Option(None, "--set", help="Parameter override SYMBOL=VALUE"),
     control_period: float = typer.Option(None, "--control-period", help="Control period, s (default about 0.1 ms)"),
@@ -364,31 +369,15 @@ def tune(
         for a, v in result.get("verification", {}).items():
             typer.echo(f"  verified on the twin, {a}: " + ", ".join(f"{k} {x:.4g}" for k, x in v.items()))
         if check_margins:
-            from twin.commissioning.boundary import CONDITIONS, MAX_WIDENINGS
+            from twin.commissioning.boundary import CONDITIONS
 
             typer.echo(
                 "  the twin's bisected boundary, dB (less the cascade margin): "
                 + ", ".join(CONDITIONS)
                 + ", zero step (the linear boundary extrapolated to a zero physics step)"
             )
-
-            def found(boundary: float | None, less: float | None) -> str:
-                return f"none within {MAX_WIDENINGS} dB" if boundary is None else f"{boundary:6.2f} ({less:+.2f})"
-
-            for row in result["margin_check"]:
-                typer.echo(
-                    f"  {row['axis']} {row['gain']:<7} margin {row['margin_db']:6.2f} dB: "
-                    + ", ".join(
-                        found(row[name] and row[name]["boundary_db"], row[name + "_minus_margin_db"])
-                        for name in CONDITIONS
-                    )
-                    + ", "
-                    + (
-                        "-"
-                        if row.get("zero_step_db") is None
-                        else found(row["zero_step_db"], row["zero_step_minus_margin_db"])
-                    )
-                )
+            for row in tuned.margin_check:
+                typer.echo(f"  {row.report_line()}")
     if out is not None:
         out.write_text(tuned.scenario_text(), encoding="utf-8")
         typer.echo(f"scenario written to {out} (run it: twin run {out})", err=as_json)

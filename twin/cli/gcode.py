@@ -12,6 +12,7 @@ from twin.cli.printing import _fail_on_warnings, _print_summary, _print_warnings
 
 @_guard
 def gcode(
+    *,
     file: Path = typer.Argument(..., help="The part program (RS-274/NGC, LinuxCNC's dialect)"),
     machine: str = typer.Option(None, "--machine", help="Plan the program for this machine (twin list)"),
     as_json: bool = typer.Option(False, "--json", help="Print the moves (and the plan) as JSON"),

@@ -24,6 +24,7 @@ from twin.reproductions import DEFAULT_SAMPLES, DEFAULT_SEED, DEFAULT_TWIN_SAMPL
 
 def _run(
     scenario: str,
+    *,
     rrd: Path | None,
     as_json: bool,
     settings: list[str] | None = None,
@@ -54,7 +55,9 @@ def _run(
     if rrd is not None and scn.record_every_ticks == 0:
         raise TwinInputError("record_every_ticks", 0, "the run keeps metrics only: nothing to write to --rrd")
     done = api.run(scn, progress=False if as_json else None, max_physics_steps=max_steps, keep_partial=True)
-    _report(done, rrd, as_json, plots, lines, part)  # a run that stopped early too: what it computed
+    _report(
+        done, rrd=rrd, as_json=as_json, plots=plots, lines=lines, part=part
+    )  # a run that stopped early too: what it computed
     if done.stopped is not None:
         raise done.stopped
     if strict:
@@ -66,7 +69,13 @@ def _run(
 
 
 def _report(
-    done, rrd: Path | None, as_json: bool, plots: Path | None, lines: Path | None = None, part: Path | None = None
+    done,
+    *,
+    rrd: Path | None,
+    as_json: bool,
+    plots: Path | None,
+    lines: Path | None = None,
+    part: Path | None = None,
 ) -> None:
     """Print the run's summary (text or JSON), write its recording, its plots and, for a
     program, its per-line table and (with a stock) its virtual part's files."""
@@ -96,7 +105,7 @@ def _report(
         )
         records = done.records
         _print_worst_lines(records.lines)
-        _print_chatter_check(records.lines)
+        _print_chatter_check(records.stability_checks)
         _print_warnings("machining warnings", records.machining_warnings, records.machining_warnings_total)
         _print_warnings("warnings against the machine", records.plan_warnings, records.plan_warnings_total)
         _print_chatter(records)
@@ -117,6 +126,7 @@ def _report(
 
 @_guard
 def run(
+    *,
     scenario: str = typer.Argument(..., help="Scenario TOML file, or a bundled scenario name"),
     rrd: Path = typer.Option(None, "--rrd", help="Write a Rerun recording to this .rrd file"),
     as_json: bool = typer.Option(False, "--json", help="Print metrics as JSON"),
@@ -146,7 +156,17 @@ def run(
     ),
 ):
     """Run a closed-loop scenario and print its tracking metrics (a G-code run: per program line too)."""
-    _run(scenario, rrd, as_json, sets, max_steps, plots, lines, strict, part)
+    _run(
+        scenario,
+        rrd=rrd,
+        as_json=as_json,
+        settings=sets,
+        max_steps=max_steps,
+        plots=plots,
+        lines=lines,
+        strict=strict,
+        part=part,
+    )
 
 
 @_guard
@@ -157,7 +177,7 @@ def demo(
 ):
     """The main job: Choi 1999's cutting circle (R 28 mm, 4800 mm/min, 10000 rpm end milling) on the
     linear-motor table under the MIMO H-infinity loop-shaping controller with ZPETC."""
-    _run("choi1999_mimo_cutting", rrd, as_json, plots=plots)
+    _run("choi1999_mimo_cutting", rrd=rrd, as_json=as_json, plots=plots)
 
 
 @_guard
@@ -196,6 +216,7 @@ def fidelity(
 
 @_guard
 def reproduce(
+    *,
     source: str = typer.Argument(..., help="Which paper, e.g. yadav2020 (twin list shows them)"),
     as_json: bool = typer.Option(False, "--json", help="Print everything as JSON"),
     rrd: Path = typer.Option(None, "--rrd", help="Record the nominal twin step runs to this .rrd"),
@@ -234,6 +255,7 @@ def reproduce(
 
 @_guard
 def sweep(
+    *,
     target: str = typer.Argument(
         ..., help="Scenario (bundled name or TOML file), or a sweep TOML file (with a [vary] table)"
     ),

@@ -339,7 +339,7 @@ def _loop_controller(bm: BuiltMachine, settings: FrfSettings, dt: float, k: int)
         else:
             w = 2 * math.pi * 10.0
             num = (2 * 0.7 * mass * w, mass * w**2)
-        parts.append(error_feedback(SisoTf(num, (1e-3, 1.0)), dt, (a.name,), name=f"loop.{a.name}"))
+        parts.append(error_feedback(SisoTf(num, (1e-3, 1.0)), dt, axes=(a.name,), name=f"loop.{a.name}"))
     return parts
 
 

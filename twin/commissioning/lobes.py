@@ -169,7 +169,9 @@ def lobes(scn: Scenario, settings: LobesSettings) -> dict:
         raise TwinInputError("--depth-max", depth_max_mm, "must be in (0, 10000] mm")
     if "sd" in methods:
         start = time.perf_counter()
-        found["sd"] = sd_critical_depths(cut, tool.dynamics, speeds, depth_max_mm * 1e-3, SD_DEPTHS)
+        found["sd"] = sd_critical_depths(
+            cut, tool.dynamics, spindle_rpm=speeds, depth_max_m=depth_max_mm * 1e-3, n_depths=SD_DEPTHS
+        )
         seconds["sd"] = time.perf_counter() - start
     summary: dict = {
         "scenario": scn.name,

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from registries import Entry, Registry
+from controllers.registries import Entry, Registry
 from twin.spec import KindSpec, register_kind
 
 #: The base of every disturbance kind's spec.

@@ -16,7 +16,7 @@ import mujoco
 import numpy as np
 
 from controllers.lti import SisoTf
-from registries import Registry
+from controllers.registries import Registry
 from twin.errors import TwinInputError
 from twin.machines.machine_file import PhysicalRange
 

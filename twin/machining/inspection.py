@@ -30,7 +30,7 @@ import shapely
 from pydantic import Field, PositiveFloat
 from scipy.optimize import least_squares
 
-from registries import Registry
+from controllers.registries import Registry
 from twin.machining.engagement import StockSpec
 from twin.machining.part import MachinedPart
 from twin.records import CircleMeasured, FeatureNotFound, FeatureType, Inspected, LineMeasured, WidthMeasured

@@ -61,7 +61,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from registries import Registry
+from controllers.registries import Registry
 
 
 @dataclass(frozen=True)

@@ -346,11 +346,11 @@ def build(spec: GcodeRef, ctx: ReferenceContext) -> GcodeReference | StreamedGco
             travel.passing(Reader(None, reader_settings, str(path), path=path).moves()),
             limits,
             settings,
-            most * SAMPLE_PERIOD_S,
-            limit,
+            most_s=most * SAMPLE_PERIOD_S,
+            limit=limit,
         )
         held, facts, samples = hold_or_count(
-            reader.moves(), limits, settings, MAX_SAMPLES if ctx.stock else HELD_SAMPLES
+            reader.moves(), limits, settings, most=MAX_SAMPLES if ctx.stock else HELD_SAMPLES
         )
     if held is not None:
         if drive is not None:

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from registries import Entry, Registry
+from controllers.registries import Entry, Registry
 from twin.spec import KindSpec, register_kind
 
 #: The base of every reference kind's spec.

@@ -7,7 +7,7 @@ import importlib
 from pathlib import Path
 from types import ModuleType
 
-from registries import Registry
+from controllers.registries import Registry
 
 
 class Reproduction:
@@ -91,7 +91,7 @@ def register_reproduction(cls: type[Reproduction]) -> type[Reproduction]:
     return cls
 
 
-def twin_vs_tf(label: str, twin: dict, tf: dict, keys, tol_rel: float) -> list[str]:
+def twin_vs_tf(label: str, twin: dict, tf: dict, *, keys, tol_rel: float) -> list[str]:
     """The ``keys`` whose twin value departs from the transfer-function value by more than
     ``tol_rel`` of it, one line each, prefixed by ``label``."""
     return [

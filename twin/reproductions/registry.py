@@ -6,7 +6,7 @@ from __future__ import annotations
 import importlib
 
 from controllers.papers import PAPERS
-from registries import Registry
+from controllers.registries import Registry
 from twin.reproductions.base import REGISTERED, Reproduction
 
 for _paper in PAPERS:
