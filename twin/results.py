@@ -20,7 +20,8 @@ if TYPE_CHECKING:  # the heavy modules load on first use, not with `import twin`
     import pyarrow as pa
 
     from twin.commissioning.boundary import MarginCheck
-    from twin.commissioning.frf import FrfSettings
+    from twin.commissioning.calibration import CalibrationReport
+    from twin.commissioning.frf import FrfMeasurement, FrfSettings
     from twin.gcode.moves import Move
     from twin.gcode.report import PlannedSummary
     from twin.outcome import RunOutcome
@@ -239,38 +240,58 @@ class Frf:
 
     Attributes
     ----------
-    machine : str
-    settings : twin.commissioning.frf.FrfSettings
-    summary : dict
-        What ``twin frf --json`` prints: the lines (Hz), magnitude (dB), phase (deg) and
-        coherence, the model's, the resonances and anti-resonances found, the settings.
-    run : twin.sim.runner.RunResult
-        The simulated experiment.
+    measurement : twin.commissioning.frf.FrfMeasurement
+        The lines (Hz), magnitude (dB), phase (deg) and coherence, the model's, the resonances
+        and anti-resonances found, the settings and the simulated experiment (``run``).
     nut_stiffness : dict or None
         On a machine file whose stiffness depends on the nut's position: the position (m) and
         the axial (N/m) and torsional (N m/rad) stiffness there.
     """
 
-    machine: str
-    settings: FrfSettings
-    summary: dict
-    run: RunResult
+    measurement: FrfMeasurement
     nut_stiffness: dict | None = None
+
+    @property
+    def machine(self) -> str:
+        """The machine or machine file measured."""
+        return self.measurement.machine
+
+    @property
+    def settings(self) -> FrfSettings:
+        """What the measurement did."""
+        return self.measurement.settings
+
+    @property
+    def run(self) -> RunResult:
+        """The simulated experiment."""
+        return self.measurement.run
+
+    @cached_property
+    def summary(self) -> dict:
+        """What ``twin frf --json`` prints (:meth:`twin.commissioning.frf.FrfMeasurement.to_json`)."""
+        return self.measurement.to_json()
 
     def to_pandas(self) -> pd.DataFrame:
         """The measured and the model's response by frequency (Hz): ``magnitude_db``,
         ``phase_deg``, ``coherence``, ``model_magnitude_db``, ``model_phase_deg``."""
         import pandas as pd
 
-        columns = ("magnitude_db", "phase_deg", "coherence", "model_magnitude_db", "model_phase_deg")
-        index = pd.Index(self.summary["frequency_hz"], name="frequency_hz")
-        return pd.DataFrame({c: self.summary[c] for c in columns}, index=index)
+        m = self.measurement
+        index = pd.Index(m.frequency_hz, name="frequency_hz")
+        columns = {
+            "magnitude_db": m.magnitude_db,
+            "phase_deg": m.phase_deg,
+            "coherence": m.coherence,
+            "model_magnitude_db": m.model_magnitude_db,
+            "model_phase_deg": m.model_phase_deg,
+        }
+        return pd.DataFrame(columns, index=index)
 
     def write_bode(self, path: str | Path) -> Path:
         """The Bode plot (PNG) of the measured response beside the model's, with the coherence."""
         from twin.commissioning.frf import write_bode
 
-        write_bode(self.summary, path)
+        write_bode(self.measurement, path)
         return Path(path)
 
     def record(self, path: str | Path) -> Path:
@@ -328,23 +349,33 @@ class Calibration:
 
     Attributes
     ----------
-    machine : str
-        The machine or machine file calibrated.
-    trace : str
-        The measured trace.
-    summary : dict
-        What ``twin calibrate --json`` prints: ``fitted`` values, ``standard_errors``,
-        ``nominal`` ones, the fit index before and after, the solver's report.
+    report : twin.commissioning.calibration.CalibrationReport
+        The machine and trace, the ``fitted`` values, their standard errors, the ``nominal``
+        ones, the fit index before and after, the solver's report.
     """
 
-    machine: str
-    trace: str
-    summary: dict
+    report: CalibrationReport
+
+    @property
+    def machine(self) -> str:
+        """The machine or machine file calibrated."""
+        return self.report.machine
+
+    @property
+    def trace(self) -> str:
+        """The measured trace."""
+        return self.report.trace
+
+    @property
+    def summary(self) -> dict:
+        """What ``twin calibrate --json`` prints
+        (:meth:`twin.commissioning.calibration.CalibrationReport.to_json`)."""
+        return self.report.to_json()
 
     @property
     def fitted(self) -> dict[str, float]:
         """The fitted parameters by symbol, in the machine's units."""
-        return self.summary["fitted"]
+        return self.report.fitted
 
     def write_machine_file(self, path: str | Path) -> Path:
         """The calibrated machine file (TOML): the machine file with the fitted values, a comment
