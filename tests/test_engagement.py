@@ -23,7 +23,7 @@ BLOCK = StockSpec(corners_mm=((0, -10), (40, 10)), top_mm=0, bottom_mm=-20, reso
 
 def _run(lines, stock=BLOCK, tool=FLAT):
     planned = plan(Reader(["G21 G90 G0 X-10 Y0 Z5", "M3 S10000", *lines, "M5"]).moves(), LIMITS, PlannerSettings())
-    table = program_milling(planned, stock, tool, [], 0).table
+    table = program_milling(planned, stock, tool, tools=[], seed=0).table
     return planned, table
 
 

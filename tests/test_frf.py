@@ -29,7 +29,7 @@ def test_a_peak_is_refined_within_half_a_line_of_the_modes_maximum(f0_hz, zeta):
     |G| f^2 found on a grid 100 times finer.  On the raw magnitude (falling 2 dB a line at 5 Hz)
     the vertex of a damped mode at 59 Hz landed 21 lines away, at 46 Hz."""
     f = LINE_HZ * np.arange(2, 1600)
-    resonances, antiresonances = peaks(f, _resonance_on_a_rigid_body(f, f0_hz, zeta), np.ones_like(f))
+    resonances, antiresonances = peaks(f, _resonance_on_a_rigid_body(f, f0_hz, zeta), coherence=np.ones_like(f))
     fine = np.linspace(0.5 * f0_hz, 1.5 * f0_hz, 100 * round(f0_hz / LINE_HZ))
     expected = fine[np.argmax(_resonance_on_a_rigid_body(fine, f0_hz, zeta) + 40 * np.log10(fine))]
     assert resonances == [pytest.approx(expected, abs=0.5 * LINE_HZ)]
@@ -42,7 +42,7 @@ def test_a_slow_bend_is_no_resonance_and_a_mode_beside_it_is():
     within a factor 1.5 of its frequency; the 175 Hz mode beside it is found."""
     f = LINE_HZ * np.arange(2, 1600)
     hump = 6.0 * np.exp(-(np.log10(f / 15.0) ** 2) / (2 * 0.4**2))
-    resonances, _ = peaks(f, _resonance_on_a_rigid_body(f, 175.0, 0.02) + hump, np.ones_like(f))
+    resonances, _ = peaks(f, _resonance_on_a_rigid_body(f, 175.0, 0.02) + hump, coherence=np.ones_like(f))
     assert resonances == [pytest.approx(175.0, abs=LINE_HZ)]
 
 
@@ -183,16 +183,16 @@ def test_the_multisine_estimator_recovers_a_known_filter_and_its_distortion():
     from twin.commissioning.frf import excitation_signal, multisine_frf
 
     dt, n = 1e-4, 4 * 3 * 8192
-    d = excitation_signal("multisine", n, dt, 1.0, 800.0, 7)
+    d = excitation_signal("multisine", n, dt, amplitude=1.0, f_max_hz=800.0, seed=7)
     b, a = signal.butter(2, 300.0, fs=1.0 / dt)
     w = signal.lfilter(b, a, d)
-    r = multisine_frf(d, d, np.cumsum(w), dt, 800.0)
+    r = multisine_frf(d, d, np.cumsum(w), dt=dt, f_max_hz=800.0)
     _, h = signal.freqz(b, np.convolve(a, [1.0, -1.0]), worN=r["frequency_hz"], fs=1.0 / dt)
     level = 20 * np.log10(np.abs(h))
     assert r["realizations"] == 4
     np.testing.assert_allclose(20 * np.log10(np.abs(r["frf"] / h)), 0.0, atol=1e-9)
     assert np.all(np.isneginf(r["distortion_db"]) | (r["distortion_db"] < level - 150))
-    r = multisine_frf(d, d, np.cumsum(w + 0.3 * w**3 / np.abs(w).max() ** 2), dt, 800.0)
+    r = multisine_frf(d, d, np.cumsum(w + 0.3 * w**3 / np.abs(w).max() ** 2), dt=dt, f_max_hz=800.0)
     assert np.median(r["distortion_db"] - level) > -60
     assert min(r["coherence"]) < 0.99
     assert np.median(np.abs(20 * np.log10(np.abs(r["frf"] / h)))) < 1.0
@@ -228,9 +228,9 @@ def test_a_mode_is_unreliable_where_a_line_near_it_is_incoherent():
     freqs = np.arange(1.0, 201.0)
     coherence = np.ones_like(freqs)
     coherence[[93, 149, 151, 155, 160]] = 0.5  # 94 Hz; 150, 152, 156 Hz (one band); 161 Hz
-    sound = mode_quality("resonance", 100.0, freqs, coherence, None)
+    sound = mode_quality("resonance", 100.0, freqs=freqs, coherence=coherence, distortion_db=None)
     assert sound.unreliable is None and sound.coherence == 1.0
-    doubtful = mode_quality("antiresonance", 98.0, freqs, coherence, np.full(200, -20.0))
+    doubtful = mode_quality("antiresonance", 98.0, freqs=freqs, coherence=coherence, distortion_db=np.full(200, -20.0))
     assert doubtful.coherence == 0.5 and doubtful.distortion_db == -20.0
     assert doubtful.unreliable is not None and doubtful.unreliable.startswith("coherence 0.500 < 0.95 within 5 % of it")
     assert incoherent_bands(freqs, coherence) == [[94.0, 94.0], [150.0, 156.0], [161.0, 161.0]]

@@ -36,7 +36,9 @@ def test_the_estimators_fitted_modes_are_the_exact_zoh_models(machine, sensor):
         sys, delay = oracle(machine, axis)
         g = zoh_frf(sys, sensor, delay)
         undelayed = g * np.exp(2j * math.pi * LINES * (delay + DT / 2))
-        found = peaks(LINES, 20 * np.log10(np.abs(g)), np.ones_like(LINES), None, undelayed)
+        found = peaks(
+            LINES, 20 * np.log10(np.abs(g)), coherence=np.ones_like(LINES), uncertainty_db=None, frf=undelayed
+        )
         for measured, expected in zip(found, modes(sys, sensor), strict=True):
             expected = [f for f in expected if f < 0.98 * LINES[-1]]
             if sensor == "table" and measured is found[1]:

@@ -16,7 +16,12 @@ def _open_loop(bm, u_V, duration_s):
     n = round(duration_s / dt)
     u = np.tile(np.asarray(u_V, float), (n, 1))
     return simulate(
-        bm, open_loop(u, dt, [a.name for a in bm.axes]), Step(0.0, n_axes=len(bm.axes)), duration_s, dt, progress=False
+        bm,
+        open_loop(u, dt, [a.name for a in bm.axes]),
+        Step(0.0, n_axes=len(bm.axes)),
+        duration_s=duration_s,
+        control_period_s=dt,
+        progress=False,
     )
 
 

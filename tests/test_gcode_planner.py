@@ -395,9 +395,15 @@ def test_a_streamed_reference_is_the_held_one_in_bounded_memory(monkeypatch):
     monkeypatch.setattr(planner, "WINDOW_POINTS", 3000)
     monkeypatch.setattr(planner, "PIECE_POINTS", 500)
     held = _plan(lines, limits)
-    held_reference = GcodeReference(held, (0, 1), len(lines))
+    held_reference = GcodeReference(held, axes=(0, 1), n_lines=len(lines))
     streamed = StreamedGcodeReference(
-        lambda: Reader(lines).moves(), limits, PlannerSettings(), None, len(held.position), (0, 1), len(lines)
+        lambda: Reader(lines).moves(),
+        limits=limits,
+        settings=PlannerSettings(),
+        facts=None,
+        n_samples=len(held.position),
+        axes=(0, 1),
+        n_lines=len(lines),
     )
     assert streamed.duration_s == held_reference.duration_s
     window = 0

@@ -197,7 +197,7 @@ def test_compliant_modes_at_the_closed_forms():
     assert time_response_nrmse(bm, bm.plant_lti(), duration_s=0.3) < 0.005
     r = measure(MID, FrfSettings(sensor="motor", duration_s=8.0), overrides)
     f, model = np.array(r.frequency_hz), np.array(r.model_magnitude_db)
-    model_peak, model_dip = peaks(f, model, np.ones_like(f))
+    model_peak, model_dip = peaks(f, model, coherence=np.ones_like(f))
     assert r.resonances_hz == [pytest.approx(model_peak[0], rel=0.015)] == [pytest.approx(resonance, rel=0.02)]
     assert r.antiresonances_hz == [pytest.approx(model_dip[0], rel=0.015)] == [pytest.approx(anti, rel=0.02)]
 
@@ -217,7 +217,7 @@ def test_frf_of_a_rigid_machine_equals_its_transfer_function(machine):
 
 @pytest.mark.parametrize("kind", ["prbs", "chirp", "multisine"])
 def test_excitations_reach_their_amplitude_and_band(kind):
-    u = excitation_signal(kind, 20000, 1e-4, 2.0, 500.0, 1)
+    u = excitation_signal(kind, 20000, 1e-4, amplitude=2.0, f_max_hz=500.0, seed=1)
     assert np.abs(u).max() == pytest.approx(2.0, rel=1e-6)
     spectrum = np.abs(np.fft.rfft(u)) ** 2
     f = np.fft.rfftfreq(len(u), 1e-4)
@@ -228,7 +228,7 @@ def test_calibration_recovers_hidden_parameters(tmp_path):
     hidden = {"x_table_mass_kg": 100.0, "x_friction_viscous_N_s_per_m": 180.0, "x_friction_coulomb_N": 18.0}
     dt, n = 1e-4, 6000
     u = np.zeros((n, 2))
-    u[:, 0] = excitation_signal("prbs", n, dt, 2.0, 50.0, 3)
+    u[:, 0] = excitation_signal("prbs", n, dt, amplitude=2.0, f_max_hz=50.0, seed=3)
     y = replay(build(MID, hidden), dt, u, np.zeros(2))[:, 0]
     y = y + np.random.default_rng(0).normal(0.0, 2e-7, n)  # sensor noise, 0.2 um
     path = tmp_path / "trace.parquet"
@@ -251,7 +251,7 @@ def test_calibration_recovers_hidden_parameters(tmp_path):
 def test_calibration_names_a_combination_it_cannot_identify(tmp_path):
     """X alone moves: its table and Y's table enter only as their sum."""
     dt, n = 1e-4, 3000
-    u = excitation_signal("prbs", n, dt, 2.0, 50.0, 3)
+    u = excitation_signal("prbs", n, dt, amplitude=2.0, f_max_hz=50.0, seed=3)
     y = replay(build(MID), dt, np.c_[u, np.zeros(n)], np.zeros(2))[:, 0]
     y = y + np.random.default_rng(1).normal(0.0, 2e-7, n)
     path = tmp_path / "trace.csv"
@@ -274,7 +274,7 @@ def test_calibration_holds_a_combination_together_and_fits_the_rest_again(tmp_pa
     the value fitted with the other) and the friction is fitted again without them, so the fit
     index rises from the nominal's."""
     dt, n = 1e-4, 3000
-    u = excitation_signal("prbs", n, dt, 2.0, 50.0, 3)
+    u = excitation_signal("prbs", n, dt, amplitude=2.0, f_max_hz=50.0, seed=3)
     y = replay(build(MID, {"x_table_mass_kg": 110.7}), dt, np.c_[u, np.zeros(n)], np.zeros(2))[:, 0]
     y = y + np.random.default_rng(1).normal(0.0, 2e-7, n)
     path = tmp_path / "trace.parquet"
@@ -297,7 +297,7 @@ def test_calibration_recovers_a_compliant_hidden_variant(tmp_path):
     hidden = {"x_table_mass_kg": 110.7, "x_k_axial_N_per_m": 1.0005e8, "x_friction_viscous_N_s_per_m": 210.0}
     dt, n = 1e-4, 6000
     u = np.zeros((n, 2))
-    u[:, 0] = excitation_signal("prbs", n, dt, 2.0, 500.0, 3)
+    u[:, 0] = excitation_signal("prbs", n, dt, amplitude=2.0, f_max_hz=500.0, seed=3)
     y = replay(build(MID, hidden), dt, u, np.zeros(2))[:, 0] + np.random.default_rng(0).normal(0.0, 2e-7, n)
     path = tmp_path / "trace.parquet"
     pq.write_table(pa.table({"time_s": np.arange(n) * dt, "u_x_V": u[:, 0], "pos_x_m": y}), path)
@@ -337,7 +337,7 @@ def test_a_fit_above_the_traces_noise_says_so(tmp_path):
     residual is far above the trace's 0.2 um noise, and the result says so."""
     dt, n = 1e-4, 3000
     u = np.zeros((n, 2))
-    u[:, 0] = excitation_signal("prbs", n, dt, 2.0, 50.0, 3)
+    u[:, 0] = excitation_signal("prbs", n, dt, amplitude=2.0, f_max_hz=50.0, seed=3)
     y = replay(build(MID, {"x_friction_viscous_N_s_per_m": 210.0}), dt, u, np.zeros(2))[:, 0]
     y = y + np.random.default_rng(2).normal(0.0, 2e-7, n)
     path = tmp_path / "trace.parquet"

@@ -25,7 +25,7 @@ STRAIGHT = ["G21 G90 G0 X-10 Y0 Z5", "M3 S10000", "G1 Z-2 F300", "G1 X30 F600", 
 
 def _engagement(lines, stock, tool=TOOL, tools=()):
     planned = plan(Reader(lines).moves(), LIMITS, PlannerSettings(tolerance_mm=0.01))
-    table = program_milling(planned, stock, tool, list(tools), 0).table
+    table = program_milling(planned, stock, tool, tools=list(tools), seed=0).table
     return planned, table
 
 
@@ -80,7 +80,7 @@ def test_air_moves_engage_nothing_and_a_stopped_spindle_no_force():
     assert not air[:, :7].any()
     lines = ["G21 G90 G0 X-10 Y0 Z5", "G1 Z-2 F300", "G1 X30 F600"]  # no M3
     planned = plan(Reader(lines).moves(), LIMITS, PlannerSettings(tolerance_mm=0.01))
-    cut = program_milling(planned, stock, TOOL, [], 0)
+    cut = program_milling(planned, stock, TOOL, tools=[], seed=0)
     assert cut.table[:, 6].max() == pytest.approx(2.0)
     assert not cut.milling.spindle_rpm.any()
 

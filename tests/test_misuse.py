@@ -25,7 +25,7 @@ FLAT = ToolSpec(diameter_mm=6.0, n_flutes=2)
 def _warnings(lines, tool=FLAT, spindle="M3 S10000"):
     program = ["G21 G90 G0 X-10 Y0 Z5", spindle, *lines, "G0 Z5", "M5"]
     planned = plan(Reader(program).moves(), LIMITS, PlannerSettings())
-    cut = program_milling(planned, BLOCK, tool, [], 0)
+    cut = program_milling(planned, BLOCK, tool, tools=[], seed=0)
     return {(w.line - 2, w.kind): w for w in cut.warnings}, cut.warnings_total
 
 
@@ -108,7 +108,7 @@ def test_a_tools_material_and_the_users_own_coefficients_reach_the_force_model()
     planned = plan(
         Reader(["G21 G90 G0 X-10 Y0 Z5", "M3 S10000", "G1 Z-2 F300", "G1 X30 F600"]).moves(), LIMITS, PlannerSettings()
     )
-    milling = program_milling(planned, BLOCK, tool, [], 0).milling
+    milling = program_milling(planned, BLOCK, tool, tools=[], seed=0).milling
     from twin.machines import build
 
     _, params, _ = milling.kernel_arrays(build("linear_motor_xy"))

@@ -33,7 +33,7 @@ def slot(offset_y_mm: float, n: int = 400) -> ToolSweep:
 
 def test_wall_error_is_the_path_offset_on_each_wall():
     # the actual path 3 µm towards +Y: the upper wall overcut by 3 µm, the lower one left 3 µm
-    part = machined_part(STOCK, slot(0.0), slot(0.003), 0.0, -10.0)
+    part = machined_part(STOCK, slot(0.0), slot(0.003), top_mm=0.0, bottom_mm=-10.0)
     assert part.levels_mm == [-1.0]
     walls = part.walls
     straight = (walls[:, 0] > 5.5) & (walls[:, 0] < 24.5)  # the walls, not the slot's round ends
@@ -47,13 +47,13 @@ def test_wall_error_is_the_path_offset_on_each_wall():
 
 
 def test_a_perfect_path_leaves_no_error():
-    part = machined_part(STOCK, slot(0.0), slot(0.0), 0.0, -10.0)
+    part = machined_part(STOCK, slot(0.0), slot(0.0), top_mm=0.0, bottom_mm=-10.0)
     assert np.abs(part.walls[:, 3]).max() < 1e-3
     assert part.summary()["surface_error_um"]["rms"] < 1e-3
 
 
 def test_line_and_width_of_a_slot():
-    actual = machined_part(STOCK, slot(0.0), slot(0.003), 0.0, -10.0)
+    actual = machined_part(STOCK, slot(0.0), slot(0.003), top_mm=0.0, bottom_mm=-10.0)
     width = measure(
         WidthFeature(type="width", name="slot", from_mm=(15, 5), to_mm=(15, 15), width_mm=6.0, z_mm=-1.0), actual
     )
@@ -73,7 +73,7 @@ def test_line_and_width_of_a_slot():
 
 
 def test_a_feature_not_on_the_part_says_so():
-    part = machined_part(STOCK, slot(0.0), slot(0.0), 0.0, -10.0)
+    part = machined_part(STOCK, slot(0.0), slot(0.0), top_mm=0.0, bottom_mm=-10.0)
     row = measure(CircleFeature(type="circle", name="none", center_mm=(5, 5), diameter_mm=1.0, z_mm=-1.0), part)
     assert isinstance(row, FeatureNotFound)
     assert row.to_json()["found"] is False
@@ -145,7 +145,7 @@ def test_bore_cut_by_the_perfect_loop_measures_its_size(bore):
     )
     stock = bore.part.stock
     feature = CircleFeature(type="circle", name="bore", center_mm=(-28, 0), diameter_mm=66.0, z_mm=-1.5)
-    row = measure(feature, machined_part(stock, loop, loop, 0.0, -10.0))
+    row = measure(feature, machined_part(stock, loop, loop, top_mm=0.0, bottom_mm=-10.0))
     assert isinstance(row, CircleMeasured)
     assert row.diameter_mm == pytest.approx(66.0, abs=5e-5)
     assert row.roundness_um < 0.2
@@ -154,7 +154,7 @@ def test_bore_cut_by_the_perfect_loop_measures_its_size(bore):
     plan = bore.part.nominal
     on = plan.line == 12
     radius = np.hypot(plan.xy_mm[on, 0] + 28, plan.xy_mm[on, 1]).mean()
-    row = measure(feature, machined_part(stock, plan, plan, 0.0, -10.0))
+    row = measure(feature, machined_part(stock, plan, plan, top_mm=0.0, bottom_mm=-10.0))
     assert isinstance(row, CircleMeasured)
     assert row.diameter_mm == pytest.approx(2 * (radius + 5.0), abs=1e-4)
 
@@ -271,7 +271,7 @@ def test_a_level_the_tool_ramps_through_is_skipped_not_swept_disc_by_disc(monkey
         np.full(n, 0.5),
         np.full(n, 7),
     )
-    part = machined_part(STOCK, ramp, ramp, 0.0, -10.0)
+    part = machined_part(STOCK, ramp, ramp, top_mm=0.0, bottom_mm=-10.0)
     assert part.levels_mm == [-0.5]
     assert part.skipped_levels_mm == [-2.0]
     summary = part.summary()

@@ -186,7 +186,7 @@ def test_through_cut_slot_with_noise_and_an_offset_half():
     actual_xy = nominal.xy_mm + rng.normal(0.0, 1.0 * UM, (n, 2))
     actual_xy[x > 20.0, 1] += 5.0 * UM
     actual = sweep(actual_xy, -12.0, 3.0, line=4)
-    part = machined_part(stock, nominal, actual, 0.0, -10.0)
+    part = machined_part(stock, nominal, actual, top_mm=0.0, bottom_mm=-10.0)
     assert len(part.levels_mm) >= 1
     assert all(-10.0 < z < 0.0 for z in part.levels_mm)
     walls = check(part, min_points=1000)
@@ -217,7 +217,7 @@ def test_helical_bore_entry_with_a_radial_error():
     nominal = sweep(xy, tip, 3.0, line=9)
     xy_a, tip_a = helix(3.0 + 2.0 * UM, per_turn=1000)
     actual = sweep(xy_a, tip_a, 3.0, line=9)
-    part = machined_part(stock, nominal, actual, 0.0, -10.0)
+    part = machined_part(stock, nominal, actual, top_mm=0.0, bottom_mm=-10.0)
     assert part.levels_mm  # the level(s) it reads, between the top and the -3 floor
     walls = check(part, min_points=300)
     # closed form: a circle of radius 3 + 3 µm cut by the 6 mm tool: the wall 2 µm overcut
@@ -267,13 +267,13 @@ def plunge_and_pass(corner: float, noise_um: float):
 @pytest.mark.parametrize("corner", [1.0, 3.0], ids=["bull_nose", "ball"])
 def test_plunge_then_side_move_radius_by_height(corner):
     stock, nominal, actual = plunge_and_pass(corner, 0.5)
-    part = machined_part(stock, nominal, actual, 0.0, -10.0)
+    part = machined_part(stock, nominal, actual, top_mm=0.0, bottom_mm=-10.0)
     assert part.levels_mm == [-0.3, -1.3]  # the floors -0.6 and -2
     check(part, min_points=500)
     # without the noise, a closed form on the deep pass's straight lower wall (the nominal
     # radius r at z, the actual r_a of a tip 2 µm lower, the path 3 µm towards +Y): material
     # left 3 µm - (r_a - r); at -0.3 the bull-nose is within its corner (h 0.3 of 1)
-    part = machined_part(*plunge_and_pass(corner, 0.0), 0.0, -10.0)
+    part = machined_part(*plunge_and_pass(corner, 0.0), top_mm=0.0, bottom_mm=-10.0)
     walls = part.walls
     for z in part.levels_mm:
         r, r_a = tool_radius(-2.0, 3.0, corner, z), tool_radius(-2.0 - 2 * UM, 3.0, corner, z)
@@ -311,7 +311,7 @@ def test_a_segment_along_which_the_tip_moves(coarse, tol_um):
     xy, tip = ramp(coarse)
     nominal = sweep(xy, tip, 3.0, corner=3.0, line=2)
     actual = sweep(xy + np.array([0.0, 1.0 * UM]), tip, 3.0, corner=3.0, line=2)
-    part = machined_part(stock, nominal, actual, 0.0, -10.0)
+    part = machined_part(stock, nominal, actual, top_mm=0.0, bottom_mm=-10.0)
     check(part, pieces=64, tol_um=tol_um, min_points=100)
 
 
@@ -328,7 +328,7 @@ def test_a_ball_finishing_pass_over_a_surface_sampled_coarsely():
     tip = np.concatenate([-1.0 - 0.8 * np.sin(xy[:-40, 0] / 3.0), np.full(40, -1.9)])  # -1.8 to -0.2
     nominal = sweep(xy, tip, 3.0, corner=3.0, line=5)
     actual = sweep(xy + np.array([0.0, 2.0 * UM]), tip, 3.0, corner=3.0, line=5)
-    part = machined_part(stock, nominal, actual, 0.0, -10.0)
+    part = machined_part(stock, nominal, actual, top_mm=0.0, bottom_mm=-10.0)
     assert part.levels_mm == [-0.95]  # the level pass's floor -1.9: the rows' valleys cross it
     walls = check(part, pieces=64, tol_um=0.05, min_points=200)
     # the path 2 µm towards +Y: the outer walls move by at most that much
@@ -358,7 +358,7 @@ def test_five_passes_the_deepest_forms_the_wall_and_a_stock_with_a_hole():
     xy, xy_a, tip, line = np.vstack(nom), np.vstack(act), np.concatenate(tips), np.concatenate(lines)
     nominal = ToolSweep(xy, tip, np.full(len(xy), 3.0), np.zeros(len(xy)), line)
     actual = ToolSweep(xy_a, tip, np.full(len(xy), 3.0), np.zeros(len(xy)), line)
-    part = machined_part(stock, nominal, actual, 0.0, -10.0)
+    part = machined_part(stock, nominal, actual, top_mm=0.0, bottom_mm=-10.0)
     walls = check(part, min_points=500)
     # no wall on the hole's own outline
     assert np.all(shapely.distance(shapely.points(walls[:, :2]), hole.exterior) > 1e-4)
@@ -381,7 +381,7 @@ def test_a_100_mm_face_mill():
     nominal = sweep(np.column_stack([x, np.full(n, -20.0)]), -1.0, 50.0, line=6)
     rng = np.random.default_rng(5)
     actual = sweep(nominal.xy_mm + rng.normal(0.0, 1.0 * UM, (n, 2)) + [-2 * UM, 3 * UM], -1.0, 50.0, line=6)
-    part = machined_part(stock, nominal, actual, 0.0, -10.0)
+    part = machined_part(stock, nominal, actual, top_mm=0.0, bottom_mm=-10.0)
     walls = check(part, min_points=1000)
     arc = walls[:, 0] < 39.0
     assert arc.sum() > 100  # the disc's own arc at the start
@@ -398,7 +398,7 @@ def test_a_half_millimetre_tool_round_a_corner():
     actual = ToolSweep(
         xy + rng.normal(0.0, 1.0 * UM, xy.shape), nominal.tip_mm, nominal.radius_mm, nominal.corner_mm, line
     )
-    part = machined_part(stock, nominal, actual, 0.0, -10.0)
+    part = machined_part(stock, nominal, actual, top_mm=0.0, bottom_mm=-10.0)
     check(part, min_points=300)
 
 
@@ -430,7 +430,7 @@ def test_bore_diameter_and_slot_width_against_the_brute_force():
     rad = 28.0 + (3.0 + 2.0 * np.cos(2 * turn) + rng.normal(0.0, 1.0, n)) * UM
     xy_a = np.column_stack([rad * np.cos(turn), rad * np.sin(turn)])
     actual = sweep(xy_a, -3.0, 5.0, line=12)
-    part = machined_part(stock, nominal, actual, 0.0, -10.0)
+    part = machined_part(stock, nominal, actual, top_mm=0.0, bottom_mm=-10.0)
     row = measure(CircleFeature(type="circle", name="bore", center_mm=(0, 0), diameter_mm=66.0, z_mm=-1.5), part)
     # ray reach at 1440 angles (the actual samples densified 4x: the capsules' sides)
     theta = np.linspace(-np.pi, np.pi, 1440, endpoint=False)
@@ -462,7 +462,7 @@ def test_bore_diameter_and_slot_width_against_the_brute_force():
     x = np.linspace(5.0, 25.0, 2001)
     nom = sweep(np.column_stack([x, np.full(len(x), 10.0)]), -2.0, 3.0, line=7)
     act_xy = nom.xy_mm + rng.normal(0.0, 1.0 * UM, nom.xy_mm.shape) + [0.0, 2.0 * UM]
-    slot = machined_part(slot_stock, nom, sweep(act_xy, -2.0, 3.0, line=7), 0.0, -10.0)
+    slot = machined_part(slot_stock, nom, sweep(act_xy, -2.0, 3.0, line=7), top_mm=0.0, bottom_mm=-10.0)
     width = measure(
         WidthFeature(type="width", name="w", from_mm=(15, 5), to_mm=(15, 15), width_mm=6.0, z_mm=-1.0), slot
     )

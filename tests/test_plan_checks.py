@@ -218,7 +218,7 @@ def test_the_drive_force_of_a_rapid_on_choi_1999s_table():
     planned = plan(moves, PlannerSettings().limits(machine.motion_limits))
     force = _rigid_force(52.3, 193.5, 0.0, planned.velocity[:, 0], planned.acceleration[:, 0])
     check = DriveCheck({0: rigid_drives(machine)["x"], 1: rigid_drives(machine)["y"]}, 10.0)
-    check.add(planned.position, planned.velocity, planned.acceleration, planned.line, planned.texts)
+    check.add(planned.position, planned.velocity, planned.acceleration, line=planned.line, texts=planned.texts)
     (row,) = check.warnings.listed()
     worst = float(np.abs(force).max())
     assert isinstance(row, DriveWarning) and (row.line, row.axis) == (3, "x")
@@ -254,7 +254,7 @@ def test_the_drive_force_on_a_compliant_ball_screw_machine_file():
     data = tomllib.loads(Path(COMPACT_FILE).read_text())
     saturation_V = 1.1
     moves = _moves("G21 G90\nG0 X0 Y0\nG0 X100 Y-80\nG1 X-50 F20000\nG0 Y60\nM2")
-    summary = planned_for("p.ngc", moves, COMPACT_FILE, PlannerSettings(), saturation_V)
+    summary = planned_for("p.ngc", moves, COMPACT_FILE, planner=PlannerSettings(), saturation_V=saturation_V)
     planned = plan(moves, PlannerSettings().limits(build(COMPACT_FILE).motion_limits))
     expected = {}
     for i, axis in enumerate("xy"):
@@ -408,11 +408,18 @@ def test_a_streamed_program_gets_the_held_ones_drive_warnings(monkeypatch):
     limits = PlannerSettings().limits(machine.motion_limits)
     held = plan(Reader(lines).moves(), limits)
     whole = DriveCheck(drives, 10.0)
-    whole.add(held.position, held.velocity, held.acceleration, held.line, held.texts)
+    whole.add(held.position, held.velocity, held.acceleration, line=held.line, texts=held.texts)
     _none, facts, samples = planner.hold_or_count(Reader(lines).moves(), limits, PlannerSettings(), most=0)
     streamed_check = DriveCheck(drives, 10.0)
     streamed = StreamedGcodeReference(
-        lambda: Reader(lines).moves(), limits, PlannerSettings(), facts, samples, (0, 1), len(lines), (streamed_check,)
+        lambda: Reader(lines).moves(),
+        limits=limits,
+        settings=PlannerSettings(),
+        facts=facts,
+        n_samples=samples,
+        axes=(0, 1),
+        n_lines=len(lines),
+        checks=(streamed_check,),
     )
     for k0 in range(0, samples * 2, 700):  # the runner's chunks at a 0.5 ms period
         streamed.sample(np.arange(k0, k0 + 710) * 5e-4)

@@ -43,7 +43,13 @@ def _views(path) -> dict:
 @pytest.fixture(scope="module")
 def circle_run():
     bm = build("cncmt_xy")
-    return simulate(bm, make_controller("yadav2020_robust_pi", 1e-3, axes=("x", "y")), Circle(5.0, 600.0), 0.5, 1e-3)
+    return simulate(
+        bm,
+        make_controller("yadav2020_robust_pi", 1e-3, axes=("x", "y")),
+        Circle(5.0, 600.0),
+        duration_s=0.5,
+        control_period_s=1e-3,
+    )
 
 
 def test_series_are_named_and_counted(circle_run, tmp_path):
@@ -120,8 +126,8 @@ def test_cutting_force_arrow_and_series(tmp_path):
         bm,
         make_controller("pid", 1e-3, {"kp": 2e4}, axes=("x", "y")),
         Circle(20.0, 2400.0),
-        0.3,
-        1e-3,
+        duration_s=0.3,
+        control_period_s=1e-3,
         disturbances=(force,),
     )
     path = record(res, tmp_path / "cut.rrd")
@@ -138,7 +144,7 @@ def test_cutting_force_arrow_and_series(tmp_path):
 
 def test_recording_decimates_long_runs(tmp_path):
     bm = build("cncmt")
-    res = simulate(bm, make_controller("yadav2020_imc", 1e-4), Step(0.01), 1.0, 1e-4)
+    res = simulate(bm, make_controller("yadav2020_imc", 1e-4), Step(0.01), duration_s=1.0, control_period_s=1e-4)
     path = record(res, tmp_path / "long.rrd", max_points=1000)
     counts = read_back(path)
     assert counts["/actual/x"] == 1000 + 1
@@ -149,7 +155,7 @@ def test_recording_decimates_long_runs(tmp_path):
 def test_several_runs_get_a_prefix_each(tmp_path):
     bm = build("cncmt")
     runs = {
-        name: simulate(bm, make_controller(name, 1e-3), Step(0.01), 0.2, 1e-3)
+        name: simulate(bm, make_controller(name, 1e-3), Step(0.01), duration_s=0.2, control_period_s=1e-3)
         for name in ("yadav2020_imc", "yadav2020_robust_pi")
     }
     counts = read_back(record_runs(runs, tmp_path / "two.rrd"))

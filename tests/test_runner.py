@@ -20,7 +20,7 @@ def test_closed_loop_step_matches_transfer_functions():
     """cncmt + robust PI at 1 kHz: twin step response equals the sampled-data TF loop."""
     dt = 1e-3
     bm = build("cncmt")
-    res = simulate(bm, make_controller("yadav2020_robust_pi", dt), Step(1.0), 6.0, dt)
+    res = simulate(bm, make_controller("yadav2020_robust_pi", dt), Step(1.0), duration_s=6.0, control_period_s=dt)
     g = control.c2d(bm.plant[0][0].to_control(), dt, "zoh")
     c = control.c2d(yadav2020.ROBUST_PI.to_control(), dt, "tustin")
     loop = control.feedback(g * c, 1)
@@ -35,12 +35,12 @@ def test_saturation_and_delay():
     bm = build("cncmt")
     u = np.full((2000, 1), 50.0)
     drive = Drive(1, 1, dt, delay_s=1e-3, saturation_V=10.0)
-    res = simulate(bm, open_loop(u, dt), Step(0.0), 0.2, dt, drive=drive)
+    res = simulate(bm, open_loop(u, dt), Step(0.0), duration_s=0.2, control_period_s=dt, drive=drive)
     assert res.u_applied_V.max() == pytest.approx(10.0)
     x = res.table_position_m()[:, 0]
     assert np.all(x[:11] == 0.0)
     assert x[12] > 0.0  # 10 steps of delay, then motion
-    plain = simulate(bm, open_loop(np.full((2000, 1), 10.0), dt), Step(0.0), 0.2, dt)
+    plain = simulate(bm, open_loop(np.full((2000, 1), 10.0), dt), Step(0.0), duration_s=0.2, control_period_s=dt)
     assert np.allclose(x[10:], plain.table_position_m()[:-10, 0], rtol=0, atol=1e-12)
 
 
@@ -77,7 +77,9 @@ def test_delay_splits_inside_a_tick():
 def test_encoder_quantization_and_seeded_noise():
     bm = build("cncmt")
     enc = Encoder(np.array([1e-6]), np.array([0.0]), np.array([1.0]))
-    res = simulate(bm, open_loop(np.full((100, 1), 1.0), 1e-3), Step(0.0), 0.1, 1e-3, encoder=enc)
+    res = simulate(
+        bm, open_loop(np.full((100, 1), 1.0), 1e-3), Step(0.0), duration_s=0.1, control_period_s=1e-3, encoder=enc
+    )
     x = res.table_position_m()[:, 0]
     np.testing.assert_allclose(res.meas_m[:, 0], np.rint(x / 1e-6) * 1e-6, rtol=0, atol=1e-18)
     a = Encoder(np.array([0.0]), np.array([1e-6]), np.array([1.0]), seed=7).noise_source()
@@ -108,8 +110,8 @@ def test_compiled_and_python_loops_give_identical_series():
                 bm,
                 ctrl,
                 Circle(0.01, 6000.0),
-                0.3,
-                period,
+                duration_s=0.3,
+                control_period_s=period,
                 drive=drive,
                 encoder=enc,
                 disturbances=[_Harmonic()],
@@ -140,13 +142,17 @@ class _PythonGain:
 
 def test_python_block_runs_in_the_python_loop_only():
     bm = build("cncmt")
-    py = simulate(bm, Controller([_PythonGain(30.0)], 1e-3), Step(0.01), 0.5, 1e-3)
-    compiled = simulate(bm, make_controller("pid", 1e-3, {"kp": 30.0}), Step(0.01), 0.5, 1e-3)
+    py = simulate(bm, Controller([_PythonGain(30.0)], 1e-3), Step(0.01), duration_s=0.5, control_period_s=1e-3)
+    compiled = simulate(
+        bm, make_controller("pid", 1e-3, {"kp": 30.0}), Step(0.01), duration_s=0.5, control_period_s=1e-3
+    )
     assert py.info["loop"] == "python"
     assert compiled.info["loop"] == "compiled"
     np.testing.assert_allclose(py.qpos, compiled.qpos, rtol=0, atol=1e-15)
     with pytest.raises(TwinInputError, match="compiled"):
-        simulate(bm, Controller([_PythonGain(30.0)], 1e-3), Step(0.01), 0.5, 1e-3, compiled=True)
+        simulate(
+            bm, Controller([_PythonGain(30.0)], 1e-3), Step(0.01), duration_s=0.5, control_period_s=1e-3, compiled=True
+        )
 
 
 def test_record_every_keeps_metrics_of_every_tick():
@@ -156,8 +162,8 @@ def test_record_every_keeps_metrics_of_every_tick():
             bm,
             make_controller("yadav2020_robust_pi", 1e-3, axes=("x", "y")),
             Circle(5.0, 600.0),
-            1.0,
-            1e-3,
+            duration_s=1.0,
+            control_period_s=1e-3,
             record_every=every,
         )
         for every in (1, 7, 0)
@@ -184,7 +190,15 @@ def test_velocity_measurement_backward_difference_and_tachometer():
             [Sum((1.0,), ("vel.x",), "u.x", "probe_x"), Sum((0.0,), ("vel.y",), "u.y", "probe_y")], period
         )  # u.x = measured velocity (V per m/s): a weak positive feedback
         enc = Encoder(np.zeros(2), np.zeros(2), np.array(bm.sensor_gains), velocity=mode)
-        res = simulate(bm, probe, Step(0.0, n_axes=2), 0.2, period, encoder=enc, disturbances=[_Harmonic()])
+        res = simulate(
+            bm,
+            probe,
+            Step(0.0, n_axes=2),
+            duration_s=0.2,
+            control_period_s=period,
+            encoder=enc,
+            disturbances=[_Harmonic()],
+        )
         seen[mode] = res
     bd, tach = seen["backward_difference"], seen["tachometer"]
     x = bd.meas_m[:, 0]
@@ -197,7 +211,7 @@ def test_u_prev_is_the_last_saturated_input():
     bm = build("cncmt")
     echo = Controller([Sum((1.0, 1.0), ("u_prev.x", "tick"), "u.x", "echo")], 1e-3)  # u[k] = ua[k-1] + k
     drive = Drive(1, 10, 1e-4, saturation_V=5.0)
-    res = simulate(bm, echo, Step(0.0), 0.01, 1e-3, drive=drive)
+    res = simulate(bm, echo, Step(0.0), duration_s=0.01, control_period_s=1e-3, drive=drive)
     expected = [0.0]
     for k in range(1, 10):
         expected.append(min(expected[-1] + k, 5.0))
@@ -210,7 +224,7 @@ def test_divergence_is_reported_with_time(compiled):
     bm = build("cncmt")
     unstable = error_feedback(control.tf([-500.0], [1.0]), dt, name="positive feedback")
     with pytest.raises(SimulationDiverged) as err:
-        simulate(bm, unstable, Step(0.01), 50.0, dt, compiled=compiled)
+        simulate(bm, unstable, Step(0.01), duration_s=50.0, control_period_s=dt, compiled=compiled)
     assert 0.1 < err.value.sim_time_s < 0.3  # e^(t/tau) from 0.01 m to 10 m
 
 
@@ -221,11 +235,11 @@ def test_huge_or_nan_control_is_divergence_not_a_zeroed_input(compiled):
     u = np.zeros((100, 1))
     u[40] = 1e12
     with pytest.raises(SimulationDiverged, match="drive input") as err:
-        simulate(bm, open_loop(u, 1e-3), Step(0.0), 0.1, 1e-3, compiled=compiled)
+        simulate(bm, open_loop(u, 1e-3), Step(0.0), duration_s=0.1, control_period_s=1e-3, compiled=compiled)
     assert err.value.sim_time_s == pytest.approx(0.040)
     u[40] = np.nan
     with pytest.raises(SimulationDiverged, match="drive input"):
-        simulate(bm, open_loop(u, 1e-3), Step(0.0), 0.1, 1e-3, compiled=compiled)
+        simulate(bm, open_loop(u, 1e-3), Step(0.0), duration_s=0.1, control_period_s=1e-3, compiled=compiled)
 
 
 @pytest.mark.parametrize("compiled", [True, False])
@@ -240,8 +254,8 @@ def test_unstable_physics_reported_at_its_step_without_a_log_file(tmp_path, monk
             bm,
             open_loop(np.full((400, 2), 1.0), 1e-3, ["x", "y"]),
             Step(0.0, n_axes=2),
-            0.4,
-            1e-3,
+            duration_s=0.4,
+            control_period_s=1e-3,
             disturbances=[AverageForce(1e9, 0.0)],
             compiled=compiled,
         )
@@ -252,16 +266,20 @@ def test_unstable_physics_reported_at_its_step_without_a_log_file(tmp_path, monk
 def test_control_period_must_be_multiple_of_timestep():
     bm = build("cncmt")
     with pytest.raises(TwinInputError, match="control_period_s"):
-        simulate(bm, make_controller("yadav2020_imc", 2.5e-4), Step(1.0), 1.0, 2.5e-4 + 1e-5)
+        simulate(
+            bm, make_controller("yadav2020_imc", 2.5e-4), Step(1.0), duration_s=1.0, control_period_s=2.5e-4 + 1e-5
+        )
 
 
 def test_controllers_must_drive_every_axis_once_and_read_existing_signals():
     bm = build("googol_xy")
     with pytest.raises(TwinInputError, match="needs each of"):
-        simulate(bm, make_controller("pid", 1e-3, {"kp": 1.0}), Step(0.0, n_axes=2), 0.01, 1e-3)
+        simulate(
+            bm, make_controller("pid", 1e-3, {"kp": 1.0}), Step(0.0, n_axes=2), duration_s=0.01, control_period_s=1e-3
+        )
     bad = make_controller("linear", 1e-3, {"inputs": ["vel.z"], "outputs": ["u.x", "u.y"], "D": [[1.0], [1.0]]})
     with pytest.raises(TwinInputError, match=r"vel\.z"):
-        simulate(bm, bad, Step(0.0, n_axes=2), 0.01, 1e-3)
+        simulate(bm, bad, Step(0.0, n_axes=2), duration_s=0.01, control_period_s=1e-3)
 
 
 def test_long_runs_are_recorded_decimated_by_default(monkeypatch):
@@ -271,9 +289,9 @@ def test_long_runs_are_recorded_decimated_by_default(monkeypatch):
 
     bm = build("cncmt")
     ctrl = make_controller("yadav2020_robust_pi", 1e-3)
-    full = simulate(bm, ctrl, Step(0.01), 1.0, 1e-3)
+    full = simulate(bm, ctrl, Step(0.01), duration_s=1.0, control_period_s=1e-3)
     monkeypatch.setattr(runner, "MAX_RECORDED_TICKS", 300)
-    sparse = simulate(bm, ctrl, Step(0.01), 1.0, 1e-3)
+    sparse = simulate(bm, ctrl, Step(0.01), duration_s=1.0, control_period_s=1e-3)
     assert sparse.info["record_every"] == 4
     assert len(sparse.t_s) == 250
     assert np.array_equal(sparse.qpos, full.qpos[::4])
@@ -283,7 +301,9 @@ def test_long_runs_are_recorded_decimated_by_default(monkeypatch):
 def test_divergence_carries_the_run_up_to_it():
     bm = build("cncmt")
     with pytest.raises(SimulationDiverged) as err:
-        simulate(bm, error_feedback(control.tf([-500.0], [1.0]), 1e-3), Step(0.01), 50.0, 1e-3)
+        simulate(
+            bm, error_feedback(control.tf([-500.0], [1.0]), 1e-3), Step(0.01), duration_s=50.0, control_period_s=1e-3
+        )
     part = err.value.result
     done = part.info["completed_ticks"]
     assert done == round(err.value.sim_time_s / 1e-3)

@@ -36,8 +36,11 @@ def heavy():
 def test_the_growth_criterion_tells_a_decaying_run_from_a_growing_one(heavy):
     """X's velocity gain 1 dB below its cascade margin decays, 1 dB above it grows."""
     margin = heavy["axes"]["x"]["cascade_margins"]["kp_vel"]["gain_margin_db"]
-    assert growth_ratio(heavy, HEAVY, "x", "kp_vel", margin - 1.0, LINEAR_QUARTER_STEP) < 0.8
-    assert growth_ratio(heavy, HEAVY, "x", "kp_vel", margin + 1.0, LINEAR_QUARTER_STEP) > 1.2 * GROWTH_RATIO
+    assert growth_ratio(heavy, HEAVY, "x", gain="kp_vel", db=margin - 1.0, conditions=LINEAR_QUARTER_STEP) < 0.8
+    assert (
+        growth_ratio(heavy, HEAVY, "x", gain="kp_vel", db=margin + 1.0, conditions=LINEAR_QUARTER_STEP)
+        > 1.2 * GROWTH_RATIO
+    )
 
 
 def test_the_twins_boundary_is_the_cascade_margin(heavy):
@@ -47,7 +50,10 @@ def test_the_twins_boundary_is_the_cascade_margin(heavy):
     0.5 dB, the Coulomb friction's damping and the Euler step each raising it; each number the
     committed table's."""
     margin = heavy["axes"]["x"]["cascade_margins"]["kp_vel"]["gain_margin_db"]
-    found = {name: twin_boundary(heavy, HEAVY, "x", "kp_vel", c).boundary_db for name, c in CONDITIONS.items()}
+    found = {
+        name: twin_boundary(heavy, HEAVY, "x", gain="kp_vel", conditions=c).boundary_db
+        for name, c in CONDITIONS.items()
+    }
     assert found["linear_quarter_step"] == pytest.approx(margin, abs=0.1)
     assert zero_step_boundary(found["linear"], found["linear_quarter_step"], 4) == pytest.approx(margin, abs=0.05)
     assert found["twin"] == pytest.approx(margin, abs=0.5)

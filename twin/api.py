@@ -265,7 +265,7 @@ def program(file: str | Path, machine: str | None = None, **settings: Any) -> Pr
     reference, planner, saturation_V = program_settings(str(file), _paths(settings))
     input_file(file, "file")
     moves = list(read_program(file, reference.reader_settings()))  # a bad line: GcodeError, a TwinInputError
-    planned = None if machine is None else planned_for(file, moves, machine, planner, saturation_V)
+    planned = None if machine is None else planned_for(file, moves, machine, planner=planner, saturation_V=saturation_V)
     return Program(str(file), moves, planned)
 
 

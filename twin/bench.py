@@ -93,9 +93,18 @@ def _cases() -> dict:
     cutting = assemble(load_scenario("choi1999_cutting_circle"))
     part = assemble(load_scenario("gcode_test_piece"))
     return {
-        "hinf_cncmt": (cncmt, lambda sec: simulate(cncmt, hinf, Step(0.01), sec, 1e-4, progress=False)),
-        "cascade_dob_googol": (googol, lambda sec: simulate(googol, cascade_dob, sine, sec, 1e-4, progress=False)),
-        "npid_googol": (googol, lambda sec: simulate(googol, npid, sine, sec, 1e-4, progress=False)),
+        "hinf_cncmt": (
+            cncmt,
+            lambda sec: simulate(cncmt, hinf, Step(0.01), duration_s=sec, control_period_s=1e-4, progress=False),
+        ),
+        "cascade_dob_googol": (
+            googol,
+            lambda sec: simulate(googol, cascade_dob, sine, duration_s=sec, control_period_s=1e-4, progress=False),
+        ),
+        "npid_googol": (
+            googol,
+            lambda sec: simulate(googol, npid, sine, duration_s=sec, control_period_s=1e-4, progress=False),
+        ),
         "cutting_circle_linear_motor": (cutting.machine, lambda sec: cutting.simulate(duration_s=sec, progress=False)),
         "gcode_test_piece_linear_motor": (part.machine, lambda sec: part.simulate(duration_s=sec, progress=False)),
     }
@@ -178,7 +187,7 @@ def gcode_figures(lines: int = 1_000_000, repeats: int = 5, moves: int = 10_000)
         planned = plan(program, limits, settings)
         timings.append(time.perf_counter() - t0)
         t0 = time.perf_counter()
-        program_milling(planned, stock, ToolSpec(diameter_mm=1.0, n_flutes=2), [], 0)
+        program_milling(planned, stock, ToolSpec(diameter_mm=1.0, n_flutes=2), tools=[], seed=0)
         engagement.append(time.perf_counter() - t0)
     peaks = {}
     with tempfile.TemporaryDirectory() as folder:
@@ -354,7 +363,7 @@ def finish_figures(lines: int) -> dict:
         stock = StockSpec(corners_mm=((-5.0, -5.0), (105.0, 105.0)), top_mm=0.0, bottom_mm=-10.0, resolution_mm=0.1)
         ball = ToolSpec(number=1, diameter_mm=6.0, n_flutes=2, corner_radius_mm=3.0)
         t0 = time.perf_counter()
-        cut = program_milling(planned, stock, None, [ball], 0)
+        cut = program_milling(planned, stock, None, tools=[ball], seed=0)
         engagement_s = time.perf_counter() - t0
         plan_peak = tracemalloc.get_traced_memory()[1] / 1e6
         tracemalloc.reset_peak()

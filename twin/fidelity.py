@@ -118,8 +118,8 @@ def time_response_nrmse(bm, reference, duration_s: float = 1.0, disturbances=())
             bm,
             open_loop(u, dt, [a.name for a in bm.axes]),
             Step(0.0, n_axes=n_axes),
-            duration_s,
-            dt,
+            duration_s=duration_s,
+            control_period_s=dt,
             disturbances=disturbances,
             progress=False,
             record_every=1,
@@ -180,7 +180,14 @@ def frequency_response_errors(
         ref = SumOfSines((amp,) * len(bins), tuple(freqs), tuple(phases), n_axes=n_axes, axes=(k,))
         ctrls = [error_feedback(designs[i][0], dt, axes=(a.name,), name=f"P.{a.name}") for i, a in enumerate(bm.axes)]
         res = simulate(
-            bm, ctrls, ref, (settle + 1) * period_s, dt, disturbances=disturbances, progress=False, record_every=every
+            bm,
+            ctrls,
+            ref,
+            duration_s=(settle + 1) * period_s,
+            control_period_s=dt,
+            disturbances=disturbances,
+            progress=False,
+            record_every=every,
         )
         y = res.table_position_m()[settle * n_period // every :]
         u = res.u_applied_V[settle * n_period // every :]
@@ -219,8 +226,8 @@ def coupling_slip_um(bm, duration_s: float = 0.4) -> float:
         bm,
         open_loop(u, dt, [a.name for a in bm.axes]),
         Step(0.0, n_axes=n_axes),
-        duration_s,
-        dt,
+        duration_s=duration_s,
+        control_period_s=dt,
         progress=False,
         record_every=1,
     )

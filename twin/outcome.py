@@ -63,6 +63,7 @@ class PlannedProgram:
 def planned_program(
     checks: tuple[TravelCheck | DriveCheck | None, ...],
     plan: Plan | None,
+    *,
     cut: ProgramCut | None = None,
     stock: StockSpec | None = None,
     features: tuple[InspectSpec, ...] = (),

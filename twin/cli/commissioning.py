@@ -297,7 +297,14 @@ def excite(
         raise TwinInputError("--out", str(out), "must be a .csv or .parquet file")
     _check_output("--out", out)
     columns = excitation_trace(
-        machine, axis, f_max, amplitude, duration, seed, _parse_sets(sets or []), simulate_twin=simulate
+        machine,
+        axis,
+        f_max_hz=f_max,
+        amplitude_V=amplitude,
+        duration_s=duration,
+        seed=seed,
+        overrides=_parse_sets(sets or []),
+        simulate_twin=simulate,
     )
     write_table(columns, out)
     typer.echo(

@@ -40,7 +40,11 @@ def gcode(
 
         reference, planner, saturation_V = program_settings(str(file), parse_settings(settings or []))
         reader_settings = reference.reader_settings()
-    plan = None if machine is None else (lambda moves: planned_for(file, moves, machine, planner, saturation_V))
+    plan = (
+        None
+        if machine is None
+        else (lambda moves: planned_for(file, moves, machine, planner=planner, saturation_V=saturation_V))
+    )
     planned = list_program(file, reader_settings, as_json, plan)
     if planned is None:
         return

@@ -229,7 +229,7 @@ def _scaled(design: dict, axis: str, gain: str, db: float) -> dict:
     return {**design, "axes": axes}
 
 
-def growth_ratio(design: dict, machine: str, axis: str, gain: str, db: float, conditions: TwinConditions) -> float:
+def growth_ratio(design: dict, machine: str, axis: str, *, gain: str, db: float, conditions: TwinConditions) -> float:
     """The peak-to-peak of ``axis``'s table position over the run's last quarter divided by the
     quarter's before it, with ``gain`` times 10^(db/20) (``inf`` where the run diverges, 0 where
     the last quarter's is below :data:`GROWTH_FLOOR_M`).
@@ -265,7 +265,7 @@ def growth_ratio(design: dict, machine: str, axis: str, gain: str, db: float, co
     return math.inf if spread == 0.0 else final / spread
 
 
-def twin_boundary(design: dict, machine: str, axis: str, gain: str, conditions: TwinConditions = AS_RUN) -> Boundary:
+def twin_boundary(design: dict, machine: str, axis: str, *, gain: str, conditions: TwinConditions = AS_RUN) -> Boundary:
     """The factor (dB) on ``gain`` of ``axis`` at which the twin's tuned cascade starts to grow,
     bisected from the reported cascade margin (see the module docstring).
 
@@ -287,7 +287,7 @@ def twin_boundary(design: dict, machine: str, axis: str, gain: str, conditions: 
 
     def ratio(db: float) -> float:
         if db not in ratios:
-            ratios[db] = growth_ratio(design, machine, axis, gain, db, conditions)
+            ratios[db] = growth_ratio(design, machine, axis, gain=gain, db=db, conditions=conditions)
         return ratios[db]
 
     low, high = start - BRACKET_DB, start + BRACKET_DB
@@ -355,7 +355,7 @@ def verify_margins(
             boundaries: dict[str, Boundary | None] = {}
             for name, condition in conditions.items():
                 try:
-                    boundaries[name] = twin_boundary(design, machine, axis, gain, condition)
+                    boundaries[name] = twin_boundary(design, machine, axis, gain=gain, conditions=condition)
                 except TwinInputError:  # no growth within MAX_WIDENINGS dB of the margin
                     boundaries[name] = None
             linear, quarter = boundaries.get("linear"), boundaries.get("linear_quarter_step")

@@ -214,7 +214,13 @@ def replay(bm: BuiltMachine, dt: float, u: np.ndarray, y0: np.ndarray) -> np.nda
     from rest at the trace's first positions ``y0``."""
     names = [a.name for a in bm.axes]
     run = simulate(
-        bm, open_loop(u, dt, names), Step(0.0, n_axes=len(names)), len(u) * dt, dt, progress=False, record_every=1
+        bm,
+        open_loop(u, dt, names),
+        Step(0.0, n_axes=len(names)),
+        duration_s=len(u) * dt,
+        control_period_s=dt,
+        progress=False,
+        record_every=1,
     )
     return run.table_position_m() - run.table_position_m()[0] + y0
 
@@ -734,7 +740,7 @@ def solve(problem: CalibrationProblem, *, progress: bool = False) -> Calibration
             sol = min([sol, *others], key=lambda solution: solution.cost)
         if problem.kind == "time":  # the position's own fit, from the velocity's basin
             sol = _solve(_CountedResidual(problem.residual, tally), sol.x, bounds, every)
-        unidentifiable = _unidentifiable(sol.jac, sol.x, problem.scale, problem.fit, sol.cost)
+        unidentifiable = _unidentifiable(sol.jac, sol.x, problem.scale, fit=problem.fit, cost=sol.cost)
         fitted_x, free = sol.x.copy(), np.array([s not in unidentifiable for s in problem.fit])
         fitted_x[~free] = (problem.nominal / problem.scale)[~free]  # held at nominal, all together
         if unidentifiable and free.any():  # the others fitted again with them held
@@ -915,6 +921,7 @@ def _table_modes(problem: CalibrationProblem, values: dict[str, float]) -> np.nd
 def excitation_trace(
     machine: str,
     axis: str = "x",
+    *,
     f_max_hz: float = 500.0,
     amplitude_V: float = 2.0,
     duration_s: float = 0.6,
@@ -935,7 +942,7 @@ def excitation_trace(
     dt = sample_period(bm)
     n = max(MIN_SAMPLES, round(duration_s / dt))
     u = np.zeros((n, len(names)))
-    u[:, k] = excitation_signal("prbs", n, dt, amplitude_V, f_max_hz, seed)
+    u[:, k] = excitation_signal("prbs", n, dt, amplitude=amplitude_V, f_max_hz=f_max_hz, seed=seed)
     columns = {"time_s": np.arange(n) * dt, f"u_{axis}_V": u[:, k]}
     if simulate_twin:
         columns[f"pos_{axis}_m"] = replay(bm, dt, u, np.zeros(len(names)))[:, k]
@@ -1028,7 +1035,7 @@ def _standard_errors(jac: np.ndarray, cost: float) -> np.ndarray:
     return np.sqrt(np.maximum(np.diag(_covariance(jac, cost)), 0.0))
 
 
-def _unidentifiable(jac: np.ndarray, x: np.ndarray, scale: np.ndarray, fit: list[str], cost: float) -> dict:
+def _unidentifiable(jac: np.ndarray, x: np.ndarray, scale: np.ndarray, *, fit: list[str], cost: float) -> dict:
     """The parameters the data do not determine, with the reason (see the module docstring): a
     Jacobian column of zeros, a direction of the Jacobian's null space it takes part in, or a
     relative standard error over :data:`MAX_RELATIVE_ERROR`, a combination where its estimate

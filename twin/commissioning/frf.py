@@ -179,7 +179,7 @@ def measurement_timestep(bm: BuiltMachine) -> float | None:
     return step / math.ceil(decay * step / MAX_DECAY_PER_STEP)
 
 
-def excitation_signal(kind: str, n: int, dt: float, amplitude: float, f_max_hz: float, seed: int) -> np.ndarray:
+def excitation_signal(kind: str, n: int, dt: float, *, amplitude: float, f_max_hz: float, seed: int) -> np.ndarray:
     """The excitation (V), ``n`` samples at ``dt``.
 
     prbs: a maximum-length sequence (``scipy.signal.max_len_seq``) of +-amplitude, each bit held
@@ -242,7 +242,7 @@ def multisine_realizations(n: int) -> int:
     return n // ((1 + MULTISINE_PERIODS) * MULTISINE_PERIOD)
 
 
-def welch_frf(d: np.ndarray, u: np.ndarray, y: np.ndarray, dt: float, f_max_hz: float) -> dict:
+def welch_frf(d: np.ndarray, u: np.ndarray, y: np.ndarray, *, dt: float, f_max_hz: float) -> dict:
     """The FRF G = S_dy / S_du and its coherence (see the module docstring) from Welch's averaged
     cross spectra of the excitation ``d``, the drive input ``u`` (V) and the position ``y`` (m),
     sampled at ``dt``, on the lines from the second to ``f_max_hz``."""
@@ -256,16 +256,16 @@ def welch_frf(d: np.ndarray, u: np.ndarray, y: np.ndarray, dt: float, f_max_hz: 
     return {
         "frequency_hz": freqs[band],
         "frf": s_dy[band] / s_du[band],
-        "coherence": _coherence(s_du[band], s_dy[band], s_dd[band], s_uu[band], s_yy[band]),
+        "coherence": _coherence(s_du[band], s_dy[band], s_dd[band], s_uu=s_uu[band], s_yy=s_yy[band]),
     }
 
 
-def _coherence(s_du, s_dy, s_dd, s_uu, s_yy) -> np.ndarray:
+def _coherence(s_du, s_dy, s_dd, *, s_uu, s_yy) -> np.ndarray:
     """The product of the excitation's coherence with the input and with the output."""
     return np.clip(np.abs(s_du) ** 2 / (s_dd * s_uu) * np.abs(s_dy) ** 2 / (s_dd * s_yy), 0.0, 1.0)
 
 
-def multisine_frf(d: np.ndarray, u: np.ndarray, y: np.ndarray, dt: float, f_max_hz: float) -> dict:
+def multisine_frf(d: np.ndarray, u: np.ndarray, y: np.ndarray, *, dt: float, f_max_hz: float) -> dict:
     """The best linear approximation (BLA) from a multisine's realizations, with the noise and the
     nonlinear distortion on it per line (Pintelon and Schoukens, System Identification, ch. 3-4).
 
@@ -315,7 +315,7 @@ def multisine_frf(d: np.ndarray, u: np.ndarray, y: np.ndarray, dt: float, f_max_
     return {
         "frequency_hz": lines / (n * dt),
         "frf": s_dy / s_du,
-        "coherence": _coherence(s_du, s_dy, cross("d", "d").real, cross("u", "u").real, cross("y", "y").real),
+        "coherence": _coherence(s_du, s_dy, cross("d", "d").real, s_uu=cross("u", "u").real, s_yy=cross("y", "y").real),
         "noise_db": noise_db,
         "distortion_db": distortion_db,
         "spread": np.sqrt(np.maximum(total_var, noise_var)),
@@ -367,7 +367,7 @@ def zoh_response(g: SisoTf, dt: float, delay_s: float, freqs_hz: np.ndarray) -> 
     return np.array([complex(gd(zi)) for zi in z]) * z ** (-round(delay_s / dt))
 
 
-def model_frf(bm: BuiltMachine, axis: int, sensor: str, freqs_hz: np.ndarray, dt: float) -> np.ndarray:
+def model_frf(bm: BuiltMachine, axis: int, sensor: str, *, freqs_hz: np.ndarray, dt: float) -> np.ndarray:
     """The model's FRF (m/V) at ``freqs_hz``: ZOH equivalent at ``dt`` with the drive delay."""
     return zoh_response(sensor_plant(bm, axis, sensor), dt, bm.delay_s, freqs_hz)
 
@@ -382,6 +382,7 @@ def sensor_plant(bm: BuiltMachine, axis: int, sensor: str) -> SisoTf:
 def peaks(
     freqs: np.ndarray,
     mag_db: np.ndarray,
+    *,
     coherence: np.ndarray,
     uncertainty_db: np.ndarray | None = None,
     frf: np.ndarray | None = None,
@@ -516,6 +517,7 @@ class ModeQuality:
 def mode_quality(
     kind: Literal["resonance", "antiresonance"],
     frequency_hz: float,
+    *,
     freqs: np.ndarray,
     coherence: np.ndarray,
     distortion_db: np.ndarray | None,
@@ -773,7 +775,12 @@ class FrfExperiment:
         n = settle + round(settings.duration_s / dt)
         d = np.zeros((n, len(names)))
         d[settle:, k] = excitation_signal(
-            settings.excitation, n - settle, dt, settings.amplitude_V, settings.f_max_hz, settings.seed
+            settings.excitation,
+            n - settle,
+            dt,
+            amplitude=settings.amplitude_V,
+            f_max_hz=settings.f_max_hz,
+            seed=settings.seed,
         )
         return cls(machine, settings, bm, k, dt, settle, d)
 
@@ -800,8 +807,8 @@ class FrfExperiment:
                 bm,
                 controller,
                 Step(0.0, n_axes=len(names)),
-                n * dt,
-                dt,
+                duration_s=n * dt,
+                control_period_s=dt,
                 encoder=encoder,
                 progress=False,
                 record_every=1,
@@ -830,17 +837,19 @@ class FrfExperiment:
         else:
             y = run.table_position_m()[settle:, k]
         estimate = (multisine_frf if settings.excitation == "multisine" else welch_frf)(
-            self.excitation_V[settle:, k], u, y, dt, settings.f_max_hz
+            self.excitation_V[settle:, k], u, y, dt=dt, f_max_hz=settings.f_max_hz
         )
         freqs, g, coherence = estimate["frequency_hz"], estimate["frf"], estimate["coherence"]
-        model = model_frf(bm, k, settings.sensor, freqs, dt)
+        model = model_frf(bm, k, settings.sensor, freqs_hz=freqs, dt=dt)
         mag_db, model_db = 20 * np.log10(np.abs(g)), 20 * np.log10(np.abs(model))
         uncertainty_db = None
         if "spread" in estimate:  # the BLA's standard deviation, in dB of its magnitude
             uncertainty_db = 20 * np.log10(1 + estimate["spread"] / np.abs(g))
         # the peaks' modes are fitted with the drive's delay and the hold's half sample taken out
         undelayed = g * np.exp(2j * math.pi * freqs * (bm.delay_s + dt / 2))
-        resonances, antiresonances = peaks(freqs, mag_db, coherence, uncertainty_db, undelayed)
+        resonances, antiresonances = peaks(
+            freqs, mag_db, coherence=coherence, uncertainty_db=uncertainty_db, frf=undelayed
+        )
         model_res, model_anti = model_modes(bm, k, settings.sensor)
         # a dip of a sensor away from the drive (the table of a ball screw) is no anti-resonance:
         # a non-collocated transfer function has no zeros there
@@ -852,7 +861,11 @@ class FrfExperiment:
             ("resonance", resonances),
             ("antiresonance", antiresonances),
         )
-        quality = [mode_quality(kind, f, freqs, coherence, distortion_db) for kind, found in kinds for f in found]
+        quality = [
+            mode_quality(kind, f, freqs=freqs, coherence=coherence, distortion_db=distortion_db)
+            for kind, found in kinds
+            for f in found
+        ]
         good = coherence >= MIN_COHERENCE
         levels = None
         if "distortion_db" in estimate:

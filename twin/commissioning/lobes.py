@@ -145,7 +145,13 @@ def lobes(scn: Scenario, settings: LobesSettings) -> dict:
     if not (math.isfinite(settings.feed_per_tooth_mm) and settings.feed_per_tooth_mm > 0):
         raise TwinInputError("--feed-per-tooth", settings.feed_per_tooth_mm, "must be positive (mm)")
     phi_st, phi_ex = immersion_angles(immersion * tool.diameter_mm, tool.diameter_mm, mode)
-    cut = milling_cut(tool.coefficients, tool.n_flutes, ((phi_st, phi_ex, 1.0),), 0.0, settings.feed_per_tooth_mm)
+    cut = milling_cut(
+        tool.coefficients,
+        tool.n_flutes,
+        ((phi_st, phi_ex, 1.0),),
+        feed_angle_rad=0.0,
+        feed_per_tooth_mm=settings.feed_per_tooth_mm,
+    )
     planned = _program_samples(scn)
     samples = None if planned is None else planned[0]
     speeds = _speeds(settings.rpm, tool, samples)

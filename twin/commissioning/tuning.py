@@ -95,6 +95,7 @@ def cascade_margins(
     freqs_hz: np.ndarray,
     kv: float,
     kp: float,
+    *,
     f_resp: np.ndarray,
     i_resp: np.ndarray,
     v_resp: np.ndarray,
@@ -159,6 +160,7 @@ def tune_axis(
     bm: BuiltMachine,
     i: int,
     dt: float,
+    *,
     resonances_hz: list[float],
     velocity_sensor: str = "table",
     position_sensor: str = "table",
@@ -212,7 +214,9 @@ def tune_axis(
                 table_ok = to_table is None or np.abs(lp / (1 + lp) * to_table).max() <= MAX_TABLE_PEAK
                 if not (table_ok and _meets(position) and _stable(kp * cv * gd_pos / (1 + cv * diff * gd))):
                     continue
-                cascade = cascade_margins(freqs, kv, kp, f_resp, i_resp, g_resp * d_resp, pos_resp)
+                cascade = cascade_margins(
+                    freqs, kv, kp, f_resp=f_resp, i_resp=i_resp, v_resp=g_resp * d_resp, p_resp=pos_resp
+                )
                 if not _cascade_meets(cascade) and kp < MIN_POSITION_SHARE * w / 4.0:
                     break  # a lower velocity crossover, rather than a position loop far below it
                 if _cascade_meets(cascade):
@@ -275,7 +279,9 @@ def tune(
             "motor" if joint == a.motor_joint else "table"
             for joint in (a.velocity_joint(feedback), a.encoder_joint(feedback))
         )
-        axes[a.name] = tune_axis(bm, i, dt, model_modes(bm, i, velocity)[0], velocity, position)
+        axes[a.name] = tune_axis(
+            bm, i, dt, resonances_hz=model_modes(bm, i, velocity)[0], velocity_sensor=velocity, position_sensor=position
+        )
     return {
         "machine": machine,
         "machine_name": spec.name,

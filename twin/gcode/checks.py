@@ -240,7 +240,7 @@ class DriveCheck:
         self.warnings = Warnings()
 
     def add(
-        self, position: np.ndarray, velocity: np.ndarray, acceleration: np.ndarray, line: np.ndarray, texts: dict
+        self, position: np.ndarray, velocity: np.ndarray, acceleration: np.ndarray, *, line: np.ndarray, texts: dict
     ) -> None:
         """Check a stretch of the reference: samples (n, 3) of x y z (m, m/s, m/s^2), the line
         of each, and the lines' texts."""
@@ -254,9 +254,9 @@ class DriveCheck:
             order = np.lexsort((-ratio[over], line[over]))
             lines, first = np.unique(line[over][order], return_index=True)
             for number, k in zip(lines.tolist(), over[order][first].tolist()):
-                self._warn(int(number), "xyz"[axis], float(ratio[k]), drive, texts)
+                self._warn(int(number), "xyz"[axis], float(ratio[k]), drive=drive, texts=texts)
 
-    def _warn(self, line: int, axis: str, ratio: float, drive: DriveModel, texts: dict) -> None:
+    def _warn(self, line: int, axis: str, ratio: float, *, drive: DriveModel, texts: dict) -> None:
         limit_N = drive.force_per_volt_N_per_V * self.saturation_V
         message = f"axis {axis} needs {ratio * limit_N:.1f} N, the drive saturates at {limit_N:.1f} N (x{ratio:.3f})"
         warning = DriveWarning(

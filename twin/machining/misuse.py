@@ -37,7 +37,7 @@ KINDS = {
 
 
 def machining_warnings(
-    plan, table: np.ndarray, tools: list[ToolSpec], tool_index: np.ndarray, spindle_rpm: np.ndarray, stock: StockSpec
+    plan, *, table: np.ndarray, tools: list[ToolSpec], tool_index: np.ndarray, spindle_rpm: np.ndarray, stock: StockSpec
 ):
     """The warnings of a program through its stock, and how many there are in all.
 

@@ -184,12 +184,12 @@ def section(stock: shapely.Geometry, sweep: ToolSweep, z_mm: float) -> shapely.G
     swept = [_swept(shapes, radius) for radius, shapes in by_radius.items()]
     pairs = np.flatnonzero(changing)
     for start in range(0, len(pairs), HULL_PAIRS):  # in blocks: memory stays bounded
-        discs = _ramp_discs(xy_mm, *tool, pairs[start : start + HULL_PAIRS], z_mm)
+        discs = _ramp_discs(xy_mm, *tool, pairs=pairs[start : start + HULL_PAIRS], z_mm=z_mm)
         swept.append(shapely.union_all(_disc_hulls(*discs)))
     return shapely.difference(stock, shapely.union_all(swept)) if swept else stock
 
 
-def _ramp_discs(xy_mm, tip_mm, radius_mm, corner_mm, pairs: np.ndarray, z_mm: float) -> tuple[np.ndarray, ...]:
+def _ramp_discs(xy_mm, tip_mm, radius_mm, corner_mm, *, pairs: np.ndarray, z_mm: float) -> tuple[np.ndarray, ...]:
     """The discs a section sweeps between the samples of ``pairs`` (index k: samples k, k + 1)
     whose radius at ``z_mm`` changes: :data:`SECTION_RAMP_PIECES` even pieces each, a piece's end
     where the tool does not reach the level moved to where the tip crosses it (with the radius
@@ -664,7 +664,7 @@ def _onto_sweep(points: np.ndarray, sweep: ToolSweep, slack_mm: float) -> None:
         active = active[step > PROJECTED_MM]
 
 
-def machined_part(stock, nominal: ToolSweep, actual: ToolSweep, top_mm: float, bottom_mm: float) -> MachinedPart:
+def machined_part(stock, nominal: ToolSweep, actual: ToolSweep, *, top_mm: float, bottom_mm: float) -> MachinedPart:
     """The virtual part of a run: the walls of the nominal sweep's part (exact sections at
     :func:`wall_levels` of the nominal path) probed against the actual sweep's capsules."""
     step = np.diff(nominal.xy_mm, axis=0, prepend=nominal.xy_mm[:1])
@@ -681,7 +681,7 @@ def virtual_part(stock: StockSpec, nominal: ToolSweep, actual: ToolSweep) -> Mac
     """The part ``actual`` cut against the one ``nominal`` cuts: the walls
     (:func:`machined_part`) with both height maps (:func:`~twin.machining.part_map.part_map`)
     and their floor error."""
-    part = machined_part(stock.polygon(), nominal, actual, stock.top_mm, stock.bottom_mm)
+    part = machined_part(stock.polygon(), nominal, actual, top_mm=stock.top_mm, bottom_mm=stock.bottom_mm)
     part.maps = part_map(stock, nominal, actual)
     part.floor_error_um = part.maps.floor_error()
     return part

@@ -49,7 +49,7 @@ class ProgramMilling:
         Flute 0's angle at t = 0.
     """
 
-    def __init__(self, table, spindle_rpm, tool_index, tools, period_s, spindle_phase_rad=0.0):
+    def __init__(self, table, *, spindle_rpm, tool_index, tools, period_s, spindle_phase_rad=0.0):
         self.table, self.spindle_rpm, self.tool_index = table, spindle_rpm, tool_index
         self.tools, self.period_s, self.spindle_phase_rad = list(tools), period_s, spindle_phase_rad
 
@@ -122,7 +122,7 @@ class ProgramCut:
         )
 
 
-def program_milling(plan, stock: StockSpec, tool: ToolSpec | None, tools: list[ToolSpec], seed: int) -> ProgramCut:
+def program_milling(plan, stock: StockSpec, tool: ToolSpec | None, *, tools: list[ToolSpec], seed: int) -> ProgramCut:
     """The stock cut by a planned program: the force model, its engagement table and warnings.
 
     Parameters
@@ -181,6 +181,15 @@ def program_milling(plan, stock: StockSpec, tool: ToolSpec | None, tools: list[T
         flute_m=flute,
         shank_m=shank,
     )
-    model = ProgramMilling(table, rpm, index, chosen, plan.period_s, spindle_phase(None, seed))
-    warnings, total = machining_warnings(plan, table, chosen, index, rpm, stock)
+    model = ProgramMilling(
+        table,
+        spindle_rpm=rpm,
+        tool_index=index,
+        tools=chosen,
+        period_s=plan.period_s,
+        spindle_phase_rad=spindle_phase(None, seed),
+    )
+    warnings, total = machining_warnings(
+        plan, table=table, tools=chosen, tool_index=index, spindle_rpm=rpm, stock=stock
+    )
     return ProgramCut(model, table, height_map, warnings, total, radius, corner)

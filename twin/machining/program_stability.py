@@ -37,6 +37,7 @@ def milling_cut(
     coefficients: CuttingCoefficients,
     n_flutes: int,
     arcs: tuple[tuple[float, float, float], ...],
+    *,
     feed_angle_rad: float = 0.0,
     feed_per_tooth_mm: float = 0.1,
 ) -> Cut:
@@ -124,7 +125,13 @@ def line_stability(samples: ProgramSamples, rpm_range: tuple[float, float]) -> d
             for i, share in ((1, share1[k]), (2, share2[k]))
             if share > 0 and col[f"phi_ex{i}"][k] > col[f"phi_st{i}"][k]
         )
-        cuts[s] = milling_cut(tool.cutting_coefficients(), tool.n_flutes, arcs, float(feed_angle[k]), float(fz[k]))
+        cuts[s] = milling_cut(
+            tool.cutting_coefficients(),
+            tool.n_flutes,
+            arcs,
+            feed_angle_rad=float(feed_angle[k]),
+            feed_per_tooth_mm=float(fz[k]),
+        )
     tools_of_states = samples.tool_index[k_all[first]]
     grids = {}
     for t in np.unique(tools_of_states):
@@ -145,7 +152,12 @@ def line_stability(samples: ProgramSamples, rpm_range: tuple[float, float]) -> d
     lines = samples.line[k_all]
     worst = {int(line): (mine := np.flatnonzero(lines == line))[np.argmin(margin[mine])] for line in np.unique(lines)}
     over_speeds = _critical_over(
-        speeds, sorted({int(inverse[w]) for w in worst.values()}), cuts, tools_of_states, samples, grids
+        speeds,
+        sorted({int(inverse[w]) for w in worst.values()}),
+        cuts,
+        tools_of_states=tools_of_states,
+        samples=samples,
+        grids=grids,
     )
     out: dict[int, LineStability] = {}
     for line, w in worst.items():
@@ -168,7 +180,7 @@ def line_stability(samples: ProgramSamples, rpm_range: tuple[float, float]) -> d
     return out
 
 
-def _critical_over(speeds, states, cuts, tools_of_states, samples, grids) -> dict[int, np.ndarray]:
+def _critical_over(speeds, states, cuts, *, tools_of_states, samples, grids) -> dict[int, np.ndarray]:
     """The zero-order critical depth (m) of each of ``states`` at every one of ``speeds``."""
     out: dict[int, np.ndarray] = {}
     for t in np.unique(tools_of_states[states]):

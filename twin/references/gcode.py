@@ -55,7 +55,7 @@ STOCK_LIMIT = (
 HELD_SAMPLES = 600_000
 
 
-def _hermite(p: np.ndarray, v: np.ndarray, k: np.ndarray, f: np.ndarray, dt: float) -> np.ndarray:
+def _hermite(p: np.ndarray, v: np.ndarray, *, k: np.ndarray, f: np.ndarray, dt: float) -> np.ndarray:
     """Cubic Hermite interpolation of positions ``p`` with slopes ``v`` between samples ``k`` and
     ``k + 1`` at fractions ``f`` (column)."""
     h00, h10 = 2 * f**3 - 3 * f**2 + 1, f**3 - 2 * f**2 + f
@@ -90,7 +90,7 @@ class _Samples:
         if self.n_samples < 2:
             return np.broadcast_to(p[0], (t.size, 3)).copy()
         k, f, dt = self._at(t)
-        return _hermite(p, v, k - first, f[:, None], dt)
+        return _hermite(p, v, k=k - first, f=f[:, None], dt=dt)
 
     def sample(self, t) -> np.ndarray:
         """Position, velocity and acceleration of the machine's axes, shape (len(t), n_axes, 3)."""
@@ -103,7 +103,7 @@ class _Samples:
         k, f, dt = self._at(t)
         k = k - first
         f = f[:, None]
-        pos = _hermite(p, v, k, f, dt)
+        pos = _hermite(p, v, k=k, f=f, dt=dt)
         vel = (1 - f) * v[k] + f * v[k + 1]
         acc = (1 - f) * a[k] + f * a[k + 1]
         for i, axis in enumerate(self.axes):
@@ -148,6 +148,7 @@ class GcodeReference(_Samples):
     def __init__(
         self,
         planned: Plan,
+        *,
         axes: tuple[int, ...],
         n_lines: int,
         cut: ProgramCut | None = None,
@@ -160,7 +161,7 @@ class GcodeReference(_Samples):
 
     def cutting(self, cut: ProgramCut) -> GcodeReference:
         """The same program cutting a stock (``cut``, :func:`twin.machining.program_cut.program_milling`)."""
-        return GcodeReference(self.plan, self.axes, self.n_lines, cut, self.checks)
+        return GcodeReference(self.plan, axes=self.axes, n_lines=self.n_lines, cut=cut, checks=self.checks)
 
     def _window(self, t):
         return 0, self.plan.position, self.plan.velocity, self.plan.acceleration, self.plan.line
@@ -216,6 +217,7 @@ class StreamedGcodeReference(_Samples):
     def __init__(
         self,
         moves,
+        *,
         limits,
         settings,
         facts,
@@ -246,7 +248,9 @@ class StreamedGcodeReference(_Samples):
             chunk = next(self.chunks)
             for check in self.checks:
                 if isinstance(check, DriveCheck):
-                    check.add(chunk.position, chunk.velocity, chunk.acceleration, chunk.line, self.facts.texts)
+                    check.add(
+                        chunk.position, chunk.velocity, chunk.acceleration, line=chunk.line, texts=self.facts.texts
+                    )
             parts.append((chunk.position, chunk.velocity, chunk.acceleration, chunk.line))
             end += len(chunk.position)
         if len(parts) > 1 or drop:
@@ -354,8 +358,8 @@ def build(spec: GcodeRef, ctx: ReferenceContext) -> GcodeReference | StreamedGco
         )
     if held is not None:
         if drive is not None:
-            drive.add(held.position, held.velocity, held.acceleration, held.line, held.texts)
-        return GcodeReference(held, axes, reader.lines_read, checks=(travel, drive))
+            drive.add(held.position, held.velocity, held.acceleration, line=held.line, texts=held.texts)
+        return GcodeReference(held, axes=axes, n_lines=reader.lines_read, checks=(travel, drive))
     if samples > MAX_PROGRAM_SAMPLES:
         raise TwinInputError(
             "reference.file",
@@ -371,13 +375,13 @@ def build(spec: GcodeRef, ctx: ReferenceContext) -> GcodeReference | StreamedGco
         )
     return StreamedGcodeReference(
         lambda: Reader(None, reader_settings, str(path), path=path).moves(),
-        limits,
-        settings,
-        facts,
-        samples,
-        axes,
-        reader.lines_read,
-        (travel, drive),
+        limits=limits,
+        settings=settings,
+        facts=facts,
+        n_samples=samples,
+        axes=axes,
+        n_lines=reader.lines_read,
+        checks=(travel, drive),
     )
 
 
@@ -416,7 +420,7 @@ def program_checks(
 
 
 def planned_for(
-    file, moves: list, machine: str, planner: PlannerSettings, saturation_V: float | None = None
+    file, moves: list, machine: str, *, planner: PlannerSettings, saturation_V: float | None = None
 ) -> PlannedSummary:
     """The ``planned`` table of ``twin gcode --machine``: the ``moves`` of ``file`` planned for
     ``machine`` (:func:`twin.gcode.report.planned_summary`), checked against its travel and, with
@@ -436,7 +440,7 @@ def planned_for(
         travel.check(moves)
         planned = plan(moves, limits, planner)
     if drive is not None:
-        drive.add(planned.position, planned.velocity, planned.acceleration, planned.line, planned.texts)
+        drive.add(planned.position, planned.velocity, planned.acceleration, line=planned.line, texts=planned.texts)
     warnings, total = plan_warnings(travel, drive)
     return planned_summary(planned, limits, warnings=warnings, warnings_total=total)
 

@@ -128,8 +128,8 @@ class RunInputs:
             self.machine,
             self.controllers,
             self.reference,
-            self.duration_s if duration_s is None else duration_s,
-            self.control_period_s,
+            duration_s=self.duration_s if duration_s is None else duration_s,
+            control_period_s=self.control_period_s,
             drive=self.drive,
             encoder=self.encoder,
             disturbances=self.disturbances,
@@ -209,10 +209,12 @@ def assemble(scn: Scenario) -> RunInputs:
             "stock", "...", f"a stock is cut by a G-code program, not a {scn.reference.type} reference"
         )
     if isinstance(reference, GcodeReference) and scn.stock is not None:
-        cut = program_milling(reference.plan, scn.stock, scn.tool, scn.tools, scn.seed)
+        cut = program_milling(reference.plan, scn.stock, scn.tool, tools=scn.tools, seed=scn.seed)
         reference = reference.cutting(cut)
         disturbances.append(cut.milling)
-        program = planned_program(reference.checks, reference.plan, cut, scn.stock, tuple(scn.inspect))
+        program = planned_program(
+            reference.checks, reference.plan, cut=cut, stock=scn.stock, features=tuple(scn.inspect)
+        )
     elif isinstance(reference, GcodeReference):
         program = planned_program(reference.checks, reference.plan)
     elif isinstance(reference, StreamedGcodeReference):

@@ -282,7 +282,7 @@ def compiled_ticks(
     return OK, k1, 0
 
 
-def python_ticks(k0, k1, model, data, program, mj, sensor, drive, force, chunk, rec, acc):
+def python_ticks(k0, k1, *, model, data, program, mj, sensor, drive, force, chunk, rec, acc):
     """Ticks ``k0 <= k < k1`` in Python: ``program.run()`` (Python blocks too) and
     ``mujoco.mj_step``; the simulation time is ``data.time``."""
     qpos, qvel, qacc, ctrl, xfrc = mj.qpos, mj.qvel, mj.qacc, mj.ctrl, mj.xfrc_applied

@@ -236,6 +236,7 @@ def _plan(
     machine: BuiltMachine,
     controllers: list[Controller],
     reference: Reference,
+    *,
     duration_s: float,
     control_period_s: float,
     drive: Drive | None,
@@ -441,6 +442,7 @@ class _ProgramSeries:
 def _result(
     machine: BuiltMachine,
     plan: RunPlan,
+    *,
     arrays: LoopArrays,
     series: _ProgramSeries | None,
     ticks: int,
@@ -478,9 +480,9 @@ def simulate(
     machine: BuiltMachine,
     controllers: Sequence[Controller] | Controller,
     reference: Reference,
+    *,
     duration_s: float,
     control_period_s: float,
-    *,
     drive: Drive | None = None,
     encoder: Encoder | None = None,
     disturbances: Sequence[Disturbance] = (),
@@ -538,25 +540,26 @@ def simulate(
         machine,
         controllers,
         reference,
-        duration_s,
-        control_period_s,
-        drive,
-        encoder,
-        disturbances,
-        record_every,
-        compiled,
-        max_physics_steps,
+        duration_s=duration_s,
+        control_period_s=control_period_s,
+        drive=drive,
+        encoder=encoder,
+        disturbances=disturbances,
+        record_every=record_every,
+        compiled=compiled,
+        max_physics_steps=max_physics_steps,
     )
     arrays = _allocate(machine, plan)
     series = _ProgramSeries(reference, plan) if isinstance(reference, ProgramReference) else None
     show = progress if progress is not None else plan.n_ticks * plan.substeps > PROGRESS_STEPS
-    _run_loop(machine, plan, arrays, reference, series, show)
-    return _result(machine, plan, arrays, series, plan.n_ticks, plan.n_ticks)
+    _run_loop(machine, plan, arrays=arrays, reference=reference, series=series, show=show)
+    return _result(machine, plan, arrays=arrays, series=series, ticks=plan.n_ticks, accumulated=plan.n_ticks)
 
 
 def _run_loop(
     machine: BuiltMachine,
     plan: RunPlan,
+    *,
     arrays: LoopArrays,
     reference: Reference,
     series: _ProgramSeries | None,
@@ -586,9 +589,19 @@ def _run_loop(
                 chunk, arrays.recording, arrays.accumulators,
             )  # fmt: skip
         return loop.python_ticks(
-            k0, k1, model, data, plan.program, arrays.mj, arrays.sensor, arrays.drive, arrays.force, chunk,
-            arrays.recording, arrays.accumulators,
-        )  # fmt: skip
+            k0,
+            k1,
+            model=model,
+            data=data,
+            program=plan.program,
+            mj=arrays.mj,
+            sensor=arrays.sensor,
+            drive=arrays.drive,
+            force=arrays.force,
+            chunk=chunk,
+            rec=arrays.recording,
+            acc=arrays.accumulators,
+        )
 
     size = max(1, min(CHUNK_TICKS, CHUNK_STEPS // plan.substeps, plan.n_ticks))
     warnings0 = [data.warning[w].number for w in FATAL_WARNINGS]
@@ -613,18 +626,28 @@ def _run_loop(
                         (k0 + int(np.argmax(bad))) * period,
                         "the reference (position, velocity or acceleration) is not finite here: it overflows",
                     )
-                    exc.result = _result(machine, plan, arrays, series, k0, k0)
+                    exc.result = _result(machine, plan, arrays=arrays, series=series, ticks=k0, accumulated=k0)
                     raise exc
                 if series is not None:
                     series.record(k0, k1)
                 chunk = loop.Chunk(ref=ref, noise=draw_noise(k1 - k0), u_dist=u_dist)
                 status, k, s = run_chunk(k0, k1, chunk)
                 try:
-                    _check(status, k, s, data, arrays.sensor.q_idx, arrays.drive.ua, period, plan.timestep_s,
-                           warnings0, messages)  # fmt: skip
+                    _check(
+                        status,
+                        k,
+                        s=s,
+                        data=data,
+                        q_idx=arrays.sensor.q_idx,
+                        ua=arrays.drive.ua,
+                        period=period,
+                        dt=plan.timestep_s,
+                        warnings0=warnings0,
+                        messages=messages,
+                    )
                 except SimulationDiverged as exc:  # keep what was computed: the ticks before k
                     accumulated = k + (status in (loop.BAD_CONTROL, loop.BAD_QACC))
-                    exc.result = _result(machine, plan, arrays, series, k, accumulated)
+                    exc.result = _result(machine, plan, arrays=arrays, series=series, ticks=k, accumulated=accumulated)
                     raise
                 done = k1
                 if series is not None:  # a program: progress in its lines, all of them at the end
@@ -634,7 +657,9 @@ def _run_loop(
                 else:
                     bar.update(k1 - k0)
     except KeyboardInterrupt:
-        raise RunInterrupted(done * period, _result(machine, plan, arrays, series, done, done)) from None
+        raise RunInterrupted(
+            done * period, _result(machine, plan, arrays=arrays, series=series, ticks=done, accumulated=done)
+        ) from None
 
 
 def _progress_bar(reference: Reference, n_ticks: int, name: str, show: bool) -> tqdm:
@@ -656,10 +681,10 @@ def _mujoco_warnings_into(messages: list):
         mujoco.set_mju_user_warning(previous)
 
 
-def _check(status, k, s, data, q_idx, ua, period, dt, warnings0, messages) -> None:
+def _check(status, k, *, s, data, q_idx, ua, period, dt, warnings0, messages) -> None:
     """Raise :class:`SimulationDiverged` for a failed chunk or a new fatal MuJoCo warning
     (with MuJoCo's own words where it gave any)."""
-    t = _failure_time(status, k, s, period, dt)
+    t = _failure_time(status, k, s=s, period=period, dt=dt)
     if status != loop.OK and messages:
         raise SimulationDiverged(t, f"{messages[0]} (MuJoCo)")
     if status == loop.RUNAWAY:
@@ -673,6 +698,6 @@ def _check(status, k, s, data, q_idx, ua, period, dt, warnings0, messages) -> No
             raise SimulationDiverged(data.time, " ".join(messages) or f"MuJoCo warning {mujoco.mjtWarning(w).name}")
 
 
-def _failure_time(status, k, s, period, dt) -> float:
+def _failure_time(status, k, *, s, period, dt) -> float:
     """Simulated time (s) of a failure: the start of tick k, or the end of its physics step s."""
     return k * period + (s + 1) * dt if status == loop.BAD_QACC else k * period

@@ -260,7 +260,12 @@ def critical_gains(twin: bool = True) -> dict:
 
         try:
             res = simulate(
-                bm, [_scaled_pid(k, a) for a in ("x", "y")], Step(1e-4, n_axes=2, axes=(0,)), 0.8, DT_S, progress=False
+                bm,
+                [_scaled_pid(k, a) for a in ("x", "y")],
+                Step(1e-4, n_axes=2, axes=(0,)),
+                duration_s=0.8,
+                control_period_s=DT_S,
+                progress=False,
             )
         except SimulationDiverged:
             return np.full(n, np.inf)
@@ -307,8 +312,8 @@ def table_case(
             bm,
             make_controller(controller, DT_S, params, axes=("x", "y")),
             SumOfSines((a_mm * 1e-3,), (f_hz,), n_axes=2, axes=(0,)),
-            duration_s,
-            DT_S,
+            duration_s=duration_s,
+            control_period_s=DT_S,
             disturbances=dist,
             progress=False,
         )

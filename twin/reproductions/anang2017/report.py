@@ -276,8 +276,8 @@ def twin_runs() -> dict:
             bm,
             make_controller(name, r.DT_S, axes=("x", "y")),
             SumOfSines((0.01,), (0.4,), n_axes=2, axes=(0,)),
-            r.DURATION_S,
-            r.DT_S,
+            duration_s=r.DURATION_S,
+            control_period_s=r.DT_S,
             disturbances=cut,
             progress=False,
         )

@@ -216,8 +216,8 @@ def run_case(
                 bm,
                 controller(config, harmonics, axes=("x", "y"), feedforward=feedforward),
                 reference,
-                duration_s,
-                DT_S,
+                duration_s=duration_s,
+                control_period_s=DT_S,
                 disturbances=ds,
                 progress=False,
             ).error_m()[:, 0]
@@ -331,7 +331,15 @@ def milling_case(rpm: float, config: str, duration_s: float = DURATION_S) -> dic
 
     twin, tf = {}, {}
     for label, dist in (("with", (EndMilling(spindle_rpm=rpm, **CUT),)), ("without", ())):
-        res = simulate(bm, build(("x", "y")), reference, duration_s, DT_S, disturbances=dist, progress=False)
+        res = simulate(
+            bm,
+            build(("x", "y")),
+            reference,
+            duration_s=duration_s,
+            control_period_s=DT_S,
+            disturbances=dist,
+            progress=False,
+        )
         twin[label] = res.error_m()[:, 0]
         force_V = res.workpiece_force_N[:, 0] * GoogolXY.volts_per_newton(bm.params, bm.model, "x")
         pos, _ = tf_loop(bm.plant[0][0], build(("x",)), ref, dt=DT_S, delay_s=bm.delay_s, plant_dist_V=force_V)

@@ -313,8 +313,8 @@ def twin_runs() -> dict:
             r.machine(),
             r.controller(config, harmonics, axes=("x", "y")),
             SumOfSines((0.01,), (0.5,), n_axes=2, axes=(0,)),
-            r.DURATION_S,
-            r.DT_S,
+            duration_s=r.DURATION_S,
+            control_period_s=r.DT_S,
             disturbances=(r._disturbance(harmonics),),
             progress=False,
         )

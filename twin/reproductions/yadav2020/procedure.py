@@ -409,7 +409,13 @@ def twin_step_result(controller, params: dict[str, float]):
     """The MuJoCo cncmt twin closed by the controller at 10 kHz (Tustin), unit step."""
     machine = build("cncmt", {k: params[k] for k in BOX_SYMBOLS})
     return simulate(
-        machine, error_feedback(controller, DT_S), Step(1.0), HORIZON_S, DT_S, progress=False, record_every=1
+        machine,
+        error_feedback(controller, DT_S),
+        Step(1.0),
+        duration_s=HORIZON_S,
+        control_period_s=DT_S,
+        progress=False,
+        record_every=1,
     )
 
 
@@ -557,7 +563,14 @@ def disturbance_and_noise() -> dict:
 
         def run(ctrl=ctrl, **kw):
             return simulate(
-                machine, error_feedback(ctrl, DT_S), Step(1.0), HORIZON_S, DT_S, progress=False, record_every=1, **kw
+                machine,
+                error_feedback(ctrl, DT_S),
+                Step(1.0),
+                duration_s=HORIZON_S,
+                control_period_s=DT_S,
+                progress=False,
+                record_every=1,
+                **kw,
             )
 
         clean = run()
