@@ -114,7 +114,7 @@ def tf_to_ss(tf: SisoTf) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray
     return A, B, C, D
 
 
-def discretize(A, B, C, D, dt: float, method: str = "tustin"):
+def discretize(A, B, C, D, *, dt: float, method: str = "tustin"):
     """Discrete equivalent at period ``dt`` (s) of a continuous state space.
 
     ``method`` is ``"tustin"`` (bilinear) or ``"zoh"`` (zero-order hold, exact for piecewise
@@ -130,10 +130,10 @@ def discretize(A, B, C, D, dt: float, method: str = "tustin"):
     """
     with np.errstate(over="ignore", invalid="ignore"):  # non-finite results are the caller's to report
         A2, B2, C2, D2 = (np.atleast_2d(np.asarray(m, float)) for m in (A, B, C, D))
-        return _discretize(A2, B2, C2, D2, dt, method)
+        return _discretize(A2, B2, C2, D2, dt=dt, method=method)
 
 
-def _discretize(A, B, C, D, dt, method):
+def _discretize(A, B, C, D, *, dt, method):
     n, m = B.shape
     if method == "tustin":
         if n == 0:

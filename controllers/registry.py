@@ -2,8 +2,9 @@
 
 Each kind is declared once, in a module of :mod:`controllers.kinds`: its parameters as a
 pydantic model (names, units in the field descriptions, defaults and limits), its builder, and
-its docs line (the builder's docstring).  ``twin list``, the scenario's error lines and the docs
-site read :data:`CONTROLLERS` and :data:`OBSERVERS`; adding a kind is one decorated builder.
+its docs line (the builder's docstring), as an entry of a :class:`controllers.registries.Registry`.  ``twin
+list``, the scenario's error lines and the docs site read :data:`CONTROLLERS` and
+:data:`OBSERVERS` (through :mod:`twin.catalogue`); adding a kind is one decorated builder.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from typing import Any
 from pydantic import BaseModel, ConfigDict, ValidationError
 
 from controllers.blocks import Controller, with_feedforward
+from controllers.registries import Registry
 
 
 @dataclass
@@ -75,45 +77,21 @@ class ParameterError(ValueError):
         self.field, self.value, self.reason = field, value, reason
 
 
-@dataclass(frozen=True)
-class ControllerKind:
-    """One controller kind (``type = "<name>"``), or an observer add-on kind
-    (``[controller.observer] type = "<name>"``).
-
-    Attributes
-    ----------
-    name : str
-        The scenario's ``type``.
-    params : type of Params
-        Its parameters: names, defaults, limits; the units are in each field's description.
-    build : callable
-        ``build(params, ctx)``: a ``Controller`` for the axes of ``ctx`` (an observer kind:
-        its list of blocks for every served axis).
-    """
-
-    name: str
-    params: type[Params]
-    build: Callable[[Any, Context], Any]
-
-    @property
-    def doc(self) -> str:
-        """The kind's docs line: the builder's docstring, on one line."""
-        return " ".join((self.build.__doc__ or self.name).split())
+#: Controller kinds by name, in registration order (:mod:`controllers.kinds`): each entry's
+#: settings are its :class:`Params`, its value the builder ``build(params, ctx) -> Controller``
+#: and its summary the builder's docstring.
+CONTROLLERS: Registry[Callable[[Any, Context], Controller]] = Registry("controller")
+#: Observer add-on kinds by name, in registration order: each entry's value is the builder
+#: ``build(params, ctx) -> list of blocks`` (every served axis's).
+OBSERVERS: Registry[Callable[[Any, Context], list]] = Registry("observer")
 
 
-#: Controller kinds by name, in registration order (:mod:`controllers.kinds`).
-CONTROLLERS: dict[str, ControllerKind] = {}
-#: Observer add-on kinds by name, in registration order.
-OBSERVERS: dict[str, ControllerKind] = {}
-
-
-def _registering(registry: dict[str, ControllerKind], what: str, name: str, params: type[Params]):
-    """A decorator that adds its builder to ``registry`` as kind ``name``."""
+def _registering(registry: Registry, name: str, params: type[Params]):
+    """A decorator that adds its builder to ``registry`` as kind ``name`` (its docstring the
+    kind's summary)."""
 
     def register(build):
-        if name in registry:
-            raise ValueError(f"{what} kind {name!r} is registered twice")
-        registry[name] = ControllerKind(name, params, build)
+        registry.add(name, build, summary=build.__doc__ or name, settings=params)
         return build
 
     return register
@@ -121,22 +99,23 @@ def _registering(registry: dict[str, ControllerKind], what: str, name: str, para
 
 def controller_kind(name: str, params: type[Params] = NoParams):
     """Register the decorated ``build(params, ctx) -> Controller`` as controller kind ``name``."""
-    return _registering(CONTROLLERS, "controller", name, params)
+    return _registering(CONTROLLERS, name, params)
 
 
 def observer_kind(name: str, params: type[Params] = NoParams):
     """Register the decorated ``build(params, ctx) -> list of blocks`` as observer kind ``name``."""
-    return _registering(OBSERVERS, "observer", name, params)
+    return _registering(OBSERVERS, name, params)
 
 
-def validate_params(name: str, model: type[Params], params: dict | None) -> Any:
-    """``params`` checked against kind ``name``'s model.
+def validate_params(name: str, model: type[BaseModel] | None, params: dict | None) -> Any:
+    """``params`` checked against kind ``name``'s model (None: it takes none).
 
     Raises
     ------
     ParameterError
         The first parameter it cannot use, named.
     """
+    model = model or NoParams
     try:
         return model.model_validate(dict(params or {}))
     except ValidationError as exc:
@@ -192,7 +171,7 @@ def build_controller(
     """Build controller kind ``name`` in the build context ``ctx``: :func:`make_controller` for a
     caller that holds a context already (the same errors)."""
     kind = CONTROLLERS[name]
-    ctrl = kind.build(validate_params(name, kind.params, params), ctx)
+    ctrl = kind.value(validate_params(name, kind.settings, params), ctx)
     ctrl.name = name
     return with_feedforward(ctrl, velocity_ff, acceleration_ff)
 
@@ -210,4 +189,8 @@ def make_observers(name: str, params: dict | None, ctx: Context) -> list:
         Values the design cannot use.
     """
     kind = OBSERVERS[name]
-    return kind.build(validate_params(name, kind.params, params), ctx)
+    return kind.value(validate_params(name, kind.settings, params), ctx)
+
+
+# Last, so the kinds (which import this module) find it whole: importing the registry gives every kind.
+import controllers.kinds  # noqa: E402, F401

@@ -80,9 +80,11 @@ def frf_rows(
                     )
                     expected = {"resonance": resonances, "antiresonance": antiresonances if sensor == "motor" else []}
                     found = []
-                    for q in r["modes"]:
-                        truth = min(expected[q["kind"]], key=lambda f: abs(f - q["frequency_hz"]), default=math.nan)
-                        found.append({**q, "model_hz": truth, "error_pct": 100 * (q["frequency_hz"] / truth - 1)})
+                    for q in r.modes:
+                        truth = min(expected[q.kind], key=lambda f: abs(f - q.frequency_hz), default=math.nan)
+                        found.append(
+                            {**q.to_json(), "model_hz": truth, "error_pct": 100 * (q.frequency_hz / truth - 1)}
+                        )
                     missing = [
                         (kind, f)
                         for kind, fs in expected.items()
@@ -99,7 +101,7 @@ def frf_rows(
                             "friction": friction,
                             "modes": found,
                             "missing": missing,
-                            "incoherent_bands_hz": r["incoherent_bands_hz"],
+                            "incoherent_bands_hz": r.incoherent_bands_hz,
                         }
                     )
                     print_frf_row(rows[-1])
@@ -160,20 +162,20 @@ def calibration_rows(machine: str, axes: list[str], folder: Path) -> list[dict]:
         columns[f"pos_{axis}_m"] = np.round(y / SCALE_M) * SCALE_M
         trace = folder / f"{machine}_{axis}.parquet"
         write_table(columns, trace)
-        r = calibrate(path, trace, list(hidden), off, axis)
+        r = calibrate(path, trace, list(hidden), overrides=off, axis=axis)
         for name, truth in hidden.items():
-            error = r["fitted"][name] - truth
-            stated = r["standard_errors"].get(name, math.nan)
+            error = r.fitted[name] - truth
+            stated = r.standard_errors.get(name, math.nan)
             row = {
                 "machine": machine,
                 "axis": axis,
                 "parameter": name,
                 "error_pct": 100 * error / truth,
                 "stated_pct": 100 * stated / truth,
-                "noise_pct": 100 * r["statistical_errors"].get(name, math.nan) / truth,
-                "model_pct": 100 * r["model_errors"].get(name, math.nan) / truth,
+                "noise_pct": 100 * r.statistical_errors.get(name, math.nan) / truth,
+                "model_pct": 100 * r.model_errors.get(name, math.nan) / truth,
                 "in_stated": abs(error) / stated,
-                "poorly_determined": name in r["poorly_determined"],
+                "poorly_determined": name in r.poorly_determined,
             }
             rows.append(row)
             print(

@@ -20,10 +20,11 @@ rows (``tests/fixtures/margins/verify_margins.json`` is that output).
 
 import argparse
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import twin
-from twin.commissioning.boundary import margin_table
+from twin.commissioning.boundary import MarginCheck, margin_table
 from twin.machines import build
 
 FILES = Path(__file__).resolve().parent / "machines"
@@ -38,7 +39,7 @@ def feedbacks(machine: str) -> list[str | None]:
     return ["dual", "motor", "table"] if any(a.motor_joint for a in build(machine).axes) else [None]
 
 
-def main(machines: list[str], gains: tuple[str, ...]) -> list[dict]:
+def main(machines: list[str], gains: tuple[str, ...]) -> list[MarginCheck]:
     rows = []
     for machine in machines:
         designs: list[dict] = []
@@ -49,7 +50,7 @@ def main(machines: list[str], gains: tuple[str, ...]) -> list[dict]:
                 continue  # the same loops as a feedback before (one transfer function per axis)
             designs.append(gains_of)
             checked = tuned.verify_margins(gains)
-            rows += [{"machine": Path(machine).stem, **row} for row in checked]
+            rows += [replace(row, machine=Path(machine).stem) for row in checked]
     return rows
 
 
@@ -60,4 +61,4 @@ if __name__ == "__main__":
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
     result = main(args.machines, tuple(args.gains))
-    print(json.dumps(result, indent=1) if args.json else margin_table(result))
+    print(json.dumps([row.to_json() for row in result], indent=1) if args.json else margin_table(result))

@@ -65,5 +65,5 @@ def text_report(run: api.Run) -> str:
 
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
-        _report(run, None, False, None)
+        _report(run, rrd=None, as_json=False, plots=None)
     return out.getvalue()

@@ -40,15 +40,15 @@ def test_the_truth_lies_within_three_stated_errors(tmp_path, machine, hidden, po
     says the model is not thereby exact."""
     path = tmp_path / "hidden.parquet"
     _hidden_trace(machine, hidden, path, 0)
-    r = calibrate(str(MACHINES / f"{machine}.toml"), path, list(hidden), NO_FRICTION)
-    assert r["solver"]["converged"]
+    r = calibrate(str(MACHINES / f"{machine}.toml"), path, list(hidden), overrides=NO_FRICTION)
+    assert r.solver.converged
     for name, truth in hidden.items():
-        error = r["standard_errors"][name]
-        assert abs(r["fitted"][name] - truth) < 3 * error, name
-        assert error == pytest.approx(np.hypot(r["statistical_errors"][name], r["model_errors"][name]))
-        assert r["model_errors"][name] > r["statistical_errors"][name]
-    assert sorted(r["poorly_determined"]) == poorly
-    assert "note" in r["solver"]
+        error = r.standard_errors[name]
+        assert abs(r.fitted[name] - truth) < 3 * error, name
+        assert error == pytest.approx(np.hypot(r.statistical_errors[name], r.model_errors[name]))
+        assert r.model_errors[name] > r.statistical_errors[name]
+    assert sorted(r.poorly_determined) == poorly
+    assert r.solver.against_noise is not None and r.solver.against_noise.note
 
 
 def test_the_estimates_shift_is_the_least_squares_solutions():

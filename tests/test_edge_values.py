@@ -179,7 +179,7 @@ def test_calibration_keeps_its_trials_within_the_physical_ranges(tmp_path):
     assert twin("excite", path, "--out", trace, "--simulate", "--duration", "0.1").returncode == 0
     result = calibrate(str(path), trace, ["x_table_mass_kg"])
     bounds = get_machine(str(path)).parameters["x_table_mass_kg"].bounds
-    assert bounds.low <= result["parameters"]["x_table_mass_kg"] <= bounds.high
+    assert bounds.low <= result.parameters["x_table_mass_kg"] <= bounds.high
 
 
 def test_calibrate_takes_the_physics_step_from_set(tmp_path):

@@ -56,10 +56,11 @@ def test_the_heavy_axis_is_measured_with_the_loop_on_the_motor_encoder():
     with pytest.raises(SimulationDiverged, match="try --feedback motor"):
         measure(machine, FrfSettings(feedback="table", duration_s=4.0), heavy)
     r = measure(machine, FrfSettings(duration_s=8.0), heavy)
-    assert len(r["resonances_hz"]) == len(r["model_resonances_hz"]) == 2
-    np.testing.assert_allclose(r["resonances_hz"], r["model_resonances_hz"], rtol=0.01)
-    assert r["antiresonances_hz"] == []
-    assert r["antiresonances_note"]
+    assert len(r.resonances_hz) == len(r.model_resonances_hz) == 2
+    np.testing.assert_allclose(r.resonances_hz, r.model_resonances_hz, rtol=0.01)
+    assert r.antiresonances_hz == []
+    assert not r.collocated  # the table's dips are no anti-resonances: the JSON says so
+    assert r.to_json()["antiresonances_note"]
 
 
 def test_a_semi_closed_loop_reads_the_motor_encoder_in_table_travel():
@@ -141,11 +142,11 @@ def test_a_multisine_with_friction_gives_its_best_linear_approximation_without_p
     friction damps it).  The distortion is measured where the model says it is large: within
     30 dB of the BLA between 300 and 600 Hz."""
     r = measure(MID, FrfSettings(excitation="multisine"))
-    assert r["realizations"] == 6
-    assert len(r["resonances_hz"]) == len(r["model_resonances_hz"]) == 2
-    np.testing.assert_allclose(r["resonances_hz"], r["model_resonances_hz"], rtol=0.01)
-    f, mag = np.array(r["frequency_hz"]), np.array(r["magnitude_db"])
-    distortion = np.array([-np.inf if v is None else v for v in r["distortion_db"]])
+    assert r.levels is not None and r.levels.realizations == 6
+    assert len(r.resonances_hz) == len(r.model_resonances_hz) == 2
+    np.testing.assert_allclose(r.resonances_hz, r.model_resonances_hz, rtol=0.01)
+    f, mag = np.array(r.frequency_hz), np.array(r.magnitude_db)
+    distortion = np.array([-np.inf if v is None else v for v in r.to_json()["distortion_db"]])
     band = (f > 300) & (f < 600)
     assert np.median(mag[band] - distortion[band]) < 30
 
@@ -157,15 +158,15 @@ def test_a_multisine_on_a_linear_machine_equals_its_transfer_function():
     over 0.99, and the nonlinear distortion and the noise lie 60 dB or more below it."""
     linear = {"x_friction_coulomb_N": 0.0, "y_friction_coulomb_N": 0.0}
     r = measure(MID, FrfSettings(excitation="multisine", duration_s=10.0), linear)
-    assert r["realizations"] == 4
-    f, mag, model = (np.array(r[k]) for k in ("frequency_hz", "magnitude_db", "model_magnitude_db"))
+    assert r.levels is not None and r.levels.realizations == 4
+    f, mag, model = r.frequency_hz, r.magnitude_db, r.model_magnitude_db
     assert np.abs(mag - model)[f <= 500].max() < 0.3
     assert np.abs(mag - model).max() < 1.2
-    assert min(r["coherence"]) > 0.99
+    assert min(r.coherence) > 0.99
     for level in ("distortion_db", "noise_db"):
-        values = np.array([-np.inf if v is None else v for v in r[level]])
+        values = np.array([-np.inf if v is None else v for v in r.to_json()[level]])
         assert (mag - values).min() > 60
-    assert len(r["resonances_hz"]) == 2
+    assert len(r.resonances_hz) == 2
 
 
 def test_a_multisine_too_short_for_its_realizations_is_refused():
@@ -228,10 +229,10 @@ def test_a_mode_is_unreliable_where_a_line_near_it_is_incoherent():
     coherence = np.ones_like(freqs)
     coherence[[93, 149, 151, 155, 160]] = 0.5  # 94 Hz; 150, 152, 156 Hz (one band); 161 Hz
     sound = mode_quality("resonance", 100.0, freqs, coherence, None)
-    assert sound["unreliable"] is None and sound["coherence"] == 1.0
+    assert sound.unreliable is None and sound.coherence == 1.0
     doubtful = mode_quality("antiresonance", 98.0, freqs, coherence, np.full(200, -20.0))
-    assert doubtful["coherence"] == 0.5 and doubtful["distortion_db"] == -20.0
-    assert doubtful["unreliable"].startswith("coherence 0.500 < 0.95 within 5 % of it")
+    assert doubtful.coherence == 0.5 and doubtful.distortion_db == -20.0
+    assert doubtful.unreliable is not None and doubtful.unreliable.startswith("coherence 0.500 < 0.95 within 5 % of it")
     assert incoherent_bands(freqs, coherence) == [[94.0, 94.0], [150.0, 156.0], [161.0, 161.0]]
 
 

@@ -66,13 +66,13 @@ def test_the_twin_measures_each_mode_within_half_a_percent_of_the_oracle(machine
         NO_FRICTION,
     )
     resonances, antiresonances = modes(sys, sensor)
-    np.testing.assert_allclose(r["resonances_hz"], [f for f in resonances if f < 980], rtol=5e-3)
-    np.testing.assert_allclose(r["antiresonances_hz"], antiresonances if sensor == "motor" else [], rtol=5e-3)
-    assert r["unreliable_modes"] == 0
-    assert [q["unreliable"] for q in r["modes"]] == [None] * len(r["modes"])
+    np.testing.assert_allclose(r.resonances_hz, [f for f in resonances if f < 980], rtol=5e-3)
+    np.testing.assert_allclose(r.antiresonances_hz, antiresonances if sensor == "motor" else [], rtol=5e-3)
+    assert r.unreliable_modes == 0
+    assert [q.unreliable for q in r.modes] == [None] * len(r.modes)
     # the band's first line (1.22 Hz, where the 20 Hz loop leaves the least response) may dip
     # in a 3.3 s Welch estimate of three segments; no band above it
-    assert [band for band in r["incoherent_bands_hz"] if band[1] > 2.0] == []
+    assert [band for band in r.incoherent_bands_hz if band[1] > 2.0] == []
 
 
 @pytest.mark.parametrize(("amplitude_V", "flagged"), [(1.0, 1), (0.45, 2)])
@@ -91,14 +91,14 @@ def test_a_multisine_with_friction_reports_each_mode_within_one_percent_or_unrel
     )
     truth = {"resonance": modes(sys, "motor")[0], "antiresonance": modes(sys, "motor")[1]}
     errors = []
-    for q in r["modes"]:
-        nearest = min(truth[q["kind"]], key=lambda f: abs(f - q["frequency_hz"]))
-        errors.append(abs(q["frequency_hz"] / nearest - 1))
-        assert errors[-1] < 0.01 or q["unreliable"] is not None, q
-        assert (q["unreliable"] is None) == (q["coherence"] >= 0.95)
-    assert r["unreliable_modes"] == flagged
+    for q in r.modes:
+        nearest = min(truth[q.kind], key=lambda f: abs(f - q.frequency_hz))
+        errors.append(abs(q.frequency_hz / nearest - 1))
+        assert errors[-1] < 0.01 or q.unreliable is not None, q
+        assert (q.unreliable is None) == (q.coherence >= 0.95)
+    assert r.unreliable_modes == flagged
     assert max(errors) > 0.005  # friction moves the first modes: the test has something to flag
     if amplitude_V < 1:
         anti = truth["antiresonance"][0]  # 139.7 Hz
-        assert not any(abs(f / anti - 1) < 0.05 for f in r["antiresonances_hz"])
-        assert any(lo <= anti * 1.05 and hi >= anti / 1.05 for lo, hi in r["incoherent_bands_hz"])
+        assert not any(abs(f / anti - 1) < 0.05 for f in r.antiresonances_hz)
+        assert any(lo <= anti * 1.05 and hi >= anti / 1.05 for lo, hi in r.incoherent_bands_hz)

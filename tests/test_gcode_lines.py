@@ -35,7 +35,7 @@ def test_every_line_that_moved_has_its_row_and_the_rows_add_up(part_run):
     for axis in ("x", "y"):
         assert max(r["max_tracking_error_um"][axis] for r in rows) == summary["max_tracking_error_um"][axis]
     planned = api.program(PROGRAM, machine="linear_motor_xy").planned  # `twin gcode`'s plan of the file
-    assert summary["cycle_time_s"] == pytest.approx(planned["cycle_time_s"], abs=1e-9)  # the whole program's
+    assert summary["cycle_time_s"] == pytest.approx(planned.cycle_time_s, abs=1e-9)  # the whole program's
     assert "lines" not in api.run("step_cncmt_hinf", duration_s=0.2).summary
 
 

@@ -160,7 +160,7 @@ def test_bundled_programs_run_to_their_end_with_z_recorded():
     planned = api.program(
         PROGRAMS / "choi1999_circle.ngc", machine="linear_motor_xy", **{"planner.tolerance_mm": 0.005}
     )
-    assert whole.summary["completed_ticks"] == pytest.approx(planned.planned["cycle_time_s"] / 5e-4, abs=2)
+    assert whole.summary["completed_ticks"] == pytest.approx(planned.planned.cycle_time_s / 5e-4, abs=2)
     import twin
 
     assert twin.program is api.program  # the public name (twin.gcode is the package)

@@ -62,7 +62,7 @@ def test_tf_loop_error_follows_the_sampled_sensitivity():
     n = int(6.0 / r.DT_S)
     ref = r.sine_reference(f, a * 1e3, n)
     pos, _ = tf_loop(
-        r.machine().plant[0][0], make_controller("anang2017_pid", r.DT_S), ref, r.DT_S, r.machine().delay_s
+        r.machine().plant[0][0], make_controller("anang2017_pid", r.DT_S), ref, dt=r.DT_S, delay_s=r.machine().delay_s
     )
     e = (ref[:, 0] - pos)[int(3.0 / r.DT_S) :]
     L = r.sampled_loop()(np.array([2 * math.pi * f]))[0]
@@ -77,7 +77,7 @@ def test_critical_gain_in_time_matches_the_gain_margin():
 
 def test_twin_matches_the_tf_loop_under_cutting():
     """NPID at 0.7 Hz, 20 mm with slot milling at 3500 rpm, 4 s: max error and RMSE within 2 %."""
-    case = r.table_case(0.7, 20, 3500.0, "anang2017_npid", twin=True, duration_s=4.0)
+    case = r.table_case(0.7, 20, 3500.0, controller="anang2017_npid", twin=True, duration_s=4.0)
     for key in ("max_mm", "rmse_mm"):
         assert case["twin"][key] == pytest.approx(case["tf_loop"][key], rel=r.TWIN_TOL_REL)
     assert case["tf_loop"]["max_mm"] > 0.1  # a real error, not a trivial match
@@ -164,8 +164,10 @@ def test_imbdo_reduces_a_harmonic_input_disturbance_as_predicted(f_hz):
     for name, observe in (("cascade", False), ("imbdo", True)):
         ctrl = make_controller("cascade", dt, _cascade_gains())
         if observe:
-            ctrl = with_correction(ctrl, [inverse_model_observer(bm.plant[0][0], 100.0, 2, dt, delay_s=bm.delay_s)])
-        pos, _ = tf_loop(bm.plant[0][0], ctrl, np.zeros((n, 3)), dt, bm.delay_s, u_dist_V=d)
+            ctrl = with_correction(
+                ctrl, [inverse_model_observer(bm.plant[0][0], cutoff_hz=100.0, order=2, dt=dt, delay_s=bm.delay_s)]
+            )
+        pos, _ = tf_loop(bm.plant[0][0], ctrl, np.zeros((n, 3)), dt=dt, delay_s=bm.delay_s, u_dist_V=d)
         e = -pos[int(2.0 / dt) :]
         window = np.hanning(len(e))
         spectrum = np.abs(np.fft.rfft(e * window))
@@ -192,7 +194,9 @@ def test_dfo_cancels_the_harmonics_and_the_combination_counts_once():
     from twin.reproductions.maharof2021 import procedure as s3
 
     shares = {
-        c: s3.run_case(0.5, 1.0, (0.2, 0.5, 0.8), c, twin=False, duration_s=6.0)["tf_loop"]["disturbance"]
+        c: s3.run_case(0.5, 1.0, harmonics=(0.2, 0.5, 0.8), config=c, twin=False, duration_s=6.0)["tf_loop"][
+            "disturbance"
+        ]
         for c in s3.CONFIGURATIONS
     }
     base = shares["cascade"]["mte_um"]
@@ -204,7 +208,7 @@ def test_dfo_cancels_the_harmonics_and_the_combination_counts_once():
 def test_maharof2021_twin_matches_the_tf_loop_with_both_observers():
     from twin.reproductions.maharof2021 import procedure as s3
 
-    case = s3.run_case(10.0, 0.5, (0.2, 0.5, 0.8), "imbdo_dfo", twin=True, duration_s=4.0)
+    case = s3.run_case(10.0, 0.5, harmonics=(0.2, 0.5, 0.8), config="imbdo_dfo", twin=True, duration_s=4.0)
     for key in ("mte_um", "rmse_um"):
         assert case["twin"][key] == pytest.approx(case["tf_loop"][key], rel=s3.TWIN_TOL_REL)
     # the cascade's own following error, kp_pos about 174 1/s: 2 pi 0.5 Hz x 10 mm / kp_pos ~ 180 um
@@ -233,7 +237,9 @@ def test_observers_leave_the_reference_loop_unchanged():
     ref = s3.sine_reference(0.5, 10.0, n)
     errors = {
         c: ref[:, 0]
-        - tf_loop(s3.machine().plant[0][0], s3.controller(c, (0.2, 0.5, 0.8)), ref, s3.DT_S, s3.machine().delay_s)[0]
+        - tf_loop(
+            s3.machine().plant[0][0], s3.controller(c, (0.2, 0.5, 0.8)), ref, dt=s3.DT_S, delay_s=s3.machine().delay_s
+        )[0]
         for c in s3.CONFIGURATIONS
     }
     settled = slice(int(1.0 / s3.DT_S), None)
@@ -255,12 +261,21 @@ def test_feedforward_removes_the_following_error_and_the_amplitude_decides_the_r
     assert ff["acceleration_ff_V_s2_per_m"] * g.num[-1] / g.den[0] == pytest.approx(1.0)
     assert ff["velocity_ff_V_s_per_m"] * g.num[-1] == pytest.approx(g.den[1])
     harmonics = (0.2, 0.5, 0.8)
-    plain = s3.run_case(10.0, 0.5, harmonics, "cascade", False, duration_s=4.0)["tf_loop"]["mte_um"]
+    plain = s3.run_case(10.0, 0.5, harmonics=harmonics, config="cascade", twin=False, duration_s=4.0)["tf_loop"][
+        "mte_um"
+    ]
     mte = {}
     for amplitude in (0.001, 1.0):
         for config in ("cascade", "imbdo_dfo"):
             mte[amplitude, config] = s3.run_case(
-                10.0, 0.5, harmonics, config, False, 4.0, "velocity_acceleration", amplitude
+                10.0,
+                0.5,
+                harmonics=harmonics,
+                config=config,
+                twin=False,
+                duration_s=4.0,
+                feedforward="velocity_acceleration",
+                amplitude_V=amplitude,
             )["tf_loop"]["mte_um"]
     assert plain > 150.0
     assert mte[0.001, "cascade"] < 1.0

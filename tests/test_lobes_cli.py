@@ -105,3 +105,13 @@ def test_the_lines_parquet_has_the_check_as_columns(tmp_path):
     assert frame.loc[14, "stability_critical_depth_mm"] == row["critical_depth_mm"]
     assert frame.loc[14, "stability_stable_rpm_high"] == row["stable_rpm"][1]
     assert pd.isna(frame.loc[11, "stability_margin"])  # a rapid
+
+
+def test_a_programs_lines_in_the_text_report():
+    """With a stock and a program the text report ends with the chatter check of the cutting
+    lines (a crash with an internal error before: the lobes' lines were read as per-line rows)."""
+    out = twin("lobes", "gcode_slot_passes", "--method", "zoa", "--rpm", "5000:25000:20")
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.splitlines()
+    assert lines[-2] == "  chatter check (zero-order lobes): 4 cutting line(s), 1 over their critical depth"
+    assert lines[-1].startswith("    line 22: 16.00 mm at 10 000 rpm, critical 3.08 mm")

@@ -29,7 +29,7 @@ def test_realization_has_the_transfer_function(tf):
 def test_tustin_is_the_bilinear_substitution(tf):
     """Tustin: H(z) = H(s) at s = (2/dt) (z - 1)/(z + 1), exactly."""
     dt = 2e-3
-    ours = discretize(*tf_to_ss(tf), dt, "tustin")
+    ours = discretize(*tf_to_ss(tf), dt=dt, method="tustin")
     for f in (0.1, 7.0, 120.0):
         z = np.exp(2j * np.pi * f * dt)
         assert _frequency_response(*ours, z)[0, 0] == pytest.approx(tf(2 / dt * (z - 1) / (z + 1)), rel=1e-10)
@@ -40,7 +40,7 @@ def test_zoh_matches_python_control(tf):
     """Zero-order hold: the same discrete model as ``control.c2d`` of python-control's own
     state-space realization (slycot), by frequency response."""
     dt = 2e-3
-    ours = discretize(*tf_to_ss(tf), dt, "zoh")
+    ours = discretize(*tf_to_ss(tf), dt=dt, method="zoh")
     theirs = control.c2d(control.ss(tf.to_control()), dt, "zoh")
     for f in (0.1, 7.0, 120.0):
         z = np.exp(2j * np.pi * f * dt)
@@ -48,7 +48,7 @@ def test_zoh_matches_python_control(tf):
 
 
 def test_static_gain_and_improper_models():
-    A, _B, _C, D = discretize(*tf_to_ss(SisoTf([3.0], [2.0])), 1e-3)
+    A, _B, _C, D = discretize(*tf_to_ss(SisoTf([3.0], [2.0])), dt=1e-3)
     assert A.shape == (0, 0)
     assert D[0, 0] == 1.5
     with pytest.raises(ValueError, match="improper"):
@@ -58,18 +58,18 @@ def test_static_gain_and_improper_models():
     with pytest.raises(ValueError, match="flat"):
         SisoTf([[1.0]], [1.0])
     with pytest.raises(ValueError, match="method"):
-        discretize(*tf_to_ss(SisoTf([1.0], [1.0, 1.0])), 1e-3, "euler")
+        discretize(*tf_to_ss(SisoTf([1.0], [1.0, 1.0])), dt=1e-3, method="euler")
 
 
 def test_tustin_pole_at_two_over_dt_is_an_error():
     with pytest.raises(ValueError, match="2/dt"):
-        discretize(*tf_to_ss(SisoTf([1.0], [1.0, -2.0 / 1e-3])), 1e-3)
+        discretize(*tf_to_ss(SisoTf([1.0], [1.0, -2.0 / 1e-3])), dt=1e-3)
 
 
 def test_series_delay_and_summed_inputs_are_products_and_sums():
     dt = 1e-3
-    g1 = discretize(*tf_to_ss(RANDOM_TFS[2]), dt)
-    g2 = discretize(*tf_to_ss(RANDOM_TFS[1]), dt)
+    g1 = discretize(*tf_to_ss(RANDOM_TFS[2]), dt=dt)
+    g2 = discretize(*tf_to_ss(RANDOM_TFS[1]), dt=dt)
     both = summed_inputs(g1, series(delay_ticks(3), g2))
     for f in (0.5, 40.0):
         z = np.exp(2j * np.pi * f * dt)

@@ -196,10 +196,10 @@ def test_compliant_modes_at_the_closed_forms():
     assert zeros == [pytest.approx(anti, rel=1e-3)]
     assert time_response_nrmse(bm, bm.plant_lti(), duration_s=0.3) < 0.005
     r = measure(MID, FrfSettings(sensor="motor", duration_s=8.0), overrides)
-    f, model = np.array(r["frequency_hz"]), np.array(r["model_magnitude_db"])
+    f, model = np.array(r.frequency_hz), np.array(r.model_magnitude_db)
     model_peak, model_dip = peaks(f, model, np.ones_like(f))
-    assert r["resonances_hz"] == [pytest.approx(model_peak[0], rel=0.015)] == [pytest.approx(resonance, rel=0.02)]
-    assert r["antiresonances_hz"] == [pytest.approx(model_dip[0], rel=0.015)] == [pytest.approx(anti, rel=0.02)]
+    assert r.resonances_hz == [pytest.approx(model_peak[0], rel=0.015)] == [pytest.approx(resonance, rel=0.02)]
+    assert r.antiresonances_hz == [pytest.approx(model_dip[0], rel=0.015)] == [pytest.approx(anti, rel=0.02)]
 
 
 @pytest.mark.parametrize("machine", ["cncmt", "googol_xy", "coupled_servo_xy", "linear_motor_xy"])
@@ -208,11 +208,11 @@ def test_frf_of_a_rigid_machine_equals_its_transfer_function(machine):
     transfer function on every coherent line, 1.2 Hz - 1 kHz (the largest departures are the
     lowest lines, where the 20 Hz loop leaves the least response), and no peaks."""
     r = measure(machine, FrfSettings(), {})
-    assert r["coherent_share"] > 0.95
-    assert r["max_model_error_db"] < 0.6
-    assert r["resonances_hz"] == []
-    assert r["antiresonances_hz"] == []
-    assert set(r["parameters"]) == set(get_machine(machine).parameters)
+    assert r.coherent_share > 0.95
+    assert r.max_model_error_db < 0.6
+    assert r.resonances_hz == []
+    assert r.antiresonances_hz == []
+    assert set(r.parameters) == set(get_machine(machine).parameters)
 
 
 @pytest.mark.parametrize("kind", ["prbs", "chirp", "multisine"])
@@ -235,13 +235,13 @@ def test_calibration_recovers_hidden_parameters(tmp_path):
     pq.write_table(pa.table({"time_s": np.arange(n) * dt, "u_x_V": u[:, 0], "pos_x_m": y}), path)
     r = calibrate(MID, path, list(hidden))
     for name, value in hidden.items():
-        assert r["fitted"][name] == pytest.approx(value, rel=0.01)
-        assert 0 < r["statistical_errors"][name] < 0.01 * value
+        assert r.fitted[name] == pytest.approx(value, rel=0.01)
+        assert 0 < r.statistical_errors[name] < 0.01 * value
         # the model's own error (the step halved) is in the standard error: the viscous
         # friction's, beside Coulomb friction's soft constraint, is 2 % of it
-        assert r["standard_errors"][name] >= r["statistical_errors"][name]
-    assert r["fit_index_pct"]["before"] < 95 < r["fit_index_pct"]["after"]
-    assert r["fit_index_pct"]["twin"] == pytest.approx(r["fit_index_pct"]["after"], abs=1e-6)
+        assert r.standard_errors[name] >= r.statistical_errors[name]
+    assert r.fit_index_pct.before < 95 < r.fit_index_pct.after
+    assert r.fit_index_pct.twin == pytest.approx(r.fit_index_pct.after, abs=1e-6)
     out = tmp_path / "calibrated.toml"
     text = _twin("calibrate", MID, "--trace", str(path), "--fit", ",".join(hidden), "--out", str(out))
     assert text.returncode == 0, text.stderr
@@ -260,12 +260,12 @@ def test_calibration_names_a_combination_it_cannot_identify(tmp_path):
         + "\n".join(f"{i * dt!r},{float(a)!r},{float(b)!r}" for i, (a, b) in enumerate(zip(u, y)))
     )
     r = calibrate(MID, path, ["x_table_mass_kg", "y_table_mass_kg"])
-    assert r["unidentifiable"] == {
+    assert r.unidentifiable == {
         "x_table_mass_kg": "the data determine only its combination with y_table_mass_kg",
         "y_table_mass_kg": "the data determine only its combination with x_table_mass_kg",
     }
-    assert r["fitted"] == {}
-    assert r["parameters"]["x_table_mass_kg"] == 90.0  # both held at nominal
+    assert r.fitted == {}
+    assert r.parameters["x_table_mass_kg"] == 90.0  # both held at nominal
 
 
 def test_calibration_holds_a_combination_together_and_fits_the_rest_again(tmp_path):
@@ -280,12 +280,12 @@ def test_calibration_holds_a_combination_together_and_fits_the_rest_again(tmp_pa
     path = tmp_path / "trace.parquet"
     pq.write_table(pa.table({"time_s": np.arange(n) * dt, "u_x_V": u, "pos_x_m": y}), path)
     r = calibrate(MID, path, ["x_table_mass_kg", "y_table_mass_kg", "x_friction_viscous_N_s_per_m"])
-    assert set(r["unidentifiable"]) == {"x_table_mass_kg", "y_table_mass_kg"}
-    assert list(r["fitted"]) == ["x_friction_viscous_N_s_per_m"]
-    assert r["parameters"]["x_table_mass_kg"] == 90.0
-    assert r["parameters"]["y_table_mass_kg"] == 45.0
-    assert r["solver"]["converged"]
-    assert r["fit_index_pct"]["after"] > r["fit_index_pct"]["before"]
+    assert set(r.unidentifiable) == {"x_table_mass_kg", "y_table_mass_kg"}
+    assert list(r.fitted) == ["x_friction_viscous_N_s_per_m"]
+    assert r.parameters["x_table_mass_kg"] == 90.0
+    assert r.parameters["y_table_mass_kg"] == 45.0
+    assert r.solver.converged
+    assert r.fit_index_pct.after > r.fit_index_pct.before
 
 
 def test_calibration_recovers_a_compliant_hidden_variant(tmp_path):
@@ -302,14 +302,14 @@ def test_calibration_recovers_a_compliant_hidden_variant(tmp_path):
     path = tmp_path / "trace.parquet"
     pq.write_table(pa.table({"time_s": np.arange(n) * dt, "u_x_V": u[:, 0], "pos_x_m": y}), path)
     r = calibrate(MID, path, list(hidden))
-    assert r["solver"]["converged"]
-    assert r["unidentifiable"] == {}
+    assert r.solver.converged
+    assert r.unidentifiable == {}
     for name, value in hidden.items():
-        assert r["fitted"][name] == pytest.approx(value, rel=0.005)
+        assert r.fitted[name] == pytest.approx(value, rel=0.005)
     truth = replay(build(MID, hidden), dt, u, np.zeros(2))[:, :1]
     from twin.metrics import fit_index
 
-    assert r["fit_index_pct"]["after"] == pytest.approx(float(fit_index(y[:, None], truth)[0]), abs=0.01)
+    assert r.fit_index_pct.after == pytest.approx(float(fit_index(y[:, None], truth)[0]), abs=0.01)
 
 
 def test_calibration_fits_the_velocity_where_the_positions_cost_is_rugged(tmp_path):
@@ -326,10 +326,10 @@ def test_calibration_fits_the_velocity_where_the_positions_cost_is_rugged(tmp_pa
     write_table(excitation_trace(MID, overrides=hidden, simulate_twin=True), path)
     r = calibrate(MID, path, list(hidden))
     for name, value in hidden.items():
-        assert r["fitted"][name] == pytest.approx(value, rel=1e-6)
-    assert r["solver"]["at_noise_floor"]
-    assert r["not_excited"] == {}
-    assert r["excited_band_hz"] == pytest.approx(0.908 * 1e4 / 8, abs=20)  # the PRBS's main lobe, 2 lines
+        assert r.fitted[name] == pytest.approx(value, rel=1e-6)
+    assert r.solver.against_noise is not None and r.solver.against_noise.at_noise_floor
+    assert r.not_excited == {}
+    assert r.excited_band_hz == pytest.approx(0.908 * 1e4 / 8, abs=20)  # the PRBS's main lobe, 2 lines
 
 
 def test_a_fit_above_the_traces_noise_says_so(tmp_path):
@@ -343,10 +343,11 @@ def test_a_fit_above_the_traces_noise_says_so(tmp_path):
     path = tmp_path / "trace.parquet"
     pq.write_table(pa.table({"time_s": np.arange(n) * dt, "u_x_V": u[:, 0], "pos_x_m": y}), path)
     r = calibrate(MID, path, ["x_table_mass_kg"])
-    assert r["solver"]["noise_floor_m"] == pytest.approx(2e-7, rel=0.1)
-    assert r["solver"]["residual_rms_m"] > 1.2 * r["solver"]["noise_floor_m"]
-    assert not r["solver"]["at_noise_floor"]
-    assert "a parameter not fitted" in r["solver"]["note"]
+    noise = r.solver.against_noise
+    assert noise is not None and noise.noise_floor_m == pytest.approx(2e-7, rel=0.1)
+    assert noise.residual_rms_m > 1.2 * noise.noise_floor_m
+    assert not noise.at_noise_floor
+    assert "a parameter not fitted" in noise.note
 
 
 def test_the_noise_floor_of_a_trace():
@@ -371,10 +372,10 @@ def test_a_stiffness_beyond_the_inputs_band_is_named_with_the_excitation_that_wo
     path = tmp_path / "slow.csv"
     write_table(excitation_trace(MID, f_max_hz=50.0, simulate_twin=True), path)
     r = calibrate(MID, path, ["x_table_mass_kg", "x_k_axial_N_per_m"])
-    assert r["excited_band_hz"] == pytest.approx(0.908 * 1e4 / 80, abs=20)
-    assert list(r["not_excited"]) == ["x_k_axial_N_per_m"]
-    assert "its mode at 175 Hz" in r["not_excited"]["x_k_axial_N_per_m"]
-    assert f"twin excite {MID} --f-max 270" in r["not_excited"]["x_k_axial_N_per_m"]
+    assert r.excited_band_hz == pytest.approx(0.908 * 1e4 / 80, abs=20)
+    assert list(r.not_excited) == ["x_k_axial_N_per_m"]
+    assert "its mode at 175 Hz" in r.not_excited["x_k_axial_N_per_m"]
+    assert f"twin excite {MID} --f-max 270" in r.not_excited["x_k_axial_N_per_m"]
 
 
 @pytest.mark.parametrize(
@@ -612,10 +613,10 @@ def test_calibration_from_a_measured_frf(tmp_path):
     rows = [f"{a!r},{float(20 * np.log10(abs(b)))!r},{float(np.degrees(np.angle(b)))!r}" for a, b in zip(f.tolist(), h)]
     path.write_text("frequency_hz,magnitude_db,phase_deg\n" + "\n".join(rows) + "\n")
     r = calibrate(LINEAR, path, list(hidden))
-    assert r["kind"] == "frf"
+    assert r.kind == "frf"
     for name, value in hidden.items():
-        assert r["fitted"][name] == pytest.approx(value, rel=0.01)
-    assert r["fit_index_pct"]["after"] > r["fit_index_pct"]["before"]
+        assert r.fitted[name] == pytest.approx(value, rel=0.01)
+    assert r.fit_index_pct.after > r.fit_index_pct.before
 
 
 def test_a_motor_sensor_frf_is_fitted_through_the_motors_transfer_function(tmp_path):
@@ -638,11 +639,11 @@ def test_a_motor_sensor_frf_is_fitted_through_the_motors_transfer_function(tmp_p
     )
     motor = calibrate(MID, path, list(hidden), sensor="motor")
     for name, value in hidden.items():
-        assert motor["fitted"][name] == pytest.approx(value, rel=0.01)
+        assert motor.fitted[name] == pytest.approx(value, rel=0.01)
     table = calibrate(MID, path, list(hidden), sensor="table")
-    assert table["fitted"]["x_table_mass_kg"] > 1.1 * hidden["x_table_mass_kg"]  # 125 kg
-    assert table["fitted"]["x_k_axial_N_per_m"] > 10 * hidden["x_k_axial_N_per_m"]  # no mode where it looks
-    assert table["fit_index_pct"]["after"] < motor["fit_index_pct"]["after"] - 3
+    assert table.fitted["x_table_mass_kg"] > 1.1 * hidden["x_table_mass_kg"]  # 125 kg
+    assert table.fitted["x_k_axial_N_per_m"] > 10 * hidden["x_k_axial_N_per_m"]  # no mode where it looks
+    assert table.fit_index_pct.after < motor.fit_index_pct.after - 3
 
 
 @pytest.mark.parametrize(

@@ -48,7 +48,7 @@ STATED_RESIDUAL = {
 
 @pytest.mark.parametrize("name", sorted(MITSUBISHI_ROWS))
 def test_the_fitted_kienzle_law_reproduces_the_sources_kc_at_each_feed(name):
-    material = MATERIALS[name]
+    material = MATERIALS[name].value
     k = material.coefficients
     kc = np.array(MITSUBISHI_ROWS[name], float)
     predicted = k.K_tc * np.array(FEEDS_MM) ** -k.mc
@@ -67,7 +67,8 @@ def test_the_fit_recovers_an_exact_power_law():
 
 def test_every_entry_names_its_source_and_kienzle_entries_use_our_stated_ratios():
     kinds = set()
-    for name, material in MATERIALS.items():
+    for name, entry in MATERIALS.items():
+        material = entry.value
         assert material.source.strip(), name
         k = material.coefficients
         assert 0.0 <= k.mc < 1.0, name
@@ -77,14 +78,14 @@ def test_every_entry_names_its_source_and_kienzle_entries_use_our_stated_ratios(
             assert (k.K_te, k.K_re, k.K_ae) == (0.0, 0.0, 0.0)
     assert {"steel", "stainless", "cast", "brass", "titanium"} <= kinds
     # the ratios lie within those of the sourced linear entries
-    linear = [m.coefficients for m in MATERIALS.values() if not m.coefficients.mc]
+    linear = [e.value.coefficients for e in MATERIALS.values() if not e.value.coefficients.mc]
     assert min(k.K_rc / k.K_tc for k in linear) <= KIENZLE_RADIAL_RATIO <= max(k.K_rc / k.K_tc for k in linear)
     assert min(k.K_ac / k.K_tc for k in linear) <= KIENZLE_AXIAL_RATIO <= max(k.K_ac / k.K_tc for k in linear)
 
 
 def test_the_kienzle_force_at_a_chip_thickness_is_kc1_h_to_the_1_minus_mc_times_b():
     """A narrow arc at phi = 90 deg cuts h = c: F_t = kc1 c^(1 - mc) a, F_r its radial ratio."""
-    k = MATERIALS["steel_cr_mo_730"].coefficients
+    k = MATERIALS["steel_cr_mo_730"].value.coefficients
     c, a, half = 0.15, 2.0, 1e-4
     st, ex = math.pi / 2 - half, math.pi / 2 + half
     by_hand = k.K_tc * c ** (1.0 - k.mc) * a
@@ -101,29 +102,32 @@ def test_the_kienzle_force_at_a_chip_thickness_is_kc1_h_to_the_1_minus_mc_times_
 
 def test_the_kienzle_mean_force_is_kc_at_the_mean_chip_thickness():
     """Over a slot the mean torque-producing force is kc(h_m) times the mean chip area."""
-    k = MATERIALS["titanium_alpha_beta"].coefficients
+    k = MATERIALS["titanium_alpha_beta"].value.coefficients
     c, a = 0.1, 3.0
     h_m = 2 * c / math.pi  # a slot's mean chip thickness
     linear = CuttingCoefficients(k.K_tc * h_m**-k.mc, k.K_rc * h_m**-k.mc, k.K_ac * h_m**-k.mc, 0.0, 0.0, 0.0)
     np.testing.assert_allclose(
-        mean_tool_forces_N(k, 4, a, c, 0.0, math.pi), mean_tool_forces_N(linear, 4, a, c, 0.0, math.pi), rtol=1e-12
+        mean_tool_forces_N(k, n_flutes=4, axial_depth_mm=a, feed_per_tooth_mm=c, phi_st=0.0, phi_ex=math.pi),
+        mean_tool_forces_N(linear, n_flutes=4, axial_depth_mm=a, feed_per_tooth_mm=c, phi_st=0.0, phi_ex=math.pi),
+        rtol=1e-12,
     )
 
 
 def test_the_linear_entries_pass_through_unchanged():
-    for name, material in MATERIALS.items():
+    for name, entry in MATERIALS.items():
+        material = entry.value
         k = material.coefficients.as_array()
         if not material.coefficients.mc:
             assert kienzle_coefficients(k, 0.1, 0.0, math.pi) is k, name
     # and the aluminium default's force is the linear model's, exactly
-    k = MATERIALS["aluminium_7075_t6"].coefficients
+    k = MATERIALS["aluminium_7075_t6"].value.coefficients
     full = step_tool_forces_N(k.as_array(), 3, 2.0, np.full(3, 0.1), np.zeros(3), 0.0, math.pi, 0.3, 0.01, 0.0)
     six = step_tool_forces_N(k.as_array()[:6], 3, 2.0, np.full(3, 0.1), np.zeros(3), 0.0, math.pi, 0.3, 0.01, 0.0)
     assert full == six
 
 
 def test_no_chip_no_kienzle_scaling():
-    k = MATERIALS["brass"].coefficients.as_array()
+    k = MATERIALS["brass"].value.coefficients.as_array()
     assert kienzle_coefficients(k, 0.0, 0.0, math.pi) is k
 
 

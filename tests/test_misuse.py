@@ -102,7 +102,7 @@ def test_a_tools_material_and_the_users_own_coefficients_reach_the_force_model()
     from twin.machining.materials import MATERIALS
 
     tool = ToolSpec(diameter_mm=6.0, n_flutes=3, material="aluminium_6082_t6", coefficients={"K_tc": 500.0})
-    expected = MATERIALS["aluminium_6082_t6"].coefficients.as_array()
+    expected = MATERIALS["aluminium_6082_t6"].value.coefficients.as_array()
     expected[0] = 500.0
     assert tool.cutting_coefficients().as_array() == pytest.approx(expected)
     planned = plan(
@@ -120,7 +120,8 @@ def test_twin_list_shows_every_material_with_its_source():
 
     listed = _twin("list")
     assert listed.returncode == 0
-    for name, material in MATERIALS.items():
+    for name, entry in MATERIALS.items():
+        material = entry.value
         line = next(row for row in listed.stdout.splitlines() if row.strip().startswith(name + " "))
         assert material.source in line
         assert material.alloy in line
@@ -138,6 +139,7 @@ def test_the_docs_materials_table_is_the_library():
     assert "<!-- table: materials -->" in page
     rows = {line.split("`")[1]: line for line in materials_table().splitlines() if line.startswith("| `")}
     assert set(rows) == set(MATERIALS)
-    for name, material in MATERIALS.items():
+    for name, entry in MATERIALS.items():
+        material = entry.value
         cells = [c.strip() for c in rows[name].split("|")[6:13]]
         assert [float(c) for c in cells] == pytest.approx(material.coefficients.as_array().tolist(), rel=1e-5), name

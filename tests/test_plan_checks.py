@@ -22,7 +22,7 @@ from twin.gcode.planner import PlannerSettings, plan
 from twin.gcode.reader import PLANES, Move, Reader, Settings
 from twin.machines import build
 from twin.machines.rigid_drive import rigid_drives, table_travel_m
-from twin.records import plan_warning
+from twin.records import DriveWarning, TravelWarning
 from twin.references.gcode import planned_for
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -190,7 +190,8 @@ def test_warn_lists_each_lines_worst_excess_per_axis():
     check = TravelCheck(LINEAR_TRAVEL, refuse=False)
     assert [m.line for m in check.passing(moves)] == [m.line for m in moves]  # every move passes on
     rows = check.warnings.listed()
-    assert [(r["line"], r["axis"], r["value_mm"]) for r in rows] == [
+    assert all(isinstance(r, TravelWarning) for r in rows)
+    assert [(r.line, r.axis, r.value_mm) for r in rows] == [
         (3, "x", -310.0),
         (3, "y", -250.0),
         (4, "x", -310.0),
@@ -198,13 +199,10 @@ def test_warn_lists_each_lines_worst_excess_per_axis():
         (5, "x", 305.0),
         (6, "x", 320.0),
     ]
-    assert (
-        rows[0]["message"] == "X -310.000 mm (machine coordinates) is outside the travel -300.000..300.000 mm of axis x"
-    )
-    assert rows[0]["text"] == "G0 X-310 Y-250" and check.warnings.total == 6
-    typed = [plan_warning(row) for row in rows]  # the typed records give each row back, key for key
-    assert {type(w).__name__ for w in typed} == {"TravelWarning"}
-    assert [json.dumps(w.to_json()) for w in typed] == [json.dumps(row) for row in rows]
+    assert rows[0].message == "X -310.000 mm (machine coordinates) is outside the travel -300.000..300.000 mm of axis x"
+    assert rows[0].text == "G0 X-310 Y-250" and check.warnings.total == 6
+    first = {"line": 3, "check": "travel", "axis": "x", "value_mm": -310.0}
+    assert json.dumps(rows[0].to_json()) == json.dumps({**first, "message": rows[0].message, "text": rows[0].text})
 
 
 def _rigid_force(mass_kg, viscous, coulomb, velocity, acceleration):
@@ -223,13 +221,12 @@ def test_the_drive_force_of_a_rapid_on_choi_1999s_table():
     check.add(planned.position, planned.velocity, planned.acceleration, planned.line, planned.texts)
     (row,) = check.warnings.listed()
     worst = float(np.abs(force).max())
-    assert (row["line"], row["axis"]) == (3, "x")
-    assert row["force_N"] == pytest.approx(worst, abs=1e-3)
-    assert row["ratio"] == pytest.approx(worst / 982.0, abs=1e-6)
-    assert row["message"] == f"axis x needs {worst:.1f} N, the drive saturates at 982.0 N (x{worst / 982.0:.3f})"
-    typed = plan_warning(row)
-    assert type(typed).__name__ == "DriveWarning"
-    assert json.dumps(typed.to_json()) == json.dumps(row)  # key for key, in order
+    assert isinstance(row, DriveWarning) and (row.line, row.axis) == (3, "x")
+    assert row.force_N == pytest.approx(worst, abs=1e-3)
+    assert row.ratio == pytest.approx(worst / 982.0, abs=1e-6)
+    assert row.message == f"axis x needs {worst:.1f} N, the drive saturates at 982.0 N (x{worst / 982.0:.3f})"
+    assert list(row.to_json()) == ["line", "check", "axis", "ratio", "force_N", "message", "text"]
+    assert row.to_json()["check"] == "drive"
     assert worst / 982.0 > 1.1
 
 
@@ -276,13 +273,14 @@ def test_the_drive_force_on_a_compliant_ball_screw_machine_file():
             worst = float(force[planned.line == line].max())
             if worst > gain * saturation_V:
                 expected[(int(line), axis)] = (worst, gain * saturation_V)
-    rows = summary["warnings"]
+    rows = summary.warnings
     assert {axis for _line, axis in expected} == {"x", "y"}
-    assert {(r["line"], r["axis"]) for r in rows} == set(expected)
+    assert {(r.line, r.axis) for r in rows} == set(expected)
     for row in rows:
-        worst, limit = expected[(row["line"], row["axis"])]
-        assert row["force_N"] == pytest.approx(worst, rel=1e-9, abs=1e-3)
-        assert row["ratio"] == pytest.approx(worst / limit, rel=1e-6)
+        assert isinstance(row, DriveWarning)
+        worst, limit = expected[(row.line, row.axis)]
+        assert row.force_N == pytest.approx(worst, rel=1e-9, abs=1e-3)
+        assert row.ratio == pytest.approx(worst / limit, rel=1e-6)
 
 
 @pytest.fixture
@@ -399,7 +397,7 @@ def test_a_streamed_program_gets_the_held_ones_drive_warnings(monkeypatch):
     """A program too long to hold is checked as the run draws its samples: once drawn to the end
     its warnings are those of the same program held whole."""
     import twin.gcode.planner as planner
-    from twin.gcode.checks import typed_plan_warnings
+    from twin.gcode.checks import plan_warnings
     from twin.references.gcode import StreamedGcodeReference
 
     monkeypatch.setattr(planner, "WINDOW_POINTS", 3000)
@@ -411,7 +409,7 @@ def test_a_streamed_program_gets_the_held_ones_drive_warnings(monkeypatch):
     held = plan(Reader(lines).moves(), limits)
     whole = DriveCheck(drives, 10.0)
     whole.add(held.position, held.velocity, held.acceleration, held.line, held.texts)
-    _none, facts, samples = planner.hold_or_count(Reader(lines).moves(), limits, PlannerSettings(), 0)
+    _none, facts, samples = planner.hold_or_count(Reader(lines).moves(), limits, PlannerSettings(), most=0)
     streamed_check = DriveCheck(drives, 10.0)
     streamed = StreamedGcodeReference(
         lambda: Reader(lines).moves(), limits, PlannerSettings(), facts, samples, (0, 1), len(lines), (streamed_check,)
@@ -419,7 +417,4 @@ def test_a_streamed_program_gets_the_held_ones_drive_warnings(monkeypatch):
     for k0 in range(0, samples * 2, 700):  # the runner's chunks at a 0.5 ms period
         streamed.sample(np.arange(k0, k0 + 710) * 5e-4)
     assert len(whole.warnings.listed()) >= 5
-    assert typed_plan_warnings(streamed_check) == (
-        [plan_warning(row) for row in whole.warnings.listed()],
-        whole.warnings.total,
-    )
+    assert plan_warnings(streamed_check) == (whole.warnings.listed(), whole.warnings.total)

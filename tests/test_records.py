@@ -10,7 +10,7 @@ import typing
 import pytest
 from records_cases import CASES, FIXTURES, json_report, run_case, text_report
 
-from twin.machining.inspection import MEASURES, InspectSpec
+from twin.machining.inspection import FEATURES, InspectSpec
 from twin.records import FeatureType
 
 _RUNS: dict = {}
@@ -102,7 +102,7 @@ def test_the_parquet_columns_are_the_untyped_flattening(case):
 def test_every_feature_type_has_one_spec_and_one_measurement():
     specs = typing.get_args(typing.get_args(InspectSpec)[0])
     literals = {typing.get_args(spec.model_fields["type"].annotation)[0] for spec in specs}
-    assert literals == {t.value for t in FeatureType} == set(MEASURES)
+    assert literals == {t.value for t in FeatureType} == set(FEATURES)
 
 
 @pytest.mark.parametrize(("listed", "total", "more"), [(25, 25, "them all"), (25, 40, "25")])

@@ -142,7 +142,8 @@ def test_oustaloup_matches_s_alpha_inside_its_band():
         A, B, C, D = o.state_space()
         ss = np.array([(C @ np.linalg.solve(1j * wi * np.eye(len(A)) - A, B) + D)[0, 0] for wi in w])
         assert ss == pytest.approx(o.response(w), rel=1e-9)
-    A, B, C, D = fractional_pi(0.2, 6.0, 0.78, *s1.OUSTALOUP_BAND, s1.OUSTALOUP_ORDER)
+    wb, wh = s1.OUSTALOUP_BAND
+    A, B, C, D = fractional_pi(0.2, 6.0, 0.78, wb=wb, wh=wh, order=s1.OUSTALOUP_ORDER)
     assert D[0, 0] + (C @ np.linalg.solve(1j * 10.0 * np.eye(len(A)) - A, B))[0, 0] == pytest.approx(
         0.2 + 6.0 * (10j) ** -0.78, rel=0.01
     )
@@ -164,7 +165,7 @@ def test_bromwich_inverse_on_an_underdamped_step():
         ),
         3.0,
     )
-    A, B, C, D = fractional_pi(*s1.EQ14["x"], 1e-4, 1e5, 8)
+    A, B, C, D = fractional_pi(*s1.EQ14["x"], wb=1e-4, wh=1e5, order=8)
     T = control.feedback(control.ss(A, B, C, D) * s1.plant_tf("x"), 1)
     ref = np.asarray(control.step_response(T, t[::50]).outputs).ravel()
     assert np.abs(y[::50] - ref).max() < 5e-3
@@ -174,8 +175,8 @@ def test_bee_colony_is_reproducible_with_its_seed_and_finds_a_minimum():
     def cost(x):
         return float(np.sum((x - 0.3) ** 2))
 
-    a = bee_colony_minimize(cost, [-1, -1], [1, 1], 15, seed=4)
-    b = bee_colony_minimize(cost, [-1, -1], [1, 1], 15, seed=4)
+    a = bee_colony_minimize(cost, [-1, -1], [1, 1], iterations=15, seed=4)
+    b = bee_colony_minimize(cost, [-1, -1], [1, 1], iterations=15, seed=4)
     assert a.x.tolist() == b.x.tolist()
     assert a.best_cost == b.best_cost
     assert a.cost < 1e-3

@@ -71,7 +71,7 @@ def test_orthogonal_cutting_minimum_width_is_the_closed_form():
     rpm = np.linspace(20000, 60000, 400)
     zoa = zoa_critical_depths(OrthogonalCut(k_f), BENCHMARK, rpm)
     assert np.nanmin(zoa.critical_depth_m) == pytest.approx(closed, rel=5e-3)
-    sd = sd_critical_depths(OrthogonalCut(k_f), BENCHMARK, rpm[::4], 5 * closed, n_depths=20)
+    sd = sd_critical_depths(OrthogonalCut(k_f), BENCHMARK, spindle_rpm=rpm[::4], depth_max_m=5 * closed, n_depths=20)
     assert np.nanmin(sd.critical_depth_m) == pytest.approx(closed, rel=2e-2)
     # above the lowest, never below it
     assert np.nanmin(sd.critical_depth_m) >= closed * 0.99
@@ -141,7 +141,7 @@ def reference_spectral_radius(arc, spindle_rpm: float, depth_m: float, steps: in
 def test_semi_discretization_against_a_second_implementation(arc, rpm):
     """The reference's boundary lies within 3 % of ours: stable at 0.97 of our critical depth,
     unstable at 1.03 of it."""
-    ours = sd_critical_depths(benchmark_cut(arc), BENCHMARK, [rpm], 10e-3).critical_depth_m[0]
+    ours = sd_critical_depths(benchmark_cut(arc), BENCHMARK, spindle_rpm=[rpm], depth_max_m=10e-3).critical_depth_m[0]
     steps = 128 if arc == SLOT else 512  # the entry's and exit's jumps in h(t) cost RK4 its order
     below, above = (reference_spectral_radius(arc, rpm, f * ours, steps) for f in (0.97, 1.03))
     assert below < 1.0 < above
@@ -151,11 +151,15 @@ def test_benchmark_values_and_the_slot_above_the_zero_order():
     """Full slot: 0.3224 mm at 10 000 rpm and 1.418 mm at 20 000 rpm (the reference's boundary,
     bisected); with two teeth in a slot the semi-discretization's lowest depth sits several
     percent above the zero-order one (the time-varying h(t), which the average drops)."""
-    sd = sd_critical_depths(benchmark_cut(SLOT), BENCHMARK, [10000.0, 20000.0], 10e-3)
+    sd = sd_critical_depths(benchmark_cut(SLOT), BENCHMARK, spindle_rpm=[10000.0, 20000.0], depth_max_m=10e-3)
     assert sd.critical_depth_m * 1e3 == pytest.approx([0.3224, 1.418], rel=0.01)
     rpm = np.linspace(5000, 25000, 101)
     zoa = np.nanmin(zoa_critical_depths(benchmark_cut(SLOT), BENCHMARK, rpm).critical_depth_m)
-    lowest = np.nanmin(sd_critical_depths(benchmark_cut(SLOT), BENCHMARK, rpm, 3e-3, n_depths=30).critical_depth_m)
+    lowest = np.nanmin(
+        sd_critical_depths(
+            benchmark_cut(SLOT), BENCHMARK, spindle_rpm=rpm, depth_max_m=3e-3, n_depths=30
+        ).critical_depth_m
+    )
     assert 1.03 < lowest / zoa < 1.12
 
 
@@ -164,7 +168,7 @@ def test_flip_lobes_at_low_immersion_the_zero_order_misses():
     (period-doubling) lobes, the multiplier -1, chatter at an odd multiple of half the tooth
     frequency, well under the zero-order depth there."""
     rpm = np.array([18000.0])
-    sd = sd_critical_depths(benchmark_cut(DOWN_005), BENCHMARK, rpm, 10e-3)
+    sd = sd_critical_depths(benchmark_cut(DOWN_005), BENCHMARK, spindle_rpm=rpm, depth_max_m=10e-3)
     zoa = zoa_critical_depths(benchmark_cut(DOWN_005), BENCHMARK, rpm)
     assert sd.critical_depth_m[0] < 0.5 * zoa.critical_depth_m[0]
     tooth_hz = TEETH * rpm[0] / 60
@@ -173,7 +177,7 @@ def test_flip_lobes_at_low_immersion_the_zero_order_misses():
 
 def test_chatter_frequency_of_both_methods_agree_on_a_hopf_lobe():
     """Full slot at 10 000 rpm (a Hopf lobe): both chatter a little above the natural frequency."""
-    sd = sd_critical_depths(benchmark_cut(SLOT), BENCHMARK, [10000.0], 10e-3)
+    sd = sd_critical_depths(benchmark_cut(SLOT), BENCHMARK, spindle_rpm=[10000.0], depth_max_m=10e-3)
     zoa = zoa_critical_depths(benchmark_cut(SLOT), BENCHMARK, [10000.0])
     assert sd.chatter_hz[0] == pytest.approx(zoa.chatter_hz[0], rel=0.02)
     assert F_N < zoa.chatter_hz[0] < 1.1 * F_N

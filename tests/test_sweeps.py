@@ -103,12 +103,14 @@ def _sweep(
     settings=SHORT,
     client=None,
 ):
-    sw = prepare_sweep(scenario, dict(settings), list(vary), samples, 5, False)
+    sw = prepare_sweep(
+        scenario, settings=dict(settings), vary=list(vary), samples=samples, seed=5, latin_hypercube=False
+    )
     out = tmp_path / name
     own = client is None
     client = client or make_client(workers)
     try:
-        run_sweep(sw.scenario, sw.plan, sw.axes, out, client, batch, progress=False)
+        run_sweep(sw.scenario, sw.plan, axes=sw.axes, out=out, client=client, batch_size=batch, progress=False)
     finally:
         if own:
             client.close()
@@ -144,15 +146,15 @@ def test_a_killed_worker_loses_no_sample(tmp_path):
     try:
         sw = prepare_sweep(
             "choi1999_cutting_circle",
-            SHORT,
-            ["overrides.m_x=box", "disturbances.0.spindle_rpm=uniform(5000,12000)"],
-            40,
-            5,
-            False,
+            settings=SHORT,
+            vary=["overrides.m_x=box", "disturbances.0.spindle_rpm=uniform(5000,12000)"],
+            samples=40,
+            seed=5,
+            latin_hypercube=False,
         )
         killer = threading.Thread(target=kill_one_worker)
         killer.start()
-        run_sweep(sw.scenario, sw.plan, sw.axes, out, client, 2, progress=False)
+        run_sweep(sw.scenario, sw.plan, axes=sw.axes, out=out, client=client, batch_size=2, progress=False)
         killer.join()
     finally:
         client.close()
@@ -198,8 +200,10 @@ def test_resume_completes_an_interrupted_sweep(tmp_path):
     client = make_client(1)
     try:
         with pytest.raises(TwinInputError, match="--resume"):
-            run_sweep(sw.scenario, sw.plan, sw.axes, out, client, 3, progress=False)
-        done = run_sweep(sw.scenario, sw.plan, sw.axes, out, client, 3, resume=True, progress=False)
+            run_sweep(sw.scenario, sw.plan, axes=sw.axes, out=out, client=client, batch_size=3, progress=False)
+        done = run_sweep(
+            sw.scenario, sw.plan, axes=sw.axes, out=out, client=client, batch_size=3, resume=True, progress=False
+        )
     finally:
         client.close()
     assert (done.ran, done.skipped) == (6, 6)

@@ -14,6 +14,7 @@ from twin.commissioning.boundary import (
     CONDITIONS,
     GROWTH_RATIO,
     LINEAR_QUARTER_STEP,
+    MarginCheck,
     growth_ratio,
     margin_table,
     twin_boundary,
@@ -46,7 +47,7 @@ def test_the_twins_boundary_is_the_cascade_margin(heavy):
     0.5 dB, the Coulomb friction's damping and the Euler step each raising it; each number the
     committed table's."""
     margin = heavy["axes"]["x"]["cascade_margins"]["kp_vel"]["gain_margin_db"]
-    found = {name: twin_boundary(heavy, HEAVY, "x", "kp_vel", c)["boundary_db"] for name, c in CONDITIONS.items()}
+    found = {name: twin_boundary(heavy, HEAVY, "x", "kp_vel", c).boundary_db for name, c in CONDITIONS.items()}
     assert found["linear_quarter_step"] == pytest.approx(margin, abs=0.1)
     assert zero_step_boundary(found["linear"], found["linear_quarter_step"], 4) == pytest.approx(margin, abs=0.05)
     assert found["twin"] == pytest.approx(margin, abs=0.5)
@@ -76,8 +77,25 @@ def test_every_catalogue_boundary_is_the_margin_like_for_like():
             assert found["grows_db"] - found["decays_db"] <= 0.1 + 1e-9
 
 
+def test_a_committed_row_reads_back_as_it_was_written():
+    """Each committed row is a :class:`MarginCheck`'s JSON, key for key and in order; the CLI's
+    line of one gives its margin, each boundary less the margin, and the zero step's."""
+    rows = json.loads(FIXTURE.read_text())
+    for row in rows:
+        assert list(MarginCheck.from_json(row).to_json().items()) == list(row.items())
+    heavy_x = next(
+        MarginCheck.from_json(r)
+        for r in rows
+        if (r["machine"], r["feedback"], r["axis"], r["gain"]) == ("heavy_xy", "dual", "x", "kp_vel")
+    )
+    line = heavy_x.report_line()
+    assert line.startswith(f"x kp_vel  margin {heavy_x.margin_db:6.2f} dB: ")
+    assert line.endswith(f", {heavy_x.zero_step_db:6.2f} ({heavy_x.zero_step_minus_margin_db:+.2f})")
+    assert line.count("(") == len(CONDITIONS) + 1
+
+
 def test_the_tuning_page_shows_the_committed_table():
-    assert margin_table(json.loads(FIXTURE.read_text())) in PAGE.read_text()
+    assert margin_table([MarginCheck.from_json(row) for row in json.loads(FIXTURE.read_text())]) in PAGE.read_text()
 
 
 @pytest.mark.slow  # 84 runs of 0.5 s, 21 of them at a quarter of the step: about 25 s

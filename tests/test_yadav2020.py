@@ -232,7 +232,7 @@ def test_sampled_step_response_matches_scipy_across_blocks():
     A = np.diag([0.999, 0.95, -0.5]) + 0.01 * rng.standard_normal((3, 3))
     B, C, D = rng.standard_normal((3, 1)), rng.standard_normal((1, 3)), np.array([[0.3]])
     _, expected, _ = dlsim((A, B, C, D, 1.0), np.ones(2500))
-    np.testing.assert_allclose(r.sampled_step_response(A, B, C, D, 2500), expected[:, 0], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(r.sampled_step_response(A, B, C, D, n=2500), expected[:, 0], rtol=1e-9, atol=1e-12)
 
 
 def test_our_designs_stand_beside_the_printed_controllers():

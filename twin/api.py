@@ -157,11 +157,11 @@ def sweep(
     sets = {**parse_settings(spec.set), **_paths(settings)}
     sw = prepare_sweep(
         spec.scenario,
-        sets,
-        variations,
-        spec.samples if samples is None else samples,
-        spec.seed if seed is None else seed,
-        spec.latin_hypercube if lhs is None else lhs,
+        settings=sets,
+        vary=variations,
+        samples=spec.samples if samples is None else samples,
+        seed=spec.seed if seed is None else seed,
+        latin_hypercube=spec.latin_hypercube if lhs is None else lhs,
     )
     out = Path(out or spec.out or f"{sw.name}_sweep.parquet")
     if not out.parent.is_dir():
@@ -173,11 +173,11 @@ def sweep(
         done = run_sweep(
             sw.scenario,
             sw.plan,
-            sw.axes,
-            out,
-            client,
-            batch_size,
-            resume,
+            axes=sw.axes,
+            out=out,
+            client=client,
+            batch_size=batch_size,
+            resume=resume,
             progress=progress,
         )
     finally:
@@ -288,9 +288,7 @@ def frf(machine: str, overrides: dict[str, float] | None = None, **settings: Any
         raise TwinInputError(
             "settings", sorted(settings), f"known: {', '.join(FrfSettings.__dataclass_fields__)}"
         ) from None
-    summary = measure(machine, chosen, overrides)
-    run = summary.pop("run")
-    return Frf(machine, chosen, summary, run, nut_stiffness(machine, chosen.axis, overrides))
+    return Frf(measure(machine, chosen, overrides), nut_stiffness(machine, chosen.axis, overrides))
 
 
 def lobes(
@@ -328,9 +326,9 @@ def calibrate(
     machine: str,
     trace: str | Path,
     fit: list[str],
+    *,
     overrides: dict[str, float] | None = None,
     axis: str = "x",
-    *,
     sensor: str = "table",
     progress: bool = False,
     timestep_s: float | None = None,
@@ -338,12 +336,12 @@ def calibrate(
     """Fit machine parameters to a measured trace or FRF, as ``twin calibrate`` (``axis`` and
     ``sensor``: where an FRF was measured; ``progress``: a progress bar; ``timestep_s``: the
     physics step of the fit's twin runs, default the machine's)."""
-    from twin.commissioning.calibration import calibrate as fit_machine
+    from twin.commissioning.calibration import CalibrationProblem, solve
 
-    summary = fit_machine(
-        machine, trace, list(fit), overrides, axis, progress=progress, sensor=sensor, timestep_s=timestep_s
+    problem = CalibrationProblem.from_inputs(
+        machine, trace, list(fit), overrides=overrides, axis=axis, sensor=sensor, timestep_s=timestep_s
     )
-    return Calibration(machine, str(trace), summary)
+    return Calibration(solve(problem, progress=progress))
 
 
 def tune(

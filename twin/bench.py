@@ -411,6 +411,7 @@ def startup(repeats: int = 5) -> dict:
 
 def run_bench(
     seconds: float = 2.0,
+    *,
     repeats: int = 5,
     gcode_lines: int = 1_000_000,
     gcode_moves: int = 10_000,
@@ -507,13 +508,13 @@ def planning_figures(scale: float = 1.0, file: str | None = None) -> dict:
         with open(file, encoding="utf-8", errors="replace") as handle:
             text = handle.read().splitlines()
         programs[file] = (lambda: text, {**limit_sets, "30.48mm_s_508mm_s2": own})
-    hold_or_count(Reader(["G21 G0 X0", "G1 X1 F100", "G2 X1 Y0 I1 J0"]).moves(), machine, None, 0)  # compile
+    hold_or_count(Reader(["G21 G0 X0", "G1 X1 F100", "G2 X1 Y0 I1 J0"]).moves(), machine, None, most=0)  # compile
     out: dict[str, dict] = {}
     for name, (lines, limits_by_name) in programs.items():
         out[name] = {}
         for limits_name, limits in limits_by_name.items():
             t0 = time.process_time()
-            _held, facts, samples = hold_or_count(Reader(lines()).moves(), limits, None, 0)
+            _held, facts, samples = hold_or_count(Reader(lines()).moves(), limits, None, most=0)
             cpu = time.process_time() - t0
             motion = samples * 1e-3
             out[name][limits_name] = {

@@ -99,7 +99,7 @@ class Worker:
         ``NUMBA_CACHE_DIR`` of the worker; None keeps the environment's.
     """
 
-    def __init__(self, tree: Path, label: str, names: list[str], log: IO[str], numba_cache: Path | None = None):
+    def __init__(self, tree: Path, label: str, names: list[str], log: IO[str], *, numba_cache: Path | None = None):
         env = {**os.environ, "PYTHONPATH": str(tree)}
         if numba_cache is not None:
             env["NUMBA_CACHE_DIR"] = str(numba_cache)

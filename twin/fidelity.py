@@ -138,6 +138,7 @@ def multisine_bins(period_s: float, f_min_hz: float, f_max_hz: float, n_tones: i
 def frequency_response_errors(
     bm,
     reference,
+    *,
     period_s: float = 10.0,
     f_max_hz: float = 50.0,
     n_tones: int = 40,
@@ -177,7 +178,7 @@ def frequency_response_errors(
     for k in range(n_axes):
         amp = tone_amplitude_m(channels[k], crossover_hz)
         ref = SumOfSines((amp,) * len(bins), tuple(freqs), tuple(phases), n_axes=n_axes, axes=(k,))
-        ctrls = [error_feedback(designs[i][0], dt, (a.name,), name=f"P.{a.name}") for i, a in enumerate(bm.axes)]
+        ctrls = [error_feedback(designs[i][0], dt, axes=(a.name,), name=f"P.{a.name}") for i, a in enumerate(bm.axes)]
         res = simulate(
             bm, ctrls, ref, (settle + 1) * period_s, dt, disturbances=disturbances, progress=False, record_every=every
         )
@@ -306,7 +307,9 @@ def fidelity(case: str, overrides: dict | None = None, *, frf_period_s: float = 
         "tf": _tf_listing(bm, reference),
         "time_nrmse": time_response_nrmse(bm, reference, disturbances=disturbances),
     }
-    out.update(frequency_response_errors(bm, reference, frf_period_s, n_tones=frf_tones, disturbances=disturbances))
+    out.update(
+        frequency_response_errors(bm, reference, period_s=frf_period_s, n_tones=frf_tones, disturbances=disturbances)
+    )
     out["coupling_slip_um"] = coupling_slip_um(bm)
     out["targets"] = TARGETS
     out["pass"] = all(out[k] <= v for k, v in TARGETS.items())

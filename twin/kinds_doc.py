@@ -1,14 +1,18 @@
-"""The docs site's reference of every registered kind, generated from the registries
-(``docs/hooks.py`` puts it where a page says ``<!-- kinds: NAME -->``), so the docs cannot drift
-from the code: each kind's docs line, and its parameters with defaults, limits and units; and
-the tables of other libraries (``<!-- table: NAME -->``: the materials)."""
+"""The docs site's reference of every registered kind, generated from the registries of the
+catalogue (:mod:`twin.catalogue`, which ``twin list`` prints; ``docs/hooks.py`` puts it where a
+page says ``<!-- kinds: NAME -->``), so the docs cannot drift from the code: each kind's docs
+line, and its parameters with defaults, limits and units; and the tables of other libraries
+(``<!-- table: NAME -->``: the materials)."""
 
 from __future__ import annotations
 
 from pydantic import BaseModel
 
-#: What each ``<!-- kinds: NAME -->`` marker expands to: the registry's title and table key.
-SECTIONS = ("references", "disturbances", "controllers", "observers", "machines", "reproductions")
+from controllers.registries import Registry
+from twin.catalogue import registry
+
+#: What a ``<!-- kinds: NAME -->`` marker may name: a section of the catalogue.
+SECTIONS = ("references", "disturbances", "controllers", "observers", "inspection", "machines", "reproductions")
 
 _LIMITS = {"ge": "≥", "gt": ">", "le": "≤", "lt": "<"}
 
@@ -28,10 +32,11 @@ def _cell(text: str) -> str:
     return text.replace("|", "\\|").replace("\n", " ")
 
 
-def parameter_table(model: type[BaseModel], skip: tuple[str, ...] = ("type",)) -> str:
-    """A markdown table of a pydantic model's fields: name, default, limits, description."""
+def parameter_table(model: type[BaseModel] | None, skip: tuple[str, ...] = ("type",)) -> str:
+    """A markdown table of a pydantic model's fields (None: none): name, default, limits,
+    description."""
     rows = ["| parameter | default | limits | what (unit) |", "|---|---|---|---|"]
-    for name, info in model.model_fields.items():
+    for name, info in (model.model_fields if model else {}).items():
         if name in skip:
             continue
         default = "required" if info.is_required() else f"`{info.get_default(call_default_factory=True)!r}`"
@@ -39,17 +44,11 @@ def parameter_table(model: type[BaseModel], skip: tuple[str, ...] = ("type",)) -
     return "\n".join(rows) if len(rows) > 2 else "No parameters."
 
 
-def _kinds(registry: dict, spec_of) -> str:
+def _kinds(kinds: Registry) -> str:
+    """Each kind's heading, summary and parameter table."""
     parts = []
-    for name, kind in registry.items():
-        parts += [
-            f"### `{name}`",
-            "",
-            _cell(kind.doc.removeprefix(f"{name}: ")),
-            "",
-            parameter_table(spec_of(kind)),
-            "",
-        ]
+    for name, kind in kinds.items():
+        parts += [f"### `{name}`", "", _cell(kind.summary), "", parameter_table(kind.settings), ""]
     return "\n".join(parts)
 
 
@@ -69,15 +68,15 @@ def motion_limits_table(machine) -> str:
     return "\n".join(rows)
 
 
-def _machines() -> str:
-    from twin.machines import MACHINES
-
+def _machines(machines: Registry) -> str:
+    """Each machine's heading, summary, parameters and motion limits."""
     parts = []
-    for name, machine in MACHINES.items():
+    for name, entry in machines.items():
+        machine = entry.value
         rows = ["| symbol | nominal | unit | what (source) |", "|---|---|---|---|"]
         rows += [f"| `{s}` | {p.value:g} | {p.unit} | {_cell(p.description)} |" for s, p in machine.parameters.items()]
         limits = motion_limits_table(machine)
-        parts += [f"### `{name}`", "", machine.summary, "", *rows, "", "Motion limits:", "", limits, ""]
+        parts += [f"### `{name}`", "", entry.summary, "", *rows, "", "Motion limits:", "", limits, ""]
     return "\n".join(parts)
 
 
@@ -86,17 +85,18 @@ TABLES = ("materials",)
 
 
 def materials_table() -> str:
-    """The materials library (:data:`twin.machining.materials.MATERIALS`) as a markdown table:
-    each entry's model, alloy, cutter, lubrication, coefficients, Kienzle exponent, fit residual
-    and source."""
-    from twin.machining.materials import DEFAULT_MATERIAL, MATERIALS
+    """The materials library (:data:`twin.machining.materials.MATERIALS`, the catalogue's
+    ``materials``) as a markdown table: each entry's model, alloy, cutter, lubrication,
+    coefficients, Kienzle exponent, fit residual and source."""
+    from twin.machining.materials import DEFAULT_MATERIAL
 
     rows = [
         "| name | model | alloy | cutter | lubrication | K_tc or kc1 | K_rc | K_ac | K_te | K_re | K_ae | mc "
         "| fit residual | source |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for name, m in MATERIALS.items():
+    for name, entry in registry("materials").items():
+        m = entry.value
         k = m.coefficients
         default = " (default)" if name == DEFAULT_MATERIAL else ""
         values = " | ".join(f"{v:g}" for v in k.as_array())
@@ -120,33 +120,18 @@ def table_markdown(name: str) -> str:
 
 
 def kinds_markdown(section: str) -> str:
-    """The markdown of one section of :data:`SECTIONS`, from its registry.
+    """The markdown of one section of :data:`SECTIONS`, from its registry in the catalogue.
 
     Raises
     ------
     KeyError
         A section that is not one of :data:`SECTIONS`.
     """
-    if section == "references":
-        from twin.references import REFERENCES
-
-        return _kinds(REFERENCES, lambda k: k.spec)
-    if section == "disturbances":
-        from twin.disturbances import DISTURBANCES
-
-        return _kinds(DISTURBANCES, lambda k: k.spec)
-    if section == "controllers":
-        from controllers import CONTROLLERS
-
-        return _kinds(CONTROLLERS, lambda k: k.params)
-    if section == "observers":
-        from controllers import OBSERVERS
-
-        return _kinds(OBSERVERS, lambda k: k.params)
+    if section not in SECTIONS:
+        raise KeyError(section)
+    entries = registry(section)
     if section == "machines":
-        return _machines()
+        return _machines(entries)
     if section == "reproductions":
-        from twin.reproductions.registry import REPRODUCTIONS
-
-        return "\n".join(f"- `{name}`: {paper.doc}" for name, paper in REPRODUCTIONS.items()) + "\n"
-    raise KeyError(section)
+        return "\n".join(f"- `{name}`: {paper.summary}" for name, paper in entries.items()) + "\n"
+    return _kinds(entries)

@@ -16,7 +16,7 @@ from functools import cached_property
 import numpy as np
 
 from twin.errors import RunInterrupted, SimulationDiverged
-from twin.gcode.checks import DriveCheck, TravelCheck, typed_plan_warnings
+from twin.gcode.checks import DriveCheck, TravelCheck, plan_warnings
 from twin.gcode.planner import Plan
 from twin.machining.engagement import StockSpec
 from twin.machining.inspection import InspectSpec, inspect
@@ -24,7 +24,7 @@ from twin.machining.part import MachinedPart, part_cut_by_motion
 from twin.machining.program_cut import ProgramCut
 from twin.machining.program_stability import default_rpm_range, line_stability
 from twin.machining.sweep import ToolSweep
-from twin.records import Inspected, MachiningWarning, PlanWarning
+from twin.records import Inspected, LineStability, MachiningWarning, PlanWarning
 from twin.sim.runner import RunResult
 
 
@@ -46,7 +46,7 @@ class PlannedProgram:
         The stock it cuts.
     features : tuple of InspectSpec
         The ``[[inspect]]`` features measured on the part after the run.
-    line_stability : dict of int to dict
+    line_stability : dict of int to twin.records.LineStability
         With a stock and tools with ``dynamics``: each cutting line's chatter check
         (:func:`twin.machining.program_stability.line_stability`, stable speeds searched over
         :func:`~twin.machining.program_stability.default_rpm_range`); else empty.
@@ -57,7 +57,7 @@ class PlannedProgram:
     cut: ProgramCut | None = None
     stock: StockSpec | None = None
     features: tuple[InspectSpec, ...] = ()
-    line_stability: dict[int, dict] = field(default_factory=dict)
+    line_stability: dict[int, LineStability] = field(default_factory=dict)
 
 
 def planned_program(
@@ -69,7 +69,7 @@ def planned_program(
 ) -> PlannedProgram:
     """The program before its run (see :class:`PlannedProgram`), each cutting line's chatter
     check done, so that its bad input is caught before the run."""
-    stability: dict[int, dict] = {}
+    stability: dict[int, LineStability] = {}
     if cut is not None and plan is not None:
         samples = cut.samples(plan)
         stability = line_stability(samples, default_rpm_range(samples.spindle_rpm))
@@ -95,7 +95,7 @@ class RunOutcome:
     plan_warnings : tuple of TravelWarning or DriveWarning
         A program's moves outside the travel (under ``travel = "warn"``) and what the drives
         cannot deliver, by line, the first ones; ``plan_warnings_total`` counts them all.
-    line_stability : dict of int to dict
+    line_stability : dict of int to twin.records.LineStability
         With a stock and a tool with ``dynamics``: each cutting line's chatter check.
     stopped : SimulationDiverged or RunInterrupted or None
         What stopped a run early; None for a run that went to its end.
@@ -107,7 +107,7 @@ class RunOutcome:
     inspection: tuple[Inspected, ...] = ()
     plan_warnings: tuple[PlanWarning, ...] = ()
     plan_warnings_total: int = 0
-    line_stability: dict[int, dict] = field(default_factory=dict)
+    line_stability: dict[int, LineStability] = field(default_factory=dict)
     stopped: SimulationDiverged | RunInterrupted | None = None
 
     @property
@@ -138,7 +138,7 @@ def finish(
     and the features measured on it."""
     if program is None:
         return RunOutcome(run, stopped=stopped)
-    listed, total = typed_plan_warnings(*program.checks)
+    listed, total = plan_warnings(*program.checks)
     part: MachinedPart | None = None
     inspection: tuple[Inspected, ...] = ()
     if (

@@ -36,7 +36,7 @@ def plot_folder(folder):
     return plt, save, written
 
 
-def _axes_plot(plt, t, series: dict, ylabel: str, title: str, path: Path) -> Path:
+def _axes_plot(plt, t, series: dict, *, ylabel: str, title: str, path: Path) -> Path:
     """One panel: a curve per name."""
     fig, ax = plt.subplots(figsize=(8, 3.5))
     for label, values in series.items():
@@ -74,17 +74,17 @@ def write_plots(outcome: RunOutcome, directory: Path, name: str = "run") -> list
             plt,
             t,
             {f"{a}": error_um[:, i] for i, a in enumerate(axes)},
-            "reference - actual (µm)",
-            f"{name}: tracking error",
-            directory / f"{name}_tracking_error.png",
+            ylabel="reference - actual (µm)",
+            title=f"{name}: tracking error",
+            path=directory / f"{name}_tracking_error.png",
         ),
         _axes_plot(
             plt,
             t,
             {f"{a}": result.u_V[:, i] for i, a in enumerate(axes)},
-            "control input (V)",
-            f"{name}: control input",
-            directory / f"{name}_control.png",
+            ylabel="control input (V)",
+            title=f"{name}: control input",
+            path=directory / f"{name}_control.png",
         ),
     ]
     quantity, unit = machine.drive_quantity(machine.axes[0])
@@ -118,9 +118,9 @@ def write_plots(outcome: RunOutcome, directory: Path, name: str = "run") -> list
                 plt,
                 t,
                 {"indicator (20 ms)": indicator, "threshold": np.full(len(t), CHATTER_THRESHOLD)},
-                "once-per-tooth vibration / feed per tooth (1)",
-                f"{name}: chatter indicator",
-                directory / f"{name}_chatter.png",
+                ylabel="once-per-tooth vibration / feed per tooth (1)",
+                title=f"{name}: chatter indicator",
+                path=directory / f"{name}_chatter.png",
             )
         )
     if len(axes) == 2:
@@ -140,7 +140,7 @@ def write_plots(outcome: RunOutcome, directory: Path, name: str = "run") -> list
         fig.savefig(written[-1], dpi=120, bbox_inches="tight")
         plt.close(fig)
     if result.program is not None and result.program.lines.size and len(axes) == 2:
-        written += _program_plots(plt, outcome, result.program, directory, name)
+        written += _program_plots(plt, outcome, program=result.program, directory=directory, name=name)
     return written
 
 
@@ -151,7 +151,7 @@ LABELLED_LINES = 5
 FEED_FILTER_S = 0.01
 
 
-def _program_plots(plt, outcome: RunOutcome, program: ProgramTrace, directory: Path, name: str) -> list[Path]:
+def _program_plots(plt, outcome: RunOutcome, *, program: ProgramTrace, directory: Path, name: str) -> list[Path]:
     """A program's part seen from above (stock and machined outlines, the path coloured by its
     contour error, the worst lines labelled) and its feed profile (programmed, planned, actual)."""
     result = outcome.run
@@ -237,11 +237,11 @@ def _program_plots(plt, outcome: RunOutcome, program: ProgramTrace, directory: P
     fig.savefig(written[-1], dpi=120, bbox_inches="tight")
     plt.close(fig)
     if outcome.part is not None and len(outcome.part.walls):
-        written.append(_wall_error_plot(plt, outcome, outcome.part, directory, name))
+        written.append(_wall_error_plot(plt, outcome, part=outcome.part, directory=directory, name=name))
     return written
 
 
-def _wall_error_plot(plt, outcome: RunOutcome, part: MachinedPart, directory: Path, name: str) -> Path:
+def _wall_error_plot(plt, outcome: RunOutcome, *, part: MachinedPart, directory: Path, name: str) -> Path:
     """The virtual part from above: its walls coloured by their signed error (µm, material left
     red, overcut blue, one scale either side of zero), the inspected features' results beside."""
     walls = part.walls

@@ -7,6 +7,7 @@ key, in that order), and the command line prints them through their attributes a
   :class:`DriveWarning` (``plan_warnings``), :class:`ChatterWarning` (``chatter_warnings``):
   each with ``line`` (None: the whole run), ``message`` and the line's ``text``;
 - :class:`ChatterCheck`: a line's or the run's chatter (``chatter``);
+- :class:`LineStability`: a cutting line's check against the tool's lobes (a row's ``stability``);
 - :class:`CircleMeasured`, :class:`LineMeasured`, :class:`WidthMeasured` and
   :class:`FeatureNotFound` (``inspection``), of the feature types of :class:`FeatureType`.
 """
@@ -14,7 +15,6 @@ key, in that order), and the command line prints them through their attributes a
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Mapping
 from dataclasses import dataclass
 from enum import StrEnum
 from typing import Any, ClassVar, Literal
@@ -276,13 +276,6 @@ class DriveWarning:
 PlanWarning = TravelWarning | DriveWarning
 
 
-def plan_warning(row: Mapping[str, Any]) -> PlanWarning:
-    """The typed warning of a row of :func:`twin.gcode.checks.plan_warnings` (its ``check``
-    says which)."""
-    fields = {key: value for key, value in row.items() if key != "check"}
-    return TravelWarning(**fields) if row["check"] == TravelWarning.check else DriveWarning(**fields)
-
-
 @dataclass(frozen=True)
 class ChatterWarning:
     """A program line that chatters, or the whole run (``line`` None, ``text`` empty)."""
@@ -342,6 +335,76 @@ class ChatterCheck:
 
 
 @dataclass(frozen=True)
+class LineStability:
+    """A cutting program line checked against the tool's zero-order lobes at its sample of least
+    margin (:func:`twin.machining.program_stability.line_stability`).
+
+    Attributes
+    ----------
+    depth_mm : float
+        The line's axial depth (mm, to 4 decimals).
+    spindle_rpm : float
+        Its spindle speed (rpm, to 0.1).
+    critical_depth_mm : float or None
+        The critical depth at that speed (mm, to 4 decimals); None: no boundary.
+    margin : float or None
+        Critical over actual depth (to 3 decimals); None: no boundary.
+    chatter_hz : float or None
+        The chatter frequency at the boundary (Hz, to 0.1); None: no boundary.
+    stable_rpm : (float, float) or None
+        The stretch of stable speeds (rpm, to 10) holding the line's speed or nearest it; None:
+        none in the range searched.
+    text : str
+        The one line a user reads ("line 57: 4.00 mm at 12 000 rpm, critical 2.10 mm; ...").
+    """
+
+    depth_mm: float
+    spindle_rpm: float
+    critical_depth_mm: float | None
+    margin: float | None
+    chatter_hz: float | None
+    stable_rpm: tuple[float, float] | None
+    text: str
+
+    @property
+    def over_critical(self) -> bool:
+        """Whether the line cuts deeper than its critical depth (margin under 1)."""
+        return self.margin is not None and self.margin < 1
+
+    def _values(self) -> dict[str, Any]:
+        """The attributes but ``stable_rpm``, in their order."""
+        return {
+            "depth_mm": self.depth_mm,
+            "spindle_rpm": self.spindle_rpm,
+            "critical_depth_mm": self.critical_depth_mm,
+            "margin": self.margin,
+            "chatter_hz": self.chatter_hz,
+        }
+
+    def to_json(self) -> dict[str, Any]:
+        """The attributes in their order, ``stable_rpm`` as [low, high] (or None)."""
+        stable = None if self.stable_rpm is None else list(self.stable_rpm)
+        return {**self._values(), "stable_rpm": stable, "text": self.text}
+
+    @classmethod
+    def from_json(cls, values: dict[str, Any]) -> LineStability:
+        """The check from its :meth:`to_json` (``twin lobes``' summary holds it so)."""
+        stable = values["stable_rpm"]
+        return cls(**{**values, "stable_rpm": None if stable is None else tuple(stable)})
+
+    def to_columns(self) -> dict[str, Any]:
+        """The check as the per-line table's columns: ``stability_<attribute>``, ``stable_rpm``
+        as ``stability_stable_rpm_low`` and ``_high`` (None: no stable speed) after ``text``."""
+        low, high = self.stable_rpm or (None, None)
+        out = {f"stability_{key}": value for key, value in self._values().items()}
+        return out | {
+            "stability_text": self.text,
+            "stability_stable_rpm_low": low,
+            "stability_stable_rpm_high": high,
+        }
+
+
+@dataclass(frozen=True)
 class LineRow:
     """A program line's row of the per-line table, over the recorded ticks the reference is on it.
 
@@ -361,8 +424,9 @@ class LineRow:
         With a stock: the mean engaged angle (deg) and the largest axial depth (mm).
     max_wall_error_um : float or None
         With a stock: the largest wall error the line left (µm).
-    stability : dict or None
-        A cutting line's chatter check (:func:`twin.machining.program_stability.line_stability`).
+    stability : LineStability or None
+        A cutting line's check against the tool's lobes; None: the line does not cut with a tool
+        that has dynamics.
     chatter : ChatterCheck or None
         The line's chatter in the run; None: the tool did not cut on it for a window.
     """
@@ -378,7 +442,7 @@ class LineRow:
     mean_engagement_deg: float | None = None
     axial_depth_mm: float | None = None
     max_wall_error_um: float | None = None
-    stability: dict[str, Any] | None = None
+    stability: LineStability | None = None
     chatter: ChatterCheck | None = None
 
     def _plain(self) -> tuple[dict[str, Any], dict[str, Any]]:
@@ -407,7 +471,7 @@ class LineRow:
         head, tail = self._plain()
         out = {**head, "max_tracking_error_um": dict(self.max_tracking_error_um), **tail}
         if self.stability is not None:
-            out["stability"] = self.stability
+            out["stability"] = self.stability.to_json()
         if self.chatter is not None:
             out["chatter"] = self.chatter.to_json()
         return out
@@ -422,10 +486,7 @@ class LineRow:
         out = {**head, **tail}
         out |= {f"max_tracking_error_um_{axis}": v for axis, v in self.max_tracking_error_um.items()}
         if self.stability is not None:
-            check = dict(self.stability)
-            low, high = check.pop("stable_rpm") or (None, None)
-            out |= {f"stability_{key}": v for key, v in check.items()}
-            out |= {"stability_stable_rpm_low": low, "stability_stable_rpm_high": high}
+            out |= self.stability.to_columns()
         if self.chatter is not None:
             out |= self.chatter.to_columns()
         return out
@@ -469,3 +530,8 @@ class RunRecords:
     inspection: tuple[Inspected, ...] = ()
     chatter: ChatterCheck | None = None
     chatter_warnings: tuple[ChatterWarning, ...] = ()
+
+    @property
+    def stability_checks(self) -> list[LineStability]:
+        """The cutting lines' chatter checks (:attr:`LineRow.stability`), in program order."""
+        return [row.stability for row in self.lines if row.stability is not None]

@@ -8,7 +8,7 @@ tune``) and :class:`Fidelity` (``twin fidelity``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -19,10 +19,13 @@ if TYPE_CHECKING:  # the heavy modules load on first use, not with `import twin`
     import pandas as pd
     import pyarrow as pa
 
-    from twin.commissioning.frf import FrfSettings
+    from twin.commissioning.boundary import MarginCheck
+    from twin.commissioning.calibration import CalibrationReport
+    from twin.commissioning.frf import FrfMeasurement, FrfSettings
     from twin.gcode.moves import Move
+    from twin.gcode.report import PlannedSummary
     from twin.outcome import RunOutcome
-    from twin.records import RunRecords
+    from twin.records import LineStability, RunRecords
     from twin.sampling import SamplePlan
     from twin.scenario import Scenario
     from twin.sim.runner import RunResult
@@ -211,14 +214,15 @@ class Program:
     file : str
     moves : list of twin.gcode.reader.Move
         The moves as LinuxCNC reads them.
-    planned : dict or None
+    planned : twin.gcode.report.PlannedSummary or None
         With a machine: the plan's cycle time (s), feed-only time, limits and largest values per
-        axis and path deviation (:func:`twin.gcode.report.planned_summary`).
+        axis, path deviation and warnings against the machine
+        (:func:`twin.gcode.report.planned_summary`).
     """
 
     file: str
     moves: list[Move]
-    planned: dict | None = None
+    planned: PlannedSummary | None = None
 
     @property
     def summary(self) -> dict:
@@ -226,7 +230,7 @@ class Program:
         center_mm and turns, feed, spindle) and, with a machine, ``planned``."""
         out: dict[str, Any] = {"file": self.file, "moves": [m.as_dict() for m in self.moves]}
         if self.planned is not None:
-            out["planned"] = self.planned
+            out["planned"] = self.planned.to_json()
         return out
 
 
@@ -236,38 +240,58 @@ class Frf:
 
     Attributes
     ----------
-    machine : str
-    settings : twin.commissioning.frf.FrfSettings
-    summary : dict
-        What ``twin frf --json`` prints: the lines (Hz), magnitude (dB), phase (deg) and
-        coherence, the model's, the resonances and anti-resonances found, the settings.
-    run : twin.sim.runner.RunResult
-        The simulated experiment.
+    measurement : twin.commissioning.frf.FrfMeasurement
+        The lines (Hz), magnitude (dB), phase (deg) and coherence, the model's, the resonances
+        and anti-resonances found, the settings and the simulated experiment (``run``).
     nut_stiffness : dict or None
         On a machine file whose stiffness depends on the nut's position: the position (m) and
         the axial (N/m) and torsional (N m/rad) stiffness there.
     """
 
-    machine: str
-    settings: FrfSettings
-    summary: dict
-    run: RunResult
+    measurement: FrfMeasurement
     nut_stiffness: dict | None = None
+
+    @property
+    def machine(self) -> str:
+        """The machine or machine file measured."""
+        return self.measurement.machine
+
+    @property
+    def settings(self) -> FrfSettings:
+        """What the measurement did."""
+        return self.measurement.settings
+
+    @property
+    def run(self) -> RunResult:
+        """The simulated experiment."""
+        return self.measurement.run
+
+    @cached_property
+    def summary(self) -> dict:
+        """What ``twin frf --json`` prints (:meth:`twin.commissioning.frf.FrfMeasurement.to_json`)."""
+        return self.measurement.to_json()
 
     def to_pandas(self) -> pd.DataFrame:
         """The measured and the model's response by frequency (Hz): ``magnitude_db``,
         ``phase_deg``, ``coherence``, ``model_magnitude_db``, ``model_phase_deg``."""
         import pandas as pd
 
-        columns = ("magnitude_db", "phase_deg", "coherence", "model_magnitude_db", "model_phase_deg")
-        index = pd.Index(self.summary["frequency_hz"], name="frequency_hz")
-        return pd.DataFrame({c: self.summary[c] for c in columns}, index=index)
+        m = self.measurement
+        index = pd.Index(m.frequency_hz, name="frequency_hz")
+        columns = {
+            "magnitude_db": m.magnitude_db,
+            "phase_deg": m.phase_deg,
+            "coherence": m.coherence,
+            "model_magnitude_db": m.model_magnitude_db,
+            "model_phase_deg": m.model_phase_deg,
+        }
+        return pd.DataFrame(columns, index=index)
 
     def write_bode(self, path: str | Path) -> Path:
         """The Bode plot (PNG) of the measured response beside the model's, with the coherence."""
         from twin.commissioning.frf import write_bode
 
-        write_bode(self.summary, path)
+        write_bode(self.measurement, path)
         return Path(path)
 
     def record(self, path: str | Path) -> Path:
@@ -305,6 +329,13 @@ class StabilityLobes:
             frames.append(frame.add_prefix(f"{method}_"))
         return pd.concat(frames, axis=1)
 
+    @property
+    def stability_checks(self) -> list[LineStability]:
+        """With a program: each cutting line's chatter check, in program order (empty without)."""
+        from twin.records import LineStability
+
+        return [LineStability.from_json(row["stability"]) for row in self.summary.get("lines", [])]
+
     def write_png(self, path: str | Path) -> Path:
         """The lobes, the program's lines on them and the chatter frequency beneath (PNG)."""
         from twin.commissioning.lobes import write_lobes_png
@@ -318,23 +349,33 @@ class Calibration:
 
     Attributes
     ----------
-    machine : str
-        The machine or machine file calibrated.
-    trace : str
-        The measured trace.
-    summary : dict
-        What ``twin calibrate --json`` prints: ``fitted`` values, ``standard_errors``,
-        ``nominal`` ones, the fit index before and after, the solver's report.
+    report : twin.commissioning.calibration.CalibrationReport
+        The machine and trace, the ``fitted`` values, their standard errors, the ``nominal``
+        ones, the fit index before and after, the solver's report.
     """
 
-    machine: str
-    trace: str
-    summary: dict
+    report: CalibrationReport
+
+    @property
+    def machine(self) -> str:
+        """The machine or machine file calibrated."""
+        return self.report.machine
+
+    @property
+    def trace(self) -> str:
+        """The measured trace."""
+        return self.report.trace
+
+    @property
+    def summary(self) -> dict:
+        """What ``twin calibrate --json`` prints
+        (:meth:`twin.commissioning.calibration.CalibrationReport.to_json`)."""
+        return self.report.to_json()
 
     @property
     def fitted(self) -> dict[str, float]:
         """The fitted parameters by symbol, in the machine's units."""
-        return self.summary["fitted"]
+        return self.report.fitted
 
     def write_machine_file(self, path: str | Path) -> Path:
         """The calibrated machine file (TOML): the machine file with the fitted values, a comment
@@ -384,10 +425,14 @@ class Tuning:
     summary : dict
         What ``twin tune --json`` prints: the control period, the feedback, per axis the gains,
         the margins and bandwidths; ``verification`` once :meth:`verify` has run.
+    margin_check : list of MarginCheck
+        Each gain's cascade margin beside the twin's boundaries once :meth:`verify_margins` has
+        run (empty before).
     """
 
     machine: str
     summary: dict
+    margin_check: list[MarginCheck] = field(default_factory=list)
 
     def verify(self) -> dict:
         """Run the tuned cascade on the twin (a 1 mm step, a circle) and add what it measured to
@@ -404,17 +449,18 @@ class Tuning:
         self,
         gains: tuple[str, ...] = ("kp_pos", "kp_vel", "ki_vel"),
         conditions: tuple[str, ...] | None = None,
-    ) -> list[dict]:
+    ) -> list[MarginCheck]:
         """Each axis's cascade margins beside the twin's own stability boundaries, bisected for
         each of ``gains`` (:func:`twin.commissioning.boundary.verify_margins`) under the named
         conditions (default all of :data:`twin.commissioning.boundary.CONDITIONS`: ``twin`` as
-        run, ``without_coulomb``, ``like_for_like``, the linear model's assumptions); adds them
-        to :attr:`summary` as ``margin_check`` and returns them."""
+        run, ``without_coulomb``, ``like_for_like``, the linear model's assumptions); keeps them
+        as :attr:`margin_check`, adds them to :attr:`summary` as ``margin_check`` and returns them."""
         from twin.commissioning.boundary import CONDITIONS, verify_margins
 
         chosen = {name: CONDITIONS[name] for name in (conditions or CONDITIONS)}
-        self.summary["margin_check"] = verify_margins(self.summary, self.machine, gains, chosen)
-        return self.summary["margin_check"]
+        self.margin_check = verify_margins(self.summary, self.machine, gains, chosen)
+        self.summary["margin_check"] = [row.to_json() for row in self.margin_check]
+        return self.margin_check
 
     def scenario_text(self, reference: str = "circle") -> str:
         """The tuned cascade as a scenario (TOML) on a 10 mm circle (or a 1 mm ``step``)."""

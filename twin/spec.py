@@ -5,11 +5,12 @@ from __future__ import annotations
 import math
 import tomllib
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Union, overload
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, field_validator
+
+from controllers.registries import Entry, Registry
 
 if TYPE_CHECKING:
     from twin.errors import TwinInputError
@@ -163,46 +164,24 @@ def axes_indices(names: list[str] | None, axis_names: list[str], field: str) -> 
 
 class KindSpec(StrictSpec):
     """What the spec of every registered kind (reference, disturbance) has: the ``type`` that
-    names its kind."""
+    names its kind (:func:`register_kind`)."""
 
     type: str
 
 
-@dataclass(frozen=True)
-class Kind:
-    """One kind of a registry (:data:`twin.references.REFERENCES`, :data:`twin.disturbances.DISTURBANCES`).
-
-    Attributes
-    ----------
-    name : str
-        The scenario's ``type``.
-    spec : type
-        Its pydantic model (a :class:`KindSpec` with ``type: Literal[name]``); its docstring's
-        first line is the kind's docs line (``twin list``).
-    build : callable
-        The builder of the kind's model from its spec (its registry says the arguments).
-    """
-
-    name: str
-    spec: type[KindSpec]
-    build: Callable
-
-    @property
-    def doc(self) -> str:
-        """The first line of the spec's docstring."""
-        return (self.spec.__doc__ or self.name).strip().splitlines()[0]
+def register_kind(registry: Registry, name: str, spec: type[StrictSpec], build: Callable) -> Entry:
+    """Add a kind to ``registry`` (:data:`twin.references.REFERENCES`,
+    :data:`twin.disturbances.DISTURBANCES`, :data:`twin.machining.inspection.FEATURES`): its
+    settings the pydantic ``spec`` (with ``type: Literal[name]``), its value the builder of its
+    model from its spec or what uses it (the registry says the arguments), its summary the first
+    line of the spec's docstring (less a leading ``<name>: ``); each kind's module calls this at
+    import."""
+    summary = (spec.__doc__ or name).strip().splitlines()[0].removeprefix(f"{name}: ")
+    return registry.add(name, build, summary=summary, settings=spec)
 
 
-def register_kind(registry: dict[str, Kind], name: str, spec: type[KindSpec], build: Callable) -> Kind:
-    """Add a kind to ``registry``; each kind's module calls this at import."""
-    if name in registry:
-        raise ValueError(f"kind {name!r} is registered twice")
-    registry[name] = Kind(name, spec, build)
-    return registry[name]
-
-
-def tagged_union(registry: dict[str, Kind]):
+def tagged_union(registry: Registry):
     """The pydantic type of a table that is any of ``registry``'s kinds, told apart by ``type``
     (a union built at run time from the registered specs)."""
-    specs = tuple(kind.spec for kind in registry.values())
+    specs = tuple(kind.settings for kind in registry.values())
     return Annotated[Union[specs], Field(discriminator="type")]  # noqa: UP007 (a union built at run time)

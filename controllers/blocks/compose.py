@@ -20,7 +20,7 @@ from controllers.design.dob import q_response
 from controllers.lti import SisoTf, delay_ticks, discretize, series, state_space, summed_inputs, tf_to_ss
 
 
-def lti_block(sys, dt: float, inputs, outputs, method: str = "tustin", name: str = "linear") -> Linear:
+def lti_block(sys, dt: float, *, inputs, outputs, method: str = "tustin", name: str = "linear") -> Linear:
     """A :class:`Linear` block from an LTI model.
 
     Parameters
@@ -46,16 +46,18 @@ def lti_block(sys, dt: float, inputs, outputs, method: str = "tustin", name: str
             f"wired to {len(inputs)} and {len(outputs)} signals"
         )
     if sys_dt is None:
-        A, B, C, D = discretize(A, B, C, D, dt, method)
+        A, B, C, D = discretize(A, B, C, D, dt=dt, method=method)
     elif not np.isclose(sys_dt, dt):
         raise ValueError(f"block {name!r}: discrete model dt = {sys_dt} differs from the control period {dt}")
     return Linear(A, B, C, D, tuple(inputs), tuple(outputs), name=name)
 
 
-def error_feedback(sys, dt: float, axes=("x",), method: str = "tustin", name: str = "C") -> Controller:
+def error_feedback(sys, dt: float, *, axes=("x",), method: str = "tustin", name: str = "C") -> Controller:
     """``u = C(z) e`` with ``e = ref - pos`` per axis: C square, one input and output per axis."""
     axes = tuple(axes)
-    block = lti_block(sys, dt, [f"error.{a}" for a in axes], [f"u.{a}" for a in axes], method, name)
+    block = lti_block(
+        sys, dt, inputs=[f"error.{a}" for a in axes], outputs=[f"u.{a}" for a in axes], method=method, name=name
+    )
     return Controller([block], dt, name)
 
 
@@ -86,6 +88,7 @@ def cascade(
     outer,
     inner,
     dt: float,
+    *,
     axis: str = "x",
     velocity_ref_ff: float = 0.0,
     method: str = "tustin",
@@ -116,28 +119,28 @@ def cascade(
     if position_ref_ff:
         weights, signals = (*weights, position_ref_ff), (*signals, f"ref.{axis}")
     blocks = [
-        lti_block(outer, dt, [f"error.{axis}"], [v_ref], method, "position"),
+        lti_block(outer, dt, inputs=[f"error.{axis}"], outputs=[v_ref], method=method, name="position"),
         Sum(weights, signals, v_err, "velocity_error"),
-        lti_block(inner, dt, [v_err], [f"u.{axis}"], method, "velocity"),
+        lti_block(inner, dt, inputs=[v_err], outputs=[f"u.{axis}"], method=method, name="velocity"),
     ]
     return Controller(blocks, dt, name)
 
 
 def lure(
-    sys, nonlinearity: str, settings, dt: float, axis: str = "x", method: str = "tustin", name: str = "lure"
+    sys, nonlinearity: str, *, settings, dt: float, axis: str = "x", method: str = "tustin", name: str = "lure"
 ) -> Controller:
     """Lur'e form: a static nonlinearity on the error, then a linear part:
     ``u = C(z) f(error)`` (see :data:`controllers.blocks.core.NONLINEARITIES`)."""
     shaped = f"{name}:f_error.{axis}"
     blocks = [
         Static(nonlinearity, tuple(settings), (f"error.{axis}",), (shaped,), "nonlinearity"),
-        lti_block(sys, dt, [shaped], [f"u.{axis}"], method, "linear"),
+        lti_block(sys, dt, inputs=[shaped], outputs=[f"u.{axis}"], method=method, name="linear"),
     ]
     return Controller(blocks, dt, name)
 
 
 def relay_feedback(
-    amplitude_V: float, hysteresis_m: float, dt: float, axis: str = "x", name: str = "relay"
+    amplitude_V: float, hysteresis_m: float, *, dt: float, axis: str = "x", name: str = "relay"
 ) -> Controller:
     """Relay with hysteresis on the error, for the relay (Astrom-Hagglund) tuning experiment.
 
@@ -175,6 +178,7 @@ MAX_HARMONICS = 10
 
 def inverse_model_observer(
     plant,
+    *,
     cutoff_hz: float,
     order: int,
     dt: float,
@@ -224,8 +228,8 @@ def inverse_model_observer(
             f"({MAX_OBSERVER_DELAY_TICKS * dt:g} s)"
         )
     lag = max(round(delay_s / dt) - 1, 0)
-    from_pos = discretize(*tf_to_ss(SisoTf(plant.den, np.polymul(plant.num, q_den))), dt, method)
-    from_u = series(delay_ticks(lag), discretize(*tf_to_ss(SisoTf((-1.0,), q_den)), dt, method))
+    from_pos = discretize(*tf_to_ss(SisoTf(plant.den, np.polymul(plant.num, q_den))), dt=dt, method=method)
+    from_u = series(delay_ticks(lag), discretize(*tf_to_ss(SisoTf((-1.0,), q_den)), dt=dt, method=method))
     A, B, C, D = summed_inputs(from_pos, from_u)
     return Linear(A, B, C, D, (f"pos.{axis}", f"u_prev.{axis}"), (f"{name}:d_hat.{axis}",), name=name)
 
@@ -267,6 +271,7 @@ def harmonic_estimator(frequencies_hz, bandwidth_hz: float, targets) -> SisoTf:
 
 def harmonic_observer(
     plant,
+    *,
     frequencies_hz,
     bandwidth_hz: float,
     dt: float,
@@ -311,13 +316,15 @@ def harmonic_observer(
             f"1 to {MAX_HARMONICS} different frequencies, each > 0 and below bandwidth_hz = "
             f"{bandwidth_hz!r}, which must be below cutoff_hz = {cutoff_hz!r}"
         )
-    raw = inverse_model_observer(plant, cutoff_hz, order, dt, axis, method, f"{name}:raw", delay_s)
+    raw = inverse_model_observer(
+        plant, cutoff_hz=cutoff_hz, order=order, dt=dt, axis=axis, method=method, name=f"{name}:raw", delay_s=delay_s
+    )
     if u_signal is not None:
         raw = replace(raw, inputs=(f"pos.{axis}", u_signal))
     lead = round(delay_s / dt) * dt
     w = 2 * math.pi * freqs
     estimator = harmonic_estimator(freqs, bandwidth_hz, np.exp(1j * w * lead) / q_response(cutoff_hz, int(order), w))
-    A, B, C, D = series((raw.A, raw.B, raw.C, raw.D), discretize(*tf_to_ss(estimator), dt, method))
+    A, B, C, D = series((raw.A, raw.B, raw.C, raw.D), discretize(*tf_to_ss(estimator), dt=dt, method=method))
     return Linear(A, B, C, D, raw.inputs, (f"{name}:d_hat.{axis}",), name=name)
 
 

@@ -78,7 +78,7 @@ def oustaloup(alpha: float, wb: float, wh: float, order: int) -> Oustaloup:
 
 
 def fractional_pi(
-    kp: float, ki: float, lam: float, wb: float, wh: float, order: int
+    kp: float, ki: float, lam: float, *, wb: float, wh: float, order: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``kp + ki s^-lam`` (eq. 14's form) as ``(A, B, C, D)``, ``s^-lam`` by :func:`oustaloup`."""
     A, B, C, D = oustaloup(-lam, wb, wh, order).state_space()

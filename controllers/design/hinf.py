@@ -97,6 +97,7 @@ class GammaIteration:
 
 def gamma_iteration(
     P: control.StateSpace,
+    *,
     gamma_max: float = 1e4,
     gamma_min: float = 1e-3,
     tol: float = 1e-3,

@@ -77,7 +77,7 @@ def ncf_generalized_plant(A, B, C) -> control.StateSpace:
     return control.ss(A, Bw, Cz, D)
 
 
-def ncf_robustness_norm(A, B, C, K_inf: control.StateSpace, omega) -> float:
+def ncf_robustness_norm(A, B, C, K_inf: control.StateSpace, *, omega) -> float:
     """``max over omega of sigma_max([K; I](I - Gs K)^-1 M^-1)``, positive feedback: the level
     that ``K_inf`` achieves (``gamma``), evaluated on the grid ``omega`` (rad/s)."""
     P = ncf_generalized_plant(A, B, C)

@@ -48,7 +48,7 @@ def _response(plant, w: float) -> complex:
 
 
 def pid_for_crossover(
-    plant, w_c: float, pm_deg: float, integral_ratio: float = 0.1, filter_ratio: float = 10.0
+    plant, w_c: float, pm_deg: float, *, integral_ratio: float = 0.1, filter_ratio: float = 10.0
 ) -> tuple[float, float, float, float]:
     """PID whose loop ``C P`` crosses over at ``w_c`` with phase margin ``pm_deg``: the
     conventional loop-shaping rule (integral corner ``integral_ratio * w_c``, derivative filter
@@ -84,7 +84,7 @@ def pid_for_crossover(
 
 
 def pid_for_crossover_with_kp(
-    plant, w_c: float, kp: float, integral_ratio: float = 0.1, filter_ratio: float = 10.0
+    plant, w_c: float, kp: float, *, integral_ratio: float = 0.1, filter_ratio: float = 10.0
 ) -> tuple[float, float, float, float]:
     """PID with a given proportional gain ``kp`` whose loop ``C P`` crosses over at ``w_c``:
     integral corner ``integral_ratio * w_c``, derivative filter corner ``filter_ratio * w_c``,

@@ -49,7 +49,7 @@ def worst_case_margins(alpha1: float, alpha2: float, beta3: float) -> tuple[floa
 
 
 def design_robust_pi(
-    alpha1: float, c2_min: float, c3_max: float, gm_db: float = 10.0, pm_deg: float = 60.0
+    alpha1: float, c2_min: float, c3_max: float, *, gm_db: float = 10.0, pm_deg: float = 60.0
 ) -> RobustPIDesign:
     """Solve eqs. (11) and (15) for Kp and Ki.
 

@@ -81,7 +81,7 @@ def relay_ultimate_gain(relay_amplitude: float, oscillation_amplitude: float) ->
     return 4.0 * relay_amplitude / (math.pi * oscillation_amplitude)
 
 
-def detune(metric, target: float, lo: float = 1e-3, hi: float = 1.0, iterations: int = 40) -> float:
+def detune(metric, target: float, *, lo: float = 1e-3, hi: float = 1.0, iterations: int = 40) -> float:
     """The largest factor ``c`` in ``[lo, hi]`` with ``metric(c) <= target``, by bisection.
 
     ``metric`` must be non-decreasing in ``c`` near the answer (overshoot against a gain
@@ -115,7 +115,7 @@ class BeeColonyResult:
 
 
 def bee_colony_minimize(
-    cost, lower, upper, iterations: int, seed: int, population: int = 10, limit: int = 20
+    cost, lower, upper, *, iterations: int, seed: int, population: int = 10, limit: int = 20
 ) -> BeeColonyResult:
     """Minimize ``cost(x)`` over the box ``[lower, upper]`` with niapy's Artificial Bee Colony.
 

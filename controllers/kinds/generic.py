@@ -33,7 +33,7 @@ def each_axis(build_one, p, ctx: Context) -> Controller:
 
 def error_feedback_each_axis(tf, ctx: Context) -> Controller:
     """The LTI controller ``tf`` on the error of each served axis."""
-    return each_axis(lambda p, c, a: error_feedback(tf, c.dt, (a,), c.method, name=f"C.{a}"), None, ctx)
+    return each_axis(lambda p, c, a: error_feedback(tf, c.dt, axes=(a,), method=c.method, name=f"C.{a}"), None, ctx)
 
 
 class PidParams(Params):
@@ -75,7 +75,9 @@ def build_cascade(p: CascadeParams, ctx: Context) -> Controller:
 
     def one(p, ctx, a):
         outer, inner = pid_tf(p.kp_pos, p.ki_pos), pid_tf(p.kp_vel, p.ki_vel)
-        return cascade(outer, inner, ctx.dt, a, p.velocity_ref_ff, ctx.method, f"cascade.{a}")
+        return cascade(
+            outer, inner, ctx.dt, axis=a, velocity_ref_ff=p.velocity_ref_ff, method=ctx.method, name=f"cascade.{a}"
+        )
 
     return each_axis(one, p, ctx)
 
@@ -116,7 +118,15 @@ def build_servo_cascade(p: ServoCascadeParams, ctx: Context) -> Controller:
         pi = pid_tf(p.kp_vel, p.kp_vel / p.ti_vel_s if p.ti_vel_s else 0.0)
         f = velocity_filter(p.notch_hz, p.notch_depth_db, p.notch_width, p.lowpass_hz)
         inner = SisoTf(np.polymul(pi.num, f.num), np.polymul(pi.den, f.den))
-        loop = cascade(SisoTf((p.kp_pos,), (1.0,)), inner, ctx.dt, a, p.velocity_ff, ctx.method, f"servo.{a}")
+        loop = cascade(
+            SisoTf((p.kp_pos,), (1.0,)),
+            inner,
+            ctx.dt,
+            axis=a,
+            velocity_ref_ff=p.velocity_ff,
+            method=ctx.method,
+            name=f"servo.{a}",
+        )
         return with_feedforward(loop, p.friction_ff, p.acceleration_ff)
 
     return each_axis(one, p, ctx)
@@ -142,7 +152,15 @@ def build_lure(p: LureParams, ctx: Context) -> Controller:
     if None in settings:
         raise ValueError(f"parameter {keys[settings.index(None)]!r} is needed by the {p.nonlinearity} nonlinearity")
     return each_axis(
-        lambda p, ctx, a: lure(SisoTf(p.num, p.den), p.nonlinearity, settings, ctx.dt, a, ctx.method, f"lure.{a}"),
+        lambda p, ctx, a: lure(
+            SisoTf(p.num, p.den),
+            p.nonlinearity,
+            settings=settings,
+            dt=ctx.dt,
+            axis=a,
+            method=ctx.method,
+            name=f"lure.{a}",
+        ),
         p,
         ctx,
     )
@@ -156,7 +174,9 @@ class RelayParams(Params):
 @controller_kind("relay", RelayParams)
 def build_relay(p: RelayParams, ctx: Context) -> Controller:
     """Relay with hysteresis on the error, for the relay tuning test."""
-    return each_axis(lambda p, ctx, a: relay_feedback(p.amplitude_V, p.hysteresis_m, ctx.dt, a, f"relay.{a}"), p, ctx)
+    return each_axis(
+        lambda p, ctx, a: relay_feedback(p.amplitude_V, p.hysteresis_m, dt=ctx.dt, axis=a, name=f"relay.{a}"), p, ctx
+    )
 
 
 @controller_kind("sum", NoParams)
@@ -198,6 +218,13 @@ def build_linear(p: LinearParams, ctx: Context) -> Controller:
         ins, outs = (_qualify(p.inputs, a), _qualify(p.outputs, a)) if a else (p.inputs, p.outputs)
         block = Linear(a_mat, b_mat, c_mat, d_mat, tuple(ins), tuple(outs), name=f"linear.{a}" if a else "linear")
         if p.domain == "continuous":
-            block = lti_block((block.A, block.B, block.C, block.D), ctx.dt, ins, outs, ctx.method, block.name)
+            block = lti_block(
+                (block.A, block.B, block.C, block.D),
+                ctx.dt,
+                inputs=ins,
+                outputs=outs,
+                method=ctx.method,
+                name=block.name,
+            )
         blocks.append(block)
     return Controller(blocks, ctx.dt, "linear")

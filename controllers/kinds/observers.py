@@ -45,7 +45,14 @@ def build_inverse_model(p: InverseModelParams, ctx: Context) -> list:
     match the drive delay."""
     return [
         inverse_model_observer(
-            p.plant(ctx, a), p.cutoff_hz, p.order, ctx.dt, a, ctx.method, name=f"observer.{a}", delay_s=p.delay(ctx)
+            p.plant(ctx, a),
+            cutoff_hz=p.cutoff_hz,
+            order=p.order,
+            dt=ctx.dt,
+            axis=a,
+            method=ctx.method,
+            name=f"observer.{a}",
+            delay_s=p.delay(ctx),
         )
         for a in ctx.axes
     ]
@@ -54,9 +61,9 @@ def build_inverse_model(p: InverseModelParams, ctx: Context) -> list:
 def _harmonic(p: HarmonicParams, ctx: Context, a: str, u_signal: str | None = None):
     return harmonic_observer(
         p.plant(ctx, a),
-        p.frequencies_hz,
-        p.bandwidth_hz,
-        ctx.dt,
+        frequencies_hz=p.frequencies_hz,
+        bandwidth_hz=p.bandwidth_hz,
+        dt=ctx.dt,
         axis=a,
         method=ctx.method,
         name=f"harmonic.{a}",
@@ -83,7 +90,14 @@ def build_inverse_model_harmonic(p: HarmonicParams, ctx: Context) -> list:
     for a in ctx.axes:
         out.append(
             inverse_model_observer(
-                p.plant(ctx, a), p.cutoff_hz, p.order, ctx.dt, a, ctx.method, name=f"observer.{a}", delay_s=p.delay(ctx)
+                p.plant(ctx, a),
+                cutoff_hz=p.cutoff_hz,
+                order=p.order,
+                dt=ctx.dt,
+                axis=a,
+                method=ctx.method,
+                name=f"observer.{a}",
+                delay_s=p.delay(ctx),
             )
         )
         # the harmonic observer compares the plant with u_prev + the inverse-model estimate of the

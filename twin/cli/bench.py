@@ -12,6 +12,7 @@ from twin.errors import TwinInputError
 
 @_guard
 def bench(
+    *,
     as_json: bool = typer.Option(False, "--json", help="Print the figures as JSON"),
     seconds: float = typer.Option(2.0, help="Simulated time per measurement (s)"),
     repeats: int = typer.Option(None, help="Alternating repeats; medians are reported (default 5; --sweep: 1)"),
@@ -67,7 +68,7 @@ def bench(
     if case and against is None:
         raise TwinInputError("--case", case[0], "is for --against only")
     if against is not None:
-        _bench_against(as_json, against, case or [], seconds, repeats)
+        _bench_against(as_json=as_json, rev=against, cases=case or [], seconds=seconds, repeats=repeats)
         return
     if sweep:
         _bench_sweep(as_json, samples, memory_samples, repeats)
@@ -82,7 +83,16 @@ def bench(
         else:
             _print_planning_bench(planning)
         return
-    figures = run_bench(seconds, repeats, gcode_lines, gcode_moves, finish_lines, part_repeats, planning_scale, file)
+    figures = run_bench(
+        seconds,
+        repeats=repeats,
+        gcode_lines=gcode_lines,
+        gcode_moves=gcode_moves,
+        finish_lines=finish_lines,
+        part_repeats=part_repeats,
+        planning_scale=planning_scale,
+        planning_file=file,
+    )
     if as_json:
         _echo_json(figures, 2)
         return
@@ -146,7 +156,7 @@ def _print_part_bench(part: dict) -> None:
     )
 
 
-def _bench_against(as_json: bool, rev: str, cases: list[str], seconds: float, repeats: int) -> None:
+def _bench_against(*, as_json: bool, rev: str, cases: list[str], seconds: float, repeats: int) -> None:
     """``twin bench --against REV``: each case's closed-loop steps/s in REV's tree (A) and this
     checkout (B), timed alternately, and the median ratio B/A."""
     from twin.bench_against import compare
@@ -180,7 +190,7 @@ def _bench_sweep(as_json: bool, samples: int, memory_samples: int, repeats: int)
     for option, value in (("--samples", samples), ("--memory-samples", memory_samples)):
         if not 1 <= value <= 100_000:
             raise TwinInputError(option, value, "must be in 1..100000")
-    f = run_sweep_bench(samples, repeats, memory_samples, progress=not as_json)
+    f = run_sweep_bench(samples=samples, repeats=repeats, memory_samples=memory_samples, progress=not as_json)
     if as_json:
         _echo_json({"sweep": f}, 2)
         return

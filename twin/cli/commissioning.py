@@ -32,6 +32,7 @@ def _timestep_and_sets(sets: list[str], option: str = "--set timestep_s") -> tup
 
 @_guard
 def frf(
+    *,
     machine: str = typer.Argument(..., help="A machine (twin list) or a machine file (FILE.toml)"),
     axis: str = typer.Option("x", "--axis", help="The axis to excite"),
     loop: str = typer.Option("velocity", "--loop", help="open | velocity | position"),
@@ -78,14 +79,14 @@ def frf(
         f_max_hz=f_max,
         feedback=feedback,
     )
-    result = measured.summary
     if as_json:
-        _echo_json(result, 1)
+        _echo_json(measured.summary, 1)
     else:
+        m = measured.measurement
         typer.echo(
             f"{machine}: axis {axis}, {loop} loop on the {feedback} encoder, {sensor} sensor, "
             f"{excitation} {amplitude:g} V, "
-            f"{len(result['frequency_hz'])} lines {result['frequency_hz'][0]:.2f}-{result['frequency_hz'][-1]:.0f} Hz"
+            f"{len(m.frequency_hz)} lines {m.frequency_hz[0]:.2f}-{m.frequency_hz[-1]:.0f} Hz"
         )
         nut = measured.nut_stiffness
         if position is not None and nut is not None:
@@ -93,26 +94,24 @@ def frf(
                 f"  nut at {position:g} m: axial stiffness {nut['axial_N_per_m'] / 1e6:.4g} N/um, "
                 f"torsion {nut['torsion_N_m_per_rad']:.4g} N m/rad"
             )
-        doubtful = {(q["kind"], q["frequency_hz"]) for q in result["modes"] if q["unreliable"] is not None}
-        for label, key, kind in (
-            ("resonances", "resonances_hz", "resonance"),
-            ("anti-resonances", "antiresonances_hz", "antiresonance"),
+        doubtful = {(q.kind, q.frequency_hz) for q in m.modes if q.unreliable is not None}
+        for label, kind, found, model in (
+            ("resonances", "resonance", m.resonances_hz, m.model_resonances_hz),
+            ("anti-resonances", "antiresonance", m.antiresonances_hz, m.model_antiresonances_hz),
         ):
-            found = ", ".join(f"{f:.1f}" + (" (unreliable)" if (kind, f) in doubtful else "") for f in result[key])
-            model = ", ".join(f"{f:.1f}" for f in result[f"model_{key}"])
-            typer.echo(f"  {label} (Hz): {found or 'none'}   model: {model or 'none'}")
-        for q in result["modes"]:
-            if q["unreliable"] is not None:
-                kind = "anti-resonance" if q["kind"] == "antiresonance" else q["kind"]
-                typer.echo(f"  unreliable {kind} {q['frequency_hz']:.1f} Hz: {q['unreliable']}")
-        if result["incoherent_bands_hz"]:
-            bands = ", ".join(
-                f"{lo:.1f}" if lo == hi else f"{lo:.1f}-{hi:.1f}" for lo, hi in result["incoherent_bands_hz"]
-            )
+            listed = ", ".join(f"{f:.1f}" + (" (unreliable)" if (kind, f) in doubtful else "") for f in found)
+            modelled = ", ".join(f"{f:.1f}" for f in model)
+            typer.echo(f"  {label} (Hz): {listed or 'none'}   model: {modelled or 'none'}")
+        for q in m.modes:
+            if q.unreliable is not None:
+                kind = "anti-resonance" if q.kind == "antiresonance" else q.kind
+                typer.echo(f"  unreliable {kind} {q.frequency_hz:.1f} Hz: {q.unreliable}")
+        if m.incoherent_bands_hz:
+            bands = ", ".join(f"{lo:.1f}" if lo == hi else f"{lo:.1f}-{hi:.1f}" for lo, hi in m.incoherent_bands_hz)
             typer.echo(f"  coherence < {MODE_MIN_COHERENCE:g} (a mode there is unreliable or missing) at {bands} Hz")
-        error = result["max_model_error_db"]
+        error = m.max_model_error_db
         typer.echo(
-            f"  coherence >= 0.9 on {100 * result['coherent_share']:.0f} % of the lines; "
+            f"  coherence >= 0.9 on {100 * m.coherent_share:.0f} % of the lines; "
             f"largest |measured - model| there: {'-' if error is None else f'{error:.2f}'} dB"
         )
     if plots is not None:
@@ -145,6 +144,7 @@ def _parse_rpm(text: str | None) -> tuple[float, float, int] | None:
 
 @_guard
 def lobes(
+    *,
     scenario: str = typer.Argument(..., help="Scenario TOML file, or a bundled scenario name"),
     method: str = typer.Option("both", "--method", help="zoa | sd | both"),
     rpm: str = typer.Option(None, "--rpm", help="Spindle speeds MIN:MAX:N (default: from the scenario's)"),
@@ -194,7 +194,7 @@ def lobes(
                 else (f"lowest critical depth {low['critical_depth_mm']:.3f} mm at {low['spindle_rpm']:.0f} rpm")
             )
             typer.echo(f"  {name}: {where} over {span}, {summary['seconds'][name]:.2f} s")
-        _print_chatter_check(summary.get("lines", []))
+        _print_chatter_check(found.stability_checks)
     if plots is not None:
         plots.mkdir(parents=True, exist_ok=True)
         path = found.write_png(plots / f"lobes_{Path(scenario).stem}.png")
@@ -203,6 +203,7 @@ def lobes(
 
 @_guard
 def calibrate(
+    *,
     machine: str = typer.Argument(..., help="A machine (twin list) or a machine file (FILE.toml)"),
     trace: Path = typer.Option(..., "--trace", help="Measured time trace or FRF, .csv or .parquet"),
     fit: str = typer.Option(..., "--fit", help="Parameters to fit, SYM,SYM"),
@@ -228,39 +229,46 @@ def calibrate(
     symbols = [s.strip() for s in fit.split(",") if s.strip()]
     timestep, overrides = _timestep_and_sets(sets or [])
     calibration = api.calibrate(
-        machine, trace, symbols, overrides, axis, sensor=sensor, progress=not as_json, timestep_s=timestep
+        machine,
+        trace,
+        symbols,
+        overrides=overrides,
+        axis=axis,
+        sensor=sensor,
+        progress=not as_json,
+        timestep_s=timestep,
     )
-    result = calibration.summary
     if as_json:
-        _echo_json(result, 2)
+        _echo_json(calibration.summary, 2)
     else:
-        what = "twin runs" if result["kind"] == "time" else "model evaluations"
-        typer.echo(f"{machine}: {result['kind']} trace {trace}, {result['evaluations']} {what}")
-        solver = result["solver"]
+        report = calibration.report
+        what = "twin runs" if report.kind == "time" else "model evaluations"
+        typer.echo(f"{machine}: {report.kind} trace {trace}, {report.evaluations} {what}")
+        solver = report.solver
         typer.echo(
-            f"  {'converged' if solver['converged'] else 'NOT converged'}: {solver['termination']} "
-            f"(optimality {solver['optimality']:.2g}"
-            + (f", {solver['rejected_diverged']} diverging trials rejected)" if solver["rejected_diverged"] else ")")
+            f"  {'converged' if solver.converged else 'NOT converged'}: {solver.termination} "
+            f"(optimality {solver.optimality:.2g}"
+            + (f", {solver.rejected_diverged} diverging trials rejected)" if solver.rejected_diverged else ")")
         )
-        for s, v in result["fitted"].items():
+        for s, v in report.fitted.items():
             unit = get_machine(machine).parameters[s].unit
-            error = result["standard_errors"].get(s)
+            error = report.standard_errors.get(s)
             spread = f" +- {error:.2g}" if error is not None else " (no standard error: the fit did not converge)"
-            if s in result["model_errors"]:
-                spread += f" (noise {result['statistical_errors'][s]:.2g}, model {result['model_errors'][s]:.2g})"
-            typer.echo(f"  {s} = {v:.6g} {unit}{spread} (nominal {result['nominal'][s]:.6g})")
-        for s, why in result["unidentifiable"].items():
-            typer.echo(f"  {s}: not identifiable, kept at {result['nominal'][s]:.6g}: {why}")
-        for s, why in result["poorly_determined"].items():
+            if s in report.model_errors:
+                spread += f" (noise {report.statistical_errors[s]:.2g}, model {report.model_errors[s]:.2g})"
+            typer.echo(f"  {s} = {v:.6g} {unit}{spread} (nominal {report.nominal[s]:.6g})")
+        for s, why in report.unidentifiable.items():
+            typer.echo(f"  {s}: not identifiable, kept at {report.nominal[s]:.6g}: {why}")
+        for s, why in report.poorly_determined.items():
             typer.echo(f"  {s}: poorly determined: {why}")
-        fi = result["fit_index_pct"]
-        typer.echo("  fit index: " + ", ".join(f"{k} {v:.2f} %" for k, v in fi.items()))
-        if "residual_rms_m" in solver:
+        typer.echo("  fit index: " + ", ".join(f"{k} {v:.2f} %" for k, v in report.fit_index_pct.to_json().items()))
+        noise = solver.against_noise
+        if noise is not None:
             typer.echo(
-                f"  residual {solver['residual_rms_m']:.3g} m RMS, the trace's noise {solver['noise_floor_m']:.3g} m"
-                + (f": {solver['note']}" if "note" in solver else "")
+                f"  residual {noise.residual_rms_m:.3g} m RMS, the trace's noise {noise.noise_floor_m:.3g} m: "
+                + noise.note
             )
-        for s, why in result["not_excited"].items():
+        for s, why in report.not_excited.items():
             typer.echo(f"  {s}: not excited: {why}")
     if out is not None:
         calibration.write_machine_file(out)
@@ -269,6 +277,7 @@ def calibrate(
 
 @_guard
 def excite(
+    *,
     machine: str = typer.Argument(..., help="A machine (twin list) or a machine file (FILE.toml)"),
     out: Path = typer.Option(..., "--out", help="The trace to write, .csv or .parquet"),
     axis: str = typer.Option("x", "--axis", help="The axis to excite"),
@@ -299,6 +308,7 @@ def excite(
 
 @_guard
 def tune(
+    *,
     machine: str = typer.Argument(..., help="A machine (twin list) or a machine file (FILE.toml)"),
     sets: list[str] = typer.Option(None, "--set", help="Parameter override SYMBOL=VALUE"),
     control_period: float = typer.Option(None, "--control-period", help="Control period, s (default about 0.1 ms)"),
@@ -359,31 +369,15 @@ def tune(
         for a, v in result.get("verification", {}).items():
             typer.echo(f"  verified on the twin, {a}: " + ", ".join(f"{k} {x:.4g}" for k, x in v.items()))
         if check_margins:
-            from twin.commissioning.boundary import CONDITIONS, MAX_WIDENINGS
+            from twin.commissioning.boundary import CONDITIONS
 
             typer.echo(
                 "  the twin's bisected boundary, dB (less the cascade margin): "
                 + ", ".join(CONDITIONS)
                 + ", zero step (the linear boundary extrapolated to a zero physics step)"
             )
-
-            def found(boundary: float | None, less: float | None) -> str:
-                return f"none within {MAX_WIDENINGS} dB" if boundary is None else f"{boundary:6.2f} ({less:+.2f})"
-
-            for row in result["margin_check"]:
-                typer.echo(
-                    f"  {row['axis']} {row['gain']:<7} margin {row['margin_db']:6.2f} dB: "
-                    + ", ".join(
-                        found(row[name] and row[name]["boundary_db"], row[name + "_minus_margin_db"])
-                        for name in CONDITIONS
-                    )
-                    + ", "
-                    + (
-                        "-"
-                        if row.get("zero_step_db") is None
-                        else found(row["zero_step_db"], row["zero_step_minus_margin_db"])
-                    )
-                )
+            for row in tuned.margin_check:
+                typer.echo(f"  {row.report_line()}")
     if out is not None:
         out.write_text(tuned.scenario_text(), encoding="utf-8")
         typer.echo(f"scenario written to {out} (run it: twin run {out})", err=as_json)

@@ -8,11 +8,11 @@ import typer
 
 from twin.cli.common import _guard
 from twin.cli.printing import _fail_on_warnings, _print_summary, _print_warnings
-from twin.records import plan_warning
 
 
 @_guard
 def gcode(
+    *,
     file: Path = typer.Argument(..., help="The part program (RS-274/NGC, LinuxCNC's dialect)"),
     machine: str = typer.Option(None, "--machine", help="Plan the program for this machine (twin list)"),
     as_json: bool = typer.Option(False, "--json", help="Print the moves (and the plan) as JSON"),
@@ -44,29 +44,16 @@ def gcode(
     planned = list_program(file, reader_settings, as_json, plan)
     if planned is None:
         return
-    warnings = [plan_warning(row) for row in planned["warnings"]]
-    total = planned.get("warnings_total", len(warnings))
+    warnings, total = planned.warnings, planned.warnings_total
     if not as_json:
         typer.echo(f"planned for {machine}:")
-        _print_summary(
-            "",
-            {
-                k: v
-                for k, v in planned.items()
-                if k not in ("limits", "max", "violations", "notes", "warnings", "warnings_total")
-            },
-        )
-        for over in planned["violations"]:
-            typer.echo(f"  over a limit: line {over['line']}, {over['axis']} {over['quantity']} x{over['ratio']:.4f}")
-        for note in planned["notes"]:
+        _print_summary("", planned.headline())
+        for over in planned.violations:
+            typer.echo(f"  over a limit: {over.report_line()}")
+        for note in planned.notes:
             typer.echo(f"  note: {note}")
         for axis in "xyz":
-            lim, top = planned["limits"][axis], planned["max"][axis]
-            typer.echo(
-                f"  {axis}: v {top['velocity_m_per_s']:.4g}/{lim['velocity_m_per_s']:.4g} m/s, "
-                f"a {top['acceleration_m_per_s2']:.4g}/{lim['acceleration_m_per_s2']:.4g} m/s^2, "
-                f"j {top['jerk_m_per_s3']:.4g}/{lim['jerk_m_per_s3']:.4g} m/s^3 (largest/limit)"
-            )
+            typer.echo(f"  {planned.axis_line(axis)}")
         _print_warnings("warnings against the machine", warnings, total)
     if strict:
         _fail_on_warnings("warning(s) against the machine", warnings, total)

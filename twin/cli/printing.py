@@ -7,7 +7,7 @@ from collections.abc import Sequence
 import typer
 
 from twin import exits
-from twin.records import Inspected, LineRow, LineWarning, RunRecords
+from twin.records import Inspected, LineRow, LineStability, LineWarning, RunRecords
 
 #: Lines of a program the text summary names, worst first.
 WORST_LINES = 5
@@ -66,20 +66,18 @@ def _print_chatter(records: RunRecords) -> None:
     _print_warnings("chatter warnings", warnings, len(warnings))
 
 
-def _print_chatter_check(rows: Sequence[LineRow]) -> None:
-    """The program's cutting lines over their critical depth (the tool's lobes), worst first."""
-    checked = [row.stability for row in rows if row.stability is not None]
+def _print_chatter_check(checked: Sequence[LineStability]) -> None:
+    """The program's cutting lines over their critical depth (the tool's lobes), worst first:
+    ``checked`` holds each cutting line's chatter check
+    (:func:`twin.machining.program_stability.line_stability`)."""
     if not checked:
         return
-    over = sorted(
-        (check for check in checked if (check["margin"] or float("inf")) < 1),
-        key=lambda check: check["margin"],
-    )
+    over = sorted((check for check in checked if check.over_critical), key=lambda check: check.margin or 0.0)
     typer.echo(
         f"  chatter check (zero-order lobes): {len(checked)} cutting line(s), {len(over)} over their critical depth"
     )
     for check in over[:WORST_LINES]:
-        typer.echo(f"    {check['text']}")
+        typer.echo(f"    {check.text}")
 
 
 def _print_part(summary: dict, inspection: Sequence[Inspected]) -> None:

@@ -24,6 +24,7 @@ from twin.reproductions import DEFAULT_SAMPLES, DEFAULT_SEED, DEFAULT_TWIN_SAMPL
 
 def _run(
     scenario: str,
+    *,
     rrd: Path | None,
     as_json: bool,
     settings: list[str] | None = None,
@@ -54,7 +55,9 @@ def _run(
     if rrd is not None and scn.record_every_ticks == 0:
         raise TwinInputError("record_every_ticks", 0, "the run keeps metrics only: nothing to write to --rrd")
     done = api.run(scn, progress=False if as_json else None, max_physics_steps=max_steps, keep_partial=True)
-    _report(done, rrd, as_json, plots, lines, part)  # a run that stopped early too: what it computed
+    _report(
+        done, rrd=rrd, as_json=as_json, plots=plots, lines=lines, part=part
+    )  # a run that stopped early too: what it computed
     if done.stopped is not None:
         raise done.stopped
     if strict:
@@ -66,7 +69,13 @@ def _run(
 
 
 def _report(
-    done, rrd: Path | None, as_json: bool, plots: Path | None, lines: Path | None = None, part: Path | None = None
+    done,
+    *,
+    rrd: Path | None,
+    as_json: bool,
+    plots: Path | None,
+    lines: Path | None = None,
+    part: Path | None = None,
 ) -> None:
     """Print the run's summary (text or JSON), write its recording, its plots and, for a
     program, its per-line table and (with a stock) its virtual part's files."""
@@ -96,7 +105,7 @@ def _report(
         )
         records = done.records
         _print_worst_lines(records.lines)
-        _print_chatter_check(records.lines)
+        _print_chatter_check(records.stability_checks)
         _print_warnings("machining warnings", records.machining_warnings, records.machining_warnings_total)
         _print_warnings("warnings against the machine", records.plan_warnings, records.plan_warnings_total)
         _print_chatter(records)
@@ -117,6 +126,7 @@ def _report(
 
 @_guard
 def run(
+    *,
     scenario: str = typer.Argument(..., help="Scenario TOML file, or a bundled scenario name"),
     rrd: Path = typer.Option(None, "--rrd", help="Write a Rerun recording to this .rrd file"),
     as_json: bool = typer.Option(False, "--json", help="Print metrics as JSON"),
@@ -146,7 +156,17 @@ def run(
     ),
 ):
     """Run a closed-loop scenario and print its tracking metrics (a G-code run: per program line too)."""
-    _run(scenario, rrd, as_json, sets, max_steps, plots, lines, strict, part)
+    _run(
+        scenario,
+        rrd=rrd,
+        as_json=as_json,
+        settings=sets,
+        max_steps=max_steps,
+        plots=plots,
+        lines=lines,
+        strict=strict,
+        part=part,
+    )
 
 
 @_guard
@@ -157,7 +177,7 @@ def demo(
 ):
     """The main job: Choi 1999's cutting circle (R 28 mm, 4800 mm/min, 10000 rpm end milling) on the
     linear-motor table under the MIMO H-infinity loop-shaping controller with ZPETC."""
-    _run("choi1999_mimo_cutting", rrd, as_json, plots=plots)
+    _run("choi1999_mimo_cutting", rrd=rrd, as_json=as_json, plots=plots)
 
 
 @_guard
@@ -196,6 +216,7 @@ def fidelity(
 
 @_guard
 def reproduce(
+    *,
     source: str = typer.Argument(..., help="Which paper, e.g. yadav2020 (twin list shows them)"),
     as_json: bool = typer.Option(False, "--json", help="Print everything as JSON"),
     rrd: Path = typer.Option(None, "--rrd", help="Record the nominal twin step runs to this .rrd"),
@@ -234,6 +255,7 @@ def reproduce(
 
 @_guard
 def sweep(
+    *,
     target: str = typer.Argument(
         ..., help="Scenario (bundled name or TOML file), or a sweep TOML file (with a [vary] table)"
     ),
@@ -313,53 +335,9 @@ def mjcf(
 
 
 def list_things():
-    """Machines, controller kinds, observers, disturbances, materials, references, bundled
-    scenarios and reproducible papers."""
-    from controllers import CONTROLLERS, OBSERVERS
-    from twin.disturbances import DISTURBANCES
-    from twin.machines import MACHINES
-    from twin.machining.materials import KIENZLE_AXIAL_RATIO, KIENZLE_RADIAL_RATIO, MATERIALS
-    from twin.references import REFERENCES
-    from twin.reproductions.registry import REPRODUCTIONS
-    from twin.scenario import bundled_scenarios, load_scenario
+    """Machines, controller kinds, observers, disturbances, materials, references, inspection
+    features, bundled scenarios and reproducible papers (the catalogue, :mod:`twin.catalogue`)."""
+    from twin.catalogue import list_lines
 
-    def params(kind):
-        names = list(kind.params.model_fields)
-        return f" [params: {', '.join(names)}]" if names else ""
-
-    typer.echo("machines (or a machine file of datasheet values, FILE.toml: examples/machines/):")
-    for name, m in MACHINES.items():
-        typer.echo(f"  {name:<22} {m.summary}")
-    typer.echo("controllers (type = ...):")
-    for name, kind in CONTROLLERS.items():
-        typer.echo(f"  {name:<22} {kind.doc}{params(kind)}")
-    typer.echo("observers ([controller.observer] type = ...):")
-    for name, kind in OBSERVERS.items():
-        typer.echo(f"  {name:<22} {kind.doc}{params(kind)}")
-    typer.echo("disturbances ([[disturbances]] type = ...):")
-    for name, kind in DISTURBANCES.items():
-        typer.echo(f"  {name:<22} {kind.doc.removeprefix(name + ': ')}")
-    typer.echo(
-        "materials ([tool] / [[tools]] / end_milling material = ...): linear K_tc K_rc K_ac N/mm^2, K_te K_re K_ae"
-        f" N/mm; Kienzle kc1 N/mm^2 and mc (kc = kc1 h^-mc), radial and axial {KIENZLE_RADIAL_RATIO:g} and"
-        f" {KIENZLE_AXIAL_RATIO:g} of the tangential (our ratios, no source)"
-    )
-    for name, material in MATERIALS.items():
-        k = material.coefficients
-        if k.mc:
-            values = f"kc1 {k.K_tc:.0f}, mc {k.mc:.3f}"
-        else:
-            values = f"{k.K_tc:g} {k.K_rc:g} {k.K_ac:g}, {k.K_te:g} {k.K_re:g} {k.K_ae:g}"
-        typer.echo(
-            f"  {name:<24} {material.model}: {material.alloy}, {material.cutter}, {material.lubrication}: {values}"
-            f" ({material.source})"
-        )
-    typer.echo("references ([reference] type = ...):")
-    for name, kind in REFERENCES.items():
-        typer.echo(f"  {name:<22} {kind.doc.removeprefix(name + ': ')}")
-    typer.echo("scenarios:")
-    for name in sorted(bundled_scenarios()):
-        typer.echo(f"  {name:<30} {load_scenario(name).description}")
-    typer.echo("reproductions (twin reproduce ...):")
-    for name, paper in REPRODUCTIONS.items():
-        typer.echo(f"  {name:<22} {paper.doc}")
+    for line in list_lines():
+        typer.echo(line)

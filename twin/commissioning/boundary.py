@@ -26,6 +26,7 @@ from __future__ import annotations
 import math
 import tomllib
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -85,6 +86,137 @@ CONDITIONS = {
 }
 
 
+@dataclass(frozen=True)
+class Boundary:
+    """The twin's bisected stability boundary of one gain (:func:`twin_boundary`).
+
+    Attributes
+    ----------
+    boundary_db : float
+        The interpolated crossing of the growth threshold (dB on the gain).
+    decays_db, grows_db : float
+        The final bracket (dB), at most :data:`RESOLUTION_DB` apart.
+    runs : int
+        The twin runs the bisection took.
+    """
+
+    boundary_db: float
+    decays_db: float
+    grows_db: float
+    runs: int
+
+    def to_json(self) -> dict[str, float | int]:
+        """``boundary_db``, ``decays_db``, ``grows_db``, ``runs``."""
+        return {
+            "boundary_db": self.boundary_db,
+            "decays_db": self.decays_db,
+            "grows_db": self.grows_db,
+            "runs": self.runs,
+        }
+
+
+@dataclass(frozen=True, kw_only=True)
+class MarginCheck:
+    """One axis's gain: its cascade margin beside the twin's bisected boundaries (:func:`verify_margins`).
+
+    Attributes
+    ----------
+    machine : str or None
+        The machine's name where a table of several names it (``examples/verify_margins.py``).
+    axis, gain, feedback : str
+    margin_db, margin_hz : float
+        The reported cascade margin (dB) and its phase crossover (Hz).
+    boundaries : dict of str to Boundary or None
+        Per condition of :data:`CONDITIONS` checked, in order, the twin's boundary; None where the
+        twin does not grow within :data:`MAX_WIDENINGS` dB of the margin.
+    minus_margin_db : dict of str to float or None
+        Per condition, the boundary less the margin (dB, to 3 decimals).
+    zero_step_db, zero_step_minus_margin_db : float or None
+        With ``linear`` and ``linear_quarter_step`` both found, the linear boundary extrapolated
+        to a zero physics step (:func:`zero_step_boundary`) and it less the margin (dB).
+    """
+
+    machine: str | None = None
+    axis: str
+    gain: str
+    feedback: str
+    margin_db: float
+    margin_hz: float
+    boundaries: dict[str, Boundary | None]
+    minus_margin_db: dict[str, float | None]
+    zero_step_db: float | None = None
+    zero_step_minus_margin_db: float | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        """``machine`` (where named), ``axis``, ``gain``, ``feedback``, ``margin_db``,
+        ``margin_hz``, per condition its boundary and ``<name>_minus_margin_db``, and where
+        found ``zero_step_db`` and ``zero_step_minus_margin_db``."""
+        out: dict[str, Any] = {} if self.machine is None else {"machine": self.machine}
+        out |= {
+            "axis": self.axis,
+            "gain": self.gain,
+            "feedback": self.feedback,
+            "margin_db": self.margin_db,
+            "margin_hz": self.margin_hz,
+        }
+        for name, found in self.boundaries.items():
+            out[name] = None if found is None else found.to_json()
+            out[f"{name}_minus_margin_db"] = self.minus_margin_db[name]
+        if self.zero_step_db is not None:
+            out["zero_step_db"] = self.zero_step_db
+            out["zero_step_minus_margin_db"] = self.zero_step_minus_margin_db
+        return out
+
+    @classmethod
+    def from_json(cls, row: dict[str, Any]) -> MarginCheck:
+        """The check :meth:`to_json` gave (a committed table's row), every condition of
+        :data:`CONDITIONS` in it."""
+        return cls(
+            machine=row.get("machine"),
+            axis=row["axis"],
+            gain=row["gain"],
+            feedback=row["feedback"],
+            margin_db=row["margin_db"],
+            margin_hz=row["margin_hz"],
+            boundaries={name: None if row[name] is None else Boundary(**row[name]) for name in CONDITIONS},
+            minus_margin_db={name: row[f"{name}_minus_margin_db"] for name in CONDITIONS},
+            zero_step_db=row.get("zero_step_db"),
+            zero_step_minus_margin_db=row.get("zero_step_minus_margin_db"),
+        )
+
+    def _boundaries(self, number: str) -> list[str]:
+        """Each condition's boundary beside the margin (:func:`_beside`, ``number`` its format)."""
+        return [
+            _beside(None if found is None else found.boundary_db, self.minus_margin_db[name], number)
+            for name, found in self.boundaries.items()
+        ]
+
+    def report_line(self) -> str:
+        """The check as ``twin tune --verify-margins`` prints it: the margin, each condition's
+        boundary (less the margin) and the zero step's (``-``: not found)."""
+        zero = "-" if self.zero_step_db is None else _beside(self.zero_step_db, self.zero_step_minus_margin_db, "6.2f")
+        return f"{self.axis} {self.gain:<7} margin {self.margin_db:6.2f} dB: " + ", ".join(
+            [*self._boundaries("6.2f"), zero]
+        )
+
+    def table_row(self) -> str:
+        """The check as a row of :func:`margin_table` (Markdown)."""
+        zero = "-" if self.zero_step_db is None else _beside(self.zero_step_db, self.zero_step_minus_margin_db, ".2f")
+        return (
+            f"| {self.machine} | {self.feedback} | {self.axis} | {self.gain} "
+            f"| {self.margin_db:.2f} dB at {self.margin_hz:.0f} Hz |"
+            + "".join(f" {cell} |" for cell in [*self._boundaries(".2f"), zero])
+        )
+
+
+def _beside(boundary_db: float | None, less_margin_db: float | None, number: str) -> str:
+    """A boundary (dB, formatted as ``number``) with it less the cascade margin in brackets, or
+    that the twin did not grow within :data:`MAX_WIDENINGS` dB (None)."""
+    if boundary_db is None:
+        return f"none within {MAX_WIDENINGS} dB"
+    return f"{boundary_db:{number}} ({less_margin_db:+.2f})"
+
+
 def _scaled(design: dict, axis: str, gain: str, db: float) -> dict:
     """A copy of ``design`` with ``axis``'s ``gain`` times 10^(db/20)."""
     factor = 10 ** (db / 20)
@@ -133,17 +265,15 @@ def growth_ratio(design: dict, machine: str, axis: str, gain: str, db: float, co
     return math.inf if spread == 0.0 else final / spread
 
 
-def twin_boundary(
-    design: dict, machine: str, axis: str, gain: str, conditions: TwinConditions = AS_RUN
-) -> dict[str, float | int]:
+def twin_boundary(design: dict, machine: str, axis: str, gain: str, conditions: TwinConditions = AS_RUN) -> Boundary:
     """The factor (dB) on ``gain`` of ``axis`` at which the twin's tuned cascade starts to grow,
     bisected from the reported cascade margin (see the module docstring).
 
     Returns
     -------
-    dict
-        ``boundary_db`` (the interpolated crossing), ``decays_db`` and ``grows_db`` (the final
-        bracket, at most :data:`RESOLUTION_DB` apart) and ``runs``.
+    Boundary
+        The interpolated crossing, the final bracket (at most :data:`RESOLUTION_DB` apart) and
+        the runs it took.
 
     Raises
     ------
@@ -178,12 +308,12 @@ def twin_boundary(
             low = middle
     at_low, at_high = (math.log(max(ratio(db), 1e-300) / GROWTH_RATIO) for db in (low, high))
     share = 0.5 if not math.isfinite(at_high) or at_high == at_low else -at_low / (at_high - at_low)
-    return {
-        "boundary_db": round(low + share * (high - low), 3),
-        "decays_db": round(low, 4),
-        "grows_db": round(high, 4),
-        "runs": len(ratios),
-    }
+    return Boundary(
+        boundary_db=round(low + share * (high - low), 3),
+        decays_db=round(low, 4),
+        grows_db=round(high, 4),
+        runs=len(ratios),
+    )
 
 
 def zero_step_boundary(at_step_db: float, at_fine_step_db: float, divisor: int) -> float:
@@ -198,7 +328,7 @@ def verify_margins(
     machine: str,
     gains: tuple[str, ...] = GAINS,
     conditions: dict[str, TwinConditions] | None = None,
-) -> list[dict]:
+) -> list[MarginCheck]:
     """Each axis's reported cascade margins beside the twin's bisected boundaries.
 
     Parameters
@@ -208,49 +338,52 @@ def verify_margins(
 
     Returns
     -------
-    list of dict
-        Per axis and gain with a finite margin: ``axis``, ``gain``, ``feedback``, ``margin_db``,
-        ``margin_hz``, per condition its :func:`twin_boundary` and ``<name>_minus_margin_db``
-        (both None where the twin does not grow within :data:`MAX_WIDENINGS` dB of the margin),
-        and with ``linear`` and ``linear_quarter_step`` both found, ``zero_step_db`` (the linear
-        boundary extrapolated to a zero step, :func:`zero_step_boundary`) and
-        ``zero_step_minus_margin_db``.
+    list of MarginCheck
+        Per axis and gain with a finite margin, each condition's :func:`twin_boundary` (None
+        where the twin does not grow within :data:`MAX_WIDENINGS` dB of the margin), and with
+        ``linear`` and ``linear_quarter_step`` both found, the linear boundary extrapolated to a
+        zero step (:func:`zero_step_boundary`).
     """
     conditions = conditions or CONDITIONS
     rows = []
     for axis, r in design["axes"].items():
         for gain in gains:
             margin = r["cascade_margins"][gain]
-            if margin["gain_margin_db"] is None:
+            margin_db = margin["gain_margin_db"]
+            if margin_db is None:
                 continue  # no crossing bounds it: nothing to bisect
-            row: dict = {
-                "axis": axis,
-                "gain": gain,
-                "feedback": design["feedback"],
-                "margin_db": margin["gain_margin_db"],
-                "margin_hz": margin["gain_margin_hz"],
-            }
+            boundaries: dict[str, Boundary | None] = {}
             for name, condition in conditions.items():
                 try:
-                    found = twin_boundary(design, machine, axis, gain, condition)
+                    boundaries[name] = twin_boundary(design, machine, axis, gain, condition)
                 except TwinInputError:  # no growth within MAX_WIDENINGS dB of the margin
-                    row[name], row[f"{name}_minus_margin_db"] = None, None
-                    continue
-                row[name] = found
-                row[f"{name}_minus_margin_db"] = round(found["boundary_db"] - margin["gain_margin_db"], 3)
-            if row.get("linear") and row.get("linear_quarter_step"):
-                zero = zero_step_boundary(
-                    row["linear"]["boundary_db"],
-                    row["linear_quarter_step"]["boundary_db"],
-                    LINEAR_QUARTER_STEP.timestep_divisor,
+                    boundaries[name] = None
+            linear, quarter = boundaries.get("linear"), boundaries.get("linear_quarter_step")
+            zero = (
+                None
+                if linear is None or quarter is None
+                else zero_step_boundary(linear.boundary_db, quarter.boundary_db, LINEAR_QUARTER_STEP.timestep_divisor)
+            )
+            rows.append(
+                MarginCheck(
+                    axis=axis,
+                    gain=gain,
+                    feedback=design["feedback"],
+                    margin_db=margin_db,
+                    margin_hz=margin["gain_margin_hz"],
+                    boundaries=boundaries,
+                    minus_margin_db={
+                        name: None if found is None else round(found.boundary_db - margin_db, 3)
+                        for name, found in boundaries.items()
+                    },
+                    zero_step_db=None if zero is None else round(zero, 3),
+                    zero_step_minus_margin_db=None if zero is None else round(zero - margin_db, 3),
                 )
-                row["zero_step_db"] = round(zero, 3)
-                row["zero_step_minus_margin_db"] = round(zero - margin["gain_margin_db"], 3)
-            rows.append(row)
+            )
     return rows
 
 
-def margin_table(rows: list[dict]) -> str:
+def margin_table(rows: list[MarginCheck]) -> str:
     """:func:`verify_margins`'s rows (each with its ``machine``, every condition of
     :data:`CONDITIONS`) as a Markdown table: the cascade margin and each boundary with the
     boundary less the margin (dB)."""
@@ -259,16 +392,4 @@ def margin_table(rows: list[dict]) -> str:
         "| linear, 1/4 step | zero step |",
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
-
-    def cell(found: dict | None, less: float | None) -> str:
-        return f" none within {MAX_WIDENINGS} dB |" if found is None else f" {found['boundary_db']:.2f} ({less:+.2f}) |"
-
-    for r in rows:
-        boundaries = "".join(cell(r[name], r[f"{name}_minus_margin_db"]) for name in CONDITIONS)
-        zero = r.get("zero_step_db")
-        lines.append(
-            f"| {r['machine']} | {r['feedback']} | {r['axis']} | {r['gain']} "
-            f"| {r['margin_db']:.2f} dB at {r['margin_hz']:.0f} Hz |{boundaries}"
-            + (" - |" if zero is None else f" {zero:.2f} ({r['zero_step_minus_margin_db']:+.2f}) |")
-        )
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines + [row.table_row() for row in rows]) + "\n"

@@ -41,7 +41,10 @@ The fit index is Sabau 2022's NRMSE fit, 100 (1 - ||y - y_model|| /
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any, Literal
 
 import numpy as np
 from scipy import optimize, signal
@@ -231,175 +234,547 @@ def _fit_parameters(machine, fit: list[str]) -> list[str]:
     return fit
 
 
+@dataclass(frozen=True)
+class TimeTrace:
+    """A measured time trace, checked (:func:`time_trace`), and how a fit compares the twin with it.
+
+    Attributes
+    ----------
+    sample_period_s : float
+    inputs_V : numpy.ndarray
+        (samples, axes): the drive inputs (V), zero on an axis without a column.
+    positions_m : numpy.ndarray
+        (samples, axes): the encoder positions (m).
+    measured : list of int
+        The axes the trace measures.
+    noise_floor_m : float
+        The positions' white noise (m RMS, :func:`noise_floor`).
+    """
+
+    sample_period_s: float
+    inputs_V: np.ndarray
+    positions_m: np.ndarray
+    measured: list[int]
+    noise_floor_m: float
+
+    @property
+    def target(self) -> np.ndarray:
+        """The measured positions (m): (samples, measured axes)."""
+        return self.positions_m[:, self.measured]
+
+    def model(self, bm: BuiltMachine) -> np.ndarray:
+        """The twin's positions (m) on the measured axes under the trace's input (:func:`replay`)."""
+        return replay(bm, self.sample_period_s, self.inputs_V, self.positions_m[0])[:, self.measured]
+
+    def residual(self, model: np.ndarray) -> np.ndarray:
+        """The position's error, in units of the measured positions' standard deviation."""
+        return (model - self.target).ravel() / np.std(self.target)
+
+    def basin_residual(self, model: np.ndarray) -> np.ndarray:
+        """The velocity's error (the positions' difference per sample), in units of the measured
+        velocity's standard deviation: the first stage's (see the module docstring)."""
+        measured_velocity = np.diff(self.target, axis=0) / self.sample_period_s
+        velocity = np.diff(model, axis=0) / self.sample_period_s
+        return (velocity - measured_velocity).ravel() / np.std(measured_velocity)
+
+    def at_noise_floor(self, solution: optimize.OptimizeResult) -> bool:
+        """Whether a velocity fit's residual lies within :data:`NOISE_FLOOR_FACTOR` of the
+        velocity's noise (the position's, differenced)."""
+        measured_velocity = np.diff(self.target, axis=0) / self.sample_period_s
+        velocity_floor = math.sqrt(2.0) * self.noise_floor_m / self.sample_period_s
+        rms = float(np.sqrt(np.mean(solution.fun**2))) * np.std(measured_velocity)
+        return bool(rms <= NOISE_FLOOR_FACTOR * velocity_floor)
+
+
+@dataclass(frozen=True)
+class MeasuredFrf:
+    """A measured FRF, checked (:func:`measured_frf`), and how a fit compares the model with it.
+
+    Attributes
+    ----------
+    frequency_hz : numpy.ndarray
+    response : numpy.ndarray
+        The complex response (m/V) on those lines.
+    axis : int
+        The index of the axis it was measured on.
+    sensor : {"motor", "table"}
+        The sensor it was measured at.
+    """
+
+    frequency_hz: np.ndarray
+    response: np.ndarray
+    axis: int
+    sensor: str
+
+    @property
+    def target(self) -> np.ndarray:
+        """The measured response (m/V)."""
+        return self.response
+
+    def model(self, bm: BuiltMachine) -> np.ndarray:
+        """The machine's transfer function to the sensor on the measured lines, with its delay."""
+        import control
+
+        g = sensor_plant(bm, self.axis, self.sensor)
+        s = 2j * math.pi * self.frequency_hz
+        return control.tf(list(g.num), list(g.den))(s) * np.exp(-s * bm.delay_s)
+
+    def residual(self, model: np.ndarray) -> np.ndarray:
+        """The complex logarithm of model over measurement: log-magnitude and phase (rad, wrapped
+        to +-pi) side by side."""
+        r = np.log(model / self.response)
+        r = r.real + 1j * np.angle(np.exp(1j * r.imag))
+        return np.concatenate([r.real, r.imag])
+
+    def basin_residual(self, model: np.ndarray) -> np.ndarray:
+        """An FRF's fit has one stage: its :meth:`residual`."""
+        return self.residual(model)
+
+    def at_noise_floor(self, solution: optimize.OptimizeResult) -> bool:
+        """Never: an FRF's noise is not known, so every start is tried."""
+        return False
+
+
+@dataclass(frozen=True)
+class CalibrationProblem:
+    """A fit, checked and ready to :func:`solve` (build it with :meth:`from_inputs`).
+
+    Attributes
+    ----------
+    machine : str
+    trace : str
+        The measured trace's path.
+    fit : list of str
+        The parameters fitted (symbols).
+    parameters : dict
+        Every parameter's value before the fit (symbol: value; the overrides in).
+    nominal : numpy.ndarray
+        The fitted parameters' values before the fit.
+    scale : numpy.ndarray
+        Each fitted parameter's unit in the solve (its nominal magnitude, 1 for zero).
+    lower, upper : numpy.ndarray
+        The bounds of the solve (in units of the scale): physical signs and the machine's ranges.
+    stiffnesses : numpy.ndarray
+        Which fitted parameters are stiffnesses (bool): the solve starts from more values of them.
+    axes : list of str
+        The machine's axes.
+    timestep_s : float or None
+        The physics step of the fit's twin runs (None: the machine's).
+    physics_step_s : float
+        That step's value (s).
+    data : TimeTrace or MeasuredFrf
+    """
+
+    machine: str
+    trace: str
+    fit: list[str]
+    parameters: dict[str, float]
+    nominal: np.ndarray
+    scale: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    stiffnesses: np.ndarray
+    axes: list[str]
+    timestep_s: float | None
+    physics_step_s: float
+    data: TimeTrace | MeasuredFrf
+
+    @classmethod
+    def from_inputs(
+        cls,
+        machine: str,
+        trace: str | Path,
+        fit: list[str],
+        *,
+        overrides: dict[str, float] | None = None,
+        axis: str = "x",
+        sensor: str = "table",
+        timestep_s: float | None = None,
+    ) -> CalibrationProblem:
+        """The fit of ``fit`` (parameter symbols) on ``machine`` (with ``overrides``) to the
+        ``trace`` (a time trace, or an FRF measured on ``axis`` at ``sensor``), its twin at the
+        physics step ``timestep_s`` (default the machine's), checked.
+
+        Raises
+        ------
+        TwinInputError
+            A bad machine, parameter, file or column (one line).
+        """
+        if sensor not in SENSORS:
+            raise TwinInputError("--sensor", sensor, f"must be one of {', '.join(SENSORS)}")
+        spec = get_machine(machine)
+        fit = _fit_parameters(spec, fit)
+        base = spec.resolve(overrides)
+        bm0 = build(machine, overrides, timestep_s)
+        names = [a.name for a in bm0.axes]
+        axes_indices([axis], names, "--axis")  # an FRF's axis; a time trace's axes are its columns
+        columns = read_table(trace)
+        nominal = np.array([base[s] for s in fit])
+        scale = np.where(nominal != 0, np.abs(nominal), 1.0)
+        lower = np.array(
+            [1e-6 if spec.parameters[s].positive else 0.0 if spec.parameters[s].nonnegative else -np.inf for s in fit]
+        )
+        # within each parameter's physical range too (a machine file's): a trial beyond it is refused
+        ranges = [spec.parameters[s].bounds for s in fit]
+        lower = np.maximum(lower, [-np.inf if r is None else r.low for r in ranges] / scale)
+        upper = np.array([np.inf if r is None else r.high for r in ranges]) / scale
+        data: TimeTrace | MeasuredFrf
+        if "frequency_hz" in columns:
+            data = measured_frf(columns, names, axis, sensor)
+        else:
+            dt, u, y, measured = time_trace(columns, names)
+            substeps = dt / bm0.model.opt.timestep
+            if abs(substeps - round(substeps)) > 1e-6 or round(substeps) < 1:
+                raise TwinInputError(
+                    "--trace column time_s",
+                    f"step {dt:g} s",
+                    f"must be a multiple of the timestep {bm0.model.opt.timestep:g} s",
+                )
+            floor = noise_floor(y[:, measured], np.array(bm0.encoder_resolution_m)[measured])
+            data = TimeTrace(dt, u, y, measured, floor)
+        return cls(
+            machine=machine,
+            trace=str(trace),
+            fit=fit,
+            parameters=base,
+            nominal=nominal,
+            scale=scale,
+            lower=lower,
+            upper=upper,
+            stiffnesses=np.array([spec.parameters[s].infinite for s in fit]),
+            axes=names,
+            timestep_s=timestep_s,
+            physics_step_s=bm0.model.opt.timestep,
+            data=data,
+        )
+
+    @property
+    def kind(self) -> Literal["time", "frf"]:
+        """``time`` for a time trace, ``frf`` for a measured FRF."""
+        return "time" if isinstance(self.data, TimeTrace) else "frf"
+
+    @property
+    def start(self) -> np.ndarray:
+        """Where the solve starts (units of the scale): the nominal values, one on its low bound
+        moved inside."""
+        return np.minimum(np.maximum(self.nominal / self.scale, self.lower + 0.01), self.upper)
+
+    def values(self, x: np.ndarray) -> dict[str, float]:
+        """All parameter values with the fitted ones at ``x`` (in units of their scale)."""
+        return {**self.parameters, **dict(zip(self.fit, (x * self.scale).tolist()))}
+
+    def model(self, x: np.ndarray, *, halved: bool = False) -> np.ndarray:
+        """The twin's (or the model's) response to the data with the fitted parameters at ``x``,
+        at the fit's physics step, or half of it (``halved``: the model's own error)."""
+        step = self.physics_step_s / 2 if halved else self.timestep_s
+        return self.data.model(build(self.machine, self.values(x), step))
+
+    def residual(self, x: np.ndarray, *, halved: bool = False) -> np.ndarray:
+        """The fit's residual at ``x`` (the position's for a time trace)."""
+        return self.data.residual(self.model(x, halved=halved))
+
+    def basin_residual(self, x: np.ndarray) -> np.ndarray:
+        """The first stage's residual at ``x`` (the velocity's for a time trace)."""
+        return self.data.basin_residual(self.model(x))
+
+
+@dataclass(frozen=True)
+class NoiseComparison:
+    """A time trace fit's residual beside the trace's noise (:func:`_against_noise`).
+
+    Attributes
+    ----------
+    residual_rms_m : float
+        The residual of a twin run with the fitted values (m RMS).
+    noise_floor_m : float
+        The trace's noise (m RMS, :func:`noise_floor`).
+    at_noise_floor : bool
+        Whether the residual is within :data:`NOISE_FLOOR_FACTOR` of the noise.
+    note : str
+        What that says.
+    """
+
+    residual_rms_m: float
+    noise_floor_m: float
+    at_noise_floor: bool
+    note: str
+
+    def to_json(self) -> dict[str, Any]:
+        """The comparison as ``solver``'s entries."""
+        return {
+            "residual_rms_m": self.residual_rms_m,
+            "noise_floor_m": self.noise_floor_m,
+            "at_noise_floor": self.at_noise_floor,
+            "note": self.note,
+        }
+
+
+@dataclass(frozen=True)
+class SolverReport:
+    """How the last least-squares solve ended.
+
+    Attributes
+    ----------
+    converged : bool
+        scipy's termination was a convergence.
+    termination : str
+        scipy's message.
+    evaluations : int
+        The solve's evaluations, out of :data:`MAX_EVALUATIONS`.
+    optimality : float
+        The final gradient's largest component, scaled.
+    rejected_diverged : int
+        The trials the twin diverged on (rejected steps), over the whole fit.
+    against_noise : NoiseComparison or None
+        A time trace's residual beside its noise; None for an FRF.
+    """
+
+    converged: bool
+    termination: str
+    evaluations: int
+    optimality: float
+    rejected_diverged: int
+    against_noise: NoiseComparison | None
+
+    def to_json(self) -> dict[str, Any]:
+        """The report as ``twin calibrate --json``'s ``solver``."""
+        return {
+            "converged": self.converged,
+            "termination": self.termination,
+            "evaluations": self.evaluations,
+            "max_evaluations": MAX_EVALUATIONS,
+            "optimality": self.optimality,
+            "rejected_diverged": self.rejected_diverged,
+            **(self.against_noise.to_json() if self.against_noise is not None else {}),
+        }
+
+
+@dataclass(frozen=True)
+class FitIndex:
+    """Sabau 2022's NRMSE fit index (%), 100 (1 - ||y - y_model|| / ||y - mean(y)||).
+
+    Attributes
+    ----------
+    before, after : float
+        With the nominal values and the fitted ones.
+    twin : float or None
+        A time trace's twin run with the fitted values, in full; None for an FRF.
+    """
+
+    before: float
+    after: float
+    twin: float | None
+
+    def to_json(self) -> dict[str, float]:
+        """``before``, ``after`` and a time trace's ``twin``."""
+        return {"before": self.before, "after": self.after, **({"twin": self.twin} if self.twin is not None else {})}
+
+
+@dataclass(frozen=True)
+class CalibrationReport:
+    """A calibration's result (:func:`solve`); every value by parameter symbol, in the machine's units.
+
+    Attributes
+    ----------
+    machine, trace : str
+    kind : {"time", "frf"}
+    excited_band_hz : float
+        The band the input excites (an FRF: its highest line).
+    not_excited : dict
+        The fitted stiffnesses whose mode the input does not reach, with the excitation that would.
+    fitted, nominal : dict
+        The fitted values (the identifiable ones) and the values before the fit.
+    standard_errors, statistical_errors, model_errors : dict
+        The noise's and the model's own errors together, the noise's (from the Jacobian) and a
+        time trace's model's own (twice the estimate's shift with the physics step halved); empty
+        for a fit that did not converge.
+    unidentifiable, poorly_determined : dict
+        The parameters the data do not determine (kept at nominal) or pin only loosely, with the reason.
+    solver : SolverReport
+    fit_index_pct : FitIndex
+    evaluations : int
+        The model's evaluations over the whole fit, finite differences included.
+    parameters : dict
+        All values in effect after the fit.
+    """
+
+    machine: str
+    trace: str
+    kind: Literal["time", "frf"]
+    excited_band_hz: float
+    not_excited: dict[str, str]
+    fitted: dict[str, float]
+    nominal: dict[str, float]
+    standard_errors: dict[str, float]
+    statistical_errors: dict[str, float]
+    model_errors: dict[str, float]
+    unidentifiable: dict[str, str]
+    poorly_determined: dict[str, str]
+    solver: SolverReport
+    fit_index_pct: FitIndex
+    evaluations: int
+    parameters: dict[str, float]
+
+    def to_json(self) -> dict[str, Any]:
+        """What ``twin calibrate --json`` prints."""
+        return {
+            "machine": self.machine,
+            "trace": self.trace,
+            "kind": self.kind,
+            "excited_band_hz": self.excited_band_hz,
+            "not_excited": self.not_excited,
+            "fitted": self.fitted,
+            "nominal": self.nominal,
+            "standard_errors": self.standard_errors,
+            "statistical_errors": self.statistical_errors,
+            "model_errors": self.model_errors,
+            "unidentifiable": self.unidentifiable,
+            "poorly_determined": self.poorly_determined,
+            "solver": self.solver.to_json(),
+            "fit_index_pct": self.fit_index_pct.to_json(),
+            "evaluations": self.evaluations,
+            "parameters": self.parameters,
+        }
+
+
+@dataclass
+class _Tally:
+    """The model's evaluations over a fit (a twin run each for a time trace), on a progress bar,
+    and the trials rejected."""
+
+    bar: tqdm
+    evaluations: int = 0
+    rejected: int = 0
+
+
+class _CountedResidual:
+    """A residual whose evaluations are counted in a :class:`_Tally`.  A trial that makes the
+    twin diverge, or needs a shorter physics step than the machine's, is a step the solver
+    rejects (a residual far larger than any it has seen), not the end of the fit; the first
+    evaluation (where the solve starts) raises."""
+
+    def __init__(self, residual: Callable[[np.ndarray], np.ndarray], tally: _Tally) -> None:
+        self.residual = residual
+        self.tally = tally
+        self.size: int | None = None
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        self.tally.evaluations += 1
+        self.tally.bar.update(1)
+        if self.size is None:
+            r = self.residual(x)
+            self.size = len(r)
+            return r
+        try:
+            return self.residual(x)
+        except SimulationDiverged:
+            self.tally.rejected += 1
+        except TwinInputError as exc:
+            if exc.field != "timestep_s":  # a trial stiffness too high for the physics step: rejected too
+                raise
+            self.tally.rejected += 1
+        return np.full(self.size, DIVERGED_RESIDUAL)
+
+
 def calibrate(
     machine: str,
     trace: str | Path,
     fit: list[str],
+    *,
     overrides: dict[str, float] | None = None,
     axis: str = "x",
     progress: bool = False,
     sensor: str = "table",
     timestep_s: float | None = None,
-) -> dict:
-    """Fit ``fit`` (parameter symbols) to a measured trace or FRF (see the module docstring);
-    ``timestep_s`` replaces the machine's physics step (a finer one: the model's own error).
+) -> CalibrationReport:
+    """Fit ``fit`` (parameter symbols) to a measured trace or FRF (see the module docstring):
+    the problem built (:meth:`CalibrationProblem.from_inputs`) and solved (:func:`solve`);
+    ``timestep_s`` replaces the machine's physics step (a finer one: the model's own error),
+    ``progress`` shows a bar of the evaluations.
 
     Returns
     -------
-    dict
-        ``machine``, ``trace``, ``kind`` ("time" or "frf"), ``fitted`` (symbol: value),
-        ``nominal``, ``standard_errors`` (the noise's and the model's own together),
-        ``statistical_errors`` (the noise's: from the Jacobian), ``model_errors`` (a time
-        trace's: twice the estimate's shift with the physics step halved), ``unidentifiable``
-        and ``poorly_determined`` (symbol: reason),
-        ``fit_index_pct`` (``before``, ``after``, and ``twin``: a twin run with the fitted
-        values), ``evaluations`` (of the model, finite differences included), ``parameters``
-        (all values in effect after the fit), ``solver`` (convergence; for a time trace the
-        residual beside the trace's noise, m), ``excited_band_hz`` and ``not_excited``
-        (symbol: the excitation that would). ``progress`` shows a bar of the evaluations.
+    CalibrationReport
+        Its :meth:`CalibrationReport.to_json` is what ``twin calibrate --json`` prints.
 
     Raises
     ------
     TwinInputError
         A bad machine, parameter, file or column (one line).
     """
-    if sensor not in SENSORS:
-        raise TwinInputError("--sensor", sensor, f"must be one of {', '.join(SENSORS)}")
-    spec = get_machine(machine)
-    fit = _fit_parameters(spec, fit)
-    base = spec.resolve(overrides)
-    bm0 = build(machine, overrides, timestep_s)
-    names = [a.name for a in bm0.axes]
-    axes_indices([axis], names, "--axis")  # an FRF's axis; a time trace's axes are its columns
-    columns = read_table(trace)
-    nominal = np.array([base[s] for s in fit])
-    scale = np.where(nominal != 0, np.abs(nominal), 1.0)
-    lower = np.array(
-        [1e-6 if spec.parameters[s].positive else 0.0 if spec.parameters[s].nonnegative else -np.inf for s in fit]
+    problem = CalibrationProblem.from_inputs(
+        machine, trace, fit, overrides=overrides, axis=axis, sensor=sensor, timestep_s=timestep_s
     )
-    # within each parameter's physical range too (a machine file's): a trial beyond it is refused
-    ranges = [spec.parameters[s].bounds for s in fit]
-    lower = np.maximum(lower, [-np.inf if r is None else r.low for r in ranges] / scale)
-    upper = np.array([np.inf if r is None else r.high for r in ranges]) / scale
+    return solve(problem, progress=progress)
 
-    def values(x):
-        """All parameter values with the fitted ones at ``x`` (in units of their scale)."""
-        return {**base, **dict(zip(fit, (x * scale).tolist()))}
 
-    if "frequency_hz" in columns:
-        kind = "frf"
-        residual, measured_vector, model_vector = _frf_problem(
-            machine, columns, names, axis, values, sensor, timestep_s
-        )
-        basin_residual = residual
+def solve(problem: CalibrationProblem, *, progress: bool = False) -> CalibrationReport:
+    """Solve a calibration (see the module docstring): the first stage (a time trace's
+    velocity) from the nominal values and, off the noise, from each stiffness's other starts
+    (:func:`_starts`), the least cost kept; a time trace's position from there; the
+    unidentifiable parameters held at nominal and the others fitted again.  ``progress`` shows
+    a bar of the evaluations.
 
-        def at_noise_floor(solution) -> bool:  # an FRF's noise is not known: every start is tried
-            return False
-
-    else:
-        kind = "time"
-        dt, u, y, measured = time_trace(columns, names)
-        substeps = dt / bm0.model.opt.timestep
-        if abs(substeps - round(substeps)) > 1e-6 or round(substeps) < 1:
-            raise TwinInputError(
-                "--trace column time_s",
-                f"step {dt:g} s",
-                f"must be a multiple of the timestep {bm0.model.opt.timestep:g} s",
-            )
-
-        def model_vector(x, step=timestep_s):
-            return replay(build(machine, values(x), step), dt, u, y[0])[:, measured]
-
-        def measured_vector():
-            return y[:, measured]
-
-        def residual(x, step=timestep_s):
-            return (model_vector(x, step) - measured_vector()).ravel() / np.std(measured_vector())
-
-        measured_velocity = np.diff(y[:, measured], axis=0) / dt
-
-        def basin_residual(x):
-            velocity = np.diff(model_vector(x), axis=0) / dt
-            return (velocity - measured_velocity).ravel() / np.std(measured_velocity)
-
-        position_floor = noise_floor(y[:, measured], np.array(bm0.encoder_resolution_m)[measured])
-        velocity_floor = math.sqrt(2.0) * position_floor / dt
-
-        def at_noise_floor(solution) -> bool:  # the velocity's residual within a few times its noise
-            rms = float(np.sqrt(np.mean(solution.fun**2))) * np.std(measured_velocity)
-            return bool(rms <= NOISE_FLOOR_FACTOR * velocity_floor)
-
-    x0 = np.minimum(np.maximum(nominal / scale, lower + 0.01), upper)  # a value on its low bound starts inside
-    runs = tqdm(desc=f"calibrating {', '.join(fit)}", unit="run", disable=not progress, leave=False)
-    evaluations = []
-    rejected = []
-
-    def counted(residual):
-        """``residual``, each evaluation (a twin run for a time trace) counted, and on the bar.
-        A trial that makes the twin diverge, or needs a shorter physics step than the
-        machine's, is a step the solver rejects (a residual far larger than any it has
-        seen), not the end of the fit; the first evaluation (where the solve starts) raises."""
-        size: list[int] = []
-
-        def evaluate(x):
-            evaluations.append(1)
-            runs.update(1)
-            if not size:
-                r = residual(x)
-                size.append(len(r))
-                return r
-            try:
-                return residual(x)
-            except SimulationDiverged:
-                rejected.append(1)
-            except TwinInputError as exc:
-                if exc.field != "timestep_s":  # a trial stiffness too high for the physics step: rejected too
-                    raise
-                rejected.append(1)
-            return np.full(size[0], DIVERGED_RESIDUAL)
-
-        return evaluate
-
+    Raises
+    ------
+    TwinInputError
+        A trial's bad value (one line, "during the fit").
+    """
+    x0, bounds = problem.start, (problem.lower, problem.upper)
+    tally = _Tally(tqdm(desc=f"calibrating {', '.join(problem.fit)}", unit="run", disable=not progress, leave=False))
     try:
-        before = model_vector(x0)
-        stiff = np.array([spec.parameters[s].infinite for s in fit])
-        every = np.ones(len(fit), bool)
-        sol = _solve(counted(basin_residual), x0, (lower, upper), every)
-        if not at_noise_floor(sol):  # from each stiffness's other starts too, the least cost kept
+        before = problem.model(x0)
+        every = np.ones(len(problem.fit), bool)
+        sol = _solve(_CountedResidual(problem.basin_residual, tally), x0, bounds, every)
+        if not problem.data.at_noise_floor(sol):  # from each stiffness's other starts too, the least cost kept
             others = (
-                _solve(counted(basin_residual), np.clip(start, lower, upper), (lower, upper), every)
-                for start in _starts(x0, stiff)
+                _solve(_CountedResidual(problem.basin_residual, tally), np.clip(start, *bounds), bounds, every)
+                for start in _starts(x0, problem.stiffnesses)
             )
             sol = min([sol, *others], key=lambda solution: solution.cost)
-        if basin_residual is not residual:  # the position's own fit, from the velocity's basin
-            sol = _solve(counted(residual), sol.x, (lower, upper), every)
-        unidentifiable = _unidentifiable(sol.jac, sol.x, scale, fit, sol.cost)
-        fitted_x, free = sol.x.copy(), np.array([s not in unidentifiable for s in fit])
-        fitted_x[~free] = (nominal / scale)[~free]  # held at nominal, all together
+        if problem.kind == "time":  # the position's own fit, from the velocity's basin
+            sol = _solve(_CountedResidual(problem.residual, tally), sol.x, bounds, every)
+        unidentifiable = _unidentifiable(sol.jac, sol.x, problem.scale, problem.fit, sol.cost)
+        fitted_x, free = sol.x.copy(), np.array([s not in unidentifiable for s in problem.fit])
+        fitted_x[~free] = (problem.nominal / problem.scale)[~free]  # held at nominal, all together
         if unidentifiable and free.any():  # the others fitted again with them held
-            sol = _solve(counted(residual), fitted_x, (lower, upper), free)
+            sol = _solve(_CountedResidual(problem.residual, tally), fitted_x, bounds, free)
             fitted_x = sol.x
     except TwinInputError as exc:
         raise TwinInputError(exc.field, exc.value, f"{exc.reason} (during the fit)") from None
     finally:
-        runs.close()
-    solver = {
-        "converged": bool(sol.status > 0),
-        "termination": sol.message,
-        "evaluations": int(sol.nfev),
-        "max_evaluations": MAX_EVALUATIONS,
-        "optimality": float(sol.optimality),  # the final gradient's largest component, scaled
-        "rejected_diverged": len(rejected),
-    }
+        tally.bar.close()
+    return _report(
+        problem, sol, fitted_x=fitted_x, free=free, unidentifiable=unidentifiable, before=before, tally=tally
+    )
+
+
+def _report(
+    problem: CalibrationProblem,
+    sol: optimize.OptimizeResult,
+    *,
+    fitted_x: np.ndarray,
+    free: np.ndarray,
+    unidentifiable: dict[str, str],
+    before: np.ndarray,
+    tally: _Tally,
+) -> CalibrationReport:
+    """The report of a solved calibration: the last solve ``sol``, the fitted values
+    ``fitted_x`` (units of the scale; the ``free`` ones fitted, the ``unidentifiable`` ones at
+    nominal), the model at the start ``before`` and the evaluations' ``tally``; the standard
+    errors (for a time trace with the model's own error, one more evaluation), the fit index,
+    a time trace's twin run with the fitted values against its noise, the stiffnesses not
+    excited."""
+    fit, scale, data = problem.fit, problem.scale, problem.data
+    converged = bool(sol.status > 0)
     std = np.full(len(fit), np.nan)
     model_error = np.zeros(len(fit))
     if free.any():
         std[free] = _standard_errors(sol.jac, sol.cost) * scale[free]
-        if kind == "time":  # the model's own error: the estimate's shift with the step halved
-            halved = bm0.model.opt.timestep / 2
-            shift = _estimate_shift(sol.jac, residual(fitted_x, halved) - residual(fitted_x))
+        if isinstance(data, TimeTrace):  # the model's own error: the estimate's shift with the step halved
+            shift = _estimate_shift(sol.jac, problem.residual(fitted_x, halved=True) - problem.residual(fitted_x))
             model_error[free] = INTEGRATOR_ORDER_FACTOR * np.abs(shift) * scale[free]
-            evaluations.append(1)
+            tally.evaluations += 1
     statistical = std.copy()
     std = np.hypot(std, model_error)
     poorly_determined = {
@@ -407,54 +782,59 @@ def calibrate(
         f"error {100 * model_error[i] / abs(fitted_x[i] * scale[i]):.2g} %, the noise's "
         f"{100 * statistical[i] / abs(fitted_x[i] * scale[i]):.2g} %)"
         for i, s in enumerate(fit)
-        if free[i]
-        and solver["converged"]
-        and fitted_x[i] != 0
-        and std[i] > POORLY_DETERMINED * abs(fitted_x[i] * scale[i])
+        if free[i] and converged and fitted_x[i] != 0 and std[i] > POORLY_DETERMINED * abs(fitted_x[i] * scale[i])
     }
-    after = model_vector(fitted_x)
-    target = measured_vector()
+    after = problem.model(fitted_x)
+    target = data.target
     fitted = {s: float(fitted_x[i] * scale[i]) for i, s in enumerate(fit) if s not in unidentifiable}
-    fit_index_pct = {
-        "before": float(np.mean(fit_index(_real(target), _real(before)))),
-        "after": float(np.mean(fit_index(_real(target), _real(after)))),
-    }
-    if kind == "time":  # confirmed by a twin run with the fitted values, in full
-        confirm = replay(build(machine, values(fitted_x), timestep_s), dt, u, y[0])[:, measured]
-        fit_index_pct["twin"] = float(np.mean(fit_index(target, confirm)))
-        solver.update(_against_noise(float(np.sqrt(np.mean((confirm - target) ** 2))), position_floor))
-    band_hz = float(columns["frequency_hz"].max()) if kind == "frf" else excited_band_hz(u, dt)
-    not_excited = _not_excited(
-        machine, values(fitted_x), [s for s, stiffness in zip(fit, stiff) if stiffness], names, band_hz, timestep_s
+    twin_index, against_noise = None, None
+    if isinstance(data, TimeTrace):  # confirmed by a twin run with the fitted values, in full
+        confirm = replay(
+            build(problem.machine, problem.values(fitted_x), problem.timestep_s),
+            data.sample_period_s,
+            data.inputs_V,
+            data.positions_m[0],
+        )[:, data.measured]
+        twin_index = float(np.mean(fit_index(target, confirm)))
+        against_noise = _against_noise(float(np.sqrt(np.mean((confirm - target) ** 2))), data.noise_floor_m)
+        band_hz = excited_band_hz(data.inputs_V, data.sample_period_s)
+    else:
+        band_hz = float(data.frequency_hz.max())
+    stiffnesses = [s for s, stiffness in zip(fit, problem.stiffnesses) if stiffness]
+    return CalibrationReport(
+        machine=problem.machine,
+        trace=problem.trace,
+        kind=problem.kind,
+        excited_band_hz=band_hz,
+        not_excited=_not_excited(problem, problem.values(fitted_x), stiffnesses, band_hz),
+        fitted=fitted,
+        nominal={s: float(problem.parameters[s]) for s in fit},
+        standard_errors=_identified(fit, std, unidentifiable) if converged else {},
+        statistical_errors=_identified(fit, statistical, unidentifiable) if converged else {},
+        model_errors=_identified(fit, model_error, unidentifiable) if converged and problem.kind == "time" else {},
+        unidentifiable=unidentifiable,
+        poorly_determined=poorly_determined,
+        solver=SolverReport(
+            converged=converged,
+            termination=sol.message,
+            evaluations=int(sol.nfev),
+            optimality=float(sol.optimality),
+            rejected_diverged=tally.rejected,
+            against_noise=against_noise,
+        ),
+        fit_index_pct=FitIndex(
+            before=float(np.mean(fit_index(_real(target), _real(before)))),
+            after=float(np.mean(fit_index(_real(target), _real(after)))),
+            twin=twin_index,
+        ),
+        evaluations=tally.evaluations,
+        parameters={k: float(v) for k, v in problem.values(fitted_x).items()},
     )
-    return {
-        "machine": machine,
-        "trace": str(trace),
-        "kind": kind,
-        "excited_band_hz": band_hz,
-        "not_excited": not_excited,
-        "fitted": fitted,
-        "nominal": {s: float(base[s]) for s in fit},
-        "standard_errors": (
-            {s: float(std[i]) for i, s in enumerate(fit) if s not in unidentifiable} if solver["converged"] else {}
-        ),
-        "statistical_errors": (
-            {s: float(statistical[i]) for i, s in enumerate(fit) if s not in unidentifiable}
-            if solver["converged"]
-            else {}
-        ),
-        "model_errors": (
-            {s: float(model_error[i]) for i, s in enumerate(fit) if s not in unidentifiable}
-            if solver["converged"] and kind == "time"
-            else {}
-        ),
-        "unidentifiable": unidentifiable,
-        "poorly_determined": poorly_determined,
-        "solver": solver,
-        "fit_index_pct": fit_index_pct,
-        "evaluations": len(evaluations),
-        "parameters": {k: float(v) for k, v in values(fitted_x).items()},
-    }
+
+
+def _identified(fit: list[str], values: np.ndarray, unidentifiable: dict[str, str]) -> dict[str, float]:
+    """``values`` (one per fitted parameter) by symbol, the unidentifiable ones left out."""
+    return {s: float(values[i]) for i, s in enumerate(fit) if s not in unidentifiable}
 
 
 def noise_floor(positions: np.ndarray, resolution_m: np.ndarray) -> float:
@@ -468,28 +848,27 @@ def noise_floor(positions: np.ndarray, resolution_m: np.ndarray) -> float:
     return float(np.sqrt(np.mean(noise**2)))
 
 
-def _against_noise(residual_rms_m: float, floor: float) -> dict:
+def _against_noise(residual_rms_m: float, floor: float) -> NoiseComparison:
     """The fit's residual (m RMS) beside the trace's noise ``floor`` (:func:`noise_floor`, m),
     and a note where it is over :data:`NOISE_FLOOR_FACTOR` times it: a solve that stopped away
     from the minimum, a parameter that should be fitted too, or a model that cannot explain the
     data."""
-    out: dict = {
-        "residual_rms_m": residual_rms_m,
-        "noise_floor_m": floor,
-        "at_noise_floor": True,
-        "note": (
-            f"the fit leaves {residual_rms_m:.3g} m RMS, {residual_rms_m / floor:.2g} x the trace's noise "
-            f"({floor:.3g} m): the model explains the data to their noise, which does not make it exact "
-            "(the standard errors include the model's own error, model_errors)"
-        ),
-    }
     if residual_rms_m > NOISE_FLOOR_FACTOR * floor:
-        out["at_noise_floor"] = False
-        out["note"] = (
-            f"the fit leaves {residual_rms_m:.3g} m RMS, {residual_rms_m / floor:.2g} x the trace's noise "
-            f"({floor:.3g} m): a local minimum, a parameter not fitted, or a model that cannot explain the data"
+        return NoiseComparison(
+            residual_rms_m,
+            floor,
+            at_noise_floor=False,
+            note=f"the fit leaves {residual_rms_m:.3g} m RMS, {residual_rms_m / floor:.2g} x the trace's noise "
+            f"({floor:.3g} m): a local minimum, a parameter not fitted, or a model that cannot explain the data",
         )
-    return out
+    return NoiseComparison(
+        residual_rms_m,
+        floor,
+        at_noise_floor=True,
+        note=f"the fit leaves {residual_rms_m:.3g} m RMS, {residual_rms_m / floor:.2g} x the trace's noise "
+        f"({floor:.3g} m): the model explains the data to their noise, which does not make it exact "
+        "(the standard errors include the model's own error, model_errors)",
+    )
 
 
 def excited_band_hz(u: np.ndarray, dt: float) -> float:
@@ -504,35 +883,33 @@ def excited_band_hz(u: np.ndarray, dt: float) -> float:
 
 
 def _not_excited(
-    machine: str,
-    values: dict[str, float],
-    stiffnesses: list[str],
-    axes: list[str],
-    band_hz: float,
-    timestep_s: float | None = None,
-):
-    """The fitted stiffnesses whose mode the input does not reach, each with the excitation that
-    would.  A stiffness's mode is the model's (table sensor, any axis) that moves most when it
-    changes by 1 %; it is excited where the input reaches :data:`EXCITE_BEYOND_MODE` times it
-    (the models built at the physics step ``timestep_s``, default the machine's)."""
-
-    def modes(params):
-        bm = build(machine, params, timestep_s)
-        return np.concatenate([model_modes(bm, k, "table")[0] for k in range(len(axes))])
-
-    nominal = modes(values)
+    problem: CalibrationProblem, values: dict[str, float], stiffnesses: list[str], band_hz: float
+) -> dict[str, str]:
+    """The fitted ``stiffnesses`` whose mode the input does not reach (with the parameter
+    ``values``), each with the excitation that would.  A stiffness's mode is the model's (table
+    sensor, any axis) that moves most when it changes by 1 %; it is excited where the input
+    reaches :data:`EXCITE_BEYOND_MODE` times ``band_hz`` (the models built at the fit's physics
+    step)."""
+    nominal = _table_modes(problem, values)
     out = {}
     for s in stiffnesses:
-        shift = np.abs(modes({**values, s: 1.01 * values[s]}) / nominal - 1)
+        shift = np.abs(_table_modes(problem, {**values, s: 1.01 * values[s]}) / nominal - 1)
         mode = float(nominal[np.argmax(shift)])
         if mode * EXCITE_BEYOND_MODE > band_hz:
             needed = 10 * math.ceil(EXCITE_BEYOND_MODE * mode / 10)
             out[s] = (
                 f"its mode at {mode:.0f} Hz lies beyond what the input excites (to {band_hz:.0f} Hz, within "
                 f"{EXCITED_WITHIN_DB:g} dB of its strongest line): excite to {needed} Hz, e.g. the PRBS of "
-                f"twin excite {machine} --f-max {needed}"
+                f"twin excite {problem.machine} --f-max {needed}"
             )
     return out
+
+
+def _table_modes(problem: CalibrationProblem, values: dict[str, float]) -> np.ndarray:
+    """The resonances (Hz) of every axis to the table's sensor with the parameter ``values``, at
+    the fit's physics step."""
+    bm = build(problem.machine, values, problem.timestep_s)
+    return np.concatenate([model_modes(bm, k, "table")[0] for k in range(len(problem.axes))])
 
 
 def excitation_trace(
@@ -697,12 +1074,16 @@ def _real(values: np.ndarray) -> np.ndarray:
     return values
 
 
-def _frf_problem(machine, columns, names, axis, values, sensor, timestep_s=None):
-    """Residual and vectors of an FRF fit (see the module docstring), through the transfer
-    function to the ``sensor`` it was measured at (the table's or the motor's); the models are
-    built at the physics step ``timestep_s`` (default the machine's)."""
-    import control
+def measured_frf(columns: dict[str, np.ndarray], axes: list[str], axis: str, sensor: str) -> MeasuredFrf:
+    """Check a measured FRF's columns (see the module docstring): measured on ``axis`` (one of
+    the machine's ``axes``) at ``sensor`` (the table's or the motor's).
 
+    Raises
+    ------
+    TwinInputError
+        One line per defect: a missing or unknown column, an unknown axis, under 10 lines, NaN,
+        frequencies not positive and increasing.
+    """
     needed = ("frequency_hz", "magnitude_db", "phase_deg")
     missing = [c for c in needed if c not in columns]
     if missing:
@@ -714,27 +1095,12 @@ def _frf_problem(machine, columns, names, axis, values, sensor, timestep_s=None)
         raise TwinInputError(
             "--trace column", unknown[0], f"unknown in an FRF (columns: {', '.join(needed)}, coherence)"
         )
-    (k,) = axes_indices([axis], names, "--axis")
+    (k,) = axes_indices([axis], axes, "--axis")
     f = columns["frequency_hz"]
     if len(f) < 10:
         raise TwinInputError("--trace", f"{len(f)} lines", "too short: an FRF needs 10 frequency lines")
     _all_finite(columns, list(needed))
     if (f <= 0).any() or (np.diff(f) <= 0).any():
         raise TwinInputError("--trace column frequency_hz", f"{f.min():g} Hz", "frequencies must be > 0 and increase")
-    g_meas = 10 ** (columns["magnitude_db"] / 20) * np.exp(1j * np.radians(columns["phase_deg"]))
-
-    def model_vector(x):
-        bm = build(machine, values(x), timestep_s)
-        g = sensor_plant(bm, k, sensor)
-        s = 2j * math.pi * f
-        return control.tf(list(g.num), list(g.den))(s) * np.exp(-s * bm.delay_s)
-
-    def measured_vector():
-        return g_meas
-
-    def residual(x):
-        r = np.log(model_vector(x) / g_meas)
-        r = r.real + 1j * np.angle(np.exp(1j * r.imag))  # phase wrapped to +-pi
-        return np.concatenate([r.real, r.imag])
-
-    return residual, measured_vector, model_vector
+    response = 10 ** (columns["magnitude_db"] / 20) * np.exp(1j * np.radians(columns["phase_deg"]))
+    return MeasuredFrf(f, response, k, sensor)

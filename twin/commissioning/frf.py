@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from scipy import signal
@@ -38,6 +38,9 @@ from twin.references import Step
 from twin.sim.drive import Encoder
 from twin.sim.runner import simulate
 from twin.spec import axes_indices
+
+if TYPE_CHECKING:
+    from twin.sim.runner import RunResult
 
 LOOPS = ("open", "velocity", "position")
 SENSORS = ("motor", "table")
@@ -336,7 +339,7 @@ def _loop_controller(bm: BuiltMachine, settings: FrfSettings, dt: float, k: int)
         else:
             w = 2 * math.pi * 10.0
             num = (2 * 0.7 * mass * w, mass * w**2)
-        parts.append(error_feedback(SisoTf(num, (1e-3, 1.0)), dt, (a.name,), name=f"loop.{a.name}"))
+        parts.append(error_feedback(SisoTf(num, (1e-3, 1.0)), dt, axes=(a.name,), name=f"loop.{a.name}"))
     return parts
 
 
@@ -475,9 +478,48 @@ def distortion_re_bla_db(estimate: dict, mag_db: np.ndarray) -> np.ndarray | Non
     return estimate["distortion_db"] + 10 * math.log10(estimate["realizations"]) - mag_db
 
 
+@dataclass(frozen=True)
+class ModeQuality:
+    """Whether a reported mode can be trusted (:func:`mode_quality`).
+
+    Attributes
+    ----------
+    kind : {"resonance", "antiresonance"}
+    frequency_hz : float
+        The mode's frequency (Hz).
+    coherence : float
+        The lowest coherence within :data:`MODE_BAND` of it.
+    distortion_db : float or None
+        A multisine's highest nonlinear distortion there (dB of the BLA); None for a Welch
+        estimate or where none is measurable.
+    unreliable : str or None
+        Why the mode is unreliable, or None.
+    """
+
+    kind: Literal["resonance", "antiresonance"]
+    frequency_hz: float
+    coherence: float
+    distortion_db: float | None
+    unreliable: str | None
+
+    def to_json(self) -> dict[str, Any]:
+        """The mode as ``twin frf --json`` prints it (one of ``modes``)."""
+        return {
+            "kind": self.kind,
+            "frequency_hz": self.frequency_hz,
+            "coherence": self.coherence,
+            "distortion_db": self.distortion_db,
+            "unreliable": self.unreliable,
+        }
+
+
 def mode_quality(
-    kind: str, frequency_hz: float, freqs: np.ndarray, coherence: np.ndarray, distortion_db: np.ndarray | None
-) -> dict:
+    kind: Literal["resonance", "antiresonance"],
+    frequency_hz: float,
+    freqs: np.ndarray,
+    coherence: np.ndarray,
+    distortion_db: np.ndarray | None,
+) -> ModeQuality:
     """Whether a reported mode can be trusted: the lowest ``coherence`` over the lines within
     :data:`MODE_BAND` of its ``frequency_hz`` (those that decide its fit) against
     :data:`MODE_MIN_COHERENCE`, and for a multisine the highest nonlinear distortion
@@ -492,13 +534,6 @@ def mode_quality(
     as if sound.  The nonlinear distortion tells the same (one realization's 9 and 7 dB under
     the BLA there) but not alike for peaks and dips: a dip's BLA is small, and a sound one at
     12 dB under it is common.
-
-    Returns
-    -------
-    dict
-        ``kind`` ("resonance" or "antiresonance"), ``frequency_hz``, ``coherence`` (the lowest),
-        ``distortion_db`` (the highest, dB of the BLA; None for a Welch estimate or where none
-        is measurable) and ``unreliable`` (the reason, or None).
     """
     near = np.abs(freqs / frequency_hz - 1.0) <= MODE_BAND
     lowest = float(coherence[near].min())
@@ -509,13 +544,13 @@ def mode_quality(
             f"coherence {lowest:.3f} < {MODE_MIN_COHERENCE:g} within {100 * MODE_BAND:g} % of it "
             "(a nonlinearity such as Coulomb friction, or noise: a larger --amplitude)"
         )
-    return {
-        "kind": kind,
-        "frequency_hz": frequency_hz,
-        "coherence": lowest,
-        "distortion_db": highest if highest is not None and math.isfinite(highest) else None,
-        "unreliable": reason,
-    }
+    return ModeQuality(
+        kind=kind,
+        frequency_hz=frequency_hz,
+        coherence=lowest,
+        distortion_db=highest if highest is not None and math.isfinite(highest) else None,
+        unreliable=reason,
+    )
 
 
 def incoherent_bands(freqs: np.ndarray, coherence: np.ndarray) -> list[list[float]]:
@@ -562,130 +597,305 @@ def nut_stiffness(machine: str, axis: str, overrides: dict[str, float] | None = 
     }
 
 
-def measure(machine: str, settings: FrfSettings, overrides: dict[str, float] | None = None) -> dict:
-    """Measure one axis's FRF on the twin (see the module docstring).
+@dataclass(frozen=True)
+class MultisineLevels:
+    """A multisine's noise and nonlinear distortion on its BLA (:func:`multisine_frf`).
 
-    Returns
-    -------
-    dict
-        ``machine``, ``settings``, ``parameters`` (symbol: value in effect), ``frequency_hz``,
-        ``magnitude_db``, ``phase_deg``, ``coherence``, ``model_magnitude_db``,
-        ``model_phase_deg``, ``resonances_hz``, ``antiresonances_hz``, ``model_resonances_hz``,
-        ``model_antiresonances_hz``, ``modes`` (each reported mode's :func:`mode_quality`),
-        ``unreliable_modes`` (how many are marked), ``incoherent_bands_hz``
-        (:func:`incoherent_bands`), ``max_model_error_db`` (where the coherence >= 0.9) and
-        ``run`` (the simulation, for plots and recordings; not JSON).
+    Attributes
+    ----------
+    realizations : int
+    noise_db, distortion_db : numpy.ndarray
+        The standard deviations on the BLA per line (dB re 1 m/V; -inf where none).
+    """
+
+    realizations: int
+    noise_db: np.ndarray
+    distortion_db: np.ndarray
+
+
+@dataclass(frozen=True)
+class FrfMeasurement:
+    """One axis's FRF measured on the twin (:func:`measure`).
+
+    Attributes
+    ----------
+    machine : str
+    settings : FrfSettings
+    sample_period_s, physics_step_s : float
+        The measurement's sample period and the physics step it ran at (s).
+    parameters : dict
+        Each parameter's value in effect (symbol: value; infinite: a rigid link).
+    frequency_hz, magnitude_db, phase_deg, coherence : numpy.ndarray
+        The measured lines (Hz), the magnitude (dB re 1 m/V), phase (deg) and coherence.
+    model_magnitude_db, model_phase_deg : numpy.ndarray
+        The model's response on the same lines.
+    resonances_hz, antiresonances_hz, model_resonances_hz, model_antiresonances_hz : list of float
+        The modes found (Hz), measured and the model's.
+    modes : list of ModeQuality
+        Each reported mode's :func:`mode_quality`.
+    incoherent_bands_hz : list of list of float
+        :func:`incoherent_bands`.
+    collocated : bool
+        Whether the sensor is collocated with the drive (else no anti-resonances are read).
+    levels : MultisineLevels or None
+        A multisine's noise and distortion on its BLA; None for a Welch estimate.
+    coherent_share : float
+        The share of the lines with coherence >= :data:`MIN_COHERENCE`.
+    max_model_error_db : float or None
+        The largest |measured - model| magnitude (dB) over those lines; None where there are none.
+    run : twin.sim.runner.RunResult
+        The simulated experiment (for plots and recordings; not JSON).
+    """
+
+    machine: str
+    settings: FrfSettings
+    sample_period_s: float
+    physics_step_s: float
+    parameters: dict[str, float]
+    frequency_hz: np.ndarray
+    magnitude_db: np.ndarray
+    phase_deg: np.ndarray
+    coherence: np.ndarray
+    model_magnitude_db: np.ndarray
+    model_phase_deg: np.ndarray
+    resonances_hz: list[float]
+    antiresonances_hz: list[float]
+    model_resonances_hz: list[float]
+    model_antiresonances_hz: list[float]
+    modes: list[ModeQuality]
+    incoherent_bands_hz: list[list[float]]
+    collocated: bool
+    levels: MultisineLevels | None
+    coherent_share: float
+    max_model_error_db: float | None
+    run: RunResult
+
+    @property
+    def unreliable_modes(self) -> int:
+        """How many of :attr:`modes` are marked unreliable."""
+        return sum(q.unreliable is not None for q in self.modes)
+
+    def to_json(self) -> dict[str, Any]:
+        """What ``twin frf --json`` prints: ``machine``, ``settings`` (with the sample period,
+        the Welch segment and the physics step), ``parameters`` (null: infinite), the lines and
+        the model's, the modes found and the model's, ``modes``, ``unreliable_modes``,
+        ``incoherent_bands_hz``, ``antiresonances_note``, a multisine's ``realizations``,
+        ``noise_db`` and ``distortion_db``, ``coherent_share`` and ``max_model_error_db``."""
+        rigid = not all(map(math.isfinite, self.parameters.values()))
+        return {
+            "machine": self.machine,
+            "settings": {
+                **self.settings.__dict__,
+                "sample_period_s": self.sample_period_s,
+                "segment_samples": SEGMENT,
+                "physics_step_s": self.physics_step_s,
+            },
+            "parameters": {k: v if math.isfinite(v) else None for k, v in self.parameters.items()},
+            **({"parameters_note": "null: infinite, a rigid link"} if rigid else {}),
+            "frequency_hz": self.frequency_hz.tolist(),
+            "magnitude_db": self.magnitude_db.tolist(),
+            "phase_deg": self.phase_deg.tolist(),
+            "coherence": self.coherence.tolist(),
+            "model_magnitude_db": self.model_magnitude_db.tolist(),
+            "model_phase_deg": self.model_phase_deg.tolist(),
+            "resonances_hz": self.resonances_hz,
+            "antiresonances_hz": self.antiresonances_hz,
+            "model_resonances_hz": self.model_resonances_hz,
+            "model_antiresonances_hz": self.model_antiresonances_hz,
+            "modes": [q.to_json() for q in self.modes],
+            "unreliable_modes": self.unreliable_modes,
+            "incoherent_bands_hz": self.incoherent_bands_hz,
+            "antiresonances_note": None
+            if self.collocated
+            else "the table's sensor is not collocated with the drive: "
+            "its dips are not anti-resonances (measure --sensor motor)",
+            **(
+                {
+                    "realizations": self.levels.realizations,
+                    "noise_db": _finite_or_none(self.levels.noise_db),
+                    "distortion_db": _finite_or_none(self.levels.distortion_db),
+                    "levels_note": "standard deviations on the BLA (dB re 1 m/V); null: none measurable",
+                }
+                if self.levels is not None
+                else {}
+            ),
+            "coherent_share": self.coherent_share,
+            "max_model_error_db": self.max_model_error_db,
+        }
+
+
+@dataclass(frozen=True)
+class FrfExperiment:
+    """One measurement set up (:meth:`plan`), to :meth:`run` on the twin and :meth:`estimate`
+    from.
+
+    Attributes
+    ----------
+    machine : str
+    settings : FrfSettings
+    bm : twin.machines.BuiltMachine
+        The machine, at the measurement's physics step (:func:`measurement_timestep`).
+    axis : int
+        The measured axis's index.
+    sample_period_s : float
+    settle : int
+        Samples of settling before the record.
+    excitation_V : numpy.ndarray
+        (samples, axes): the excitation added to the drive inputs.
+    """
+
+    machine: str
+    settings: FrfSettings
+    bm: BuiltMachine
+    axis: int
+    sample_period_s: float
+    settle: int
+    excitation_V: np.ndarray
+
+    @classmethod
+    def plan(cls, machine: str, settings: FrfSettings, overrides: dict[str, float] | None = None) -> FrfExperiment:
+        """The measurement of ``settings`` on ``machine`` (with ``overrides``), checked.
+
+        Raises
+        ------
+        TwinInputError
+            An unknown machine, axis, parameter or option value.
+        """
+        settings.check()
+        bm = build(machine, overrides)
+        finer = measurement_timestep(bm)
+        if finer is not None:
+            bm = build(machine, overrides, finer)
+        names = [a.name for a in bm.axes]
+        (k,) = axes_indices([settings.axis], names, "--axis")
+        dt = sample_period(bm)
+        settle = round(0.5 / dt)
+        n = settle + round(settings.duration_s / dt)
+        d = np.zeros((n, len(names)))
+        d[settle:, k] = excitation_signal(
+            settings.excitation, n - settle, dt, settings.amplitude_V, settings.f_max_hz, settings.seed
+        )
+        return cls(machine, settings, bm, k, dt, settle, d)
+
+    def run(self) -> RunResult:
+        """The experiment simulated: the excitation on the drive input, the loop closed as the
+        settings say.
+
+        Raises
+        ------
+        SimulationDiverged
+            The measurement's loop is unstable on this axis (with the option to try).
+        """
+        bm, settings, dt = self.bm, self.settings, self.sample_period_s
+        names = [a.name for a in bm.axes]
+        controller = sum_of(
+            [*_loop_controller(bm, settings, dt, self.axis), open_loop(self.excitation_V, dt, names, name="excitation")]
+        )
+        encoder = Encoder(
+            np.zeros(len(names)), np.zeros(len(names)), np.array(bm.sensor_gains), feedback=settings.feedback
+        )
+        n = len(self.excitation_V)
+        try:
+            return simulate(
+                bm,
+                controller,
+                Step(0.0, n_axes=len(names)),
+                n * dt,
+                dt,
+                encoder=encoder,
+                progress=False,
+                record_every=1,
+            )
+        except SimulationDiverged as exc:
+            advice = (
+                "--loop open"
+                if settings.feedback == "motor" or bm.axes[self.axis].motor_joint is None
+                else "--feedback motor"
+            )
+            diverged = SimulationDiverged(
+                exc.sim_time_s,
+                f"{exc.reason} (the measurement's {settings.loop} loop on the {settings.feedback} "
+                f"encoder is unstable on this axis: try {advice})",
+            )
+            diverged.result = exc.result
+            raise diverged from None
+
+    def estimate(self, run: RunResult) -> FrfMeasurement:
+        """The FRF, its coherence and modes from the recorded ``run``, beside the model's."""
+        bm, settings, dt, k, settle = self.bm, self.settings, self.sample_period_s, self.axis, self.settle
+        u = run.u_applied_V[settle:, k]
+        motor = bm.axes[k].motor_joint
+        if settings.sensor == "motor" and motor is not None:
+            y = run.qpos[settle:][:, bm.joint_qpos_index(motor)] * bm.motor_travel_m_per_rad[bm.axes[k].name]
+        else:
+            y = run.table_position_m()[settle:, k]
+        estimate = (multisine_frf if settings.excitation == "multisine" else welch_frf)(
+            self.excitation_V[settle:, k], u, y, dt, settings.f_max_hz
+        )
+        freqs, g, coherence = estimate["frequency_hz"], estimate["frf"], estimate["coherence"]
+        model = model_frf(bm, k, settings.sensor, freqs, dt)
+        mag_db, model_db = 20 * np.log10(np.abs(g)), 20 * np.log10(np.abs(model))
+        uncertainty_db = None
+        if "spread" in estimate:  # the BLA's standard deviation, in dB of its magnitude
+            uncertainty_db = 20 * np.log10(1 + estimate["spread"] / np.abs(g))
+        # the peaks' modes are fitted with the drive's delay and the hold's half sample taken out
+        undelayed = g * np.exp(2j * math.pi * freqs * (bm.delay_s + dt / 2))
+        resonances, antiresonances = peaks(freqs, mag_db, coherence, uncertainty_db, undelayed)
+        model_res, model_anti = model_modes(bm, k, settings.sensor)
+        # a dip of a sensor away from the drive (the table of a ball screw) is no anti-resonance:
+        # a non-collocated transfer function has no zeros there
+        collocated = settings.sensor == "motor" or bm.axes[k].motor_joint is None
+        if not collocated:
+            antiresonances = []
+        distortion_db = distortion_re_bla_db(estimate, mag_db)
+        kinds: tuple[tuple[Literal["resonance", "antiresonance"], list[float]], ...] = (
+            ("resonance", resonances),
+            ("antiresonance", antiresonances),
+        )
+        quality = [mode_quality(kind, f, freqs, coherence, distortion_db) for kind, found in kinds for f in found]
+        good = coherence >= MIN_COHERENCE
+        levels = None
+        if "distortion_db" in estimate:
+            levels = MultisineLevels(estimate["realizations"], estimate["noise_db"], estimate["distortion_db"])
+        return FrfMeasurement(
+            machine=self.machine,
+            settings=settings,
+            sample_period_s=dt,
+            physics_step_s=bm.model.opt.timestep,
+            parameters=dict(bm.params),
+            frequency_hz=freqs,
+            magnitude_db=mag_db,
+            phase_deg=np.degrees(np.angle(g)),
+            coherence=coherence,
+            model_magnitude_db=model_db,
+            model_phase_deg=np.degrees(np.angle(model)),
+            resonances_hz=resonances,
+            antiresonances_hz=antiresonances,
+            model_resonances_hz=model_res,
+            model_antiresonances_hz=model_anti,
+            modes=quality,
+            incoherent_bands_hz=incoherent_bands(freqs, coherence),
+            collocated=collocated,
+            levels=levels,
+            coherent_share=float(good.mean()),
+            max_model_error_db=float(np.abs(mag_db - model_db)[good].max()) if good.any() else None,
+            run=run,
+        )
+
+
+def measure(machine: str, settings: FrfSettings, overrides: dict[str, float] | None = None) -> FrfMeasurement:
+    """Measure one axis's FRF on the twin (see the module docstring): the experiment planned
+    (:meth:`FrfExperiment.plan`), run and estimated.
 
     Raises
     ------
     TwinInputError
         An unknown machine, axis, parameter or option value.
+    SimulationDiverged
+        The measurement's loop is unstable on this axis.
     """
-    settings.check()
-    bm = build(machine, overrides)
-    finer = measurement_timestep(bm)
-    if finer is not None:
-        bm = build(machine, overrides, finer)
-    names = [a.name for a in bm.axes]
-    (k,) = axes_indices([settings.axis], names, "--axis")
-    dt = sample_period(bm)
-    settle = round(0.5 / dt)
-    n = settle + round(settings.duration_s / dt)
-    d = np.zeros((n, len(names)))
-    d[settle:, k] = excitation_signal(
-        settings.excitation, n - settle, dt, settings.amplitude_V, settings.f_max_hz, settings.seed
-    )
-    controller = sum_of([*_loop_controller(bm, settings, dt, k), open_loop(d, dt, names, name="excitation")])
-    encoder = Encoder(np.zeros(len(names)), np.zeros(len(names)), np.array(bm.sensor_gains), feedback=settings.feedback)
-    try:
-        run = simulate(
-            bm, controller, Step(0.0, n_axes=len(names)), n * dt, dt, encoder=encoder, progress=False, record_every=1
-        )
-    except SimulationDiverged as exc:
-        advice = "--loop open" if settings.feedback == "motor" or bm.axes[k].motor_joint is None else "--feedback motor"
-        diverged = SimulationDiverged(
-            exc.sim_time_s,
-            f"{exc.reason} (the measurement's {settings.loop} loop on the {settings.feedback} "
-            f"encoder is unstable on this axis: try {advice})",
-        )
-        diverged.result = exc.result
-        raise diverged from None
-    u = run.u_applied_V[settle:, k]
-    motor = bm.axes[k].motor_joint
-    if settings.sensor == "motor" and motor is not None:
-        y = run.qpos[settle:][:, bm.joint_qpos_index(motor)] * bm.motor_travel_m_per_rad[bm.axes[k].name]
-    else:
-        y = run.table_position_m()[settle:, k]
-    estimate = (multisine_frf if settings.excitation == "multisine" else welch_frf)(
-        d[settle:, k], u, y, dt, settings.f_max_hz
-    )
-    freqs, g, coherence = estimate["frequency_hz"], estimate["frf"], estimate["coherence"]
-    model = model_frf(bm, k, settings.sensor, freqs, dt)
-    mag_db, model_db = 20 * np.log10(np.abs(g)), 20 * np.log10(np.abs(model))
-    uncertainty_db = None
-    if "spread" in estimate:  # the BLA's standard deviation, in dB of its magnitude
-        uncertainty_db = 20 * np.log10(1 + estimate["spread"] / np.abs(g))
-    # the peaks' modes are fitted with the drive's delay and the hold's half sample taken out
-    undelayed = g * np.exp(2j * math.pi * freqs * (bm.delay_s + dt / 2))
-    resonances, antiresonances = peaks(freqs, mag_db, coherence, uncertainty_db, undelayed)
-    model_res, model_anti = model_modes(bm, k, settings.sensor)
-    # a dip of a sensor away from the drive (the table of a ball screw) is no anti-resonance:
-    # a non-collocated transfer function has no zeros there
-    collocated = settings.sensor == "motor" or bm.axes[k].motor_joint is None
-    if not collocated:
-        antiresonances = []
-    distortion_db = distortion_re_bla_db(estimate, mag_db)
-    quality = [
-        mode_quality(kind, f, freqs, coherence, distortion_db)
-        for kind, found in (("resonance", resonances), ("antiresonance", antiresonances))
-        for f in found
-    ]
-    good = coherence >= MIN_COHERENCE
-    return {
-        "machine": machine,
-        "settings": {
-            **settings.__dict__,
-            "sample_period_s": dt,
-            "segment_samples": SEGMENT,
-            "physics_step_s": bm.model.opt.timestep,
-        },
-        "parameters": {k: v if math.isfinite(v) else None for k, v in bm.params.items()},
-        **(
-            {"parameters_note": "null: infinite, a rigid link"}
-            if not all(map(math.isfinite, bm.params.values()))
-            else {}
-        ),
-        "frequency_hz": freqs.tolist(),
-        "magnitude_db": mag_db.tolist(),
-        "phase_deg": np.degrees(np.angle(g)).tolist(),
-        "coherence": coherence.tolist(),
-        "model_magnitude_db": model_db.tolist(),
-        "model_phase_deg": np.degrees(np.angle(model)).tolist(),
-        "resonances_hz": resonances,
-        "antiresonances_hz": antiresonances,
-        "model_resonances_hz": model_res,
-        "model_antiresonances_hz": model_anti,
-        "modes": quality,
-        "unreliable_modes": sum(q["unreliable"] is not None for q in quality),
-        "incoherent_bands_hz": incoherent_bands(freqs, coherence),
-        "antiresonances_note": None
-        if collocated
-        else "the table's sensor is not collocated with the drive: "
-        "its dips are not anti-resonances (measure --sensor motor)",
-        **(
-            {
-                "realizations": estimate["realizations"],
-                "noise_db": _finite_or_none(estimate["noise_db"]),
-                "distortion_db": _finite_or_none(estimate["distortion_db"]),
-                "levels_note": "standard deviations on the BLA (dB re 1 m/V); null: none measurable",
-            }
-            if "distortion_db" in estimate
-            else {}
-        ),
-        "coherent_share": float(good.mean()),
-        "max_model_error_db": float(np.abs(mag_db - model_db)[good].max()) if good.any() else None,
-        "run": run,
-    }
+    experiment = FrfExperiment.plan(machine, settings, overrides)
+    return experiment.estimate(experiment.run())
 
 
 def _finite_or_none(values: np.ndarray) -> list[float | None]:
@@ -693,39 +903,40 @@ def _finite_or_none(values: np.ndarray) -> list[float | None]:
     return [float(v) if math.isfinite(v) else None for v in values]
 
 
-def write_bode(result: dict, path) -> None:
+def write_bode(measured: FrfMeasurement, path: str | Path) -> None:
     """The measured Bode plot beside the model's, with the coherence, as a PNG."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    f = np.array(result["frequency_hz"])
+    f = measured.frequency_hz
     fig, (ax_m, ax_p, ax_c) = plt.subplots(3, 1, figsize=(9, 8), sharex=True, height_ratios=(3, 2, 1))
-    ax_m.semilogx(f, result["magnitude_db"], label="measured on the twin")
-    ax_m.semilogx(f, result["model_magnitude_db"], "--", label="model (transfer function)")
-    for fr in result["resonances_hz"]:
+    ax_m.semilogx(f, measured.magnitude_db, label="measured on the twin")
+    ax_m.semilogx(f, measured.model_magnitude_db, "--", label="model (transfer function)")
+    for fr in measured.resonances_hz:
         ax_m.axvline(fr, color="tab:red", lw=0.8, alpha=0.6)
-    for fa in result["antiresonances_hz"]:
+    for fa in measured.antiresonances_hz:
         ax_m.axvline(fa, color="tab:green", lw=0.8, alpha=0.6)
-    if "distortion_db" in result:  # a multisine's BLA: the levels on it
-        levels = {"noise_db": "noise", "distortion_db": "nonlinear distortion"}
-        for key, label in levels.items():
-            level = np.array([np.nan if v is None else v for v in result[key]], float)
-            ax_m.semilogx(f, level, ".", ms=2, label=f"{label} (std on the BLA)")
+    if measured.levels is not None:  # a multisine's BLA: the levels on it
+        for level, label in (
+            (measured.levels.noise_db, "noise"),
+            (measured.levels.distortion_db, "nonlinear distortion"),
+        ):
+            ax_m.semilogx(f, np.where(np.isfinite(level), level, np.nan), ".", ms=2, label=f"{label} (std on the BLA)")
     ax_m.set_ylabel("magnitude (dB re 1 m/V)")
     ax_m.legend()
-    ax_p.semilogx(f, np.degrees(np.unwrap(np.radians(result["phase_deg"]))))
-    ax_p.semilogx(f, np.degrees(np.unwrap(np.radians(result["model_phase_deg"]))), "--")
+    ax_p.semilogx(f, np.degrees(np.unwrap(np.radians(measured.phase_deg))))
+    ax_p.semilogx(f, np.degrees(np.unwrap(np.radians(measured.model_phase_deg))), "--")
     ax_p.set_ylabel("phase (deg)")
-    ax_c.semilogx(f, result["coherence"], color="k")
+    ax_c.semilogx(f, measured.coherence, color="k")
     ax_c.set_ylim(0, 1.05)
     ax_c.set_ylabel("coherence")
     ax_c.set_xlabel("frequency (Hz)")
-    s = result["settings"]
+    s = measured.settings
     fig.suptitle(
-        f"{Path(result['machine']).name}: axis {s['axis']}, {s['loop']} loop on the {s['feedback']} encoder, "
-        f"{s['sensor']} sensor, {s['excitation']}"
+        f"{Path(measured.machine).name}: axis {s.axis}, {s.loop} loop on the {s.feedback} encoder, "
+        f"{s.sensor} sensor, {s.excitation}"
         f" (red: resonances, green: anti-resonances)",
         fontsize=10,
     )

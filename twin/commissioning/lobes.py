@@ -169,7 +169,9 @@ def lobes(scn: Scenario, settings: LobesSettings) -> dict:
         raise TwinInputError("--depth-max", depth_max_mm, "must be in (0, 10000] mm")
     if "sd" in methods:
         start = time.perf_counter()
-        found["sd"] = sd_critical_depths(cut, tool.dynamics, speeds, depth_max_mm * 1e-3, SD_DEPTHS)
+        found["sd"] = sd_critical_depths(
+            cut, tool.dynamics, spindle_rpm=speeds, depth_max_m=depth_max_mm * 1e-3, n_depths=SD_DEPTHS
+        )
         seconds["sd"] = time.perf_counter() - start
     summary: dict = {
         "scenario": scn.name,
@@ -191,7 +193,9 @@ def lobes(scn: Scenario, settings: LobesSettings) -> dict:
     if planned is not None:
         samples, texts = planned
         checked = line_stability(samples, (float(speeds.min()), float(speeds.max())))
-        summary["lines"] = [{"line": n, "text": texts.get(n, ""), "stability": row} for n, row in checked.items()]
+        summary["lines"] = [
+            {"line": n, "text": texts.get(n, ""), "stability": check.to_json()} for n, check in checked.items()
+        ]
     return summary
 
 

@@ -12,9 +12,9 @@ from __future__ import annotations
 import importlib
 import pkgutil
 
-from twin.disturbances.kinds import DISTURBANCES, DisturbanceSpecBase, Kind, register
+from twin.disturbances.kinds import DISTURBANCES, DisturbanceSpecBase, register
 
 for _module in pkgutil.iter_modules(__path__):
     importlib.import_module(f"{__name__}.{_module.name}")
 
-__all__ = ["DISTURBANCES", "DisturbanceSpecBase", "Kind", "register"]
+__all__ = ["DISTURBANCES", "DisturbanceSpecBase", "register"]

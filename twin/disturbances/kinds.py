@@ -5,7 +5,8 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from twin.spec import Kind, KindSpec, register_kind
+from controllers.registries import Entry, Registry
+from twin.spec import KindSpec, register_kind
 
 #: The base of every disturbance kind's spec.
 DisturbanceSpecBase = KindSpec
@@ -13,9 +14,9 @@ DisturbanceSpecBase = KindSpec
 #: seed, field) -> model``, the force model on the workpiece (``kernel_arrays``) or the
 #: drive-input disturbance (``input_V``) for a machine with those axes, ``seed`` the entry's (or
 #: the scenario's), ``field`` the entry's path for errors.
-DISTURBANCES: dict[str, Kind] = {}
+DISTURBANCES: Registry[Callable] = Registry("disturbance")
 
 
-def register(name: str, spec: type[KindSpec], build: Callable) -> Kind:
+def register(name: str, spec: type[KindSpec], build: Callable) -> Entry:
     """Add a disturbance kind; its module calls this at import."""
     return register_kind(DISTURBANCES, name, spec, build)

@@ -27,7 +27,7 @@ import numpy as np
 from twin.gcode.moves import Move, MoveKind
 from twin.gcode.path import Segment, SegmentKind, move_segment
 from twin.gcode.planned import PlanningError
-from twin.records import PlanWarning, plan_warning
+from twin.records import DriveWarning, PlanWarning, TravelWarning
 
 #: Warnings listed at most (each check); more are counted.
 MAX_WARNINGS = 100
@@ -94,14 +94,15 @@ class Warnings:
 
     Attributes
     ----------
-    rows : dict
-        ``{(line, axis): row}``, each row ``{line, check, axis, ratio or value_mm, message, text}``.
+    kept : dict
+        ``{(line, axis): (warning, badness)}``: the pair's worst warning so far and how bad it is
+        (the check's ranking: m outside the travel, ratio to the saturation).
     warned : set of (int, str)
         Every (line, axis) pair warned of, listed or not.
     """
 
     def __init__(self) -> None:
-        self.rows: dict[tuple[int, str], dict] = {}
+        self.kept: dict[tuple[int, str], tuple[PlanWarning, float]] = {}
         self.warned: set[tuple[int, str]] = set()  # a pair per program line at most, as its text
 
     @property
@@ -109,17 +110,17 @@ class Warnings:
         """Every (line, axis) pair warned of, listed or not."""
         return len(self.warned)
 
-    def add(self, row: dict, badness: float) -> None:
-        """Keep ``row`` if it is its line and axis's first or worst (by ``badness``)."""
-        key = (row["line"], row["axis"])
+    def add(self, warning: PlanWarning, badness: float) -> None:
+        """Keep ``warning`` if it is its line and axis's first or worst (by ``badness``)."""
+        key = (warning.line, warning.axis)
         self.warned.add(key)
-        held = self.rows.get(key)
-        if (held is None and len(self.rows) < MAX_WARNINGS) or (held is not None and badness > held["badness"]):
-            self.rows[key] = {**row, "badness": badness}
+        held = self.kept.get(key)
+        if (held is None and len(self.kept) < MAX_WARNINGS) or (held is not None and badness > held[1]):
+            self.kept[key] = (warning, badness)
 
-    def listed(self) -> list[dict]:
-        """The rows by line and axis, without their ranking key."""
-        return [{k: v for k, v in row.items() if k != "badness"} for _key, row in sorted(self.rows.items())]
+    def listed(self) -> list[PlanWarning]:
+        """The warnings kept, by line and axis."""
+        return [warning for _key, (warning, _badness) in sorted(self.kept.items())]
 
 
 class TravelCheck:
@@ -185,8 +186,10 @@ class TravelCheck:
             )
             if self.refuse:
                 raise PlanningError(f'line {move.line}: {message} (travel = "warn" in [planner] to warn only)')
-            row = {"line": move.line, "check": "travel", "axis": name, "value_mm": round(value * 1e3, 6)}
-            self.warnings.add({**row, "message": message, "text": move.text}, max(below, above))
+            warning = TravelWarning(
+                line=move.line, axis=name, value_mm=round(value * 1e3, 6), message=message, text=move.text
+            )
+            self.warnings.add(warning, max(below, above))
 
 
 class DriveModel(Protocol):
@@ -256,24 +259,20 @@ class DriveCheck:
     def _warn(self, line: int, axis: str, ratio: float, drive: DriveModel, texts: dict) -> None:
         limit_N = drive.force_per_volt_N_per_V * self.saturation_V
         message = f"axis {axis} needs {ratio * limit_N:.1f} N, the drive saturates at {limit_N:.1f} N (x{ratio:.3f})"
-        row = {
-            "line": line,
-            "check": "drive",
-            "axis": axis,
-            "ratio": round(ratio, 6),
-            "force_N": round(ratio * limit_N, 3),
-        }
-        self.warnings.add({**row, "message": message, "text": texts.get(line, "")}, ratio)
+        warning = DriveWarning(
+            line=line,
+            axis=axis,
+            ratio=round(ratio, 6),
+            force_N=round(ratio * limit_N, 3),
+            message=message,
+            text=texts.get(line, ""),
+        )
+        self.warnings.add(warning, ratio)
 
 
-def plan_warnings(*checks: TravelCheck | DriveCheck | None) -> tuple[list[dict], int]:
-    """The warnings of ``checks`` (None: a check not run) by line, and how many in all."""
+def plan_warnings(*checks: TravelCheck | DriveCheck | None) -> tuple[list[PlanWarning], int]:
+    """The warnings of ``checks`` (None: a check not run) by line, check and axis, and how many
+    in all."""
     done = [c.warnings for c in checks if c is not None]
-    rows = sorted((row for w in done for row in w.listed()), key=lambda row: (row["line"], row["check"], row["axis"]))
-    return rows, sum(w.total for w in done)
-
-
-def typed_plan_warnings(*checks: TravelCheck | DriveCheck | None) -> tuple[list[PlanWarning], int]:
-    """The warnings of ``checks`` by line (:func:`plan_warnings`), typed, and how many in all."""
-    rows, total = plan_warnings(*checks)
-    return [plan_warning(row) for row in rows], total
+    listed = sorted((w for found in done for w in found.listed()), key=lambda w: (w.line, w.check, w.axis))
+    return listed, sum(found.total for found in done)

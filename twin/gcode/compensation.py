@@ -59,7 +59,7 @@ class _Queued:
     original_turns: float = 0.0
 
 
-def find_turn(a1: float, b1: float, ca: float, cb: float, turn: int, a2: float, b2: float) -> float:
+def find_turn(a1: float, b1: float, ca: float, cb: float, *, turn: int, a2: float, b2: float) -> float:
     """LinuxCNC's ``find_turn``: the angle an arc sweeps from (a1, b1) to (a2, b2) about
     (ca, cb), ``turn`` full or partial circles (> 0 counter-clockwise), rad (negative: clockwise)."""
     if turn == 0:
@@ -207,20 +207,20 @@ class CutterCompensation:
     # --- straight moves ---------------------------------------------------------------------
 
     def straight(
-        self, kind: MoveKind, end: list[float], position: list[float], plane: str, make: MoveMaker
+        self, kind: MoveKind, end: list[float], *, position: list[float], plane: str, make: MoveMaker
     ) -> list[float]:
         """G0 / G1 (``kind`` RAPID / FEED) to the programmed ``end`` [x, y, z] from the
         current point ``position``; the new current point (the compensated end)."""
         p = _in_plane(end, plane)
         c = _in_plane(position, plane)
         if self.first:
-            new = self._straight_entry(kind, p, c, position, make, plane)
+            new = self._straight_entry(kind, p, c, position=position, make=make, plane=plane)
         else:
-            new = self._straight_next(kind, p, c, make, plane)
+            new = self._straight_next(kind, p, c, make=make, plane=plane)
         self.program = list(end)
         return _from_plane(new, plane)
 
-    def _straight_entry(self, kind, p, c, position, make, plane) -> list[float]:
+    def _straight_entry(self, kind, p, c, *, position, make, plane) -> list[float]:
         """LinuxCNC's ``convert_straight_comp1``: the entry move."""
         pa, pb, pc = p
         ca, cb, _ = c
@@ -231,18 +231,18 @@ class CutterCompensation:
         ea, eb = pa + radius * math.cos(alpha), pb + radius * math.sin(alpha)
         self._begin(position)
         self._set_endpoint(ca, cb)
-        self._enqueue(kind, [ea, eb, pc], make, plane, direction=(math.cos(alpha), math.sin(alpha)))
+        self._enqueue(kind, [ea, eb, pc], make=make, plane=plane, direction=(math.cos(alpha), math.sin(alpha)))
         self.first = False
         return [ea, eb, pc]
 
-    def _straight_next(self, kind, p, c, make, plane) -> list[float]:
+    def _straight_next(self, kind, p, c, *, make, plane) -> list[float]:
         """LinuxCNC's ``convert_straight_comp2``: a move after the entry, its corner with the
         move before."""
         pa, pb, pc = p
         ca, cb, cc = c
         opa, opb, _ = _in_plane(self.program, plane)
         if pa == opa and pb == opb:  # no motion in the plane: the tool stays beside the point
-            self._enqueue(kind, [ca, cb, pc], make, plane, direction=(0.0, 0.0))
+            self._enqueue(kind, [ca, cb, pc], make=make, plane=plane, direction=(0.0, 0.0))
             return [ca, cb, pc]
         radius = self.radius
         small = TOLERANCE_CONCAVE_CORNER
@@ -269,9 +269,9 @@ class CutterCompensation:
             self._move_endpoint_and_flush(ca, cb, plane)
             if kind == MoveKind.FEED:
                 turn = -1 if self.side == "left" else 1
-                self._enqueue(MoveKind.ARC, [mid_a, mid_b, cc], make, plane, center=(opa, opb), turn=turn)
+                self._enqueue(MoveKind.ARC, [mid_a, mid_b, cc], make=make, plane=plane, center=(opa, opb), turn=turn)
             else:
-                self._enqueue(MoveKind.RAPID, [mid_a, mid_b, cc], make, plane)
+                self._enqueue(MoveKind.RAPID, [mid_a, mid_b, cc], make=make, plane=plane)
             self._dequeue(plane)
             self._set_endpoint(mid_a, mid_b)
         elif concave:
@@ -285,14 +285,14 @@ class CutterCompensation:
                 mid_b = cb + retreat * math.sin(theta + gamma)
                 self._move_endpoint_and_flush(mid_a, mid_b, plane)
             else:  # arc to line: the arc's end where the line's offset meets its circle
-                self._move_endpoint_and_flush(*self._arc_to_line(front, pa, pb, opa, opb), plane)
+                self._move_endpoint_and_flush(*self._arc_to_line(front, pa=pa, pb=pb, opa=opa, opb=opb), plane)
         else:  # straight on (collinear, or a tangent arc into the line)
             self._dequeue(plane)
             self._set_endpoint(ca, cb)
-        self._enqueue(kind, [ea, eb, pc], make, plane, direction=(pa - opa, pb - opb))
+        self._enqueue(kind, [ea, eb, pc], make=make, plane=plane, direction=(pa - opa, pb - opb))
         return [ea, eb, pc]
 
-    def _arc_to_line(self, prev: _Queued, pa, pb, opa, opb) -> tuple[float, float]:
+    def _arc_to_line(self, prev: _Queued, *, pa, pb, opa, opb) -> tuple[float, float]:
         """Where the (compensated) arc ``prev`` meets the next line's offset."""
         radius = self.radius
         pca, pcb = prev.center
@@ -319,6 +319,7 @@ class CutterCompensation:
         self,
         motion: int,
         end: list[float],
+        *,
         position: list[float],
         plane: str,
         turns: int,
@@ -333,9 +334,20 @@ class CutterCompensation:
         p = _in_plane(end, plane)
         c = _in_plane(position, plane)
         if self.first:
-            new = self._arc_entry(motion, p, c, position, plane, turns, radius_word, center_of, spiral_tolerance, make)
+            new = self._arc_entry(
+                motion,
+                p,
+                c,
+                position=position,
+                plane=plane,
+                turns=turns,
+                radius_word=radius_word,
+                center_of=center_of,
+                spiral_tolerance=spiral_tolerance,
+                make=make,
+            )
         else:
-            new = self._arc_next(motion, p, c, plane, turns, center_of, make)
+            new = self._arc_next(motion, p, c, plane=plane, turns=turns, center_of=center_of, make=make)
         self.program = list(end)
         return _from_plane(new, plane)
 
@@ -344,7 +356,7 @@ class CutterCompensation:
         if inside and arc_radius <= self.radius:
             raise BlockError("Tool radius not less than arc radius with comp")
 
-    def _arc_entry(self, motion, p, c, position, plane, turns, radius_word, center_of, spiral_tolerance, make):
+    def _arc_entry(self, motion, p, c, *, position, plane, turns, radius_word, center_of, spiral_tolerance, make):
         """LinuxCNC's ``convert_arc_comp1``: an arc as the entry move, tangent to the tool where
         it stands."""
         pa, pb, pc = p
@@ -376,13 +388,15 @@ class CutterCompensation:
             raise BlockError("Bug in tool radius comp")
         self._begin(position)
         if self.orientation not in (0, 9):  # a lathe tool: its origin moved first
-            self._enqueue(MoveKind.FEED, [ca, cb, cc], make, plane)
+            self._enqueue(MoveKind.FEED, [ca, cb, cc], make=make, plane=plane)
             self._set_endpoint(ca, cb)
-        sweep = find_turn(ca, cb, center_a, center_b, turn, ea, eb)
-        self._enqueue(MoveKind.ARC, [ea, eb, pc], make, plane, center=(center_a, center_b), turn=turn, sweep=sweep)
+        sweep = find_turn(ca, cb, center_a, center_b, turn=turn, a2=ea, b2=eb)
+        self._enqueue(
+            MoveKind.ARC, [ea, eb, pc], make=make, plane=plane, center=(center_a, center_b), turn=turn, sweep=sweep
+        )
         return [ea, eb, pc]
 
-    def _arc_next(self, motion, p, c, plane, turns, center_of, make):
+    def _arc_next(self, motion, p, c, *, plane, turns, center_of, make):
         """LinuxCNC's ``convert_arc_comp2``: an arc after the entry, its corner with the move
         before."""
         pa, pb, pc = p
@@ -411,31 +425,49 @@ class CutterCompensation:
             delta += math.pi
         new_a, new_b = pa + radius * math.cos(gamma), pb + radius * math.sin(gamma)
         inside = _tool_inside_arc(side, turn)
-        sweep = find_turn(opa, opb, center_a, center_b, turn, pa, pb)
+        sweep = find_turn(opa, opb, center_a, center_b, turn=turn, a2=pa, b2=pb)
         if beta < -small or beta > math.pi + small or (abs(beta - math.pi) < small and not inside):
             front = self._front()
             if front is None or front.move.kind != MoveKind.ARC:  # line to arc
                 self._move_endpoint_and_flush(
-                    *self._line_to_arc(beta, theta, arc_radius, inside, turn, center_a, center_b), plane
+                    *self._line_to_arc(
+                        beta,
+                        theta,
+                        arc_radius=arc_radius,
+                        inside=inside,
+                        turn=turn,
+                        center_a=center_a,
+                        center_b=center_b,
+                    ),
+                    plane,
                 )
             else:  # arc to arc
-                self._move_endpoint_and_flush(*self._arc_to_arc(front, center_a, center_b, arc_radius, turn), plane)
+                self._move_endpoint_and_flush(
+                    *self._arc_to_arc(front, center_a=center_a, center_b=center_b, arc_radius=arc_radius, turn=turn),
+                    plane,
+                )
         elif beta > small:  # outside corner: an arc about it first
             mid_a, mid_b = opa + radius * math.cos(delta), opb + radius * math.sin(delta)
             self._dequeue(plane)
             corner_turn = -1 if side == "left" else 1
-            self._enqueue(MoveKind.ARC, [mid_a, mid_b, cc], make, plane, center=(opa, opb), turn=corner_turn)
+            self._enqueue(MoveKind.ARC, [mid_a, mid_b, cc], make=make, plane=plane, center=(opa, opb), turn=corner_turn)
             self._dequeue(plane)
             self._set_endpoint(mid_a, mid_b)
         else:  # straight on
             self._dequeue(plane)
             self._set_endpoint(ca, cb)
         self._enqueue(
-            MoveKind.ARC, [new_a, new_b, pc], make, plane, center=(center_a, center_b), turn=turn, sweep=sweep
+            MoveKind.ARC,
+            [new_a, new_b, pc],
+            make=make,
+            plane=plane,
+            center=(center_a, center_b),
+            turn=turn,
+            sweep=sweep,
         )
         return [new_a, new_b, pc]
 
-    def _line_to_arc(self, beta, theta, arc_radius, inside, turn, center_a, center_b) -> tuple[float, float]:
+    def _line_to_arc(self, beta, theta, *, arc_radius, inside, turn, center_a, center_b) -> tuple[float, float]:
         """Where the held line's end meets the next arc's offset circle (an inside corner)."""
         radius = self.radius
         cy = arc_radius * math.sin(beta - math.pi / 2)
@@ -454,7 +486,7 @@ class CutterCompensation:
             angle = theta + math.pi - math.asin(ratio) if turn > 0 else theta + math.pi + math.asin(ratio)
         return center_a + dist * math.cos(angle), center_b + dist * math.sin(angle)
 
-    def _arc_to_arc(self, prev: _Queued, center_a, center_b, arc_radius, turn) -> tuple[float, float]:
+    def _arc_to_arc(self, prev: _Queued, *, center_a, center_b, arc_radius, turn) -> tuple[float, float]:
         """Where the held arc's end meets the next arc's offset circle (an inside corner)."""
         pca, pcb = prev.center
         oldrad = math.hypot(pcb - prev.end[1], pca - prev.end[0])
@@ -486,7 +518,7 @@ class CutterCompensation:
     def _set_endpoint(self, a: float, b: float) -> None:
         self.endpoint, self.endpoint_valid = (a, b), True
 
-    def _enqueue(self, kind, end, make, plane, direction=(0.0, 0.0), center=(0.0, 0.0), turn=0, sweep=0.0) -> None:
+    def _enqueue(self, kind, end, *, make, plane, direction=(0.0, 0.0), center=(0.0, 0.0), turn=0, sweep=0.0) -> None:
         self._check_held()
         xyz = _from_plane(end, plane)
         move = make(kind, xyz, center, turn)
@@ -509,7 +541,7 @@ class CutterCompensation:
                 ca, cb = q.center
                 r1 = math.hypot(q.end[0] - ca, q.end[1] - cb)
                 r2 = math.hypot(a - ca, b - cb)
-                sweep = find_turn(ea, eb, ca, cb, q.turn, a, b)
+                sweep = find_turn(ea, eb, ca, cb, turn=q.turn, a2=a, b2=b)
                 if abs(r1 - r2) > ARC_END_RADIUS_SLACK:
                     raise BlockError(
                         "BUG: cutter compensation has generated an invalid arc with mismatched radii "

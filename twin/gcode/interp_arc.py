@@ -63,7 +63,7 @@ class Arcs(StraightMoves):
             radius = words["r"]
 
             def center_of(a0: float, b0: float) -> tuple[float, float]:
-                return arc_center_r(clockwise, a0, b0, a1, b1, radius, tolerance)
+                return arc_center_r(clockwise, a0=a0, b0=b0, a1=a1, b1=b1, radius=radius, tolerance=tolerance)
 
         else:
             if normal_word in words:
@@ -80,14 +80,22 @@ class Arcs(StraightMoves):
 
             def center_of(a0: float, b0: float) -> tuple[float, float]:
                 center = (a0 + ci, b0 + cj) if s.arc_incremental else (ci, cj)
-                check_arc_radii(center, a0, b0, a1, b1, tolerance, spiral)
+                check_arc_radii(center, a0=a0, b0=b0, a1=a1, b1=b1, tolerance=tolerance, spiral=spiral)
                 return center
 
         signed_turns = -turns if clockwise else turns
         if comp.active and plane in COMPENSATED_PLANES:
             radius_word = words.get("r")
             s.position = comp.arc(
-                motion, end, s.position, plane, signed_turns, radius_word, center_of, spiral, self._compensated_move
+                motion,
+                end,
+                position=s.position,
+                plane=plane,
+                turns=signed_turns,
+                radius_word=radius_word,
+                center_of=center_of,
+                spiral_tolerance=spiral,
+                make=self._compensated_move,
             )
             return None
         center = center_of(s.position[first], s.position[second])
@@ -104,7 +112,7 @@ class Arcs(StraightMoves):
         return move
 
 
-def arc_center_r(clockwise: bool, a0: float, b0: float, a1: float, b1: float, radius: float, tolerance: float):
+def arc_center_r(clockwise: bool, *, a0: float, b0: float, a1: float, b1: float, radius: float, tolerance: float):
     """LinuxCNC's ``arc_data_r``: the centre of an R arc (negative R: more than half a circle)."""
     if a0 == a1 and b0 == b1:
         raise BlockError("current point same as end point of arc (an R arc cannot be a full circle: use I, J, K)")
@@ -125,7 +133,7 @@ def arc_center_r(clockwise: bool, a0: float, b0: float, a1: float, b1: float, ra
     return (mid_a + offset * math.cos(theta), mid_b + offset * math.sin(theta))
 
 
-def check_arc_radii(center, a0: float, b0: float, a1: float, b1: float, tolerance: float, spiral: float) -> None:
+def check_arc_radii(center, *, a0: float, b0: float, a1: float, b1: float, tolerance: float, spiral: float) -> None:
     """LinuxCNC's ``arc_data_ijk`` checks: no zero radius; the end's radius within the spiral
     tolerance of the start's (absolute *and* relative, or 100 times the absolute alone)."""
     r1 = math.hypot(center[0] - a0, center[1] - b0)

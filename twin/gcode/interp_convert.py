@@ -225,7 +225,9 @@ class BlockConverter(Offsets, Arcs):
                 if g_modes.get(ModalGroup.MODAL_0) == GCode.G_53:
                     raise BlockError("Cannot use g53 with cutter radius comp")
                 kind = MoveKind.FEED if motion == GCode.G_1 else MoveKind.RAPID
-                s.position = comp.straight(kind, end, s.position, PLANE_OF[s.plane], self._compensated_move)
+                s.position = comp.straight(
+                    kind, end, position=s.position, plane=PLANE_OF[s.plane], make=self._compensated_move
+                )
             else:
                 self._linear(MoveKind.FEED if motion == GCode.G_1 else MoveKind.RAPID, end)
         else:

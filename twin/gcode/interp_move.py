@@ -40,13 +40,16 @@ class StraightMoves(InterpreterSetup):
             if k in words:
                 end[i] = end[i] + words[k] if s.incremental else words[k]
         if "@" in words or "^" in words:
-            end[0], end[1] = polar_end(end[0], end[1], words.get("@"), words.get("^"), s.incremental)
+            end[0], end[1] = polar_end(
+                end[0], end[1], radius=words.get("@"), angle=words.get("^"), incremental=s.incremental
+            )
         return end
 
     def _move(
         self,
         kind: MoveKind,
         end: list[float],
+        *,
         feed_mm_per_min: float = 0.0,
         plane: str = "",
         center_mm: tuple[float, float] = (0.0, 0.0),
@@ -106,21 +109,27 @@ class StraightMoves(InterpreterSetup):
             return self._move(MoveKind.RAPID, end)
         scale = s.mm_per_unit
         if kind == MoveKind.FEED:
-            return self._move(MoveKind.FEED, end, s.feed * scale)
+            return self._move(MoveKind.FEED, end, feed_mm_per_min=s.feed * scale)
         center_mm = (center[0] * scale, center[1] * scale)
-        return self._move(MoveKind.ARC, end, s.feed * scale, PLANE_OF[s.plane], center_mm, turns)
+        return self._move(
+            MoveKind.ARC, end, feed_mm_per_min=s.feed * scale, plane=PLANE_OF[s.plane], center_mm=center_mm, turns=turns
+        )
 
     def _linear_move(self, feeding: bool, end: list[float]) -> Move:
         """G1 (``feeding``) or G0 to ``end`` (program units), made the current point."""
         s = self.state
         if feeding and s.feed <= 0:
             raise BlockError("cannot do G1 with zero feed rate (give F)")
-        move = self._move(MoveKind.FEED, end, s.feed * s.mm_per_unit) if feeding else self._move(MoveKind.RAPID, end)
+        move = (
+            self._move(MoveKind.FEED, end, feed_mm_per_min=s.feed * s.mm_per_unit)
+            if feeding
+            else self._move(MoveKind.RAPID, end)
+        )
         s.position = end
         return move
 
 
-def polar_end(x: float, y: float, radius: float | None, angle: float | None, incremental: bool):
+def polar_end(x: float, y: float, *, radius: float | None, angle: float | None, incremental: bool):
     """LinuxCNC's polar coordinates (``@`` radius, ``^`` angle in degrees, G17): the end point
     from the current one ``(x, y)``; incremental adds to the current radius and angle."""
     if incremental:

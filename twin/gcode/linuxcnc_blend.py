@@ -180,7 +180,7 @@ def blend_tolerance(prev: Segment, seg: Segment) -> float:
     return min(min(nominal, prev.nominal_length * ratio), seg.nominal_length * ratio)
 
 
-def _kinematics(geom: Geometry, param: Parameters, prev: Segment, seg: Segment, acc: Vec, vel: Vec, feed_scale):
+def _kinematics(geom: Geometry, param: Parameters, *, prev: Segment, seg: Segment, acc: Vec, vel: Vec, feed_scale):
     """``blendParamKinematics``."""
     param.phi = math.pi - param.theta * 2.0
     param.tolerance = blend_tolerance(prev, seg)
@@ -200,7 +200,7 @@ def _kinematics(geom: Geometry, param: Parameters, prev: Segment, seg: Segment, 
     param.v_goal = min(param.v_goal, max(v_max_alt, v_planar_max))
 
 
-def init_line_line(prev: Segment, seg: Segment, acc: Vec, vel: Vec, feed_scale: float):
+def init_line_line(prev: Segment, seg: Segment, *, acc: Vec, vel: Vec, feed_scale: float):
     """``blendInit3FromLineLine``."""
     geom = _geometry(prev, seg)
     param = Parameters()
@@ -208,11 +208,11 @@ def init_line_line(prev: Segment, seg: Segment, acc: Vec, vel: Vec, feed_scale: 
     param.phi = math.pi - param.theta * 2.0
     param.L1 = min(prev.target, prev.nominal_length * BLEND_DIST_FRACTION)
     param.L2 = seg.target * BLEND_DIST_FRACTION
-    _kinematics(geom, param, prev, seg, acc, vel, feed_scale)
+    _kinematics(geom, param, prev=prev, seg=seg, acc=acc, vel=vel, feed_scale=feed_scale)
     return geom, param
 
 
-def init_line_arc(prev: Segment, seg: Segment, acc: Vec, vel: Vec, feed_scale: float):
+def init_line_arc(prev: Segment, seg: Segment, *, acc: Vec, vel: Vec, feed_scale: float):
     """``blendInit3FromLineArc``."""
     geom = _geometry(prev, seg)
     param = Parameters()
@@ -231,11 +231,11 @@ def init_line_arc(prev: Segment, seg: Segment, acc: Vec, vel: Vec, feed_scale: f
         param.L2 = math.sin(param.phi2_max / 4.0) * geom.radius2
     else:
         param.L2 = param.phi2_max * geom.radius2
-    _kinematics(geom, param, prev, seg, acc, vel, feed_scale)
+    _kinematics(geom, param, prev=prev, seg=seg, acc=acc, vel=vel, feed_scale=feed_scale)
     return geom, param
 
 
-def init_arc_line(prev: Segment, seg: Segment, acc: Vec, vel: Vec, feed_scale: float):
+def init_arc_line(prev: Segment, seg: Segment, *, acc: Vec, vel: Vec, feed_scale: float):
     """``blendInit3FromArcLine``."""
     geom = _geometry(prev, seg)
     param = Parameters()
@@ -252,11 +252,11 @@ def init_arc_line(prev: Segment, seg: Segment, acc: Vec, vel: Vec, feed_scale: f
     param.L2 = seg.nominal_length / 2.0
     if param.convex1:
         param.L1 = math.sin(param.phi1_max / 4.0) * geom.radius1
-    _kinematics(geom, param, prev, seg, acc, vel, feed_scale)
+    _kinematics(geom, param, prev=prev, seg=seg, acc=acc, vel=vel, feed_scale=feed_scale)
     return geom, param
 
 
-def init_arc_arc(prev: Segment, seg: Segment, acc: Vec, vel: Vec, feed_scale: float):
+def init_arc_arc(prev: Segment, seg: Segment, *, acc: Vec, vel: Vec, feed_scale: float):
     """``blendInit3FromArcArc``."""
     geom = _geometry(prev, seg)
     param = Parameters()
@@ -287,7 +287,7 @@ def init_arc_arc(prev: Segment, seg: Segment, acc: Vec, vel: Vec, feed_scale: fl
         param.L1 = math.sin(param.phi1_max / 4.0) * geom.radius1
     if param.convex2:
         param.L2 = math.sin(param.phi2_max / 4.0) * geom.radius2
-    _kinematics(geom, param, prev, seg, acc, vel, feed_scale)
+    _kinematics(geom, param, prev=prev, seg=seg, acc=acc, vel=vel, feed_scale=feed_scale)
     return geom, param
 
 
@@ -331,7 +331,9 @@ def _quadratic(a: float, b: float, c: float) -> tuple[float, float]:
     return (-b + t1) / (2.0 * a), (-b - t1) / (2.0 * a)
 
 
-def _line_circle_center(geom: Geometry, param: Parameters, u_line: Vec, center: Vec, radius: float, convex: bool, sign):
+def _line_circle_center(
+    geom: Geometry, param: Parameters, *, u_line: Vec, center: Vec, radius: float, convex: bool, sign
+):
     """The blend arc's centre beside a line and a circle (``blendLineArcPostProcess``,
     ``blendArcLinePostProcess``): its distance along the line and the centre."""
     d = (-param.R_plan if convex else param.R_plan) + radius
@@ -352,7 +354,7 @@ def line_arc_points(geom: Geometry, param: Parameters) -> Points:
     """``blendLineArcPostProcess``."""
     points = Points()
     d_line, points.arc_center = _line_circle_center(
-        geom, param, geom.u1, geom.center2, geom.radius2, param.convex2, -1.0
+        geom, param, u_line=geom.u1, center=geom.center2, radius=geom.radius2, convex=param.convex2, sign=-1.0
     )
     points.trim1 = d_line
     points.trim2 = _trim_angle(geom.P, points.arc_center, geom.center2)
@@ -363,7 +365,7 @@ def arc_line_points(geom: Geometry, param: Parameters) -> Points:
     """``blendArcLinePostProcess``."""
     points = Points()
     d_line, points.arc_center = _line_circle_center(
-        geom, param, geom.u2, geom.center1, geom.radius1, param.convex1, 1.0
+        geom, param, u_line=geom.u2, center=geom.center1, radius=geom.radius1, convex=param.convex1, sign=1.0
     )
     points.trim1 = _trim_angle(geom.P, points.arc_center, geom.center1)
     points.trim2 = d_line
@@ -412,7 +414,9 @@ def max_tangent_angle(v_plan: float, acc_limit: float, cycle_time: float) -> flo
     return acc_margin / dx if dx > 0.0 else TP_ANGLE_EPSILON
 
 
-def check_tangent_angle(circle: Circle, arc_tangent: Vec, param: Parameters, cycle_time: float, at_end: bool) -> None:
+def check_tangent_angle(
+    circle: Circle, arc_tangent: Vec, *, param: Parameters, cycle_time: float, at_end: bool
+) -> None:
     """``checkTangentAngle``: refuse an arc that meets ``circle`` at too sharp a kink."""
     u_circ = circle.tangent(0.0) if at_end else circle.tangent(circle.angle)
     u_arc = unit(arc_tangent)

@@ -144,7 +144,7 @@ class Circle:
     spiral: float
 
     @classmethod
-    def init(cls, start: Vec, end: Vec, center: Vec, normal: Vec, turn: int) -> Circle:
+    def init(cls, start: Vec, end: Vec, *, center: Vec, normal: Vec, turn: int) -> Circle:
         """``pmCircleInit``: ``turn`` as LinuxCNC's canon sends it (0: less than a turn
         counter-clockwise about ``normal``; -1: clockwise; more: added full turns)."""
         v = project(sub(start, center), normal)
@@ -290,7 +290,7 @@ class SphericalArc:
 
     @classmethod
     def from_points(
-        cls, start: Vec, end: Vec, center: Vec, u_tan: Vec, binormal: Vec, line_length: float
+        cls, start: Vec, end: Vec, center: Vec, *, u_tan: Vec, binormal: Vec, line_length: float
     ) -> SphericalArc | None:
         """``arcInitFromPoints`` (None where LinuxCNC fails: too small a radius or angle)."""
         r_start = sub(start, center)

@@ -348,10 +348,10 @@ def sampled(moves: Iterable[Move], limits: AxisLimits, period_s: float = 1e-3, b
     if canon.end is None or not head:
         return
     first_line = next(item.line_number for item in head if isinstance(item, _Motion))
-    yield from _run(config, canon.start, first_line, itertools.chain(head, source), block)
+    yield from _run(config, start=canon.start, line=first_line, items=itertools.chain(head, source), block=block)
 
 
-def _run(config: Config, start, line: int, items: Iterable[object], block: int):
+def _run(config: Config, *, start, line: int, items: Iterable[object], block: int):
     """The task, the planner and the interpolator, one servo period at a time (``line``: the
     program line of the samples before the first segment)."""
     planner = Planner(config, start)
@@ -372,11 +372,25 @@ def _run(config: Config, start, line: int, items: Iterable[object], block: int):
         elif pending is not None and len(planner.queue) < QUEUE_FULL:
             if isinstance(pending, _Motion):
                 if pending.kind == "line":
-                    planner.add_line(pending.end, pending.traverse, pending.line_number, pending.vel,
-                                     pending.ini_maxvel, pending.acc)  # fmt: skip
+                    planner.add_line(
+                        pending.end,
+                        traverse=pending.traverse,
+                        line_number=pending.line_number,
+                        vel=pending.vel,
+                        ini_maxvel=pending.ini_maxvel,
+                        acc=pending.acc,
+                    )
                 else:
-                    planner.add_circle(pending.end, pending.center, pending.normal, pending.turn,
-                                       pending.line_number, pending.vel, pending.ini_maxvel, pending.acc)  # fmt: skip
+                    planner.add_circle(
+                        pending.end,
+                        pending.center,
+                        normal=pending.normal,
+                        turn=pending.turn,
+                        line_number=pending.line_number,
+                        vel=pending.vel,
+                        ini_maxvel=pending.ini_maxvel,
+                        acc=pending.acc,
+                    )
                 line = pending.line_number
                 pending = next(source, None)
             elif isinstance(pending, _TermCond):

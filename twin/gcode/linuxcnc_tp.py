@@ -108,7 +108,7 @@ class Planner:
         self.term_cond = cond
         self.tolerance = tolerance
 
-    def _new(self, kind: str, traverse: bool, line_number: int, vel: float, ini_maxvel: float, acc: float, atspeed):
+    def _new(self, kind: str, *, traverse: bool, line_number: int, vel: float, ini_maxvel: float, acc: float, atspeed):
         seg = Segment(kind, traverse, line_number, self.config.cycle_time, atspeed=atspeed)
         seg.term_cond = self.term_cond
         seg.tolerance = self.tolerance
@@ -117,20 +117,24 @@ class Planner:
         seg.reqvel = vel
         return seg
 
-    def add_line(self, end: Vec, traverse: bool, line_number: int, vel, ini_maxvel, acc, atspeed=False) -> bool:
+    def add_line(self, end: Vec, *, traverse: bool, line_number: int, vel, ini_maxvel, acc, atspeed=False) -> bool:
         """``tpAddLine``; False for a segment of zero length (not queued)."""
-        seg = self._new("line", traverse, line_number, vel, ini_maxvel, acc, atspeed)
+        seg = self._new(
+            "line", traverse=traverse, line_number=line_number, vel=vel, ini_maxvel=ini_maxvel, acc=acc, atspeed=atspeed
+        )
         seg.line = Line.between(self.goal_pos, end)
         seg.target = 0.0 if seg.line.tmag_zero else seg.line.tmag
         if seg.target < TP_POS_EPSILON:
             return False
         return self._add(seg)
 
-    def add_circle(self, end: Vec, center: Vec, normal: Vec, turn: int, line_number: int, vel, ini_maxvel, acc,
+    def add_circle(self, end: Vec, center: Vec, *, normal: Vec, turn: int, line_number: int, vel, ini_maxvel, acc,
                    atspeed=False) -> bool:  # fmt: skip
         """``tpAddCircle``; False for a segment of zero length (not queued)."""
-        seg = self._new("circle", False, line_number, vel, ini_maxvel, acc, atspeed)
-        seg.set_circle(Circle.init(self.goal_pos, end, center, normal, turn))
+        seg = self._new(
+            "circle", traverse=False, line_number=line_number, vel=vel, ini_maxvel=ini_maxvel, acc=acc, atspeed=atspeed
+        )
+        seg.set_circle(Circle.init(self.goal_pos, end, center=center, normal=normal, turn=turn))
         if seg.target < TP_POS_EPSILON:
             return False
         return self._add(seg)
@@ -231,12 +235,17 @@ class Planner:
     def _line_line_blend(self, prev: Segment, seg: Segment) -> Segment | None:
         """``tpCreateLineLineBlend``."""
         cfg = self.config
-        geom, param = bm.init_line_line(prev, seg, cfg.acc_bound, cfg.vel_bound, cfg.max_feed_scale)
+        geom, param = bm.init_line_line(prev, seg, acc=cfg.acc_bound, vel=cfg.vel_bound, feed_scale=cfg.max_feed_scale)
         bm.compute_parameters(param)
         points = bm.find_points(geom, param)
         self._check_consume(param, points, prev)
         arc = SphericalArc.from_points(
-            points.arc_start, points.arc_end, points.arc_center, geom.u_tan1, geom.binormal, param.line_length
+            points.arc_start,
+            points.arc_end,
+            points.arc_center,
+            u_tan=geom.u_tan1,
+            binormal=geom.binormal,
+            line_length=param.line_length,
         )
         if arc is None:
             return None
@@ -256,23 +265,28 @@ class Planner:
     def _curved_blend(self, prev: Segment, seg: Segment) -> Segment | None:
         """``tpCreateLineArcBlend``, ``tpCreateArcLineBlend``, ``tpCreateArcArcBlend``."""
         cfg = self.config
-        args = (prev, seg, cfg.acc_bound, cfg.vel_bound, cfg.max_feed_scale)
         if prev.kind == "circle" and seg.kind == "circle":
             if not bm.coplanar(prev.circle.normal, seg.circle.normal):
                 return None
-            geom, param = bm.init_arc_arc(*args)
+            geom, param = bm.init_arc_arc(
+                prev, seg, acc=cfg.acc_bound, vel=cfg.vel_bound, feed_scale=cfg.max_feed_scale
+            )
             if not bm.coplanar(geom.binormal, prev.circle.normal) or not bm.coplanar(geom.binormal, seg.circle.normal):
                 return None
             bm.compute_parameters(param)
             points = bm.arc_arc_points(geom, param)
         elif prev.kind == "line":
-            geom, param = bm.init_line_arc(*args)
+            geom, param = bm.init_line_arc(
+                prev, seg, acc=cfg.acc_bound, vel=cfg.vel_bound, feed_scale=cfg.max_feed_scale
+            )
             if not bm.coplanar(geom.binormal, seg.circle.normal):
                 return None
             bm.compute_parameters(param)
             points = bm.line_arc_points(geom, param)
         else:
-            geom, param = bm.init_arc_line(*args)
+            geom, param = bm.init_arc_line(
+                prev, seg, acc=cfg.acc_bound, vel=cfg.vel_bound, feed_scale=cfg.max_feed_scale
+            )
             if not bm.coplanar(geom.binormal, prev.circle.normal):
                 return None
             bm.compute_parameters(param)
@@ -313,16 +327,25 @@ class Planner:
         if new_circle is not None:
             points.arc_end = new_circle.point(0.0)
         arc = SphericalArc.from_points(
-            points.arc_start, points.arc_end, points.arc_center, geom.u_tan1, geom.binormal, param.line_length
+            points.arc_start,
+            points.arc_end,
+            points.arc_center,
+            u_tan=geom.u_tan1,
+            binormal=geom.binormal,
+            line_length=param.line_length,
         )
         if arc is None:
             return None
         blend = self._blend_segment(prev, arc, param)
         try:
             if new_circle is not None:
-                bm.check_tangent_angle(new_circle, arc.tangent(True), param, cfg.cycle_time, True)
+                bm.check_tangent_angle(
+                    new_circle, arc.tangent(True), param=param, cycle_time=cfg.cycle_time, at_end=True
+                )
             if new_prev_circle is not None:
-                bm.check_tangent_angle(new_prev_circle, arc.tangent(False), param, cfg.cycle_time, False)
+                bm.check_tangent_angle(
+                    new_prev_circle, arc.tangent(False), param=param, cycle_time=cfg.cycle_time, at_end=False
+                )
         except bm.BlendFailed:
             return None
         if self._choose_best_blend(prev, seg, blend) != "arc":

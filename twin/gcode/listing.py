@@ -12,6 +12,7 @@ import sys
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any, Protocol, TypeVar
 
 from twin.errors import input_file
 from twin.gcode.moves import Move, MoveKind
@@ -21,6 +22,16 @@ from twin.gcode.reader import Settings, read_program
 IN_MEMORY_BYTES = 64 << 20
 #: Rows joined into one write (a spooled file's write checks its size each time).
 ROWS_PER_WRITE = 4096
+
+
+class JsonReport(Protocol):
+    """What a program's plan gives the listing: its JSON (``planned``)."""
+
+    def to_json(self) -> dict[str, Any]: ...
+
+
+#: What ``plan`` returns (:class:`twin.gcode.report.PlannedSummary`).
+Planned = TypeVar("Planned", bound=JsonReport)
 
 #: The table's header (``twin gcode FILE`` without ``--json``).
 HEADER = f"{'line':>6}  {'kind':<6} {'end_mm (x, y, z)':<34} {'feed mm/min':>11}  spindle"
@@ -67,8 +78,8 @@ def list_program(
     file: Path,
     settings: Settings,
     as_json: bool,
-    plan: Callable[[list[Move]], dict] | None = None,
-) -> dict | None:
+    plan: Callable[[list[Move]], Planned] | None = None,
+) -> Planned | None:
     """Read ``file`` and print its listing on stdout (a table, or one JSON document); with
     ``plan``, the moves are kept and planned, and the plan's table goes into the JSON.
 
@@ -78,7 +89,7 @@ def list_program(
 
     Returns
     -------
-    dict or None
+    Planned or None
         What ``plan`` returned (None without it).
 
     Raises
@@ -107,7 +118,7 @@ def list_program(
             wrote = True
         planned = None if plan is None or kept is None else plan(kept)
         if as_json:
-            tail = "" if planned is None else f', "planned": {json.dumps(planned, indent=1, allow_nan=False)}'
+            tail = "" if planned is None else f', "planned": {json.dumps(planned.to_json(), indent=1, allow_nan=False)}'
             out.write(f"\n]{tail}}}\n")
         elif wrote:
             out.write("\n")

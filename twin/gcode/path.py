@@ -303,7 +303,7 @@ def _arc_distance(seg: Segment, p: np.ndarray) -> np.ndarray:
     for turn, _per_m in estimates:
         rows.append(np.repeat(np.arange(len(p)), 3))
         turns.append((turn[:, None] + np.array([-1, 0, 1])).ravel())
-    _nearest_on_turns(seg, p, np.concatenate(rows), np.concatenate(turns), angle, best, last)
+    _nearest_on_turns(seg, p, rows=np.concatenate(rows), turns=np.concatenate(turns), angle=angle, best=best, last=last)
     for turn, per_m in estimates:
         # the turns whose height (radius) is within the distance found of the point's
         reach = np.minimum(np.ceil(best * per_m + 0.5), last + 1).astype(int)  # the estimate rounds by half a turn
@@ -314,11 +314,11 @@ def _arc_distance(seg: Segment, p: np.ndarray) -> np.ndarray:
             step = (
                 np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts) - np.repeat(reach[far], counts)
             )
-            _nearest_on_turns(seg, p, row, turn[row] + step, angle, best, last)
+            _nearest_on_turns(seg, p, rows=row, turns=turn[row] + step, angle=angle, best=best, last=last)
     return best
 
 
-def _nearest_on_turns(seg, p, rows, turns, angle, best, last) -> None:
+def _nearest_on_turns(seg, p, *, rows, turns, angle, best, last) -> None:
     """Lower ``best`` (per point of ``p``) to the distance of the arc's point that Newton's
     method finds from each point's ``angle`` on each of its ``turns`` (rows: the point of each)."""
     k = (seg.radius_end - seg.radius) / seg.sweep

@@ -68,6 +68,11 @@ class Violation(NamedTuple):
     def as_dict(self) -> dict:
         return {"line": self.line, "axis": self.axis, "quantity": self.quantity, "ratio": round(self.ratio, 6)}
 
+    def report_line(self) -> str:
+        """The violation as the text report gives it: line, axis, quantity and the ratio (to 4
+        decimals, of the JSON's 6)."""
+        return f"line {self.line}, {self.axis} {self.quantity} x{round(self.ratio, 6):.4f}"
+
 
 class PlanChunk(NamedTuple):
     """A stretch of the planned reference, every ``period_s`` from sample ``first``.

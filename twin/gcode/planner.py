@@ -342,7 +342,7 @@ def _least_time(path: Iterable[Segment], ctx: _Context, most_s: float, limit: st
         yield seg
 
 
-def refuse_long(moves: Iterable[Move], limits: Limits, settings: PlannerSettings, most_s: float, limit: str) -> None:
+def refuse_long(moves: Iterable[Move], limits: Limits, settings: PlannerSettings, *, most_s: float, limit: str) -> None:
     """Count a lower bound of the program's motion time from its moves alone, before (and
     without) planning them: time linear in its length, memory bounded.
 
@@ -567,7 +567,7 @@ class _Grid:
     """The look-ahead's arc-length grid over some segments: cumulative s (m), speed limit,
     acceleration, damping and curvature at each point, and the segment each lies on."""
 
-    def __init__(self, segments: list[Segment], junctions: list[float], v_start: float, v_end: float, ctx):
+    def __init__(self, segments: list[Segment], junctions: list[float], *, v_start: float, v_end: float, ctx):
         limits, override, filter_s = ctx.limits, ctx.override, ctx.filter_s
         n = len(segments)
         length = np.array([seg.length for seg in segments])
@@ -733,7 +733,7 @@ def _window_mean(x: np.ndarray, width: int) -> np.ndarray:
     return (summed[width:] - summed[:-width]) / width
 
 
-def _sample(grid: _Grid, v: np.ndarray, phase: float, to_end: bool, filter_s: float) -> tuple[_Raw, float]:
+def _sample(grid: _Grid, v: np.ndarray, *, phase: float, to_end: bool, filter_s: float) -> tuple[_Raw, float]:
     """Positions every :data:`SAMPLE_PERIOD_S` along the planned stretch from time ``phase``
     after its start (on arcs put out by the filter's shrink, :func:`_shrink_compensation`); the
     phase of the next stretch. ``to_end``: a stretch that ends at rest gets a sample at its end
@@ -872,6 +872,7 @@ class _Stream:
         moves: Iterable[Move],
         limits: Limits,
         settings: PlannerSettings,
+        *,
         keep_programmed: bool,
         most_s: float = math.inf,
         limit: str = "",
@@ -913,7 +914,7 @@ class _Stream:
                 yield from self._rest(seg.start, seg.line, 2, seg.tolerance_m)
             speed = _junction_speed(buffer[-1], seg, self.ctx) if buffer else 0.0
             if buffer and speed == 0.0:  # a stop: the buffer is planned to rest
-                yield from self._stretch(buffer, junctions, v_start, 0.0, phase, to_end=True)
+                yield from self._stretch(buffer, junctions, v_start=v_start, v_end=0.0, phase=phase, to_end=True)
                 buffer, junctions, points, v_start, phase, least_time = [], [], 0, 0.0, 0.0, 0.0
                 window_points, window_time = float(WINDOW_POINTS), WINDOW_TIME_S
             if seg.kind == SegmentKind.DWELL:
@@ -927,7 +928,9 @@ class _Stream:
             points += _grid_points(seg)
             least_time += seg.length / _segment_speed_limit(seg, self.limits, self.ctx.override, self.ctx.filter_s)
             while points >= window_points or least_time >= window_time:
-                rest = yield from self._hand_on(buffer, junctions, v_start, phase, full=points >= MAX_WINDOW_POINTS)
+                rest = yield from self._hand_on(
+                    buffer, junctions, v_start=v_start, phase=phase, full=points >= MAX_WINDOW_POINTS
+                )
                 if rest is None:  # no cruise yet: planned again once the window is half as long again
                     window_points, window_time = min(1.5 * points, MAX_WINDOW_POINTS), 1.5 * least_time
                     break
@@ -939,7 +942,7 @@ class _Stream:
                     for s in buffer
                 )
         if buffer:
-            yield from self._stretch(buffer, junctions, v_start, 0.0, phase, to_end=True)
+            yield from self._stretch(buffer, junctions, v_start=v_start, v_end=0.0, phase=phase, to_end=True)
         if self.smoother is not None:
             yield from self._finish()
 
@@ -951,16 +954,16 @@ class _Stream:
             raw = _Raw(np.repeat(position[None, :], n, axis=0), np.full(n, line), np.full(n, tolerance))
             yield from self._emit(raw)
 
-    def _stretch(self, segments, junctions, v_start, v_end, phase, to_end) -> Generator[PlanChunk, None, float]:
+    def _stretch(self, segments, junctions, *, v_start, v_end, phase, to_end) -> Generator[PlanChunk, None, float]:
         """Plan, sample, check (and repair) and emit one stretch of the path; return the phase
         of the next one. A stretch that ends at rest is followed by the filter's window of rest."""
         ctx = self.ctx
-        grid = _Grid(segments, junctions, v_start, v_end, ctx)
+        grid = _Grid(segments, junctions, v_start=v_start, v_end=v_end, ctx=ctx)
         settle = ctx.n_filter - 1 if to_end else 0  # after a stop, the filter's window of rest
         for attempt in range(MAX_REPAIRS + 1):
             v = grid.speeds(ctx.filter_s, ctx.budget)
             _bounded(grid, v)
-            raw, next_phase = _sample(grid, v, phase, to_end, ctx.filter_s)
+            raw, next_phase = _sample(grid, v, phase=phase, to_end=to_end, filter_s=ctx.filter_s)
             if settle:
                 raw = _Raw(
                     np.concatenate([raw.position, np.repeat(raw.position[-1:], settle, axis=0)]),
@@ -985,13 +988,13 @@ class _Stream:
         yield from self._emit(raw)
         return next_phase
 
-    def _hand_on(self, buffer, junctions, v_start, phase, full: bool) -> Generator[PlanChunk, None, tuple | None]:
+    def _hand_on(self, buffer, junctions, *, v_start, phase, full: bool) -> Generator[PlanChunk, None, tuple | None]:
         """Plan the window; hand on what is final up to a cruise and return the rest (its
         segments, junctions, start speed and phase), or None to read more of the path first.
         ``full``: the window may grow no more: with no cruise it is planned to rest (a stop the
         program did not ask for, noted)."""
         ctx = self.ctx
-        go = _Grid(buffer, junctions, v_start, math.inf, ctx)
+        go = _Grid(buffer, junctions, v_start=v_start, v_end=math.inf, ctx=ctx)
         grid = go.ending_at(0.0)
         v_stop = grid.speeds(ctx.filter_s, ctx.budget)
         v_go = go.speeds(ctx.filter_s, ctx.budget)
@@ -1006,13 +1009,13 @@ class _Stream:
                 f"line {buffer[-1].line}: the look-ahead window is full ({MAX_WINDOW_POINTS:,} grid points) with "
                 "no cruise to hand on at: the motion stops there"
             )
-            yield from self._stretch(buffer, junctions, v_start, 0.0, phase, to_end=True)
+            yield from self._stretch(buffer, junctions, v_start=v_start, v_end=0.0, phase=phase, to_end=True)
             return [], [], 0.0, 0.0
         index = int(grid.index[cut])
         first, second = buffer[index].split(float(grid.s[cut] - grid.s[grid.index == index][0]))
         speed = float(v_stop[cut])
         next_phase = yield from self._stretch(
-            [*buffer[:index], first], junctions[:index], v_start, speed, phase, to_end=False
+            [*buffer[:index], first], junctions[:index], v_start=v_start, v_end=speed, phase=phase, to_end=False
         )
         return [second, *buffer[index + 1 :]], junctions[index:], speed, next_phase
 
@@ -1097,11 +1100,11 @@ def _grid_points(seg: Segment) -> int:
     return max(MIN_SEGMENT_POINTS, math.ceil(seg.length / GRID_M) + 1)
 
 
-def _stream(moves, limits: Limits, settings: PlannerSettings, keep_programmed: bool, most_s=math.inf, limit=""):
+def _stream(moves, limits: Limits, settings: PlannerSettings, *, keep_programmed: bool, most_s=math.inf, limit=""):
     """The planner of ``settings.mode`` over a stream of moves."""
     if settings.mode == "linuxcnc":
         return LinuxcncStream(moves, limits, settings, keep_programmed)
-    return _Stream(moves, limits, settings, keep_programmed, most_s, limit)
+    return _Stream(moves, limits, settings, keep_programmed=keep_programmed, most_s=most_s, limit=limit)
 
 
 def plan_stream(moves: Iterable[Move], limits: Limits, settings: PlannerSettings | None = None):
@@ -1126,7 +1129,9 @@ def plan(moves: Iterable[Move], limits: Limits, settings: PlannerSettings | None
     PlanningError
         A program with no motion, or one too long to hold (:data:`MAX_SAMPLES`).
     """
-    held, _facts, _samples = hold_or_count(moves, limits, settings, MAX_SAMPLES, MAX_SAMPLES, HELD_LIMIT)
+    held, _facts, _samples = hold_or_count(
+        moves, limits, settings, most=MAX_SAMPLES, count_to=MAX_SAMPLES, limit=HELD_LIMIT
+    )
     if held is None:
         raise PlanningError(f"the program runs longer than {HELD_LIMIT}")
     return held
@@ -1145,6 +1150,7 @@ def hold_or_count(
     moves: Iterable[Move],
     limits: Limits,
     settings: PlannerSettings | None,
+    *,
     most: int,
     count_to: int = MAX_PROGRAM_SAMPLES,
     limit: str | None = None,
@@ -1171,7 +1177,7 @@ def hold_or_count(
     settings = settings or PlannerSettings()
     most_s = math.inf if limit is None else count_to * SAMPLE_PERIOD_S
     if limit is not None and isinstance(moves, Sequence):
-        refuse_long(moves, limits, settings, most_s, limit)
+        refuse_long(moves, limits, settings, most_s=most_s, limit=limit)
     stream = _stream(moves, limits, settings, keep_programmed=True, most_s=most_s, limit=limit or "")
     parts: list[PlanChunk] | None = []
     total = 0

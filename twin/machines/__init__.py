@@ -40,12 +40,9 @@ def get_machine(name: str) -> Machine:
     if is_machine_file(name):
         path = input_file(name, "machine", "no such machine file").resolve()
         return _machine_file(str(path), path.stat().st_mtime_ns)
-    try:
-        return MACHINES[name]
-    except KeyError:
-        raise TwinInputError(
-            "machine", name, f"unknown machine (known: {', '.join(MACHINES)}; or a machine file, FILE.toml)"
-        ) from None
+    return MACHINES.lookup(
+        name, field="machine", alternative="or a machine file, FILE.toml", error=TwinInputError
+    ).value
 
 
 def build(name: str, overrides: dict[str, float] | None = None, timestep_s: float | None = None) -> BuiltMachine:

@@ -16,6 +16,7 @@ import mujoco
 import numpy as np
 
 from controllers.lti import SisoTf
+from controllers.registries import Registry
 from twin.errors import TwinInputError
 from twin.machines.machine_file import PhysicalRange
 
@@ -495,15 +496,20 @@ def diagonal_plant(channels: list[SisoTf]) -> tuple[tuple[SisoTf, ...], ...]:
 
 
 #: Machines by name, in registration order: each machine's module registers its class with
-#: :func:`register_machine` (every module of :mod:`twin.machines` is imported by the package).
-MACHINES: dict[str, Machine] = {}
+#: :func:`register_machine` (every module of :mod:`twin.machines` is imported by the package);
+#: each entry's value is the machine, its summary the machine's ``summary``.
+MACHINES: Registry[Machine] = Registry("machine")
 
 
 def register_machine(cls: type[Machine]) -> type[Machine]:
     """Class decorator: add an instance of the machine ``cls`` to :data:`MACHINES` under its
     ``name``; its parameters (values, units, sources, limits), model file and ``summary`` (the
-    docs line) are the class's own."""
-    if not cls.name or cls.name in MACHINES:
-        raise ValueError(f"machine {cls.name!r} has no name or is registered twice")
-    MACHINES[cls.name] = cls()
+    docs line) are the class's own.
+
+    Raises
+    ------
+    ValueError
+        A class without a name, or a name registered already.
+    """
+    MACHINES.add(cls.name, cls(), summary=cls.summary)
     return cls

@@ -56,7 +56,7 @@ def leadscrew_parameters(
     }
 
 
-def leadscrew_tf(K1, K2, m, Im, p, n, H2) -> SisoTf:
+def leadscrew_tf(*, K1, K2, m, Im, p, n, H2) -> SisoTf:
     """Eq. (1): table position (m) per control input (V)."""
     J = p**2 * m + n**2 * Im
     return SisoTf((K1 * K2 * n * p,), (J, K1 * K2 * n * H2, 0.0))

@@ -32,7 +32,7 @@ def _drive(spec, name: str, joint: str, gain: float) -> None:
     spec.add_actuator(name=name, target=joint, trntype=mujoco.mjtTrn.mjTRN_JOINT, gainprm=[gain] + [0.0] * 9)
 
 
-def _link(spec, name: str, first: str, second: str, ratio: float, stiffness: float, damping: float) -> None:
+def _link(spec, name: str, *, first: str, second: str, ratio: float, stiffness: float, damping: float) -> None:
     """Joint ``first`` = ``ratio`` x joint ``second``: a gear equality where ``stiffness`` is
     infinite, else a spring tendon whose length, ``first / ratio - second``, is the stretch."""
     if math.isinf(stiffness):
@@ -73,7 +73,7 @@ def machine_spec(name: str, axes: list[AxisValues], workpiece_mass_kg: float, ti
         else:
             table = _carriage(spec, parent, axis, z)
         parent, z = table, 0.05
-    work = _body(parent, "workpiece", (0, 0, 0.05), workpiece_mass_kg, (0.005,) * 3)
+    work = _body(parent, "workpiece", pos=(0, 0, 0.05), mass_kg=workpiece_mass_kg, inertia=(0.005,) * 3)
     _geom(work, "box", [0.05, 0.05, 0.02], (0.8, 0.6, 0.3))
     # the tool tip touches the workpiece's top face over its starting position (visual only)
     spindle = spec.worldbody.add_body(name="spindle", pos=[0, 0, 0.1 + 0.05 * len(axes) + 0.02])
@@ -83,7 +83,7 @@ def machine_spec(name: str, axes: list[AxisValues], workpiece_mass_kg: float, ti
     return spec
 
 
-def _body(parent, name: str, pos, mass_kg: float, inertia):
+def _body(parent, name: str, *, pos, mass_kg: float, inertia):
     """A body with its mass (kg) and principal inertias (kg m^2) at its origin."""
     return parent.add_body(
         name=name, pos=list(pos), ipos=[0, 0, 0], mass=mass_kg, inertia=list(inertia), explicitinertial=True
@@ -108,7 +108,7 @@ def _slide(body, name: str, axis: AxisValues):
 def _carriage(spec, parent, axis: AxisValues, z: float):
     """A linear-motor axis: its carriage on a slide, the drive's force on it."""
     a = axis.name
-    carriage = _body(parent, f"{a}_table", (0, 0, z), axis.values.table_mass_kg, (1, 1, 1))
+    carriage = _body(parent, f"{a}_table", pos=(0, 0, z), mass_kg=axis.values.table_mass_kg, inertia=(1, 1, 1))
     _slide(carriage, f"{a}_table", axis)
     _geom(carriage, "box", [0.2, 0.2, 0.02], (0.4, 0.5, 0.6))
     _drive(spec, f"{a}_drive", f"{a}_table", drive_gain(axis.values))
@@ -136,9 +136,9 @@ def _ball_screw(spec, parent, axis: AxisValues, z: float):
     rotor = _body(
         parent,
         f"{a}_motor_rotor",
-        -(length / 2 + 0.1) * e + [0, 0, z - 0.05],
-        motor_mass,
-        about_axis(budget.motor_kg_m2, motor_mass),
+        pos=-(length / 2 + 0.1) * e + [0, 0, z - 0.05],
+        mass_kg=motor_mass,
+        inertia=about_axis(budget.motor_kg_m2, motor_mass),
     )
     rotor.add_joint(name=f"{a}_motor", type=mujoco.mjtJoint.mjJNT_HINGE, axis=list(e))
     _geom(rotor, "cylinder", [0.03], (0.2, 0.2, 0.25), fromto=list(np.r_[-0.06 * e, 0.06 * e]))
@@ -147,19 +147,37 @@ def _ball_screw(spec, parent, axis: AxisValues, z: float):
     # a compliant nut turns with the screw (its inertia in the budget) and travels with the axes
     # below with it: its mass on the screw's body, so that each slide carries what the chain's table does
     mass = budget.screw_body_kg
-    screw = _body(parent, f"{a}_screw", (0, 0, z - 0.05), mass, about_axis(budget.screw_kg_m2, mass))
+    screw = _body(
+        parent, f"{a}_screw", pos=(0, 0, z - 0.05), mass_kg=mass, inertia=about_axis(budget.screw_kg_m2, mass)
+    )
     screw.add_joint(name=f"{a}_screw", type=mujoco.mjtJoint.mjJNT_HINGE, axis=list(e))
     _geom(screw, "cylinder", [radius], (0.7, 0.7, 0.7), fromto=list(np.r_[-length / 2 * e, length / 2 * e]))
     marker = -0.4 * length * e + [0, 0, radius]
     _geom(screw, "box", [0.006, 0.006, 0.006], (1, 0.45, 0.1), name=f"{a}_screw_marker", pos=list(marker))
     table_mass = budget.table_kg
-    table = _body(parent, f"{a}_table", (0, 0, z), table_mass, (0.2 * table_mass / 12,) * 3)
+    table = _body(parent, f"{a}_table", pos=(0, 0, z), mass_kg=table_mass, inertia=(0.2 * table_mass / 12,) * 3)
     _slide(table, f"{a}_table", axis)
     half = 0.18 - 0.04 * k
     _geom(table, "box", [half, half, 0.015], (0.4 + 0.1 * k, 0.5 + 0.1 * k, 0.6 + 0.1 * k))
     nut_at = np.r_[-0.03 * e, 0.03 * e] + [0, 0, -0.05, 0, 0, -0.05]
     _geom(table, "cylinder", [radius * 1.8], (0.55, 0.45, 0.3), fromto=list(nut_at))
-    _link(spec, f"{a}_gear", f"{a}_motor", f"{a}_screw", values.gear_ratio, k_torsion, values.c_torsion_N_m_s_per_rad)
-    _link(spec, f"{a}_nut", f"{a}_screw", f"{a}_table", 1.0 / axis.lead_m_per_rad, k_axial, values.c_axial_N_s_per_m)
+    _link(
+        spec,
+        f"{a}_gear",
+        first=f"{a}_motor",
+        second=f"{a}_screw",
+        ratio=values.gear_ratio,
+        stiffness=k_torsion,
+        damping=values.c_torsion_N_m_s_per_rad,
+    )
+    _link(
+        spec,
+        f"{a}_nut",
+        first=f"{a}_screw",
+        second=f"{a}_table",
+        ratio=1.0 / axis.lead_m_per_rad,
+        stiffness=k_axial,
+        damping=values.c_axial_N_s_per_m,
+    )
     _drive(spec, f"{a}_drive", f"{a}_motor", drive_gain(values))
     return table

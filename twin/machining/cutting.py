@@ -92,7 +92,7 @@ def immersion_angles(radial_depth_mm: float, diameter_mm: float, mode: str) -> t
     raise TwinInputError("mode", mode, "must be 'up' or 'down'")
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def kienzle_coefficients(k, feed_per_tooth_mm, phi_st, phi_ex):  # pragma: no cover - compiled
     """``k`` (:meth:`CuttingCoefficients.as_array`) itself if its ``mc`` (``k[6]``) is 0, else a
     copy with the cutting coefficients times ``h_m^-mc``: the Kienzle form linearised about the
@@ -138,7 +138,13 @@ def flute_force_integral(k, axial_depth_mm, du, dw, phi):  # pragma: no cover - 
 
 
 def mean_tool_forces_N(
-    k: CuttingCoefficients, n_flutes: int, axial_depth_mm: float, feed_per_tooth_mm: float, phi_st: float, phi_ex: float
+    k: CuttingCoefficients,
+    *,
+    n_flutes: int,
+    axial_depth_mm: float,
+    feed_per_tooth_mm: float,
+    phi_st: float,
+    phi_ex: float,
 ) -> np.ndarray:
     """Closed-form average force on the tool over a tooth period, feed frame (N), shape (3,).
 
@@ -172,22 +178,36 @@ def flute_force_double_integral(k, du, dw, phi):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _clipped_double_integral(k, du, dw, phi_st, phi_ex, u):  # pragma: no cover - compiled
+def _arc_ends(k, du, dw, phi_st, phi_ex, u_lo, u_hi):  # pragma: no cover - compiled
+    """The primitives :func:`_clipped_double_integral` takes at the arc's ends for every ``u``
+    in ``[u_lo, u_hi]``: ``Q(phi_st)`` (unit depth) where some ``u <= phi_st``, ``R(phi_st)``
+    where some ``u > phi_st``, ``R(phi_ex)`` and ``Q(phi_ex)`` where some ``u >= phi_ex``; zeros
+    for those no ``u`` there needs (each is evaluated once per flute and step, not once per
+    ``u``)."""
+    zero = (0.0, 0.0, 0.0)
+    q_st = flute_force_integral(k, 1.0, du, dw, phi_st) if u_lo <= phi_st else zero
+    r_st = flute_force_double_integral(k, du, dw, phi_st) if u_hi > phi_st else zero
+    past_end = u_hi >= phi_ex
+    r_ex = flute_force_double_integral(k, du, dw, phi_ex) if past_end else zero
+    q_ex = flute_force_integral(k, 1.0, du, dw, phi_ex) if past_end else zero
+    return q_st, r_st, r_ex, q_ex
+
+
+@njit(cache=True)
+def _clipped_double_integral(k, du, dw, phi_st, phi_ex, ends, u):  # pragma: no cover - compiled
     """``G(u)``: the integral up to ``u`` of ``Q(clip(psi, phi_st, phi_ex))`` at unit depth,
     zero at ``phi_st`` (N rad^2/mm): ``Q(phi_st) (u - phi_st)`` below the arc, ``R(u) - R(phi_st)``
-    on it, ``R(phi_ex) - R(phi_st) + Q(phi_ex) (u - phi_ex)`` above it."""
+    on it, ``R(phi_ex) - R(phi_st) + Q(phi_ex) (u - phi_ex)`` above it; ``ends`` the primitives
+    at the arc's ends (:func:`_arc_ends`)."""
+    q_st, r0, r_ex, q_ex = ends
     if u <= phi_st:
-        q = flute_force_integral(k, 1.0, du, dw, phi_st)
         d = u - phi_st
-        return q[0] * d, q[1] * d, q[2] * d
-    r0 = flute_force_double_integral(k, du, dw, phi_st)
+        return q_st[0] * d, q_st[1] * d, q_st[2] * d
     if u < phi_ex:
         r = flute_force_double_integral(k, du, dw, u)
         return r[0] - r0[0], r[1] - r0[1], r[2] - r0[2]
-    r = flute_force_double_integral(k, du, dw, phi_ex)
-    q = flute_force_integral(k, 1.0, du, dw, phi_ex)
     d = u - phi_ex
-    return r[0] - r0[0] + q[0] * d, r[1] - r0[1] + q[1] * d, r[2] - r0[2] + q[2] * d
+    return r_ex[0] - r0[0] + q_ex[0] * d, r_ex[1] - r0[1] + q_ex[1] * d, r_ex[2] - r0[2] + q_ex[2] * d
 
 
 @njit(cache=True)
@@ -258,14 +278,18 @@ def step_tool_forces_N(
         if rest <= 0.0:
             continue
         # the arc's copies one revolution apart that the swept angles [start - rest, start + step] meet
-        for m in range(
-            math.floor((start - rest - ex) / two_pi), math.floor((start + step_angle_rad - st) / two_pi) + 1
-        ):
+        first, last = math.floor((start - rest - ex) / two_pi), math.floor((start + step_angle_rad - st) / two_pi)
+        if last < first:
+            continue
+        # the u below are within [u_lo, u_hi]: the latest copy's u - rest, the earliest's u + step
+        u_lo, u_hi = (start - last * two_pi) - rest, (start - first * two_pi) + step_angle_rad
+        ends = _arc_ends(k, du, dw, st, ex, u_lo, u_hi)
+        for m in range(first, last + 1):
             u = start - m * two_pi
-            g1 = _clipped_double_integral(k, du, dw, st, ex, u + step_angle_rad)
-            g0 = _clipped_double_integral(k, du, dw, st, ex, u)
-            h1 = _clipped_double_integral(k, du, dw, st, ex, u + step_angle_rad - rest)
-            h0 = _clipped_double_integral(k, du, dw, st, ex, u - rest)
+            g1 = _clipped_double_integral(k, du, dw, st, ex, ends, u + step_angle_rad)
+            g0 = _clipped_double_integral(k, du, dw, st, ex, ends, u)
+            h1 = _clipped_double_integral(k, du, dw, st, ex, ends, u + step_angle_rad - rest)
+            h0 = _clipped_double_integral(k, du, dw, st, ex, ends, u - rest)
             fx += scale * (g1[0] - g0[0] - h1[0] + h0[0])
             fy += scale * (g1[1] - g0[1] - h1[1] + h0[1])
             fz += scale * (g1[2] - g0[2] - h1[2] + h0[2])
@@ -343,7 +367,7 @@ class EndMilling:
     axial_depth_mm: float
     radial_depth_mm: float
     mode: str = "up"
-    coefficients: CuttingCoefficients = MATERIALS[DEFAULT_MATERIAL].coefficients
+    coefficients: CuttingCoefficients = MATERIALS[DEFAULT_MATERIAL].value.coefficients
     start_s: float = 0.0
     stop_s: float | None = None
     spindle_phase_rad: float | None = None
@@ -405,7 +429,9 @@ class EndMilling:
             },
             jacobian,
         )
-        state = chip_state(n_hist, (1.0, 0.0), len(modes))  # feed direction +x until the reference first moves
+        state = chip_state(
+            n_hist, (1.0, 0.0), len(modes), self.n_flutes
+        )  # feed direction +x until the reference first moves
         return END_MILLING, np.concatenate([params, modes.ravel()]), state
 
 
@@ -527,8 +553,9 @@ PM_ANGLE, PM_TOOL = PM_COLUMNS.index("angle"), PM_COLUMNS.index("tool")
 #: Columns from one engaged arc's to the next's (phi_st1 to phi_st2).
 PM_ARC_STRIDE = PM_COLUMNS.index("phi_st2") - PM_PHI_ST1
 #: A milling kernel's state: the step count, the feed direction held through stops and the last
-#: once-per-tooth difference of the vibration (feed frame, mm; :func:`_probe`), then the ring
-#: buffer of the tool's XY position relative to the workpiece (:func:`_record_position`).
+#: once-per-tooth difference of the vibration (feed frame, mm; :func:`_probe`), then each tool
+#: mode's displacement and velocity, the step's scratch (:func:`_scratch`) and the ring buffer of
+#: the tool's XY position relative to the workpiece (:func:`_record_position`).
 CHIP_STATE = ("steps", "feed_x", "feed_y", "vib_u", "vib_w")
 CHIP_STEPS, CHIP_FEED_X, CHIP_FEED_Y, CHIP_VIB_U, CHIP_VIB_W = (CHIP_STATE.index(name) for name in CHIP_STATE)
 CHIP_HISTORY = len(CHIP_STATE)
@@ -619,38 +646,60 @@ def mode_rows(dynamics, timestep_s: float) -> np.ndarray:
     return np.array(rows, float).reshape(-1, MODE_WIDTH)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _tool_deflection(modes, mstate, tool, dt):  # pragma: no cover - compiled
     """The tool tip's deflection (m, machine X/Y) at the middle of the step: the modes of
-    ``tool`` at ``q + v dt/2`` (``mstate``: each mode's ``q``, ``v``)."""
+    ``tool`` at ``q + v dt/2`` (``modes``: :data:`MODE_COLUMNS` row after row, flat; ``mstate``:
+    each mode's ``q``, ``v``)."""
     dx = dy = 0.0
-    for r in range(modes.shape[0]):
-        if int(modes[r, MODE_TOOL]) == tool:
+    for r in range(modes.shape[0] // MODE_WIDTH):
+        mode = r * MODE_WIDTH
+        if int(modes[mode + MODE_TOOL]) == tool:
             q = mstate[2 * r] + 0.5 * dt * mstate[2 * r + 1]
-            dx += modes[r, MODE_DIR_X] * q
-            dy += modes[r, MODE_DIR_Y] * q
+            dx += modes[mode + MODE_DIR_X] * q
+            dy += modes[mode + MODE_DIR_Y] * q
     return dx, dy
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _advance_modes(modes, mstate, tool, fx, fy):  # pragma: no cover - compiled
     """Advance the modes of ``tool`` over the step under the force ``(fx, fy)`` on the tool
-    (N, machine X/Y, held over the step): the exact discretization of :func:`mode_rows`."""
-    for r in range(modes.shape[0]):
-        if int(modes[r, MODE_TOOL]) == tool:
-            f = fx * modes[r, MODE_DIR_X] + fy * modes[r, MODE_DIR_Y]
+    (N, machine X/Y, held over the step): the exact discretization of :func:`mode_rows` (``modes``
+    flat, as :func:`_tool_deflection`'s)."""
+    for r in range(modes.shape[0] // MODE_WIDTH):
+        mode = r * MODE_WIDTH
+        if int(modes[mode + MODE_TOOL]) == tool:
+            f = fx * modes[mode + MODE_DIR_X] + fy * modes[mode + MODE_DIR_Y]
             q, v = mstate[2 * r], mstate[2 * r + 1]
-            mstate[2 * r] = modes[r, MODE_PHI_QQ] * q + modes[r, MODE_PHI_QV] * v + modes[r, MODE_GAMMA_Q] * f
-            mstate[2 * r + 1] = modes[r, MODE_PHI_VQ] * q + modes[r, MODE_PHI_VV] * v + modes[r, MODE_GAMMA_V] * f
+            mstate[2 * r] = (
+                modes[mode + MODE_PHI_QQ] * q + modes[mode + MODE_PHI_QV] * v + modes[mode + MODE_GAMMA_Q] * f
+            )
+            mstate[2 * r + 1] = (
+                modes[mode + MODE_PHI_VQ] * q + modes[mode + MODE_PHI_VV] * v + modes[mode + MODE_GAMMA_V] * f
+            )
 
 
-def chip_state(n_hist: int, feed_direction: tuple[float, float], n_modes: int = 0) -> np.ndarray:
+def chip_state(n_hist: int, feed_direction: tuple[float, float], n_modes: int = 0, n_flutes: int = 1) -> np.ndarray:
     """A milling kernel's initial state (:data:`CHIP_STATE`, each tool mode's displacement and
-    velocity at rest, then a ring buffer of ``n_hist`` XY positions), with the feed direction
-    held until the reference first moves (a unit vector, or zero: no force until then)."""
-    state = np.zeros(CHIP_HISTORY + 2 * n_modes + 2 * n_hist)
+    velocity at rest, the scratch of a step of up to ``n_flutes`` flutes (:func:`_scratch`), then
+    a ring buffer of ``n_hist`` XY positions), with the feed direction held until the reference
+    first moves (a unit vector, or zero: no force until then)."""
+    state = np.zeros(CHIP_HISTORY + 2 * n_modes + 2 * REGENERATIONS + 2 * n_flutes + 2 * n_hist)
     state[CHIP_FEED_X], state[CHIP_FEED_Y] = feed_direction
     return state
+
+
+@njit(cache=True, inline="always")
+def _scratch(state, n_modes, n_flutes):  # pragma: no cover - compiled
+    """The scratch of one step in a milling kernel's ``state`` (:func:`chip_state`), which no
+    step reads before it writes it (kept in the state so that the kernels allocate nothing):
+    each earlier tooth pass's chip vector (:data:`REGENERATIONS` pairs, flat) and the flutes' chip
+    vectors, along and across the feed (``n_flutes`` each) (:func:`_chips`).  The kernels index
+    their arrays flat (no ``reshape``, which costs a call into numba's C helpers a step)."""
+    first = CHIP_HISTORY + 2 * n_modes
+    passes = state[first : first + 2 * REGENERATIONS]
+    chips = first + 2 * REGENERATIONS
+    return passes, state[chips : chips + n_flutes], state[chips + n_flutes : chips + 2 * n_flutes]
 
 
 _EM = {name: i for i, name in enumerate(END_MILLING_SLOTS)}
@@ -680,28 +729,30 @@ def pack_slots(slots: tuple[str, ...], values: dict[str, float], jacobian: np.nd
     return np.concatenate([[float(values[name]) for name in slots], np.asarray(jacobian, float).ravel()])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _record_position(jac, qpos, qvel, dt, state, n, tool_xy):  # pragma: no cover - compiled
     """Step count (``state``'s :data:`CHIP_STEPS`) on by one and the tool's XY position
     relative to the workpiece at the middle of the step, ``tool_xy - jac @ (qpos + qvel dt/2)``
     (m; the spindle stands still in the world, its tip deflected by ``tool_xy``), into the ring
-    buffer of the last ``2 n`` entries of ``state`` (filled with it at the first step); returns
-    the step index and the buffer."""
-    hist = state[state.shape[0] - 2 * n :].reshape((n, 2))
+    buffer of the last ``2 n`` entries of ``state`` (filled with it at the first step; position
+    ``m`` at ``2 m``, ``2 m + 1``); ``jac`` is flat, row by row.  Returns the step index and the
+    buffer."""
+    hist = state[state.shape[0] - 2 * n :]
     i = int(state[CHIP_STEPS])
     state[CHIP_STEPS] = i + 1
+    cols = jac.shape[0] // 2
     for r in range(2):
         acc = tool_xy[r]
-        for j in range(jac.shape[1]):
-            acc -= jac[r, j] * (qpos[j] + 0.5 * dt * qvel[j])
-        hist[i % n, r] = acc
+        for j in range(cols):
+            acc -= jac[r * cols + j] * (qpos[j] + 0.5 * dt * qvel[j])
+        hist[2 * (i % n) + r] = acc
     if i == 0:
         for m in range(1, n):
-            hist[m, 0], hist[m, 1] = hist[0, 0], hist[0, 1]
+            hist[2 * m], hist[2 * m + 1] = hist[0], hist[1]
     return i, hist
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _feed_frame(feed_velocity, state):  # pragma: no cover - compiled
     """The planned feed: the tool's speed relative to the workpiece (m/s, the reference's:
     ``-feed_velocity``, the workpiece's planned velocity) and its direction, held in ``state``
@@ -713,45 +764,48 @@ def _feed_frame(feed_velocity, state):  # pragma: no cover - compiled
     return speed, state[CHIP_FEED_X], state[CHIP_FEED_Y]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _past(hist, i, n, lag):  # pragma: no cover - compiled
     """The buffer's position ``lag`` (> 0, fractional) steps before step ``i`` (linear
     interpolation; the first recorded position before it)."""
     lo = int(lag)
     frac = lag - lo
-    p0, p1 = max(i - lo, 0) % n, max(i - lo - 1, 0) % n
-    return (1.0 - frac) * hist[p0, 0] + frac * hist[p1, 0], (1.0 - frac) * hist[p0, 1] + frac * hist[p1, 1]
+    p0, p1 = 2 * (max(i - lo, 0) % n), 2 * (max(i - lo - 1, 0) % n)
+    return (1.0 - frac) * hist[p0] + frac * hist[p1], (1.0 - frac) * hist[p0 + 1] + frac * hist[p1 + 1]
 
 
-@njit(cache=True)
-def _chips(hist, i, n, lag_steps, ux, uy, angle, n_flutes, chip_u, chip_w):  # pragma: no cover - compiled
+@njit(cache=True, inline="always")
+def _chips(hist, i, n, lag_steps, ux, uy, angle, n_flutes, passes_uw, chip_u, chip_w):  # pragma: no cover - compiled
     """Each flute's chip vector (feed frame, mm) into ``chip_u``, ``chip_w``: where the tool is
     now less where it was when the last earlier tooth to cut at this flute's angle ``angle - 2 pi
     j/N`` (rad) passed it, ``m`` tooth periods (``lag_steps`` physics steps each) ago, ``m``
     from 1 to :data:`REGENERATIONS` (those the buffer of ``n`` rows holds) the one that leaves
-    the thinnest chip there (multiple
-    regeneration: a tooth that left the cut left the surface before it).  Its projection on the
-    edge's normal is the chip thickness (:func:`step_tool_forces_N`).  Returns the tool's motion
-    over the last tooth period, feed frame (mm)."""
-    px, py = hist[i % n, 0], hist[i % n, 1]
+    the thinnest chip there (multiple regeneration: a tooth that left the cut left the surface
+    before it).  Its projection on the edge's normal is the chip thickness
+    (:func:`step_tool_forces_N`).  The tool's motion over each of the ``m`` tooth periods, the
+    same for every flute, goes into ``passes_uw`` (at ``2 (m - 1)``, ``2 m - 1``; ``hist`` flat as
+    :func:`_record_position`'s).  Returns the tool's motion over the last tooth period, feed
+    frame (mm)."""
+    px, py = hist[2 * (i % n)], hist[2 * (i % n) + 1]
     pitch = 2.0 * math.pi / n_flutes
     passes = max(1, min(REGENERATIONS, int((n - 2) / lag_steps)))  # those the buffer holds
+    for m in range(1, passes + 1):
+        qx, qy = _past(hist, i, n, m * lag_steps)
+        dx, dy = (px - qx) * 1e3, (py - qy) * 1e3
+        passes_uw[2 * m - 2] = dx * ux + dy * uy  # along the feed
+        passes_uw[2 * m - 1] = dy * ux - dx * uy  # along z x feed
     for j in range(n_flutes):
         s, c = math.sin(angle - j * pitch), math.cos(angle - j * pitch)
         best = math.inf
-        for m in range(1, passes + 1):
-            qx, qy = _past(hist, i, n, m * lag_steps)
-            dx, dy = (px - qx) * 1e3, (py - qy) * 1e3
-            du, dw = dx * ux + dy * uy, dy * ux - dx * uy  # along the feed and along z x feed
+        for m in range(passes):
+            du, dw = passes_uw[2 * m], passes_uw[2 * m + 1]
             h = du * s + dw * c
             if h < best:
                 best, chip_u[j], chip_w[j] = h, du, dw
-    qx, qy = _past(hist, i, n, lag_steps)
-    dx, dy = (px - qx) * 1e3, (py - qy) * 1e3
-    return dx * ux + dy * uy, dy * ux - dx * uy
+    return passes_uw[0], passes_uw[1]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _probe(state, du, dw, feed_mm, probe):  # pragma: no cover - compiled
     """Add one cutting step to ``probe`` (:data:`PROBE`): the once-per-tooth difference of the
     vibration, ``(du - feed_mm, dw)`` (mm: the chip vector one tooth period back less the planned
@@ -767,7 +821,7 @@ def _probe(state, du, dw, feed_mm, probe):  # pragma: no cover - compiled
     state[CHIP_VIB_U], state[CHIP_VIB_W] = vu, vw
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _end_milling(par, state, qpos, qvel, feed_velocity, t, out, probe):  # pragma: no cover - compiled
     """Add one step's mechanistic milling force on the workpiece (world frame, N) to ``out``
     and the step's vibration to ``probe``; advance the tool's modes under its reaction."""
@@ -775,27 +829,25 @@ def _end_milling(par, state, qpos, qvel, feed_velocity, t, out, probe):  # pragm
     n_flutes, a, lag, phi_st, phi_ex = int(par[EM_N_FLUTES]), par[EM_DEPTH], par[EM_LAG], par[EM_PHI_ST], par[EM_PHI_EX]
     omega, phase0, dt, lag_steps = par[EM_OMEGA], par[EM_PHASE0], par[EM_DT], par[EM_LAG_STEPS]
     lo, hi, n, n_jac, n_modes = par[EM_LO], par[EM_HI], int(par[EM_N_HIST]), int(par[EM_N_JAC]), int(par[EM_N_MODES])
-    modes = par[EM_JACOBIAN + n_jac :].reshape((n_modes, MODE_WIDTH))
+    modes = par[EM_JACOBIAN + n_jac :]
     mstate = state[CHIP_HISTORY : CHIP_HISTORY + 2 * n_modes]
     tool_xy = _tool_deflection(modes, mstate, 0, dt)
-    i, hist = _record_position(
-        par[EM_JACOBIAN : EM_JACOBIAN + n_jac].reshape((2, -1)), qpos, qvel, dt, state, n, tool_xy
-    )
+    i, hist = _record_position(par[EM_JACOBIAN : EM_JACOBIAN + n_jac], qpos, qvel, dt, state, n, tool_xy)
     speed, ux, uy = _feed_frame(feed_velocity, state)
     fx = fy = fz = 0.0
     if lo <= t < hi:
         feed_mm = speed * lag_steps * dt * 1e3
         angle = phase0 + omega * t
-        chip_u, chip_w = np.empty(n_flutes), np.empty(n_flutes)
+        passes_uw, chip_u, chip_w = _scratch(state, n_modes, n_flutes)
         mid = angle + 0.5 * omega * dt - 0.5 * lag
-        du, dw = _chips(hist, i, n, lag_steps, ux, uy, mid, n_flutes, chip_u, chip_w)
+        du, dw = _chips(hist, i, n, lag_steps, ux, uy, mid, n_flutes, passes_uw, chip_u, chip_w)
         _probe(state, du, dw, feed_mm, probe)
         k = kienzle_coefficients(k, feed_mm, phi_st, phi_ex)
         fx, fy, fz = step_tool_forces_N(k, n_flutes, a, chip_u, chip_w, phi_st, phi_ex, angle, omega * dt, lag)
     _apply(fx, fy, fz, ux, uy, modes, mstate, 0, out)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _apply(fx, fy, fz, ux, uy, modes, mstate, tool, out):  # pragma: no cover - compiled
     """The step's force on the tool (feed frame, N): its reaction onto the workpiece (``out``,
     world frame), the force itself onto the modes of ``tool``."""
@@ -806,7 +858,7 @@ def _apply(fx, fy, fz, ux, uy, modes, mstate, tool, out):  # pragma: no cover - 
     _advance_modes(modes, mstate, tool, wx, wy)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _program_milling(par, state, qpos, qvel, feed_velocity, t, out, probe):  # pragma: no cover - compiled
     """Add one step's milling force of a part program on the workpiece (world frame, N) to
     ``out`` and its vibration to ``probe``: the engagement, spindle and tool by time from the
@@ -814,36 +866,37 @@ def _program_milling(par, state, qpos, qvel, feed_velocity, t, out, probe):  # p
     :func:`_end_milling`)."""
     n_tools, period, n_table = int(par[PM_N_TOOLS]), par[PM_PERIOD], int(par[PM_N_TABLE])
     dt, n, n_jac, n_modes = par[PM_DT], int(par[PM_N_HIST]), int(par[PM_N_JAC]), int(par[PM_N_MODES])
-    jac = par[PM_JACOBIAN : PM_JACOBIAN + n_jac].reshape((2, -1))
-    tools_end = PM_JACOBIAN + n_jac + PM_TOOL_WIDTH * n_tools
-    tools = par[PM_JACOBIAN + n_jac : tools_end].reshape((n_tools, PM_TOOL_WIDTH))
+    jac = par[PM_JACOBIAN : PM_JACOBIAN + n_jac]
+    tools_start = PM_JACOBIAN + n_jac
+    tools_end = tools_start + PM_TOOL_WIDTH * n_tools
     modes_end = tools_end + MODE_WIDTH * n_modes
-    modes = par[tools_end:modes_end].reshape((n_modes, MODE_WIDTH))
-    table = par[modes_end:].reshape((n_table, PM_WIDTH))
+    modes = par[tools_end:modes_end]
     mstate = state[CHIP_HISTORY : CHIP_HISTORY + 2 * n_modes]
     row = min(max(int(t / period), 0), n_table - 1)
-    tool = int(table[row, PM_TOOL])
+    entry = par[modes_end + row * PM_WIDTH : modes_end + (row + 1) * PM_WIDTH]  # the table's row
+    tool = int(entry[PM_TOOL])
     i, hist = _record_position(jac, qpos, qvel, dt, state, n, _tool_deflection(modes, mstate, tool, dt))
     speed, ux, uy = _feed_frame(feed_velocity, state)
-    omega = table[row, PM_OMEGA]
-    if (table[row, PM_DEPTH1] <= 0.0 and table[row, PM_DEPTH2] <= 0.0) or omega <= 0.0 or ux == uy == 0.0:
+    omega = entry[PM_OMEGA]
+    if (entry[PM_DEPTH1] <= 0.0 and entry[PM_DEPTH2] <= 0.0) or omega <= 0.0 or ux == uy == 0.0:
         _advance_modes(modes, mstate, tool, 0.0, 0.0)
         return
-    k = tools[tool, PM_TOOL_K_FIRST:PM_TOOL_K_END]
-    n_flutes, lag_per_mm = int(tools[tool, PM_TOOL_FLUTES]), tools[tool, PM_TOOL_LAG]
+    values = par[tools_start + PM_TOOL_WIDTH * tool : tools_start + PM_TOOL_WIDTH * (tool + 1)]  # the tool's
+    k = values[PM_TOOL_K_FIRST:PM_TOOL_K_END]
+    n_flutes, lag_per_mm = int(values[PM_TOOL_FLUTES]), values[PM_TOOL_LAG]
     lag_steps = 2.0 * math.pi / (omega * n_flutes) / dt
     feed_mm = speed * lag_steps * dt * 1e3
-    angle = table[row, PM_ANGLE] + omega * (t - row * period)
-    chip_u, chip_w = np.empty(n_flutes), np.empty(n_flutes)
-    depth = max(table[row, PM_DEPTH1], table[row, PM_DEPTH2])
+    angle = entry[PM_ANGLE] + omega * (t - row * period)
+    passes_uw, chip_u, chip_w = _scratch(state, n_modes, n_flutes)
+    depth = max(entry[PM_DEPTH1], entry[PM_DEPTH2])
     mid = angle + 0.5 * omega * dt - 0.5 * depth * lag_per_mm
-    du, dw = _chips(hist, i, n, lag_steps, ux, uy, mid, n_flutes, chip_u, chip_w)
+    du, dw = _chips(hist, i, n, lag_steps, ux, uy, mid, n_flutes, passes_uw, chip_u, chip_w)
     _probe(state, du, dw, feed_mm, probe)
     fx = fy = fz = 0.0
     for arc in range(2):
         first = PM_ARC_STRIDE * arc
-        st, ex = table[row, PM_PHI_ST1 + first], table[row, PM_PHI_EX1 + first]
-        a = table[row, PM_DEPTH1 + first]
+        st, ex = entry[PM_PHI_ST1 + first], entry[PM_PHI_EX1 + first]
+        a = entry[PM_DEPTH1 + first]
         if ex > st and a > 0.0:
             ka = kienzle_coefficients(k, feed_mm, st, ex)
             gx, gy, gz = step_tool_forces_N(ka, n_flutes, a, chip_u, chip_w, st, ex, angle, omega * dt, a * lag_per_mm)
@@ -851,18 +904,19 @@ def _program_milling(par, state, qpos, qvel, feed_velocity, t, out, probe):  # p
     _apply(fx, fy, fz, ux, uy, modes, mstate, tool, out)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _average_force(par, qvel, t, out):  # pragma: no cover - compiled
     """Add Choi 1999's average cutting force on the workpiece (N) to ``out``."""
     k_il, k_c, r, w = par[AF_K_IL], par[AF_K_C], par[AF_R], par[AF_OMEGA]
     phase, lo, hi = par[AF_PHASE], par[AF_LO], par[AF_HI]
     if not (lo <= t < hi):
         return
-    jac = par[AF_JACOBIAN:].reshape((2, -1))
+    jac = par[AF_JACOBIAN:]  # row by row
+    cols = jac.shape[0] // 2
     vx = vy = 0.0
-    for j in range(jac.shape[1]):
-        vx += jac[0, j] * qvel[j]
-        vy += jac[1, j] * qvel[j]
+    for j in range(cols):
+        vx += jac[j] * qvel[j]
+        vy += jac[cols + j] * qvel[j]
     gain = 1.0 + r * math.sin(w * t + phase) if r else 1.0
     out[0] += gain * (k_il * vx - k_c * vy)
     out[1] += gain * (k_il * vy + k_c * vx)
@@ -875,7 +929,8 @@ def workpiece_forces(fops, fpar, fstate, qpos, qvel, feed_velocity, t, xfrc, bod
     ``feed_velocity`` (2,) is the workpiece's planned XY velocity (m/s, the reference's), which
     sets the feed frame; the milling models add the step's vibration to ``probe``
     (:data:`PROBE`).  ``fops`` rows: :data:`FORCE_OP_COLUMNS`."""
-    out = np.zeros(3)
+    out = xfrc[body, :3]  # the models add into it (a view: no array allocated a step)
+    out[:] = 0.0
     for m in range(fops.shape[0]):
         kind, p0, pn = fops[m, FORCE_KIND], fops[m, FORCE_PAR_START], fops[m, FORCE_PAR_LEN]
         s0, sn = fops[m, FORCE_STATE_START], fops[m, FORCE_STATE_LEN]
@@ -886,7 +941,6 @@ def workpiece_forces(fops, fpar, fstate, qpos, qvel, feed_velocity, t, xfrc, bod
         else:
             _average_force(fpar[p0 : p0 + pn], qvel, t, out)
     for i in range(3):
-        xfrc[body, i] = out[i]
         f_sum[i] += out[i]
 
 
@@ -972,7 +1026,7 @@ class CoefficientsSpec(StrictSpec):
         ones given here in their place; a Kienzle form given replaces the material's whole."""
         given = self.model_dump(exclude_none=True)
         kc1 = given.pop("kc1_N_per_mm2", None)
-        base = MATERIALS[material].coefficients if kc1 is None else kienzle(kc1, given.pop("mc"))
+        base = MATERIALS[material].value.coefficients if kc1 is None else kienzle(kc1, given.pop("mc"))
         return replace(base, **given)
 
 

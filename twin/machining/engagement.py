@@ -718,7 +718,7 @@ def _engage(pos, vel, tools, grid, step, out):  # pragma: no cover - compiled
 
 
 def engagement_table(
-    position_m, velocity_m_per_s, radius_m, height_map: HeightMap, corner_m=None, flute_m=None, shank_m=None
+    position_m, velocity_m_per_s, *, radius_m, height_map: HeightMap, corner_m=None, flute_m=None, shank_m=None
 ) -> np.ndarray:
     """The engagement along a planned path (see the module docstring), shape (n, 10):
     :data:`COLUMNS`, angles in rad, lengths in mm.  Cuts ``height_map`` as it goes, whether the

@@ -23,17 +23,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from typing import Annotated, Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import shapely
 from pydantic import Field, PositiveFloat
 from scipy.optimize import least_squares
 
+from controllers.registries import Registry
 from twin.machining.engagement import StockSpec
 from twin.machining.part import MachinedPart
 from twin.records import CircleMeasured, FeatureNotFound, FeatureType, Inspected, LineMeasured, WidthMeasured
-from twin.spec import MAX_MM, Millimetres, ReportName, StrictSpec
+from twin.spec import MAX_MM, Millimetres, ReportName, StrictSpec, register_kind, tagged_union
 
 #: Distance from a nominal feature (mm) within which the boundary counts as its points.
 BAND_MM = 0.5
@@ -68,15 +69,12 @@ class LineFeature(_Feature):
 
 
 class WidthFeature(_Feature):
-    """A slot's or pocket's width across the line ``from_mm`` to ``to_mm``."""
+    """A slot's or pocket's width across the line from_mm to to_mm."""
 
     type: Literal["width"]
     from_mm: Point = Field(description="a point [x, y] beyond one wall (mm)")
     to_mm: Point = Field(description="a point [x, y] beyond the other (mm)")
     width_mm: PositiveFloat = Field(le=MAX_MM, description="nominal width (mm)")
-
-
-InspectSpec = Annotated[CircleFeature | LineFeature | WidthFeature, Field(discriminator="type")]
 
 
 def fit_circle(points: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
@@ -221,18 +219,26 @@ def _measured(feature, deviation_um: float) -> dict:
     }
 
 
-#: Each feature type's measurement: the one place the types are told apart.
-MEASURES: dict[FeatureType, Callable[[Any, MachinedPart], Inspected]] = {
-    FeatureType.CIRCLE: _measure_circle,
-    FeatureType.LINE: _measure_line,
-    FeatureType.WIDTH: _measure_width,
-}
+#: The feature types by name (``[[inspect]] type = ...``, :class:`~twin.records.FeatureType`):
+#: each entry's settings are its spec, its value its measurement ``measure(feature, part)``, its
+#: summary the spec's docstring: the one place the types are told apart.
+FEATURES: Registry[Callable[[Any, MachinedPart], Inspected]] = Registry("inspection feature")
+register_kind(FEATURES, FeatureType.CIRCLE, CircleFeature, _measure_circle)
+register_kind(FEATURES, FeatureType.LINE, LineFeature, _measure_line)
+register_kind(FEATURES, FeatureType.WIDTH, WidthFeature, _measure_width)
+
+#: An ``[[inspect]]`` table: one spec per feature type of :data:`FEATURES`, told apart by
+#: ``type``; to a type checker, which cannot follow a union built at run time, their union.
+if TYPE_CHECKING:
+    InspectSpec = CircleFeature | LineFeature | WidthFeature
+else:
+    InspectSpec = tagged_union(FEATURES)
 
 
 def measure(feature: InspectSpec, part: MachinedPart) -> Inspected:
     """One feature of ``inspection`` measured on the actual ``part`` at its height (see the
     module docstring): probes every :data:`PROBE_STEP_MM` along the nominal feature."""
-    return MEASURES[FeatureType(feature.type)](feature, part)
+    return FEATURES[feature.type].value(feature, part)
 
 
 def inspect(features: Sequence[InspectSpec], part: MachinedPart, stock: StockSpec) -> tuple[Inspected, ...]:

@@ -61,6 +61,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from controllers.registries import Registry
+
 
 @dataclass(frozen=True)
 class CuttingCoefficients:
@@ -178,8 +180,7 @@ def _mitsubishi(row: str, alloy: str) -> Material:
 #: Al7075-T6, carbide, dry: the twin's default.
 ALUMINIUM_7075_T6 = CuttingCoefficients(K_tc=767.01, K_rc=168.8, K_ac=222.0, K_te=27.7, K_re=26.6, K_ae=0.7)
 
-#: The materials by name (``material = ...`` on a tool or an end-milling disturbance).
-MATERIALS: dict[str, Material] = {
+_LIBRARY: dict[str, Material] = {
     "aluminium_7075_t6": Material(ALUMINIUM_7075_T6, "Al7075-T6", "cemented carbide", "dry", f"{_REVIEW}, ref. [190]"),
     "aluminium_7075_t6_ref160": Material(
         CuttingCoefficients(K_tc=600.46, K_rc=180.96, K_ac=0.0, K_te=17.9, K_re=20.42, K_ae=0.0),
@@ -230,6 +231,22 @@ MATERIALS: dict[str, Material] = {
         _ISCAR,
     ),
 }
+
+
+def _registry(library: dict[str, Material]) -> Registry[Material]:
+    """The ``library`` as a registry: each entry's summary its model, alloy, cutter and
+    lubrication."""
+    registry: Registry[Material] = Registry("material")
+    for name, material in library.items():
+        registry.add(
+            name, material, summary=f"{material.model}: {material.alloy}, {material.cutter}, {material.lubrication}"
+        )
+    return registry
+
+
+#: The materials by name (``material = ...`` on a tool or an end-milling disturbance): each
+#: entry's value is the :class:`Material` (its coefficients and their source).
+MATERIALS = _registry(_LIBRARY)
 
 #: The material of a tool or an end-milling disturbance that names none.
 DEFAULT_MATERIAL = "aluminium_7075_t6"

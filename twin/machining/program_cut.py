@@ -79,7 +79,9 @@ class ProgramMilling:
         params = np.concatenate(
             [[float(head[name]) for name in PROGRAM_MILLING_SLOTS], jacobian, *tools, modes.ravel(), rows.ravel()]
         )
-        return PROGRAM_MILLING, params, chip_state(n_hist, (0.0, 0.0), len(modes))  # no force before the first move
+        most_flutes = max((t.n_flutes for t in self.tools), default=1)
+        state = chip_state(n_hist, (0.0, 0.0), len(modes), most_flutes)  # no force before the first move
+        return PROGRAM_MILLING, params, state
 
 
 @dataclass
@@ -170,7 +172,15 @@ def program_milling(plan, stock: StockSpec, tool: ToolSpec | None, tools: list[T
     shank = np.array([t.shank_diameter_mm or 0.0 for t in chosen])[index] * 0.5e-3
     rpm = plan.per_sample(plan.spindle_rpm, 0.0)
     height_map = HeightMap(stock, MAP_MARGIN_MM)
-    table = engagement_table(plan.position, plan.velocity, radius, height_map, corner, flute, shank)
+    table = engagement_table(
+        plan.position,
+        plan.velocity,
+        radius_m=radius,
+        height_map=height_map,
+        corner_m=corner,
+        flute_m=flute,
+        shank_m=shank,
+    )
     model = ProgramMilling(table, rpm, index, chosen, plan.period_s, spindle_phase(None, seed))
     warnings, total = machining_warnings(plan, table, chosen, index, rpm, stock)
     return ProgramCut(model, table, height_map, warnings, total, radius, corner)

@@ -23,6 +23,7 @@ from twin.machining.cutting import MIN_SPINDLE_RPM, kienzle_coefficients
 from twin.machining.engagement import COLUMNS, ToolSpec
 from twin.machining.materials import CuttingCoefficients
 from twin.machining.stability import Cut, frequency_grid_hz, zoa_boundaries
+from twin.records import LineStability
 
 #: Angles (arcs, feed direction) are compared to this step (deg).
 ANGLE_STEP_DEG = 1.0
@@ -61,12 +62,11 @@ class ProgramSamples:
     velocity_xy: np.ndarray
 
 
-def line_stability(samples: ProgramSamples, rpm_range: tuple[float, float]) -> dict[int, dict]:
-    """Per program line that cuts with a tool that has ``dynamics``: ``depth_mm``,
-    ``spindle_rpm``, ``critical_depth_mm`` (None: no boundary), ``margin`` (critical / depth),
-    ``chatter_hz``, ``stable_rpm`` ([low, high] of the stable speeds within ``rpm_range``
-    nearest the line's own, its own if it is stable; None: none) and ``text`` (the one line
-    a user reads).
+def line_stability(samples: ProgramSamples, rpm_range: tuple[float, float]) -> dict[int, LineStability]:
+    """Per program line that cuts with a tool that has ``dynamics``, its check: the depth,
+    speed, critical depth, margin and chatter frequency at its sample of least margin, the
+    stable speeds within ``rpm_range`` nearest the line's own (its own if it is stable) and the
+    one line a user reads.
 
     Parameters
     ----------
@@ -147,20 +147,24 @@ def line_stability(samples: ProgramSamples, rpm_range: tuple[float, float]) -> d
     over_speeds = _critical_over(
         speeds, sorted({int(inverse[w]) for w in worst.values()}), cuts, tools_of_states, samples, grids
     )
-    out: dict[int, dict] = {}
+    out: dict[int, LineStability] = {}
     for line, w in worst.items():
         k, s = k_all[w], int(inverse[w])
         stable = _stable_range(speeds, over_speeds[s] * 1e3, float(depth[k]), float(samples.spindle_rpm[k]))
-        row: dict = {
-            "depth_mm": round(float(depth[k]), 4),
-            "spindle_rpm": round(float(samples.spindle_rpm[k]), 1),
-            "critical_depth_mm": round(float(critical[s]) * 1e3, 4) if np.isfinite(critical[s]) else None,
-            "margin": round(float(margin[w]), 3) if np.isfinite(margin[w]) else None,
-            "chatter_hz": round(float(chatter[s]), 1) if np.isfinite(chatter[s]) else None,
-            "stable_rpm": stable,
-        }
-        row["text"] = describe(line, row)
-        out[line] = row
+        depth_mm = round(float(depth[k]), 4)
+        spindle_rpm = round(float(samples.spindle_rpm[k]), 1)
+        critical_mm = round(float(critical[s]) * 1e3, 4) if np.isfinite(critical[s]) else None
+        out[line] = LineStability(
+            depth_mm=depth_mm,
+            spindle_rpm=spindle_rpm,
+            critical_depth_mm=critical_mm,
+            margin=round(float(margin[w]), 3) if np.isfinite(margin[w]) else None,
+            chatter_hz=round(float(chatter[s]), 1) if np.isfinite(chatter[s]) else None,
+            stable_rpm=stable,
+            text=describe(
+                line, depth_mm=depth_mm, spindle_rpm=spindle_rpm, critical_depth_mm=critical_mm, stable_rpm=stable
+            ),
+        )
     return out
 
 
@@ -186,9 +190,11 @@ def default_rpm_range(spindle_rpm: np.ndarray) -> tuple[float, float]:
     return 0.25 * float(turning.min()), 2.0 * float(turning.max())
 
 
-def _stable_range(speeds: np.ndarray, critical_mm: np.ndarray, depth_mm: float, rpm: float) -> list[float] | None:
+def _stable_range(
+    speeds: np.ndarray, critical_mm: np.ndarray, depth_mm: float, rpm: float
+) -> tuple[float, float] | None:
     """The stretch of ``speeds`` (rpm) whose critical depth is over ``depth_mm`` holding
-    ``rpm`` or nearest it, as [low, high] (rpm, to 10); None: none."""
+    ``rpm`` or nearest it, as (low, high) (rpm, to 10); None: none."""
     ok = ~(critical_mm <= depth_mm)  # nan: no boundary, stable
     if not ok.any():
         return None
@@ -198,15 +204,27 @@ def _stable_range(speeds: np.ndarray, critical_mm: np.ndarray, depth_mm: float, 
         0.0 if speeds[a] <= rpm <= speeds[b] else min(abs(speeds[a] - rpm), abs(speeds[b] - rpm)) for a, b in runs
     ]
     a, b = runs[int(np.argmin(distance))]
-    return [round(float(speeds[a]), -1), round(float(speeds[b]), -1)]
+    return round(float(speeds[a]), -1), round(float(speeds[b]), -1)
 
 
-def describe(line: int, row: dict) -> str:
-    """ "line 57: 4.0 mm at 12 000 rpm, critical 2.1 mm; stable at 13 400-15 100 rpm"."""
-    critical = "no boundary" if row["critical_depth_mm"] is None else f"critical {row['critical_depth_mm']:.2f} mm"
-    stable = row["stable_rpm"]
-    where = "no stable speed in the range" if stable is None else f"stable at {_rpm(stable[0])}-{_rpm(stable[1])} rpm"
-    return f"line {line}: {row['depth_mm']:.2f} mm at {_rpm(row['spindle_rpm'])} rpm, {critical}; {where}"
+def describe(
+    line: int,
+    *,
+    depth_mm: float,
+    spindle_rpm: float,
+    critical_depth_mm: float | None,
+    stable_rpm: tuple[float, float] | None,
+) -> str:
+    """A line's check as a user reads it: "line 57: 4.00 mm at 12 000 rpm, critical 2.10 mm;
+    stable at 13 400-15 100 rpm" (depths in mm, speeds in rpm; None: no boundary, no stable
+    speed)."""
+    critical = "no boundary" if critical_depth_mm is None else f"critical {critical_depth_mm:.2f} mm"
+    where = (
+        "no stable speed in the range"
+        if stable_rpm is None
+        else f"stable at {_rpm(stable_rpm[0])}-{_rpm(stable_rpm[1])} rpm"
+    )
+    return f"line {line}: {depth_mm:.2f} mm at {_rpm(spindle_rpm)} rpm, {critical}; {where}"
 
 
 def _rpm(value: float) -> str:

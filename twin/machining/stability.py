@@ -433,7 +433,7 @@ def sd_spectral_radius(
 
 
 def sd_critical_depths(
-    cut: Cut, dynamics: ToolDynamicsSpec, spindle_rpm, depth_max_m: float, n_depths: int = 100, steps: int = 20
+    cut: Cut, dynamics: ToolDynamicsSpec, *, spindle_rpm, depth_max_m: float, n_depths: int = 100, steps: int = 20
 ) -> Lobes:
     """Critical depth (m) and chatter frequency (Hz) at each speed by semi-discretization.
 
@@ -472,7 +472,7 @@ def sd_critical_depths(
     chatter = np.full(len(speeds), np.nan)
     for m in np.unique(needed[needed <= SD_MAX_STEPS]):
         group = np.flatnonzero(needed == m)
-        critical[group], chatter[group] = _sd_boundary(model, cut, int(m), periods[group], depths)
+        critical[group], chatter[group] = _sd_boundary(model, cut, m=int(m), periods=periods[group], depths=depths)
     return Lobes("sd", speeds, critical, chatter)
 
 
@@ -482,7 +482,7 @@ def sd_slowest_rpm(cut: Cut, dynamics: ToolDynamicsSpec) -> float:
     return 60.0 * SD_STEPS_PER_CYCLE * highest_hz / (cut.n_flutes * SD_MAX_STEPS)
 
 
-def _sd_boundary(model: ModalModel, cut: Cut, m: int, periods: np.ndarray, depths: np.ndarray):
+def _sd_boundary(model: ModalModel, cut: Cut, *, m: int, periods: np.ndarray, depths: np.ndarray):
     """Critical depths (m) and chatter frequencies (Hz) at ``periods`` with ``m`` steps (see
     :func:`sd_critical_depths`)."""
     critical = np.full(len(periods), np.nan)
@@ -495,7 +495,7 @@ def _sd_boundary(model: ModalModel, cut: Cut, m: int, periods: np.ndarray, depth
         return critical, chatter
     first = first[idx]
     lo = np.where(first > 0, depths[np.maximum(first - 1, 0)], 0.0)
-    a_m, mu_m = _bisect(model, coarse, periods[idx], lo, depths[first])
+    a_m, mu_m = _bisect(model, steps=coarse, periods=periods[idx], lo=lo, hi=depths[first])
     a_2m, mu_2m = _secant(model, fine, periods[idx], a_m)
     found = np.isfinite(a_2m)
     critical[idx] = np.where(found, a_2m + (a_2m - a_m) / ((m_fine / m) ** 2 - 1.0), a_m)
@@ -542,7 +542,7 @@ def _first_unstable(model: ModalModel, steps, periods: np.ndarray, depths: np.nd
     return first
 
 
-def _bisect(model: ModalModel, steps, periods: np.ndarray, lo: np.ndarray, hi: np.ndarray):
+def _bisect(model: ModalModel, *, steps, periods: np.ndarray, lo: np.ndarray, hi: np.ndarray):
     """The stability boundary between the depths ``lo`` (stable) and ``hi`` (unstable) at each
     period, by :data:`SD_BISECTIONS` bisections, and the critical multiplier at its upper end."""
     for _ in range(SD_BISECTIONS):

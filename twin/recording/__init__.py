@@ -99,13 +99,22 @@ def record_runs(
     }
     rec.send_blueprint(blueprint(outcomes, gains, scales))
     for name, outcome in outcomes.items():
-        _log_run(rec, outcome, f"{name}/" if name else "", max_points, gains[name], scales[name])
+        _log_run(
+            rec,
+            outcome,
+            prefix=f"{name}/" if name else "",
+            max_points=max_points,
+            gain=gains[name],
+            n_per_mm=scales[name],
+        )
     rec.flush()
     rec.disconnect()
     return path
 
 
-def _log_run(rec, outcome: RunOutcome, prefix: str, max_points: int, gain: int | None, n_per_mm: float | None) -> None:
+def _log_run(
+    rec, outcome: RunOutcome, *, prefix: str, max_points: int, gain: int | None, n_per_mm: float | None
+) -> None:
     """Send one run under ``prefix``: series, machine, the force arrow when ``n_per_mm`` is
     given and the contour when ``gain`` is."""
     result = outcome.run
@@ -113,11 +122,13 @@ def _log_run(rec, outcome: RunOutcome, prefix: str, max_points: int, gain: int |
     model = result.machine.model
     log_series(rec, result, prefix, rows)
     log_geometry(rec, model, prefix)
-    log_poses(rec, model, result.t_s[rows], result.qpos[rows], prefix)
+    log_poses(rec, model, t=result.t_s[rows], qpos=result.qpos[rows], prefix=prefix)
     if n_per_mm is not None:
-        log_cutting_force(rec, model, result.t_s[rows], result.workpiece_force_N[rows], n_per_mm, prefix)
+        log_cutting_force(
+            rec, model, t=result.t_s[rows], force_N=result.workpiece_force_N[rows], n_per_mm=n_per_mm, prefix=prefix
+        )
     if gain is not None:
-        log_contour(rec, outcome, prefix, rows, gain)
+        log_contour(rec, outcome, prefix=prefix, rows=rows, gain=gain)
 
 
 def read_back(path: str | Path) -> dict[str, int]:

@@ -50,7 +50,7 @@ def _xyz(xy_mm: np.ndarray) -> np.ndarray:
     return np.column_stack([xy_mm, np.zeros(len(xy_mm))])
 
 
-def log_contour(rec, outcome: RunOutcome, prefix: str, rows: slice, gain: int) -> None:
+def log_contour(rec, outcome: RunOutcome, *, prefix: str, rows: slice, gain: int) -> None:
     """``contour/reference``, ``contour/actual`` (a program's: ``contour/path_by_contour_error``,
     see :func:`log_program`), ``contour/error_x<gain>`` (static line strips) and ``contour/tool``
     (a point over time), all in mm."""
@@ -69,7 +69,7 @@ def log_contour(rec, outcome: RunOutcome, prefix: str, rows: slice, gain: int) -
         static=True,
     )
     if is_program:
-        log_program(rec, outcome, root, rows, ref, act)
+        log_program(rec, outcome, root=root, rows=rows, ref=ref, act=act)
     rec.log(f"{root}/tool", rr.Points3D.from_fields(colors=[TOOL_COLOR], radii=[-8.0]), static=True)
     rec.send_columns(
         f"{root}/tool",
@@ -78,7 +78,7 @@ def log_contour(rec, outcome: RunOutcome, prefix: str, rows: slice, gain: int) -
     )
 
 
-def log_program(rec, outcome: RunOutcome, root: str, rows: slice, ref: np.ndarray, act: np.ndarray) -> None:
+def log_program(rec, outcome: RunOutcome, *, root: str, rows: slice, ref: np.ndarray, act: np.ndarray) -> None:
     """A program's part: the stock and machined outlines, the path coloured by its contour error
     (``path_by_contour_error``) and the colour scale beside it with its ends labelled (µm)."""
     result = outcome.run

@@ -136,7 +136,7 @@ def series_views(result, prefix: str = "") -> list:
 
 
 def run_layout(
-    outcome: RunOutcome, prefix: str, gain: int | None, n_per_mm: float | None, name: str | None = None
+    outcome: RunOutcome, *, prefix: str, gain: int | None, n_per_mm: float | None, name: str | None = None
 ) -> rrb.Horizontal:
     """One run: series left; machine (and the contour when ``gain`` is given) right."""
     result = outcome.run
@@ -157,8 +157,15 @@ def blueprint(results: dict[str, RunOutcome], gains: dict, arrow_scales: dict) -
     ``arrow_scales`` per run name: contour error magnification and N per mm of force arrow
     (None where there is no contour or no cutting force)."""
     if list(results) == [""]:
-        return rrb.Blueprint(run_layout(results[""], "", gains[""], arrow_scales[""]), collapse_panels=True)
+        return rrb.Blueprint(
+            run_layout(results[""], prefix="", gain=gains[""], n_per_mm=arrow_scales[""]), collapse_panels=True
+        )
     return rrb.Blueprint(
-        rrb.Tabs(*[run_layout(r, f"{name}/", gains[name], arrow_scales[name], name) for name, r in results.items()]),
+        rrb.Tabs(
+            *[
+                run_layout(r, prefix=f"{name}/", gain=gains[name], n_per_mm=arrow_scales[name], name=name)
+                for name, r in results.items()
+            ]
+        ),
         collapse_panels=True,
     )

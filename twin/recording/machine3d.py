@@ -86,7 +86,7 @@ def body_poses(model, qpos: np.ndarray):
     return xpos, xquat
 
 
-def log_poses(rec, model, t, qpos, prefix: str) -> None:
+def log_poses(rec, model, *, t, qpos, prefix: str) -> None:
     """Each body's pose: over time for bodies that move, once for those welded to the world."""
     xpos, xquat = body_poses(model, qpos)
     for b in range(1, model.nbody):
@@ -111,7 +111,7 @@ def arrow_scale_N_per_mm(force_N: np.ndarray) -> float:
     return round_up(max(float(np.abs(force_N).max()), 1e-9) / (ARROW_MAX_M * 1e3))
 
 
-def log_cutting_force(rec, model, t, force_N, n_per_mm: float, prefix: str) -> None:
+def log_cutting_force(rec, model, *, t, force_N, n_per_mm: float, prefix: str) -> None:
     """The force on the workpiece (N, world frame) as an arrow from the tool tip (site
     ``tool_tip``, else the workpiece), ``n_per_mm`` N per mm of arrow.  The arrow starts
     :data:`ARROW_LIFT_M` above the tip, where the workpiece's top face does not hide it."""

@@ -16,7 +16,7 @@ from __future__ import annotations
 import importlib
 import pkgutil
 
-from twin.references.kinds import REFERENCES, Kind, ReferenceContext, ReferenceSpecBase, register
+from twin.references.kinds import REFERENCES, ReferenceContext, ReferenceSpecBase, register
 from twin.references.paths import Circle, Polyline, square
 from twin.references.sines import MAX_SINES, SumOfSines
 from twin.references.step import Ramp, Step
@@ -28,7 +28,6 @@ __all__ = [
     "MAX_SINES",
     "REFERENCES",
     "Circle",
-    "Kind",
     "Polyline",
     "Ramp",
     "ReferenceContext",

@@ -30,7 +30,7 @@ from twin.gcode.planner import (
     refuse_long,
 )
 from twin.gcode.reader import Reader, Settings
-from twin.gcode.report import planned_summary
+from twin.gcode.report import PlannedSummary, planned_summary
 from twin.machines import BuiltMachine
 from twin.machines import build as build_machine
 from twin.machines.rigid_drive import rigid_drives, table_travel_m
@@ -346,11 +346,11 @@ def build(spec: GcodeRef, ctx: ReferenceContext) -> GcodeReference | StreamedGco
             travel.passing(Reader(None, reader_settings, str(path), path=path).moves()),
             limits,
             settings,
-            most * SAMPLE_PERIOD_S,
-            limit,
+            most_s=most * SAMPLE_PERIOD_S,
+            limit=limit,
         )
         held, facts, samples = hold_or_count(
-            reader.moves(), limits, settings, MAX_SAMPLES if ctx.stock else HELD_SAMPLES
+            reader.moves(), limits, settings, most=MAX_SAMPLES if ctx.stock else HELD_SAMPLES
         )
     if held is not None:
         if drive is not None:
@@ -415,10 +415,12 @@ def program_checks(
     return travel, DriveCheck({"xyz".index(a): d for a, d in rigid_drives(machine).items()}, saturation_V)
 
 
-def planned_for(file, moves: list, machine: str, planner: PlannerSettings, saturation_V: float | None = None) -> dict:
+def planned_for(
+    file, moves: list, machine: str, planner: PlannerSettings, saturation_V: float | None = None
+) -> PlannedSummary:
     """The ``planned`` table of ``twin gcode --machine``: the ``moves`` of ``file`` planned for
     ``machine`` (:func:`twin.gcode.report.planned_summary`), checked against its travel and, with
-    ``saturation_V`` (V), its drives: ``warnings`` (and ``warnings_total`` where more than listed).
+    ``saturation_V`` (V), its drives (its ``warnings``).
 
     Raises
     ------
@@ -435,12 +437,8 @@ def planned_for(file, moves: list, machine: str, planner: PlannerSettings, satur
         planned = plan(moves, limits, planner)
     if drive is not None:
         drive.add(planned.position, planned.velocity, planned.acceleration, planned.line, planned.texts)
-    summary = planned_summary(planned, limits)
-    rows, total = plan_warnings(travel, drive)
-    summary["warnings"] = rows
-    if total > len(rows):
-        summary["warnings_total"] = total
-    return summary
+    warnings, total = plan_warnings(travel, drive)
+    return planned_summary(planned, limits, warnings=warnings, warnings_total=total)
 
 
 class ProgramDrive(StrictSpec):

@@ -9,14 +9,15 @@ from typing import Any
 
 import numpy as np
 
-from twin.spec import Kind, KindSpec, register_kind
+from controllers.registries import Entry, Registry
+from twin.spec import KindSpec, register_kind
 
 #: The base of every reference kind's spec.
 ReferenceSpecBase = KindSpec
 #: Reference kinds by name, in registration order: each builder is ``build(spec, ctx) -> reference``
 #: (``ctx``: a :class:`ReferenceContext`; the reference has ``n_axes`` and ``sample(t) -> (len(t),
 #: n_axes, 3)``), raising ``TwinInputError`` naming the field.
-REFERENCES: dict[str, Kind] = {}
+REFERENCES: Registry[Callable] = Registry("reference")
 
 
 @dataclass(frozen=True)
@@ -52,7 +53,7 @@ class ReferenceContext:
     tool_diameters_mm: dict[int, float] = field(default_factory=dict)
 
 
-def register(name: str, spec: type[KindSpec], build: Callable) -> Kind:
+def register(name: str, spec: type[KindSpec], build: Callable) -> Entry:
     """Add a reference kind; its module calls this at import."""
     return register_kind(REFERENCES, name, spec, build)
 

@@ -7,6 +7,8 @@ import importlib
 from pathlib import Path
 from types import ModuleType
 
+from controllers.registries import Registry
+
 
 class Reproduction:
     """A paper's reproduction.  Subclasses (one per paper package) set :attr:`name`,
@@ -72,18 +74,24 @@ class Reproduction:
 #: Reproductions by paper name, as their packages are imported (in whatever order a process
 #: imports them); :data:`twin.reproductions.registry.REPRODUCTIONS` holds them all in the order
 #: of the source texts.
-REGISTERED: dict[str, Reproduction] = {}
+REGISTERED: Registry[Reproduction] = Registry("reproduction")
 
 
 def register_reproduction(cls: type[Reproduction]) -> type[Reproduction]:
-    """Class decorator: add an instance of ``cls`` to :data:`REGISTERED` under its name."""
-    if not cls.name or cls.name in REGISTERED:
-        raise ValueError(f"reproduction {cls.name!r} has no name or is registered twice")
-    REGISTERED[cls.name] = cls()
+    """Class decorator: add an instance of ``cls`` to :data:`REGISTERED` under its name (its
+    summary the docs line, :attr:`Reproduction.doc`).
+
+    Raises
+    ------
+    ValueError
+        A class without a name, or a name registered already.
+    """
+    paper = cls()
+    REGISTERED.add(cls.name, paper, summary=paper.doc)
     return cls
 
 
-def twin_vs_tf(label: str, twin: dict, tf: dict, keys, tol_rel: float) -> list[str]:
+def twin_vs_tf(label: str, twin: dict, tf: dict, *, keys, tol_rel: float) -> list[str]:
     """The ``keys`` whose twin value departs from the transfer-function value by more than
     ``tol_rel`` of it, one line each, prefixed by ``label``."""
     return [

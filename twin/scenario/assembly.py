@@ -54,8 +54,7 @@ def _design_failure(exc: Exception) -> str:
 def _controller(spec: ControllerSpec, field: str, base: Context) -> Controller:
     """Build one controller entry for the axes of ``base`` (period, plants, delay); errors name
     ``<field>.<what>``."""
-    if spec.type not in CONTROLLERS:
-        raise TwinInputError(f"{field}.type", spec.type, f"unknown controller (known: {', '.join(CONTROLLERS)})")
+    CONTROLLERS.lookup(spec.type, field=f"{field}.type", error=TwinInputError)
     if (spec.type == "sum") != (spec.parts is not None):
         raise TwinInputError(
             f"{field}.parts", [p.type for p in spec.parts or []], "give parts for type 'sum', and only there"
@@ -73,10 +72,7 @@ def _controller(spec: ControllerSpec, field: str, base: Context) -> Controller:
         raise TwinInputError(f"{field}.params", spec.params, _design_failure(exc)) from None
     if spec.observer is None:
         return ctrl
-    if spec.observer.type not in OBSERVERS:
-        raise TwinInputError(
-            f"{field}.observer.type", spec.observer.type, f"unknown observer (known: {', '.join(OBSERVERS)})"
-        )
+    OBSERVERS.lookup(spec.observer.type, field=f"{field}.observer.type", error=TwinInputError)
     try:
         with _design_warnings_as_errors():
             observers = make_observers(spec.observer.type, spec.observer.params, ctx)
@@ -92,7 +88,7 @@ def _disturbance(spec, index: int, axis_names: list[str], seed: int):
     field = f"disturbances.{index}"
     seed = seed if getattr(spec, "seed", None) is None else spec.seed
     try:
-        return DISTURBANCES[spec.type].build(spec, axis_names, seed, field)
+        return DISTURBANCES[spec.type].value(spec, axis_names, seed, field)
     except TwinInputError as exc:
         name = exc.field.removeprefix("disturbance.")
         if name.startswith(field):
@@ -173,7 +169,7 @@ def assemble(scn: Scenario) -> RunInputs:
         ctrls = [_controller(scn.controller, "controller", base)]
     numbers = frozenset(t.number for t in scn.tools if t.number is not None) if scn.tools else None
     diameters = {t.number: t.diameter_mm for t in scn.tools if t.number is not None}
-    reference = REFERENCES[scn.reference.type].build(
+    reference = REFERENCES[scn.reference.type].value(
         scn.reference,
         ReferenceContext(
             names,

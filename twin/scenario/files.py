@@ -46,7 +46,7 @@ def _relative_to(data: dict, folder: Path) -> dict:
         data["machine"] = str(folder / machine)
     reference = data.get("reference")
     if isinstance(reference, dict) and isinstance(reference.get("type"), str) and reference["type"] in REFERENCES:
-        for key in getattr(REFERENCES[reference["type"]].spec, "relative_paths", ()):
+        for key in getattr(REFERENCES[reference["type"]].settings, "relative_paths", ()):
             value = reference.get(key)
             if isinstance(value, str) and not Path(value).is_absolute():
                 reference[key] = str(folder / value)

@@ -81,6 +81,7 @@ def tf_loop(
     plant,
     controller,
     ref: np.ndarray,
+    *,
     dt: float,
     delay_s: float = 0.0,
     u_dist_V: np.ndarray | None = None,
@@ -120,7 +121,7 @@ def tf_loop(
     single = np.ndim(ref) == 2
     ref = np.ascontiguousarray(np.asarray(ref, float).reshape(len(ref), len(axes), 3) if single else ref, float)
     A, B, C, D = tf_to_ss(plant) if isinstance(plant, SisoTf) else (np.atleast_2d(np.asarray(m, float)) for m in plant)
-    Ad, Bd, Cd = (np.ascontiguousarray(m) for m in discretize(A, B, C, D, dt, "zoh")[:3])
+    Ad, Bd, Cd = (np.ascontiguousarray(m) for m in discretize(A, B, C, D, dt=dt, method="zoh")[:3])
     if Bd.shape[1] != len(axes) or Cd.shape[0] != len(axes):
         raise ValueError(f"the plant has {Bd.shape[1]} inputs and {Cd.shape[0]} outputs for axes {list(axes)}")
     preview = preview_ticks_needed(controller.inputs)

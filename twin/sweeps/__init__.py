@@ -71,7 +71,7 @@ class SweepSpec:
 
 
 def prepare_sweep(
-    scenario: str, settings: dict, vary: list[str], samples: int, seed: int, latin_hypercube: bool
+    scenario: str, *, settings: dict, vary: list[str], samples: int, seed: int, latin_hypercube: bool
 ) -> SweepSpec:
     """Load and check the scenario with ``settings`` (``{dotted path: value}``, once, before any
     sample runs) and build the plan.

@@ -34,29 +34,63 @@ def _rss_mb() -> float:
 
 
 def run_sweep_bench(
-    samples: int = 1000, repeats: int = 1, memory_samples: int = 10_000, loop_samples: int = 10, progress: bool = True
+    *,
+    samples: int = 1000,
+    repeats: int = 1,
+    memory_samples: int = 10_000,
+    loop_samples: int = 10,
+    progress: bool = True,
 ) -> dict:
     """The figures of ``twin bench --sweep`` (see the module docstring)."""
     from twin.sweeps import prepare_sweep
     from twin.sweeps.run import make_client, run_sweep
 
-    sw = prepare_sweep(SCENARIO, SETTINGS, VARY, samples, 0, False)
+    sw = prepare_sweep(SCENARIO, settings=SETTINGS, vary=VARY, samples=samples, seed=0, latin_hypercube=False)
     times: dict[int, list[float]] = {1: [], 2: []}
     with tempfile.TemporaryDirectory() as tmp:
         clients = {n: make_client(n) for n in (1, 2)}
         try:
-            warm = prepare_sweep(SCENARIO, SETTINGS, VARY, 4, 1, False)
+            warm = prepare_sweep(SCENARIO, settings=SETTINGS, vary=VARY, samples=4, seed=1, latin_hypercube=False)
             for n, client in clients.items():
-                run_sweep(warm.scenario, warm.plan, warm.axes, Path(tmp) / f"warm{n}", client, 1, progress=False)
+                run_sweep(
+                    warm.scenario,
+                    warm.plan,
+                    axes=warm.axes,
+                    out=Path(tmp) / f"warm{n}",
+                    client=client,
+                    batch_size=1,
+                    progress=False,
+                )
             for r in range(repeats):
                 for n, client in clients.items():
                     done = run_sweep(
-                        sw.scenario, sw.plan, sw.axes, Path(tmp) / f"s{n}_{r}", client, 10, progress=progress
+                        sw.scenario,
+                        sw.plan,
+                        axes=sw.axes,
+                        out=Path(tmp) / f"s{n}_{r}",
+                        client=client,
+                        batch_size=10,
+                        progress=progress,
                     )
                     times[n].append(done.wall_s)
-            tiny = prepare_sweep(SCENARIO, {"duration_s": 0.0005}, VARY, memory_samples, 0, False)
+            tiny = prepare_sweep(
+                SCENARIO,
+                settings={"duration_s": 0.0005},
+                vary=VARY,
+                samples=memory_samples,
+                seed=0,
+                latin_hypercube=False,
+            )
             before = _rss_mb()
-            run_sweep(tiny.scenario, tiny.plan, tiny.axes, Path(tmp) / "memory", clients[2], 50, progress=progress)
+            run_sweep(
+                tiny.scenario,
+                tiny.plan,
+                axes=tiny.axes,
+                out=Path(tmp) / "memory",
+                client=clients[2],
+                batch_size=50,
+                progress=progress,
+            )
             growth = _rss_mb() - before
         finally:
             for client in clients.values():

@@ -54,7 +54,7 @@ def scenario_value(value):
     return float(value) if isinstance(value, (int, float, np.floating)) else str(value)
 
 
-def run_sample(base: dict, index: int, values: dict, seed: int, axes) -> dict:
+def run_sample(base: dict, *, index: int, values: dict, seed: int, axes) -> dict:
     """Run one sample of the scenario ``base`` (a scenario dict) and return its row.
 
     The scenario gets the sample's ``values`` (as ``twin run --set`` would set them), its
@@ -113,7 +113,7 @@ def run_sample(base: dict, index: int, values: dict, seed: int, axes) -> dict:
 
 def run_batch(base: dict, items: list, axes) -> list[dict]:
     """:func:`run_sample` for each ``(index, values, seed)`` of ``items`` (one Dask task)."""
-    return [run_sample(base, i, values, seed, axes) for i, values, seed in items]
+    return [run_sample(base, index=i, values=values, seed=seed, axes=axes) for i, values, seed in items]
 
 
 def _schema(plan: SamplePlan, axes, program: bool):
@@ -212,6 +212,7 @@ def make_client(workers: int | None = None, scheduler: str | None = None):
 def run_sweep(
     base: dict,
     plan: SamplePlan,
+    *,
     axes,
     out: Path,
     client,

@@ -31,5 +31,15 @@ def build_npid(p: NpidParams, ctx: Context):
     at e_max."""
     settings = (p.ko_per_mm * 1e3, p.e_max_mm * 1e-3)
     return each_axis(
-        lambda p, ctx, a: lure(anang2017.pid(p.tf_s), "cosh_gain", settings, ctx.dt, a, ctx.method, f"npid.{a}"), p, ctx
+        lambda p, ctx, a: lure(
+            anang2017.pid(p.tf_s),
+            "cosh_gain",
+            settings=settings,
+            dt=ctx.dt,
+            axis=a,
+            method=ctx.method,
+            name=f"npid.{a}",
+        ),
+        p,
+        ctx,
     )

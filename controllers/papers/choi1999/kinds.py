@@ -33,7 +33,7 @@ class Choi1999PidParams(Params):
     ki_scale: float = Field(1.0, description="multiplies the integral gain, 0 to 1000")
 
 
-def _build(kind: str, zpetc: bool, order: str, tuning: str, ki_scale: float, ctx: Context) -> Controller:
+def _build(kind: str, *, zpetc: bool, order: str, tuning: str, ki_scale: float, ctx: Context) -> Controller:
     import control
 
     from controllers.papers import choi1999
@@ -57,8 +57,8 @@ def _build(kind: str, zpetc: bool, order: str, tuning: str, ki_scale: float, ctx
                 lti_block(
                     control.tf(num, den, ctx.dt),
                     ctx.dt,
-                    [f"preview.{a}.{filt.preview}"],
-                    [f"zpetc:ref.{a}"],
+                    inputs=[f"preview.{a}.{filt.preview}"],
+                    outputs=[f"zpetc:ref.{a}"],
                     name=f"zpetc.{a}",
                 ),
                 Sum((1.0, -1.0), (f"zpetc:ref.{a}", f"pos.{a}"), f"zpetc:error.{a}", name=f"zpetc_error.{a}"),
@@ -67,9 +67,9 @@ def _build(kind: str, zpetc: bool, order: str, tuning: str, ki_scale: float, ctx
         lti_block(
             choi1999.controller_si(kind, order, tuning, ki_scale),
             ctx.dt,
-            errors,
-            [f"u.{a}" for a in ctx.axes],
-            ctx.method,
+            inputs=errors,
+            outputs=[f"u.{a}" for a in ctx.axes],
+            method=ctx.method,
             name=f"choi1999_{kind}",
         )
     )
@@ -81,10 +81,10 @@ def build_mimo(p: MimoParams, ctx: Context) -> Controller:
     """Choi 1999's MIMO H-infinity loop-shaping controller (Glover-McFarlane, Ws = diag(990, 660)
     (s+110)/(s+1500), positions in mm) on axes x and y together."""
     defaults = Choi1999PidParams()  # the MIMO design does not depend on the PID's tuning
-    return _build("mimo", p.zpetc, p.order, defaults.tuning, defaults.ki_scale, ctx)
+    return _build("mimo", zpetc=p.zpetc, order=p.order, tuning=defaults.tuning, ki_scale=defaults.ki_scale, ctx=ctx)
 
 
 @controller_kind("choi1999_pid", Choi1999PidParams)
 def build_pid(p: Choi1999PidParams, ctx: Context) -> Controller:
     """A PID per axis for Choi 1999's SISO comparison, designed here (the paper gives no gains)."""
-    return _build("pid", p.zpetc, p.order, p.tuning, p.ki_scale, ctx)
+    return _build("pid", zpetc=p.zpetc, order=p.order, tuning=p.tuning, ki_scale=p.ki_scale, ctx=ctx)

@@ -28,6 +28,8 @@ def build_cascade(p: Maharof2021CascadeParams, ctx: Context):
             raise ValueError(f"no model of axis {a!r} to design the cascade on")
         gains = maharof2021.design_cascade(ctx.plants[a], ctx.delay_s, ctx.dt)
         outer, inner = pid_tf(gains["kp_pos"]), pid_tf(gains["kp_vel"], gains["ki_vel"])
-        return cascade(outer, inner, ctx.dt, a, p.velocity_ref_ff, ctx.method, f"cascade.{a}")
+        return cascade(
+            outer, inner, ctx.dt, axis=a, velocity_ref_ff=p.velocity_ref_ff, method=ctx.method, name=f"cascade.{a}"
+        )
 
     return each_axis(one, p, ctx)

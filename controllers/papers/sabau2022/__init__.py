@@ -319,7 +319,8 @@ def fractional_pi_state_space(axis: str):
     from controllers.design.fractional import fractional_pi
 
     kp, ki, lam = EQ14[axis]
-    return fractional_pi(kp, ki, lam, *OUSTALOUP_BAND, OUSTALOUP_ORDER)
+    wb, wh = OUSTALOUP_BAND
+    return fractional_pi(kp, ki, lam, wb=wb, wh=wh, order=OUSTALOUP_ORDER)
 
 
 #: Designs the ``sabau2022`` registry entry builds, with what each is.

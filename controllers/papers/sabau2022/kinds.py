@@ -53,18 +53,18 @@ def _one_axis(p: Sabau2022Params, ctx: Context, a: str) -> Controller:
     g = sabau2022.design_gains(a, p.design, p.ku_V_per_mm, p.pu_s)
     if g["form"] == "pid":
         tf = pid_tf(mm * g["kp"], mm * g["ki"], mm * g["kd"], g["tf_s"])
-        return error_feedback(tf, ctx.dt, (a,), ctx.method, name=f"sabau2022.{a}")
+        return error_feedback(tf, ctx.dt, axes=(a,), method=ctx.method, name=f"sabau2022.{a}")
     if g["form"] == "fo_pi":
         A, B, C, D = sabau2022.fractional_pi_state_space(a)
-        return error_feedback((A, B, mm * C, mm * D), ctx.dt, (a,), ctx.method, name=f"sabau2022.{a}")
+        return error_feedback((A, B, mm * C, mm * D), ctx.dt, axes=(a,), method=ctx.method, name=f"sabau2022.{a}")
     return cascade(
         pid_tf(g["kp"], g["ki"], g["kd"], g["tf_s"]),
         pid_tf(mm * g["kv"]),
         ctx.dt,
-        a,
-        0.0,
-        ctx.method,
-        f"sabau2022.{a}",
+        axis=a,
+        velocity_ref_ff=0.0,
+        method=ctx.method,
+        name=f"sabau2022.{a}",
         position_ref_ff=g["position_ref_ff"] if p.feedforward else 0.0,
     )
 

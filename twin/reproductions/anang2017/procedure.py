@@ -150,11 +150,11 @@ def continuous_loop(delay: str = "exact", tf_s: float = 0.0):
 def sampled_loop(dt: float = DT_S, tf_s: float = TF_S):
     """L(w) of the twin's sampled loop: Tustin controller, ZOH plant, delay in whole ticks."""
     bm = machine()
-    A, B, C, D = discretize(*tf_to_ss(pid_mm(tf_s)), dt, "tustin")
-    Ag, Bg, Cg, Dg = discretize(*tf_to_ss(plant_mm()), dt, "zoh")
+    A, B, C, D = discretize(*tf_to_ss(pid_mm(tf_s)), dt=dt, method="tustin")
+    Ag, Bg, Cg, Dg = discretize(*tf_to_ss(plant_mm()), dt=dt, method="zoh")
     n = round(bm.delay_s / dt)
 
-    def response(A, B, C, D, z):
+    def response(A, B, C, D, *, z):
         out = np.empty(len(z), complex)
         for k, zk in enumerate(z):
             out[k] = (C @ np.linalg.solve(zk * np.eye(len(A)) - A, B) + D)[0, 0] if len(A) else D[0, 0]
@@ -163,7 +163,7 @@ def sampled_loop(dt: float = DT_S, tf_s: float = TF_S):
     def L(w):
         w = np.asarray(w, float)
         z = np.exp(1j * np.minimum(w, math.pi / dt * (1 - 1e-9)) * dt)
-        return response(A, B, C, D, z) * response(Ag, Bg, Cg, Dg, z) * z ** (-n)
+        return response(A, B, C, D, z=z) * response(Ag, Bg, Cg, Dg, z=z) * z ** (-n)
 
     return L
 
@@ -216,7 +216,7 @@ def ke(ko_per_mm: float = anang2017.KO_PER_MM, e_max_mm: float = anang2017.E_MAX
 
 def _scaled_pid(gain: float, axis: str = "x"):
     c = anang2017.pid(TF_S)
-    return error_feedback(SisoTf(np.asarray(c.num) * gain, c.den), DT_S, (axis,), name=f"K PID.{axis}")
+    return error_feedback(SisoTf(np.asarray(c.num) * gain, c.den), DT_S, axes=(axis,), name=f"K PID.{axis}")
 
 
 def _grows(error: np.ndarray, dt: float) -> bool:
@@ -251,7 +251,7 @@ def critical_gains(twin: bool = True) -> dict:
     step = _step(n)
 
     def tf_run(k):
-        pos, _ = tf_loop(bm.plant[0][0], _scaled_pid(k), step, DT_S, bm.delay_s)
+        pos, _ = tf_loop(bm.plant[0][0], _scaled_pid(k), step, dt=DT_S, delay_s=bm.delay_s)
         return step[:, 0] - pos
 
     def twin_run(k):
@@ -288,6 +288,7 @@ def table_case(
     f_hz: float,
     a_mm: float,
     rpm: float | None,
+    *,
     controller: str,
     twin: bool,
     duration_s: float = DURATION_S,
@@ -314,7 +315,12 @@ def table_case(
         out["twin"] = _metrics(res.error_m()[:, 0])
         force_V = res.workpiece_force_N[:, 0] * GoogolXY.volts_per_newton(bm.params, bm.model, "x")
     pos, _ = tf_loop(
-        bm.plant[0][0], make_controller(controller, DT_S, params), ref, DT_S, bm.delay_s, plant_dist_V=force_V
+        bm.plant[0][0],
+        make_controller(controller, DT_S, params),
+        ref,
+        dt=DT_S,
+        delay_s=bm.delay_s,
+        plant_dist_V=force_V,
     )
     out["tf_loop"] = _metrics(ref[:, 0] - pos)
     return out
@@ -336,7 +342,7 @@ def tables(twin: bool = True, duration_s: float = DURATION_S, progress=None) -> 
         for rpm in SPINDLES_RPM:
             row: dict[str, Any] = {"f_hz": f, "a_mm": a, "rpm": rpm}
             for ctrl in ("anang2017_pid", "anang2017_npid"):
-                row[ctrl] = table_case(f, a, rpm, ctrl, twin, duration_s)
+                row[ctrl] = table_case(f, a, rpm, controller=ctrl, twin=twin, duration_s=duration_s)
                 if progress:
                     progress()
             for side in ("tf_loop", "twin") if twin else ("tf_loop",):
@@ -356,10 +362,12 @@ def error_unit_study(duration_s: float = DURATION_S) -> list[dict]:
     units = {"mm": {"ko_per_mm": 6.0, "e_max_mm": 0.3}, "um": {"ko_per_mm": 6000.0, "e_max_mm": 0.0003}}
     rows = []
     for f, a in REFERENCES:
-        pid = table_case(f, a, None, "anang2017_pid", False, duration_s)["tf_loop"]
+        pid = table_case(f, a, None, controller="anang2017_pid", twin=False, duration_s=duration_s)["tf_loop"]
         row: dict[str, Any] = {"f_hz": f, "a_mm": a}
         for unit, params in units.items():
-            npid = table_case(f, a, None, "anang2017_npid", False, duration_s, params)["tf_loop"]
+            npid = table_case(
+                f, a, None, controller="anang2017_npid", twin=False, duration_s=duration_s, npid_params=params
+            )["tf_loop"]
             stable = math.isfinite(npid["rmse_mm"]) and npid["rmse_mm"] < 10 * pid["rmse_mm"]
             row[unit] = (pid["rmse_mm"] - npid["rmse_mm"]) / pid["rmse_mm"] * 100.0 if stable else None
         rows.append(row)
@@ -380,7 +388,7 @@ def mismatches(rows: list[dict]) -> list[str]:
             f"{ctrl} {row['f_hz']} Hz {row['a_mm']} mm rpm {row['rpm']}",
             row[ctrl]["twin"],
             row[ctrl]["tf_loop"],
-            ("max_mm", "rmse_mm"),
-            TWIN_TOL_REL,
+            keys=("max_mm", "rmse_mm"),
+            tol_rel=TWIN_TOL_REL,
         )
     ]

@@ -68,7 +68,9 @@ def design() -> dict:
     d = s4.mimo_design()
     lsd = d["design"]
     A, B, C = lsd.shaped.A, lsd.shaped.B, lsd.shaped.C
-    independent = gamma_iteration(ncf_generalized_plant(A, B, C), 100.0, 1.0 + 1e-6, 1e-7, 2, 2).gamma
+    independent = gamma_iteration(
+        ncf_generalized_plant(A, B, C), gamma_max=100.0, gamma_min=1.0 + 1e-6, tol=1e-7, ncon=2, nmeas=2
+    ).gamma
     full, reduced = d["full"], d["reduced"]
     w = np.logspace(0, 4, 200)
     F, R = frequency_response(full, w), frequency_response(reduced, w)
@@ -92,7 +94,7 @@ def design() -> dict:
         "gamma": lsd.gamma,
         "gamma_factor": s4.GAMMA_FACTOR,
         "margin": lsd.margin,
-        "achieved_norm": ncf_robustness_norm(A, B, C, lsd.K_inf, np.logspace(-1, 5, 600)),
+        "achieved_norm": ncf_robustness_norm(A, B, C, lsd.K_inf, omega=np.logspace(-1, 5, 600)),
         "shaped_order": int(lsd.shaped.nstates),
         "k_inf_order": int(lsd.K_inf.nstates),
         "order": loops["full"]["order"],
@@ -218,7 +220,7 @@ def circle_reference(radius_mm: float, feed_mm_per_min: float, duration_s: float
     return Circle(radius_mm, feed_mm_per_min).sample(np.arange(n + preview) * s4.DT_S)
 
 
-def _errors(t_s, ref_xy, pos_xy, u_V, ref_vel_xy=None) -> dict:
+def _errors(t_s, ref_xy, pos_xy, *, u_V, ref_vel_xy=None) -> dict:
     """Max tracking error per axis (all, and after SETTLED_S), contour errors to the path and to
     the reference point of the same instant, max |u| per axis (um, V); with the reference
     velocity, also the largest tracking error per axis within :data:`REVERSAL_WINDOW_S` of that
@@ -250,21 +252,21 @@ def _max_near_reversals(t_s, velocity, error) -> float:
 
 
 def tf_circle(
-    kind: str, zpetc: bool, radius_mm: float, feed: float, duration_s: float, k_il: float = 0.0, k_c: float = 0.0
+    kind: str, *, zpetc: bool, radius_mm: float, feed: float, duration_s: float, k_il: float = 0.0, k_c: float = 0.0
 ) -> dict:
     """The circle on the transfer functions (eq. 11 with the cutting gains), saturation 10 V."""
     ctrl = make_controller(f"choi1999_{kind}", s4.DT_S, {"zpetc": zpetc}, axes=("x", "y"))
     ref = circle_reference(radius_mm, feed, duration_s, preview_ticks_needed(ctrl.inputs))
     pos, u = tf_loop_xy(cutting_coupled_plant(s4.nominal_params(), k_il, k_c), ctrl, ref)
     n = len(pos)
-    return _errors(np.arange(n) * s4.DT_S, ref[:n, :, 0], pos, u)
+    return _errors(np.arange(n) * s4.DT_S, ref[:n, :, 0], pos, u_V=u)
 
 
 def tf_loop_xy(plant, ctrl, ref):
     """:func:`twin.sim.tf_loop.tf_loop` on axes x, y with the drive's 10 V saturation."""
     from twin.sim.tf_loop import tf_loop
 
-    return tf_loop(plant, ctrl, ref, s4.DT_S, saturation_V=10.0, axes=("x", "y"))
+    return tf_loop(plant, ctrl, ref, dt=s4.DT_S, saturation_V=10.0, axes=("x", "y"))
 
 
 def zpetc_part() -> dict:
@@ -276,8 +278,8 @@ def zpetc_part() -> dict:
             "preview_ticks": [f.preview for f, _ in filters],
             "delay_ticks": [f.delay for f, _ in filters],
             "unacceptable_zeros": [[[z.real, z.imag] for z in f.unacceptable] for f, _ in filters],
-            "with": tf_circle(kind, True, 20.0, 2400.0, 3.2),
-            "without": tf_circle(kind, False, 20.0, 2400.0, 3.2),
+            "with": tf_circle(kind, zpetc=True, radius_mm=20.0, feed=2400.0, duration_s=3.2),
+            "without": tf_circle(kind, zpetc=False, radius_mm=20.0, feed=2400.0, duration_s=3.2),
         }
     return out
 
@@ -303,7 +305,7 @@ def cutting_run(kind: str):
 
 
 def twin_errors(res) -> dict:
-    return _errors(res.t_s, res.ref[:, :, 0], res.table_position_m(), res.u_V, res.ref[:, :, 1])
+    return _errors(res.t_s, res.ref[:, :, 0], res.table_position_m(), u_V=res.u_V, ref_vel_xy=res.ref[:, :, 1])
 
 
 def static_gains() -> dict:
@@ -369,7 +371,15 @@ def circle_cases() -> dict:
                 d["harmonic_fraction"] = 0.0
             twin = twin_errors(run_twin(data))
             ref = data["reference"]
-            tf = tf_circle(kind, True, ref["radius_mm"], ref["feed_mm_per_min"], data["duration_s"], k_il, k_c)
+            tf = tf_circle(
+                kind,
+                zpetc=True,
+                radius_mm=ref["radius_mm"],
+                feed=ref["feed_mm_per_min"],
+                duration_s=data["duration_s"],
+                k_il=k_il,
+                k_c=k_c,
+            )
             linear.append({"case": "air cut" if k_il == 0 else "average force", "twin": twin, "tf": tf})
         out[kind]["linear"] = linear
     return out
@@ -389,5 +399,7 @@ def mismatches(circles: dict) -> list[str]:
                     "y_um": m["max_tracking_settled_um"][1],
                     "contour_um": m["max_contour_path_um"],
                 }
-            lines += twin_vs_tf(f"{kind} {case['case']}", flat["twin"], flat["tf"], flat["twin"].keys(), TWIN_TOL_REL)
+            lines += twin_vs_tf(
+                f"{kind} {case['case']}", flat["twin"], flat["tf"], keys=flat["twin"].keys(), tol_rel=TWIN_TOL_REL
+            )
     return lines

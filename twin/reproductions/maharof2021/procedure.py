@@ -111,6 +111,7 @@ def model_feedforward() -> dict:
 def controller(
     config: str,
     harmonics,
+    *,
     axes=("x",),
     bandwidth_hz: float = BANDWIDTH_HZ,
     cutoff_hz: float | None = None,
@@ -176,6 +177,7 @@ def _metrics(error_m: np.ndarray, harmonics, search_hz: float = 0.0) -> dict:
 def run_case(
     amplitude_mm: float,
     f_hz: float,
+    *,
     harmonics,
     config: str,
     twin: bool,
@@ -198,8 +200,8 @@ def run_case(
             bm.plant[0][0],
             controller(config, harmonics, feedforward=feedforward),
             ref,
-            DT_S,
-            bm.delay_s,
+            dt=DT_S,
+            delay_s=bm.delay_s,
             u_dist_V=u_dist,
         )
         errors[label] = ref[:, 0] - pos
@@ -212,7 +214,7 @@ def run_case(
         runs: dict[str, Any] = {
             label: simulate(
                 bm,
-                controller(config, harmonics, ("x", "y"), feedforward=feedforward),
+                controller(config, harmonics, axes=("x", "y"), feedforward=feedforward),
                 reference,
                 duration_s,
                 DT_S,
@@ -242,7 +244,15 @@ def cases(twin: bool = True, duration_s: float = DURATION_S, progress=None, feed
                 "feedforward": feedforward,
             }
             for config in CONFIGURATIONS:
-                row[config] = run_case(amplitude, f, harmonics, config, twin, duration_s, feedforward)
+                row[config] = run_case(
+                    amplitude,
+                    f,
+                    harmonics=harmonics,
+                    config=config,
+                    twin=twin,
+                    duration_s=duration_s,
+                    feedforward=feedforward,
+                )
                 if progress:
                     progress()
             for side in ("tf_loop", "twin") if twin else ("tf_loop",):
@@ -282,7 +292,16 @@ def amplitude_study(feedforward: str = "velocity_acceleration", duration_s: floa
     for amplitude_V in AMPLITUDES_V:
         row: dict[str, Any] = {"amplitude_V": amplitude_V, "feedforward": feedforward}
         for config in ("cascade", "imbdo_dfo"):
-            row[config] = run_case(amplitude_mm, f_hz, harmonics, config, False, duration_s, feedforward, amplitude_V)
+            row[config] = run_case(
+                amplitude_mm,
+                f_hz,
+                harmonics=harmonics,
+                config=config,
+                twin=False,
+                duration_s=duration_s,
+                feedforward=feedforward,
+                amplitude_V=amplitude_V,
+            )
         red = _reductions(row, "tf_loop")["imbdo_dfo"]
         row["reduction_pct"] = {"mte": red["mte"], "rmse": red["rmse"]}
         rows.append(row)
@@ -308,14 +327,14 @@ def milling_case(rpm: float, config: str, duration_s: float = DURATION_S) -> dic
     reference = SumOfSines((0.01,), (0.5,), n_axes=2, axes=(0,))
 
     def build(axes):
-        return controller(config, harmonics, axes, bandwidth_hz=1.5 * harmonics[-1], cutoff_hz=MILLING_CUTOFF_HZ)
+        return controller(config, harmonics, axes=axes, bandwidth_hz=1.5 * harmonics[-1], cutoff_hz=MILLING_CUTOFF_HZ)
 
     twin, tf = {}, {}
     for label, dist in (("with", (EndMilling(spindle_rpm=rpm, **CUT),)), ("without", ())):
         res = simulate(bm, build(("x", "y")), reference, duration_s, DT_S, disturbances=dist, progress=False)
         twin[label] = res.error_m()[:, 0]
         force_V = res.workpiece_force_N[:, 0] * GoogolXY.volts_per_newton(bm.params, bm.model, "x")
-        pos, _ = tf_loop(bm.plant[0][0], build(("x",)), ref, DT_S, bm.delay_s, plant_dist_V=force_V)
+        pos, _ = tf_loop(bm.plant[0][0], build(("x",)), ref, dt=DT_S, delay_s=bm.delay_s, plant_dist_V=force_V)
         tf[label] = ref[:, 0] - pos
     # the feed reverses with the 0.5 Hz sine, so the tooth force sits at f +- 0.5 Hz, not at f
     search_hz = 1.0
@@ -409,7 +428,7 @@ def mismatches(rows: list[dict]) -> list[str]:
             f"{config} {row['amplitude_mm']} mm {row['f_hz']} Hz {row['harmonics_hz']}",
             row[config]["twin"],
             row[config]["tf_loop"],
-            ("mte_um", "rmse_um"),
-            TWIN_TOL_REL,
+            keys=("mte_um", "rmse_um"),
+            tol_rel=TWIN_TOL_REL,
         )
     ]

@@ -311,7 +311,7 @@ def twin_runs() -> dict:
     return {
         config: simulate(
             r.machine(),
-            r.controller(config, harmonics, ("x", "y")),
+            r.controller(config, harmonics, axes=("x", "y")),
             SumOfSines((0.01,), (0.5,), n_axes=2, axes=(0,)),
             r.DURATION_S,
             r.DT_S,

@@ -86,6 +86,7 @@ def _disturbance_V(n: int, dt: float) -> np.ndarray:
 def tf_run(
     ctrl: Controller,
     duration_s: float,
+    *,
     coupled: bool = False,
     disturbance: bool = False,
     scale: dict | None = None,
@@ -101,8 +102,8 @@ def tf_run(
         plant_si(coupled, scale),
         ctrl,
         ref,
-        dt,
-        delay_s,
+        dt=dt,
+        delay_s=delay_s,
         u_dist_V=_disturbance_V(n, dt) if disturbance else None,
         axes=("x", "y"),
     )
@@ -112,6 +113,7 @@ def tf_run(
 def twin_run(
     ctrl: Controller,
     duration_s: float,
+    *,
     coupled: bool = False,
     disturbance: bool = False,
     scale: dict | None = None,
@@ -149,6 +151,7 @@ def responses(
     ctrl: Controller,
     duration_s: float,
     twin: bool,
+    *,
     coupled: bool = False,
     disturbance: bool = False,
     scale: dict | None = None,
@@ -157,9 +160,20 @@ def responses(
     """``side -> (t_s, pos m (n, 2))`` of 1 mm steps on ``axes``: the TF loop (``"tf"``) and,
     with ``twin``, the twin (``"twin"``), the same loop on both."""
     n = round(duration_s / ctrl.dt)
-    out: dict[str, Any] = {"tf": tf_run(ctrl, duration_s, coupled, disturbance, scale, _step_ref(n, axes))[:2]}
+    out: dict[str, Any] = {
+        "tf": tf_run(ctrl, duration_s, coupled=coupled, disturbance=disturbance, scale=scale, ref=_step_ref(n, axes))[
+            :2
+        ]
+    }
     if twin:
-        res = twin_run(ctrl, duration_s, coupled, disturbance, scale, Step(STEP_M, n_axes=2, axes=tuple(axes)))
+        res = twin_run(
+            ctrl,
+            duration_s,
+            coupled=coupled,
+            disturbance=disturbance,
+            scale=scale,
+            reference=Step(STEP_M, n_axes=2, axes=tuple(axes)),
+        )
         out["twin"] = (res.t_s, res.table_position_m())
     return out
 
@@ -378,7 +392,7 @@ ARRANGEMENTS = (
 
 
 def fractional_step(
-    axis: str, arrangement: str, scale=(1.0, 1.0), plant_gain: float = 1.0, t_max_s: float = 6.0
+    axis: str, arrangement: str, *, scale=(1.0, 1.0), plant_gain: float = 1.0, t_max_s: float = 6.0
 ) -> tuple[np.ndarray, np.ndarray]:
     """``(t_s, y)``: exact (Bromwich-integral) step response of eq. (14) on ``axis`` in ``arrangement`` (one of
     :data:`ARRANGEMENTS`, or ``"velocity plant, gain x g"`` with ``plant_gain``); ``scale``
@@ -458,12 +472,16 @@ def fractional_part(samples: int, seed: int, twin: bool) -> dict:
         out["arrangements"][name] = [_metrics(fractional_step(a, name)) for a in s1.AXES]
     exact_box = []
     for c in box_corners():
-        exact_box.append([_metrics(fractional_step(a, ARRANGEMENTS[0], (c[f"K_{a}"], c[f"a_{a}"]))) for a in s1.AXES])
+        exact_box.append(
+            [_metrics(fractional_step(a, ARRANGEMENTS[0], scale=(c[f"K_{a}"], c[f"a_{a}"]))) for a in s1.AXES]
+        )
     out["exact_box"] = exact_box
     rng = np.random.default_rng(seed)
     sampled = []
     for q in rng.uniform(1 - s1.BOX, 1 + s1.BOX, (samples, 2, 2)):
-        sampled.append([_metrics(fractional_step(a, ARRANGEMENTS[0], tuple(q[i]))) for i, a in enumerate(s1.AXES)])
+        sampled.append(
+            [_metrics(fractional_step(a, ARRANGEMENTS[0], scale=tuple(q[i]))) for i, a in enumerate(s1.AXES)]
+        )
     out["exact_random"] = {"samples": samples, "bands": [_bands([m[i] for m in sampled + exact_box]) for i in range(2)]}
     for design, horizon in (("fo_pi", 4.0), ("mu_cascade", 20.0)):
         ctrl = controller(design)
@@ -521,7 +539,12 @@ def abc_part(seed: int, twin: bool) -> dict:
             return cost(m) if np.isfinite(m["settling_time_s"]) else math.inf
 
         res = bee_colony_minimize(
-            evaluate, [ABC_LOG10_BOUNDS[0]] * 2, [ABC_LOG10_BOUNDS[1]] * 2, ABC_ITERATIONS, seed, ABC_POPULATION
+            evaluate,
+            [ABC_LOG10_BOUNDS[0]] * 2,
+            [ABC_LOG10_BOUNDS[1]] * 2,
+            iterations=ABC_ITERATIONS,
+            seed=seed,
+            population=ABC_POPULATION,
         )
         best = lqr_step_metrics("x", res.x)
         history = [lqr_step_metrics("x", x) for x in res.best_x]
@@ -545,7 +568,7 @@ def _abc_controller(metrics: dict) -> Controller:
     from controllers.design.pid import pid_tf
 
     kp, kv = metrics["k_theta"] / metrics["k_omega"], metrics["k_omega"] * s1.MM_PER_M
-    x = cascade(pid_tf(kp), pid_tf(kv), DT, "x", name="abc.x")
+    x = cascade(pid_tf(kp), pid_tf(kv), DT, axis="x", name="abc.x")
     y = controller("pole_placement", ("y",))
     return Controller(x.blocks + y.blocks, DT, "abc")
 

@@ -501,7 +501,7 @@ def write_plots(folder, results: dict) -> list[Path]:
 
     plt, save, written = plot_folder(folder)
 
-    def step_plot(groups, title, name, horizon=2.0, disturbance=False):
+    def step_plot(groups, title, name, *, horizon=2.0, disturbance=False):
         fig, axes = plt.subplots(1, 2, figsize=(11, 4), sharey=True)
         for label, ctrl in groups:
             t, pos = r.responses(ctrl, horizon, False, disturbance=disturbance)["tf"]

@@ -182,7 +182,7 @@ def robust_pi_designs() -> dict:
         "eq17_coefficients": (eq17["alpha1"], eq17["c2_min"], eq17["c3_max"]),
         "box_coefficients": (lo_a * p["H2"], lo_a * p["p"], hi_a * p["p"]),
     }.items():
-        d = design_robust_pi(a1, c2, c3, 10.0, 60.0)
+        d = design_robust_pi(a1, c2, c3, gm_db=10.0, pm_deg=60.0)
         # the true margins of the designed PI on the nominal plant (eq. 14 is empirical)
         gm, pm, _, _ = control.margin(_plant(p) * control.tf([d.kp, d.ki], [1.0, 0.0]))
         out[label] = {
@@ -306,7 +306,7 @@ def _hinf_problem(eps: float = 1e-6):
     shifted = shift_integrators(_plant(nominal_params()), eps)
     w3 = 1 / (s + 0.1)
     P = mixed_sensitivity_plant(shifted, 20 / (s + 0.01), control.tf(1, 1), w3)
-    opt = gamma_iteration(P, GAMMA_HI, GAMMA_LO, GAMMA_TOL)
+    opt = gamma_iteration(P, gamma_max=GAMMA_HI, gamma_min=GAMMA_LO, tol=GAMMA_TOL)
     at_paper = control.tf(central_controller(P, 1.0 / PAPER["hinf_theta"]))
     return shifted, w3, opt, at_paper
 
@@ -318,7 +318,7 @@ def our_controllers() -> dict:
     lambda = 2); the H-infinity central controller at the paper's gamma and at the optimal one,
     each also balanced-truncated to first order as eq. (29) is."""
     eq17 = PAPER["eq17"]
-    pi = design_robust_pi(eq17["alpha1"], eq17["c2_min"], eq17["c3_max"], 10.0, 60.0)
+    pi = design_robust_pi(eq17["alpha1"], eq17["c2_min"], eq17["c3_max"], gm_db=10.0, pm_deg=60.0)
     _, _, opt, at_paper = _hinf_problem()
     optimal = control.tf(opt.controller)
     return {
@@ -370,10 +370,10 @@ def tf_step_series(controller, params: dict[str, float], delay_s: float = 0.0) -
     if delay_s > 0.0 and np.abs(np.linalg.eigvals(ss.A)).max() >= 1.0:
         return None
     t = np.arange(round(horizon / dt)) * dt
-    return t, sampled_step_response(ss.A, ss.B, ss.C, ss.D, len(t))
+    return t, sampled_step_response(ss.A, ss.B, ss.C, ss.D, n=len(t))
 
 
-def sampled_step_response(A, B, C, D, n: int, block: int = 1024) -> np.ndarray:
+def sampled_step_response(A, B, C, D, *, n: int, block: int = 1024) -> np.ndarray:
     """Unit-step response of ``x[k+1] = A x[k] + B u[k], y = C x + D u`` (SISO), ``n`` samples
     from rest, in state space: the powers ``A^m`` of one block (``m < block``, by doubling) give
     its free response ``C A^m`` and its forced one ``C sum_{j<m} A^j B + D``; each block then
