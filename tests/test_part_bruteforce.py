@@ -534,7 +534,7 @@ def long_jitter_case(n: int = 2_000_000):
     rng = np.random.default_rng(8)
     xa = np.linspace(0.0, 100.0, n)
     xy = np.column_stack([xa, np.full(n, 25.0)]) + rng.normal(0.0, 1.0 * UM, (n, 2))
-    return stock, nominal, sweep(xy, -2.0, 3.0, line=3), 0.0, -10.0
+    return stock, nominal, sweep(xy, -2.0, 3.0, line=3)
 
 
 @pytest.mark.slow
@@ -547,13 +547,13 @@ def test_two_million_jittery_samples_in_bounded_memory(tmp_path):
         sys.path.insert(0, {str(Path(__file__).parent)!r})
         import test_part_bruteforce as t
         case = t.long_jitter_case()
-        t.machined_part(*t.long_jitter_case(2000))  # compiled before the clock starts
+        t.machined_part(*t.long_jitter_case(2000), top_mm=0.0, bottom_mm=-10.0)  # compiled before the clock starts
         def peak_mb():  # this process's peak RSS (ru_maxrss would carry pytest's over exec)
             status = open("/proc/self/status").read().split("VmHWM:")[1]
             return int(status.split()[0]) / 1024
         before = peak_mb()
         start = time.perf_counter()
-        part = t.machined_part(*case)
+        part = t.machined_part(*case, top_mm=0.0, bottom_mm=-10.0)
         seconds = time.perf_counter() - start
         np.save({str(tmp_path / "walls.npy")!r}, part.walls)
         print(before, peak_mb(), seconds)
@@ -568,7 +568,7 @@ def test_two_million_jittery_samples_in_bounded_memory(tmp_path):
     walls = np.load(tmp_path / "walls.npy")
     assert len(walls) > 3000
     # the brute force on 200 wall points, each against the segments within reach of it
-    _, _, actual, _, _ = long_jitter_case()
+    _, _, actual = long_jitter_case()
     pick = np.random.default_rng(9).choice(len(walls), 200, replace=False)
     n = len(actual.xy_mm)
     for i in pick:
