@@ -156,6 +156,43 @@ def _discretize(A, B, C, D, *, dt, method):
     raise ValueError(f"method = {method!r}: use 'tustin' or 'zoh'")
 
 
+def step_from_rest(sys, *, dt: float, n: int) -> np.ndarray:
+    """Unit step response from rest of a continuous SISO model at ``t = 0, dt, ... (n-1) dt`` (s).
+
+    Exact at the samples (the step is constant between them): the zero-order-hold states
+    ``x[k] = sum_{j<k} Ad^j Bd``, built by doubling, ``x[k + m] = Ad^m x[k] + x[m]`` (a dozen
+    matrix products for thousands of samples, where a sample-by-sample loop takes one
+    Python step each).
+
+    Parameters
+    ----------
+    sys
+        A continuous model :func:`state_space` takes, one input and one output.
+    dt : float
+        Sample period (s).
+    n : int
+        Samples, ``t = 0`` first.
+
+    Returns
+    -------
+    ndarray (n,)
+        The output.
+    """
+    A, B, C, D, sample_time = state_space(sys)
+    if sample_time is not None or B.shape[1] != 1 or C.shape[0] != 1:
+        raise ValueError("step_from_rest: needs a continuous model with one input and one output")
+    Ad, Bd, _, _ = discretize(A, B, C, D, dt=dt, method="zoh")
+    x = np.zeros((n, A.shape[0]))
+    if n > 1:
+        x[1] = Bd[:, 0]
+    m, power = 1, Ad  # x[: m + 1] known; power = Ad^m
+    while m + 1 < n:
+        count = min(m, n - 1 - m)
+        x[m + 1 : m + 1 + count] = x[1 : 1 + count] @ power.T + x[m]
+        m, power = 2 * m, power @ power
+    return x @ C[0] + D[0, 0]
+
+
 def state_space(sys):
     """``(A, B, C, D, dt)`` of a model; ``dt`` is None for continuous ones.
 

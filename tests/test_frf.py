@@ -133,6 +133,7 @@ def test_a_semi_closed_loop_is_tuned_on_the_motor_and_holds_the_table(tmp_path):
     assert both["x"]["step_settling_s"] < 0.8 * on_scale["x"]["step_settling_s"]
 
 
+@pytest.mark.slow  # six realizations at the default 16 s (tests/test_frf_oracle.py: shorter ones)
 def test_a_multisine_with_friction_gives_its_best_linear_approximation_without_phantoms():
     """mid_size_xy X (Coulomb friction 15 N), the table sensor, the default 16 s multisine: one
     periodic multisine made friction's distortion repeat and look coherent (48 resonances

@@ -4,7 +4,16 @@ import control
 import numpy as np
 import pytest
 
-from controllers.lti import SisoTf, delay_ticks, discretize, series, state_space, summed_inputs, tf_to_ss
+from controllers.lti import (
+    SisoTf,
+    delay_ticks,
+    discretize,
+    series,
+    state_space,
+    step_from_rest,
+    summed_inputs,
+    tf_to_ss,
+)
 
 
 def _frequency_response(A, B, C, D, z):
@@ -89,3 +98,23 @@ def test_degree_limit_and_short_messages():
     with pytest.raises(ValueError, match=r"\[1, 1, 1, 1, 1, 1, \.\.\. 96 more\]: degree 101 above the limit of 100"):
         SisoTf([1.0], np.ones(102))
     assert SisoTf([1.0], np.ones(101)).relative_degree == 100
+
+
+@pytest.mark.parametrize("n", [2, 7, 6001])
+@pytest.mark.parametrize("tf", RANDOM_TFS)
+def test_step_from_rest_is_python_controls_step_response(tf, n):
+    """The doubling's samples equal python-control's sample-by-sample simulation (stable
+    models, a proper one with a direct term among them), any sample count."""
+    t = np.linspace(0.0, 0.2, n)
+    dt = 0.2 / (n - 1)
+    reference = np.asarray(control.step_response(tf.to_control(), t).outputs, float).reshape(-1)
+    ours = step_from_rest(tf, dt=dt, n=n)
+    assert ours.shape == (n,)
+    np.testing.assert_allclose(ours, reference, rtol=1e-10, atol=1e-12 * np.abs(reference).max())
+
+
+def test_step_from_rest_takes_continuous_siso_models_only():
+    # one sample: the response at t = 0, the direct term (python-control needs two samples)
+    assert step_from_rest(SisoTf([2.0, 1.0], [1.0, 3.0]), dt=0.1, n=1).tolist() == [2.0]
+    with pytest.raises(ValueError, match="continuous model with one input and one output"):
+        step_from_rest(control.tf([1.0], [1.0, 1.0], 0.1), dt=0.1, n=5)

@@ -742,6 +742,7 @@ def test_frf_position_measures_the_mode_where_the_nut_is(tmp_path):
         assert message in r.stderr, r.stderr
 
 
+@pytest.mark.slow  # 16 s of simulation per axis, 15-20 s a machine (tests/test_frf_oracle.py: 3.3 s runs)
 @pytest.mark.parametrize("name", ["compact_xy", "heavy_xy"])
 def test_a_catalogue_machine_is_measured_with_default_settings(name):
     """`twin frf` with its defaults (velocity loop on the motor's encoder, PRBS to 1 kHz) on each

@@ -8,6 +8,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from twin.references import REFERENCES
 from twin.scenario import Scenario
 
@@ -60,6 +62,7 @@ def test_the_schema_is_the_registry():
     assert tags == set(REFERENCES) == {"step", "ramp", "sines", "circle", "square", "polyline", "gcode"}
 
 
+@pytest.mark.slow  # a copy of the tree compiles every kernel afresh: about 15 s
 def test_a_new_kind_is_one_module(tmp_path):
     for package in ("twin", "controllers", "mjcf"):
         shutil.copytree(ROOT / package, tmp_path / package, ignore=shutil.ignore_patterns("__pycache__"))

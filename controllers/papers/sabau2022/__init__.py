@@ -38,6 +38,7 @@ from controllers.design.statefeedback import (
     place,
 )
 from controllers.design.tuning import detune, ziegler_nichols
+from controllers.lti import step_from_rest
 
 AXES = ("x", "y")
 #: Eqs. (1), (3): omega/u = K/(s + a): K = K_M/T_M (mm/(V s^2)), a = 1/T_M (1/s); and (K_M, T_M).
@@ -182,11 +183,10 @@ def derivative_filter_s(kp: float, kd: float) -> float:
 
 
 def continuous_step(closed_loop, horizon_s: float = 3.0, n: int = 6001) -> tuple[np.ndarray, np.ndarray]:
-    """``(t_s, y)`` of the unit step response of a continuous python-control model."""
-    import control
-
+    """``(t_s, y)`` of the unit step response of a continuous python-control model
+    (:func:`controllers.lti.step_from_rest`)."""
     t = np.linspace(0.0, horizon_s, n)
-    return t, np.asarray(control.step_response(closed_loop, t).outputs, float).reshape(-1)[:n]
+    return t, step_from_rest(closed_loop, dt=t[1], n=n)
 
 
 def overshoot_pct(closed_loop, horizon_s: float = 3.0) -> float:
