@@ -92,6 +92,15 @@ def test_bad_variations_name_the_field(spec, match):
 SHORT = {"duration_s": 0.05}
 
 
+@pytest.fixture(scope="module")
+def one_worker():
+    """A client on a local cluster of one worker process, shared by this module's tests (each
+    cluster takes a second or two to start, and its worker to load the twin)."""
+    client = make_client(1)
+    yield client
+    client.close()
+
+
 def _sweep(
     tmp_path,
     name,
@@ -117,8 +126,8 @@ def _sweep(
     return sw, read_sweep(out)
 
 
-def test_results_are_bit_identical_for_one_and_two_workers(tmp_path):
-    sw, one = _sweep(tmp_path, "one.parquet", 1)
+def test_results_are_bit_identical_for_one_and_two_workers(tmp_path, one_worker):
+    sw, one = _sweep(tmp_path, "one.parquet", None, client=one_worker)
     _, two = _sweep(tmp_path, "two.parquet", 2)
     assert one.num_rows == two.num_rows == 12
     assert one.drop(["wall_s"]).equals(two.drop(["wall_s"]))
@@ -164,16 +173,17 @@ def test_a_killed_worker_loses_no_sample(tmp_path):
     assert table.drop(["wall_s"]).equals(reference.drop(["wall_s"]))
 
 
-def test_divergence_and_errors_are_rows_with_their_status(tmp_path):
+def test_divergence_and_errors_are_rows_with_their_status(tmp_path, one_worker):
     _, table = _sweep(
         tmp_path,
         "bad.parquet",
-        1,
+        None,
         vary=["controller.params.kp=choice(4000, 1e12, 'abc')"],
         samples=24,
         batch=4,
         scenario="square_sabau_pid",
         settings={"duration_s": 0.2},
+        client=one_worker,
     )
     rows = table.to_pylist()
     by_kp = {r["controller.params.kp"]: r for r in rows}
@@ -190,28 +200,24 @@ def test_divergence_and_errors_are_rows_with_their_status(tmp_path):
     assert by_kp["abc"]["error"]
 
 
-def test_resume_completes_an_interrupted_sweep(tmp_path):
-    sw, full = _sweep(tmp_path, "full.parquet", 1)
+def test_resume_completes_an_interrupted_sweep(tmp_path, one_worker):
+    sw, full = _sweep(tmp_path, "full.parquet", None, client=one_worker)
     out = tmp_path / "part.parquet"
     shutil.copytree(tmp_path / "full.parquet", out)
     removed = sorted(out.glob("part-*.parquet"))[1:3]
     for p in removed:
         p.unlink()
-    client = make_client(1)
-    try:
-        with pytest.raises(TwinInputError, match="--resume"):
-            run_sweep(sw.scenario, sw.plan, axes=sw.axes, out=out, client=client, batch_size=3, progress=False)
-        done = run_sweep(
-            sw.scenario, sw.plan, axes=sw.axes, out=out, client=client, batch_size=3, resume=True, progress=False
-        )
-    finally:
-        client.close()
+    with pytest.raises(TwinInputError, match="--resume"):
+        run_sweep(sw.scenario, sw.plan, axes=sw.axes, out=out, client=one_worker, batch_size=3, progress=False)
+    done = run_sweep(
+        sw.scenario, sw.plan, axes=sw.axes, out=out, client=one_worker, batch_size=3, resume=True, progress=False
+    )
     assert (done.ran, done.skipped) == (6, 6)
     assert read_sweep(out).drop(["wall_s"]).equals(full.drop(["wall_s"]))
 
 
-def test_summary_bands_and_worst_case(tmp_path):
-    sw, table = _sweep(tmp_path, "s.parquet", 1)
+def test_summary_bands_and_worst_case(tmp_path, one_worker):
+    sw, table = _sweep(tmp_path, "s.parquet", None, client=one_worker)
     s = summarize(table, sw.plan, sw.axes)
     worst = max(max(r["max_tracking_error_um_x"], r["max_tracking_error_um_y"]) for r in table.to_pylist())
     assert s["worst"]["value"] == pytest.approx(worst)
