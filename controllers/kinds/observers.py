@@ -43,19 +43,20 @@ class HarmonicParams(InverseModelParams):
 def build_inverse_model(p: InverseModelParams, ctx: Context) -> list:
     """Inverse-model disturbance observer d = Q P_n^-1 pos - Q z^-m u_prev, u_prev delayed to
     match the drive delay."""
-    return [
-        inverse_model_observer(
-            p.plant(ctx, a),
-            cutoff_hz=p.cutoff_hz,
-            order=p.order,
-            dt=ctx.dt,
-            axis=a,
-            method=ctx.method,
-            name=f"observer.{a}",
-            delay_s=p.delay(ctx),
-        )
-        for a in ctx.axes
-    ]
+    return [_inverse_model(p, ctx, a) for a in ctx.axes]
+
+
+def _inverse_model(p: InverseModelParams, ctx: Context, a: str):
+    return inverse_model_observer(
+        p.plant(ctx, a),
+        cutoff_hz=p.cutoff_hz,
+        order=p.order,
+        dt=ctx.dt,
+        axis=a,
+        method=ctx.method,
+        name=f"observer.{a}",
+        delay_s=p.delay(ctx),
+    )
 
 
 def _harmonic(p: HarmonicParams, ctx: Context, a: str, u_signal: str | None = None):
@@ -88,18 +89,7 @@ def build_inverse_model_harmonic(p: HarmonicParams, ctx: Context) -> list:
     d_harmonic."""
     out: list = []
     for a in ctx.axes:
-        out.append(
-            inverse_model_observer(
-                p.plant(ctx, a),
-                cutoff_hz=p.cutoff_hz,
-                order=p.order,
-                dt=ctx.dt,
-                axis=a,
-                method=ctx.method,
-                name=f"observer.{a}",
-                delay_s=p.delay(ctx),
-            )
-        )
+        out.append(_inverse_model(p, ctx, a))
         # the harmonic observer compares the plant with u_prev + the inverse-model estimate of the
         # tick before (already in u_prev), so it estimates what that observer left
         previous, residual = f"harmonic.{a}:imbdo_prev.{a}", f"harmonic.{a}:u_residual.{a}"

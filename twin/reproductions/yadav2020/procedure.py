@@ -407,7 +407,13 @@ def tf_step(controller, params: dict[str, float], delay_s: float = 0.0) -> dict 
 
 def twin_step_result(controller, params: dict[str, float]):
     """The MuJoCo cncmt twin closed by the controller at 10 kHz (Tustin), unit step."""
-    machine = build("cncmt", {k: params[k] for k in BOX_SYMBOLS})
+    return _twin_step(build("cncmt", {k: params[k] for k in BOX_SYMBOLS}), controller)
+
+
+def _twin_step(machine, controller, **options):
+    """``machine`` closed by ``controller`` at 10 kHz (Tustin), a unit step over
+    :data:`HORIZON_S`, every tick recorded; ``options`` go to :func:`simulate` (disturbances,
+    an encoder)."""
     return simulate(
         machine,
         error_feedback(controller, DT_S),
@@ -416,6 +422,7 @@ def twin_step_result(controller, params: dict[str, float]):
         control_period_s=DT_S,
         progress=False,
         record_every=1,
+        **options,
     )
 
 
@@ -560,22 +567,9 @@ def disturbance_and_noise() -> dict:
     machine = build("cncmt")
     out: dict[str, Any] = {}
     for name, ctrl in TABLE2_CONTROLLERS.items():
-
-        def run(ctrl=ctrl, **kw):
-            return simulate(
-                machine,
-                error_feedback(ctrl, DT_S),
-                Step(1.0),
-                duration_s=HORIZON_S,
-                control_period_s=DT_S,
-                progress=False,
-                record_every=1,
-                **kw,
-            )
-
-        clean = run()
-        dist = run(disturbances=[VoltageStep(DISTURBANCE_V, DISTURBANCE_START_S)])
-        noisy = run(encoder=Encoder(np.zeros(1), np.full(1, NOISE_STD_M), np.ones(1), NOISE_SEED))
+        clean = _twin_step(machine, ctrl)
+        dist = _twin_step(machine, ctrl, disturbances=[VoltageStep(DISTURBANCE_V, DISTURBANCE_START_S)])
+        noisy = _twin_step(machine, ctrl, encoder=Encoder(np.zeros(1), np.full(1, NOISE_STD_M), np.ones(1), NOISE_SEED))
         y0 = clean.table_position_m()[:, 0]
         after = clean.t_s >= DISTURBANCE_START_S
         dev_d = dist.table_position_m()[:, 0] - y0
